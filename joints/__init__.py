@@ -1,0 +1,20 @@
+"""The joint and driver library of mbd3d.
+
+Every joint is a composition of the constraint primitives of :mod:`mbd3d.primitives`, written
+against the body kinematics, so the same classes serve every body type that supports them.
+
+- :class:`Revolute`: pin (point coincidence).
+- :class:`Prismatic`: slider along an axis.
+- :class:`Fixed`: weld (also to the ground).
+- :class:`Distance`: massless rigid link between two points.
+- Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
+"""
+
+from joints.distance import Distance
+from joints.drivers import CoordinateDriver, RotationDriver, TranslationDriver
+from joints.fixed import Fixed
+from joints.prismatic import Prismatic
+from joints.revolute import Revolute
+
+__all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
+           "TranslationDriver"]

@@ -1,0 +1,137 @@
+"""Drivers: constraints that prescribe a coordinate or a relative motion as a function of time.
+
+Each driver is one constraint row ``c(q) - f(t) = 0``. Its **effort**
+(``results.driver(name).effort``) is the generalized force the actuator applies in the direction
+of increasing ``c``: a torque [N m] for a rotation driver, a force [N] for a translation driver.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from mbd3d.body import Body
+from mbd3d.element import ConstraintElement, PrimitiveSpec
+from mbd3d.errors import ModelError
+from mbd3d.model import BuildContext
+from mbd3d.motion import Motion, as_motion
+
+from joints.base import require_planar
+from joints.prismatic import Prismatic
+from joints.revolute import Revolute
+
+
+class CoordinateDriver(ConstraintElement):
+    """Prescribes one absolute coordinate of a body: ``q[coordinate] = f(t)``.
+
+    Parameters
+    ----------
+    name : str
+    body : Body
+    coordinate : {"x", "y", "theta"} or int
+        Which coordinate (centre-of-mass position [m] or body angle [rad]).
+    motion : Motion or float
+        ``f(t)``; a number is a constant.
+    """
+
+    is_driver = True
+
+    def __init__(self, name: str, body: Body, coordinate: str | int, motion: Motion | float):
+        self.name = name
+        self.body_i = None  # the ground, filled in when the model is built
+        self.body_j = body
+        self.coordinate = coordinate
+        self.motion = as_motion(motion, f"driver '{name}': motion")
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        names = ctx.body_type.coordinate_names
+        c = self.coordinate
+        if isinstance(c, str):
+            if c not in names:
+                raise ModelError(f"driver '{self.name}': coordinate must be one of {names}, "
+                                 f"got {c!r}")
+            index, label = names.index(c), c
+        elif isinstance(c, (int, np.integer)) and 0 <= c < len(names):
+            index, label = int(c), names[int(c)]
+        else:
+            raise ModelError(f"driver '{self.name}': coordinate must be one of {names} or an "
+                             f"index 0..{len(names) - 1}, got {c!r}")
+        if self.body_j.is_ground:
+            raise ModelError(f"driver '{self.name}': the ground has no coordinates to drive")
+        return [PrimitiveSpec("coordinate", self.body_i, self.body_j, {"coordinate": index},
+                              (label,), motion=self.motion)]
+
+
+class RotationDriver(ConstraintElement):
+    """Prescribes the rotation of body j relative to body i: ``theta_j - theta_i = f(t)``.
+
+    The angle is measured from body i's x axis to body j's x axis, counter-clockwise [rad]; for a
+    crank driven from the ground it is the crank's absolute angle. The effort is the motor torque
+    on body j [N m] (the reaction torque on body i is opposite).
+
+    Parameters
+    ----------
+    name : str
+    joint : Revolute or Body
+        The revolute across which the rotation is driven (its bodies are used), or body i.
+    body_j : Body, optional
+        Body j, when ``joint`` is body i.
+    motion : Motion or float
+        ``f(t)`` [rad].
+    """
+
+    is_driver = True
+
+    def __init__(self, name: str, joint: Revolute | Body, body_j: Body | None = None, *,
+                 motion: Motion | float):
+        self.name = name
+        self.joint = joint if isinstance(joint, Revolute) else None
+        if self.joint is not None:
+            if body_j is not None:
+                raise ModelError(f"driver '{name}': give a Revolute or two bodies, not both")
+            self.body_i, self.body_j = joint.body_i, joint.body_j
+        else:
+            if body_j is None:
+                raise ModelError(f"driver '{name}': give the Revolute to drive, or body_i and "
+                                 "body_j")
+            self.body_i, self.body_j = joint, body_j
+        self.motion = as_motion(motion, f"driver '{name}': motion")
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_planar(ctx, self.name)
+        return [PrimitiveSpec("angle", self.body_i, self.body_j, {}, ("angle",),
+                              motion=self.motion)]
+
+    def reaction_frame(self, ctx: BuildContext):
+        if self.joint is not None:
+            return self.joint.reaction_frame(ctx)
+        return super().reaction_frame(ctx)
+
+
+class TranslationDriver(ConstraintElement):
+    """Prescribes the sliding of a prismatic joint: ``h_i . (r_Pj - r_Pi) = f(t)``.
+
+    ``f`` is the position [m] of the prismatic's point on body j along the axis, measured from its
+    point on body i (zero in the drawing when the joint was given with ``at``). The effort is the
+    force on body j along the axis [N].
+    """
+
+    is_driver = True
+
+    def __init__(self, name: str, joint: Prismatic, *, motion: Motion | float):
+        if not isinstance(joint, Prismatic):
+            raise ModelError(f"driver '{name}': joint must be a Prismatic, got {joint!r}")
+        self.name = name
+        self.joint = joint
+        self.body_i, self.body_j = joint.body_i, joint.body_j
+        self.motion = as_motion(motion, f"driver '{name}': motion")
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        u_i, u_j, h_i, _ = self.joint.geometry(ctx)
+        return [PrimitiveSpec("dot2", self.body_i, self.body_j,
+                              {"v_i": h_i, "u_i": u_i, "u_j": u_j}, ("translation",),
+                              motion=self.motion)]
+
+    def reaction_frame(self, ctx: BuildContext):
+        return self.joint.reaction_frame(ctx)

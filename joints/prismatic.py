@@ -1,0 +1,59 @@
+"""Prismatic joint (slider)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from mbd3d.body import Body
+from mbd3d.element import PrimitiveSpec
+from mbd3d.model import BuildContext
+
+from joints.base import Joint, perpendicular, require_planar
+
+
+class Prismatic(Joint):
+    """A slider: body j translates along an axis of body i, without relative rotation.
+
+    Planar form (Haug's translational joint): with ``h`` the axis and ``n`` its normal on body i,
+    ``n_i . h_j = 0`` (row ``rotation``: no relative rotation) and ``n_i . (r_Pj - r_Pi) = 0``
+    (row ``normal``: point P of body j stays on the line of body i).
+
+    Reaction on body j: force [N] and moment [N m] about its point P; in joint axes the force
+    components are (along the axis, normal to it).
+
+    Parameters
+    ----------
+    name : str
+    body_i, body_j : Body
+    axis : (2,) array_like
+        Direction of sliding in the drawing (global axes).
+    at, point_i, point_j : optional
+        A point on the sliding line (see :class:`joints.base.Joint`); default body j's centre of
+        mass.
+    """
+
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, axis: Any, at: Any = None,
+                 point_i: Any = None, point_j: Any = None):
+        super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
+        self.axis = axis
+
+    def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, ...]:
+        """``(u_i, u_j, h_i, h_j)``: points and unit axis in the frames of bodies i and j."""
+        require_planar(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        h = ctx.direction(self.axis, f"joint '{self.name}': axis")
+        return u_i, u_j, ctx.to_local_vector(self.body_i, h), ctx.to_local_vector(self.body_j, h)
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        u_i, u_j, h_i, h_j = self.geometry(ctx)
+        n_i = perpendicular(h_i)
+        return [PrimitiveSpec("dot1", self.body_i, self.body_j, {"v_i": n_i, "v_j": h_j},
+                              ("rotation",)),
+                PrimitiveSpec("dot2", self.body_i, self.body_j,
+                              {"v_i": n_i, "u_i": u_i, "u_j": u_j}, ("normal",))]
+
+    def reaction_frame(self, ctx: BuildContext):
+        u_i, u_j, h_i, _ = self.geometry(ctx)
+        return u_i, u_j, np.column_stack([h_i, perpendicular(h_i)])

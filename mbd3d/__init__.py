@@ -1,0 +1,42 @@
+"""mbd3d: kinematic and dynamic analysis of mechanisms in absolute coordinates.
+
+Build a model with :class:`ModelBuilder` (bodies here, joints and drivers from the ``joints``
+package, forces from here), then run an analysis; every analysis returns a :class:`Results`.
+
+>>> import numpy as np
+>>> import mbd3d as mb
+>>> from joints import Revolute, RotationDriver
+>>> b = mb.ModelBuilder(dim=2)
+>>> crank = b.add_body("crank", mass=1.0, inertia=0.01, position=(0.05, 0.0))
+>>> pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
+>>> _ = b.add(RotationDriver("motor", pin, motion=mb.Ramp(0.0, 2 * np.pi)))
+>>> res = mb.inverse_dynamics(b.build(), np.linspace(0.0, 1.0, 5))
+>>> float(np.round(res.body("crank").angle[-1], 6))
+6.283185
+"""
+
+from mbd3d.body import Body
+from mbd3d.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
+from mbd3d.equations import kinetic_energy, potential_energy
+from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
+                          NotFullyDrivenError, SingularJacobianError)
+from mbd3d.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
+from mbd3d.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
+from mbd3d.mobility import MobilityReport, mobility
+from mbd3d.model import Model, ModelBuilder
+from mbd3d.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
+from mbd3d.position import solve_position
+from mbd3d.results import Results
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ModelBuilder", "Model", "Body",
+    "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
+    "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
+    "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
+    "inverse_dynamics", "forward_dynamics", "forward_accelerations", "project_state", "METHODS",
+    "mobility", "MobilityReport", "Results", "kinetic_energy", "potential_energy",
+    "MBDError", "ModelError", "NotFullyDrivenError", "AnalysisError", "AssemblyError",
+    "SingularJacobianError", "IntegrationError",
+]

@@ -1,0 +1,187 @@
+"""Bodies and the body-kinematics interface that joints and forces are written against.
+
+A :class:`Body` is the user's description of one rigid body (name, mass properties, initial guess).
+A :class:`BodyType` holds the kinematics of one kind of body (planar or spatial) and evaluates them
+*batched*: every method takes an array of body indices and returns one row per index, so a
+constraint primitive evaluates all its instances with a few NumPy calls whatever the number of
+joints. Joints never look at the coordinates themselves; they ask the body type for
+
+- the global position of a body point ``r = R + A u`` and its Jacobian ``dr/dq``,
+- a body-fixed vector ``a = A v`` and its Jacobian,
+- their velocities and the velocity-dependent parts of their accelerations
+  (the terms that do not multiply ``qdd``),
+
+which is what lets one joint library serve planar and spatial bodies.
+
+The ground is not a body with coordinates: in the batched arrays it is one extra row (index
+``n_bodies``) whose coordinates are all zero, so its frame is the global frame and its points are
+given in global coordinates. Its columns are dropped when the Jacobian is assembled.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Body", "BodyType", "Frames"]
+
+
+class Body:
+    """A rigid body of a model under construction (returned by ``ModelBuilder.add_body``).
+
+    Attributes
+    ----------
+    name : str
+        Unique name, used in results and error messages.
+    index : int
+        Position of the body in the model; the body owns ``q[index * n_coords:(index + 1) * n_coords]``.
+        ``-1`` for the ground.
+    mass : float
+        Mass [kg].
+    inertia : float or ndarray
+        Centroidal moment of inertia [kg m^2]: a scalar about the normal axis for planar bodies.
+    q0, qd0 : ndarray
+        Initial guess of the body's coordinates and their rates (body frame at the centre of mass).
+    """
+
+    def __init__(self, name: str, index: int, mass: float, inertia: Any,
+                 q0: np.ndarray, qd0: np.ndarray, is_ground: bool = False):
+        self.name = name
+        self.index = index
+        self.mass = mass
+        self.inertia = inertia
+        self.q0 = q0
+        self.qd0 = qd0
+        self.is_ground = is_ground
+
+    def __repr__(self) -> str:
+        if self.is_ground:
+            return "Body(ground)"
+        return f"Body({self.name!r}, mass={self.mass}, inertia={self.inertia!r})"
+
+
+class Frames:
+    """Per-body kinematic quantities for one state, computed once per evaluation.
+
+    All arrays have one row per body plus a last row for the ground. Which attributes exist
+    depends on the body type; ``Q`` and ``A`` always do, ``Qd`` and ``omega`` when velocities were
+    given.
+    """
+
+    def __init__(self, **arrays: np.ndarray):
+        self.__dict__.update(arrays)
+
+
+class BodyType(ABC):
+    """Kinematics of one kind of rigid body, evaluated for many bodies at once.
+
+    Index arrays ``idx`` have shape ``(k,)``; body-frame points ``u`` and vectors ``v`` have shape
+    ``(k, dim)``; results are ``(k, dim)`` for positions and ``(k, dim, n_coords)`` for Jacobians.
+    """
+
+    #: dimension of the space the bodies move in (2 or 3)
+    dim: int
+    #: number of coordinates per body
+    n_coords: int
+    #: names of the coordinates, in order
+    coordinate_names: tuple[str, ...]
+    #: short name used in messages ("planar", "spatial")
+    name: str
+
+    # -- model data ------------------------------------------------------------------------------
+    @abstractmethod
+    def check_inertia(self, inertia: Any, body: str) -> Any:
+        """Validate a centroidal inertia given by the user and return it in canonical form."""
+
+    @abstractmethod
+    def initial_coordinates(self, body: str, position: Any, orientation: Any) -> np.ndarray:
+        """Coordinates of a body at ``position`` with ``orientation`` (planar: angle in rad)."""
+
+    @abstractmethod
+    def initial_rates(self, body: str, velocity: Any, angular_velocity: Any,
+                      q0: np.ndarray) -> np.ndarray:
+        """Coordinate rates of a body with the given centre-of-mass velocity and angular velocity."""
+
+    # -- kinematics ------------------------------------------------------------------------------
+    # The primitives work with ``s = A v``, the global components of a body-fixed vector, computed
+    # once per vector; every other kinematic quantity of a point or vector is a cheap function of
+    # ``s`` and per-body data.
+    @abstractmethod
+    def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None) -> Frames:
+        """Per-body quantities for coordinates ``Q`` (n_bodies + 1, n_coords), ground row last."""
+
+    @abstractmethod
+    def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``s = A v``: global components of body-frame vectors ``v`` (k, dim)."""
+
+    @abstractmethod
+    def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
+                    ) -> np.ndarray:
+        """``d(R + s)/dq`` (translation=True, a point) or ``ds/dq`` (a vector); (k, dim, n_coords)."""
+
+    @abstractmethod
+    def velocity_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """``ds/dt = omega x s`` [per s] (needs velocities in ``fr``)."""
+
+    @abstractmethod
+    def acceleration_term_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Velocity-dependent part of ``d2s/dt2`` (the part not multiplying ``qdd``)."""
+
+    # conveniences for forces and results, built on the methods above
+    def point(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Global position ``R + A u`` [m] of body points ``u`` (body frame)."""
+        return fr.R[idx] + self.rotate(fr, idx, u)
+
+    def point_jacobian(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """``d(R + A u)/dq``, shape (k, dim, n_coords)."""
+        return self.jacobian_of(fr, idx, self.rotate(fr, idx, u), True)
+
+    def point_velocity(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Global velocity of body points [m/s]."""
+        return fr.Rd[idx] + self.velocity_of(fr, idx, self.rotate(fr, idx, u))
+
+    def point_acceleration_term(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Velocity-dependent part of the acceleration of body points [m/s^2]."""
+        return self.acceleration_term_of(fr, idx, self.rotate(fr, idx, u))
+
+    def vector(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Global components ``A v`` of body-fixed vectors ``v``."""
+        return self.rotate(fr, idx, v)
+
+    @abstractmethod
+    def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Cross product of rows: a scalar per row in 2D, a vector per row in 3D."""
+
+    # -- dynamics --------------------------------------------------------------------------------
+    @abstractmethod
+    def mass_blocks(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+        """Per-body mass matrices, shape (n_bodies, n_coords, n_coords)."""
+
+    @abstractmethod
+    def quadratic_velocity(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+        """Per-body quadratic velocity vectors ``Qv``, shape (n_bodies, n_coords)."""
+
+    @abstractmethod
+    def torque_generalized(self, fr: Frames, idx: np.ndarray, torque: np.ndarray) -> np.ndarray:
+        """Generalized forces (k, n_coords) of torques given in global components."""
+
+    @abstractmethod
+    def wrench(self, fr: Frames, idx: np.ndarray, generalized: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Force [N] and moment about the centre of mass [N m], global components, that produce
+        the generalized forces ``generalized`` (k, n_coords) on bodies ``idx``."""
+
+    @abstractmethod
+    def angular_velocity(self, fr: Frames, idx: np.ndarray) -> np.ndarray:
+        """Angular velocity [rad/s]: (k,) about the normal in 2D, (k, 3) global in 3D."""
+
+    @abstractmethod
+    def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,
+                       jacobian: bool = False) -> np.ndarray:
+        """Rotation of body j relative to body i about the plane normal [rad], unwrapped.
+
+        With ``jacobian=True`` return the derivative with respect to the coordinates of
+        (i, j) instead, shape (k, 2, n_coords).
+        """

@@ -1,0 +1,121 @@
+"""Evaluation of the constraint equations of a model: ``C``, ``Cq``, ``-Ct`` and ``Qd``.
+
+``C = c(q) - c0 - f(t)`` row by row (see :mod:`mbd3d.primitives`). Each primitive type is
+evaluated for all its instances in one call; the Jacobian values are scattered into the pattern
+fixed when the model was built (dense array, or CSR with precomputed ordering when
+``model.sparse``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d.body import Frames
+from mbd3d.errors import ModelError
+
+__all__ = ["frames", "evaluate", "residual", "jacobian", "jacobian_matrix", "velocity_rhs",
+           "acceleration_rhs", "driver_values"]
+
+
+def frames(model, q: np.ndarray, qd: np.ndarray | None = None) -> Frames:
+    """Per-body kinematic quantities of state ``(q, qd)``; the ground is the last row."""
+    nb, nc = model.n_bodies, model.n_coords_per_body
+    Q = np.zeros((nb + 1, nc))
+    Q[:nb] = np.reshape(q, (nb, nc))
+    Qd = None
+    if qd is not None:
+        Qd = np.zeros((nb + 1, nc))
+        Qd[:nb] = np.reshape(qd, (nb, nc))
+    return model.body_type.frames(Q, Qd)
+
+
+def driver_values(model, t: float) -> np.ndarray:
+    """``(f, f', f'')`` of every driven row, shape (3, n_drivers).
+
+    Raises
+    ------
+    ModelError
+        If a driver's motion returns a non-finite value (names the driver and the time).
+    """
+    out = np.empty((3, len(model.driver_motions)))
+    for k, motion in enumerate(model.driver_motions):
+        try:
+            out[:, k] = motion.evaluate(t)
+        except (TypeError, ValueError) as exc:
+            raise ModelError(f"driver '{model.driver_names[k]}': its motion failed at "
+                             f"t = {t:g} s: {exc}") from exc
+        if not np.all(np.isfinite(out[:, k])):
+            raise ModelError(f"driver '{model.driver_names[k]}': its motion returned a non-finite "
+                             f"value (f, f', f'') = {tuple(out[:, k])} at t = {t:g} s")
+    return out
+
+
+def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,
+             gamma: bool = False) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """``C``, the Jacobian values in the model's pattern, and ``Qd``, in one pass over the groups.
+
+    Returns ``(C (m,), jac_data (nnz,), Qd (m,))`` with ``None`` for the parts not asked for;
+    turn ``jac_data`` into a matrix with :func:`jacobian_matrix`.
+    """
+    bt, m = model.body_type, model.n_constraints
+    C = np.empty(m) if value else None
+    Qd = np.empty(m) if gamma else None
+    parts = []
+    for g in model.groups:
+        c, J, gam = g.cls.evaluate(bt, fr, g.bi, g.bj, g.params, value, jacobian, gamma)
+        rows = slice(g.offset, g.offset + g.n_rows)
+        if value:
+            C[rows] = c.ravel()
+        if jacobian:
+            parts.append(J.ravel())
+        if gamma:
+            Qd[rows] = gam.ravel()
+    data = None
+    if jacobian:
+        data = np.concatenate(parts)[model._jac_take] if parts else np.zeros(0)
+    if (value or gamma) and len(model.driver_rows):
+        f = driver_values(model, t)
+        if value:
+            C[model.driver_rows] -= f[0]
+        if gamma:
+            Qd[model.driver_rows] += f[2]
+    if value:
+        C -= model.c0
+    return C, data, Qd
+
+
+def jacobian_matrix(model, data: np.ndarray, sparse: bool | None = None):
+    """``Cq`` (m, n) from its values in the model's pattern: ndarray, or CSR when sparse."""
+    shape = (model.n_constraints, model.n_coordinates)
+    if model.sparse if sparse is None else sparse:
+        return sp.csr_matrix((data, model._jac_cols, model._jac_indptr), shape=shape)
+    Cq = np.zeros(shape)
+    Cq[model._jac_rows, model._jac_cols] = data
+    return Cq
+
+
+def residual(model, t: float, q: np.ndarray, fr: Frames | None = None) -> np.ndarray:
+    """Constraint residual ``C(q, t)``, shape (m,) [m or rad per row]."""
+    return evaluate(model, t, frames(model, q) if fr is None else fr, True, False)[0]
+
+
+def jacobian(model, q: np.ndarray, fr: Frames | None = None, sparse: bool | None = None):
+    """Constraint Jacobian ``Cq``, shape (m, n): ndarray, or CSR matrix when sparse."""
+    data = evaluate(model, 0.0, frames(model, q) if fr is None else fr, False, True)[1]
+    return jacobian_matrix(model, data, sparse)
+
+
+def velocity_rhs(model, t: float) -> np.ndarray:
+    """Right-hand side ``-Ct`` of ``Cq qd = -Ct``: ``f'(t)`` on driven rows, zero elsewhere."""
+    nu = np.zeros(model.n_constraints)
+    if len(model.driver_rows):
+        nu[model.driver_rows] = driver_values(model, t)[1]
+    return nu
+
+
+def acceleration_rhs(model, t: float, q: np.ndarray, qd: np.ndarray,
+                     fr: Frames | None = None) -> np.ndarray:
+    """Right-hand side ``Qd = -(Cq qd)_q qd - 2 Cqt qd - Ctt`` of ``Cq qdd = Qd``."""
+    fr = frames(model, q, qd) if fr is None else fr
+    return evaluate(model, t, fr, False, False, True)[2]

@@ -1,0 +1,220 @@
+"""Forward dynamics: the augmented equations integrated in time with constraint stabilisation.
+
+At every right-hand side evaluation the accelerations and multipliers come from
+
+    [M  Cq^T] [qdd]   [Qe + Qv]
+    [Cq 0   ] [lam] = [Qd     ]
+
+(the one place this solve is written: :func:`forward_accelerations`). The state ``(q, qd)`` is
+integrated by one of SciPy's ``OdeSolver`` classes, stepped one step at a time. Because the
+index-1 equations only hold the constraints at acceleration level, position and velocity drift;
+after every accepted step whose residual exceeds ``constraint_tol`` the state is projected back
+onto ``C = 0`` and ``Cq qd = -Ct`` (mass-weighted least change: Newton-Raphson for positions, one
+linear solve for velocities) and the integrator restarts from the projected state with its last
+step size. Output times are interpolated with the integrator's dense output and projected the
+same way, so every reported state satisfies the constraints.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from typing import Sequence
+
+import numpy as np
+import scipy.integrate as si
+
+from mbd3d import constraints
+from mbd3d.equations import generalized_forces
+from mbd3d.errors import AnalysisError, IntegrationError, MBDError, ModelError
+from mbd3d.kinematics import check_times, solve_velocity
+from mbd3d.linalg import Factorization, SingularMatrix, augmented_system
+from mbd3d.position import singular_error, solve_position
+from mbd3d.results import Results
+
+__all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS"]
+
+#: integrators selectable by name; "RK45" is the Dormand-Prince 5(4) pair of MATLAB's ode45
+METHODS = {"RK45": si.RK45, "DOP853": si.DOP853, "RK23": si.RK23, "Radau": si.Radau,
+           "BDF": si.BDF, "LSODA": si.LSODA}
+
+
+def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """Accelerations ``qdd`` and multipliers ``lam`` from the augmented equations at ``(t, q, qd)``.
+
+    Raises
+    ------
+    SingularJacobianError
+        When the augmented matrix is singular (names the dependent joints and the time).
+    """
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise IntegrationError(f"forward dynamics of '{model.name}': the state is not finite at "
+                               f"t = {t:.6g} s (the integration diverged)", time=t)
+    fr = constraints.frames(model, q, qd)
+    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
+    K = augmented_system(model, model.body_type.mass_blocks(fr, model.mass, model.inertia),
+                         jac_data)
+    rhs = np.concatenate([generalized_forces(model, t, fr), gamma])
+    try:
+        solution = Factorization(K).solve(rhs)
+    except SingularMatrix:
+        raise singular_error(model, constraints.jacobian_matrix(model, jac_data), t,
+                             f"forward dynamics of '{model.name}'") from None
+    n = model.n_coordinates
+    return solution[:n], solution[n:]
+
+
+def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest (mass-weighted) state that satisfies the position and velocity constraints."""
+    q = solve_position(model, q, t, tol=tol)
+    return q, solve_velocity(model, q, t, qd_guess=qd)
+
+
+def _difference_jacobian(rhs, n_y: int):
+    """Forward-difference Jacobian of ``rhs`` for the implicit integrators.
+
+    SciPy's own estimate adapts its step per column and lets it grow without bound on columns
+    that are identically zero (coordinates nothing depends on, such as a free body's position
+    under constant gravity), which overflows; a fixed relative step is robust here.
+    """
+    def jac(t: float, y: np.ndarray) -> np.ndarray:
+        f0 = rhs(t, y)
+        J = np.empty((n_y, n_y))
+        for j in range(n_y):
+            h = 1.5e-8 * max(1.0, abs(y[j]))
+            y_step = y.copy()
+            y_step[j] += h
+            J[:, j] = (rhs(t, y_step) - f0) / h
+        return J
+    return jac
+
+
+def _residuals(model, t, q, qd) -> tuple[float, float]:
+    C, jac_data, _ = constraints.evaluate(model, t, constraints.frames(model, q))
+    v = constraints.jacobian_matrix(model, jac_data) @ qd - constraints.velocity_rhs(model, t)
+    return float(np.max(np.abs(C), initial=0.0)), float(np.max(np.abs(v), initial=0.0))
+
+
+def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None = None,
+                     qd0: Sequence[float] | None = None, *, method: str = "RK45",
+                     rtol: float = 1e-8, atol: float = 1e-10, constraint_tol: float = 1e-8,
+                     max_step: float = np.inf, hold: Sequence[str | int] | None = None) -> Results:
+    """Integrate the equations of motion from ``times[0]`` to ``times[-1]``.
+
+    Parameters
+    ----------
+    model : Model
+    times : (k,) array_like
+        Output times [s], strictly increasing; the integration spans the first to the last.
+    q0, qd0 : (n,) array_like, optional
+        Initial guesses of coordinates and rates (default the bodies' guesses). They are first
+        made consistent: positions by Newton-Raphson, velocities by mass-weighted projection.
+    method : {"RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA"}
+        SciPy integrator. "RK45" (Dormand-Prince, as MATLAB's ode45) for general use, "DOP853"
+        for tight tolerances.
+    rtol, atol : float
+        Integrator tolerances (relative; absolute in the units of ``q`` and ``qd``).
+    constraint_tol : float
+        Largest position [m, rad] and velocity [m/s, rad/s] constraint residual allowed at the
+        end of a step before the state is projected back. Reported states are projected too.
+    max_step : float
+        Largest step [s].
+    hold : sequence of str or int, optional
+        Coordinates kept at their given values (and rates) while assembling the initial state,
+        e.g. ``["crank.theta"]``.
+
+    Returns
+    -------
+    Results
+        With ``lam`` (reactions, driver efforts) at every output time; ``stats`` holds
+        ``steps``, ``rhs_evaluations``, ``projections``, ``max_drift`` (largest residual found at
+        a step end before projection) and ``wall_time`` [s].
+
+    Raises
+    ------
+    IntegrationError, SingularJacobianError, AssemblyError
+        With ``.results`` holding the output times computed before the failure. An interrupt
+        (Ctrl-C) returns the results so far with ``status == "interrupted"``.
+    """
+    t = check_times(times)
+    if len(t) < 2:
+        raise ModelError("forward_dynamics needs at least two output times (start and end)")
+    if method not in METHODS:
+        raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    for label, value in (("rtol", rtol), ("atol", atol), ("constraint_tol", constraint_tol)):
+        if not (np.isfinite(value) and value > 0):
+            raise ModelError(f"{label} must be positive and finite, got {value!r}")
+    solver_cls = METHODS[method]
+    n = model.n_coordinates
+    projection_tol = constraint_tol * 1e-3
+    start = _time.perf_counter()
+    stats = {"method": method, "steps": 0, "rhs_evaluations": 0, "projections": 0,
+             "max_drift": 0.0, "wall_time": 0.0}
+    k_max = len(t)
+    Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
+    Lam = np.empty((k_max, model.n_constraints))
+    done = 0
+
+    def partial(status: str, message: str) -> Results:
+        stats["wall_time"] = _time.perf_counter() - start
+        return Results(model, "forward dynamics", t[:done], Q[:done], Qd[:done], Qdd[:done],
+                       Lam[:done], status=status, message=message, stats=stats)
+
+    def rhs(tt: float, y: np.ndarray) -> np.ndarray:
+        stats["rhs_evaluations"] += 1
+        qdd, _ = forward_accelerations(model, tt, y[:n], y[n:])
+        return np.concatenate([y[n:], qdd])
+
+    def record(k: int, q: np.ndarray, qd: np.ndarray) -> None:
+        qdd, lam = forward_accelerations(model, t[k], q, qd)
+        Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
+
+    try:
+        q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
+                           hold=hold)
+        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold)
+        record(0, q, qd)
+        done = 1
+        y = np.concatenate([q, qd])
+        options = {"rtol": rtol, "atol": atol, "max_step": max_step}
+        if method in ("Radau", "BDF", "LSODA"):
+            options["jac"] = _difference_jacobian(rhs, 2 * n)
+        solver = solver_cls(rhs, t[0], y, t[-1], **options)
+        while done < k_max:
+            message = solver.step()
+            if solver.status == "failed":
+                raise IntegrationError(
+                    f"forward dynamics of '{model.name}': the {method} integrator failed at "
+                    f"t = {solver.t:.6g} s: {message}. Try a smaller max_step, looser tolerances "
+                    "or an implicit method (Radau, BDF) for stiff models.", time=float(solver.t))
+            stats["steps"] += 1
+            if not np.all(np.isfinite(solver.y)):
+                raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
+                                       f"non-finite at t = {solver.t:.6g} s", time=float(solver.t))
+            if t[done] <= solver.t:
+                dense = solver.dense_output()
+                while done < k_max and t[done] <= solver.t:
+                    y_k = dense(t[done])
+                    record(done, *project_state(model, t[done], y_k[:n], y_k[n:], projection_tol))
+                    done += 1
+            if solver.status == "finished" or done >= k_max:
+                break
+            y = solver.y
+            drift = max(_residuals(model, solver.t, y[:n], y[n:]))
+            stats["max_drift"] = max(stats["max_drift"], drift)
+            if drift > constraint_tol:
+                q, qd = project_state(model, solver.t, y[:n], y[n:], projection_tol)
+                stats["projections"] += 1
+                h = min(solver.step_size or np.inf, t[-1] - solver.t)
+                solver = solver_cls(rhs, solver.t, np.concatenate([q, qd]), t[-1], first_step=h,
+                                    **options)
+    except AnalysisError as exc:
+        exc.results = partial("failed", str(exc))
+        raise
+    except MBDError as exc:
+        exc.results = partial("failed", str(exc))  # type: ignore[attr-defined]
+        raise
+    except KeyboardInterrupt:
+        return partial("interrupted", f"interrupted by the user after t = {t[done - 1]:g} s")
+    return partial("complete", "")

@@ -1,0 +1,62 @@
+"""Error types raised by mbd3d.
+
+Every error the library raises on purpose derives from :class:`MBDError`, so that user code can
+catch the library's own failures without catching programming errors. Each message names the body,
+joint, force or parameter at fault and says what to do about it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class MBDError(Exception):
+    """Base class of every error mbd3d raises on purpose."""
+
+
+class ModelError(MBDError, ValueError):
+    """The model description is invalid (bad parameter, unknown or duplicate name, ...)."""
+
+
+class NotFullyDrivenError(MBDError, ValueError):
+    """A kinematic analysis was asked of a mechanism that still has degrees of freedom."""
+
+
+class AnalysisError(MBDError, RuntimeError):
+    """An analysis failed part way.
+
+    Attributes
+    ----------
+    time : float or None
+        Simulation time [s] at which the failure happened, when known.
+    results : mbd3d.Results or None
+        Everything computed before the failure (time points already solved). ``None`` when the
+        failure happened before the first time point.
+    """
+
+    def __init__(self, message: str, *, time: float | None = None, results: Any = None):
+        super().__init__(message)
+        self.time = time
+        self.results = results
+
+
+class AssemblyError(AnalysisError):
+    """Newton-Raphson did not bring the constraint residual below the tolerance."""
+
+
+class SingularJacobianError(AnalysisError):
+    """The constraint Jacobian lost rank (lock-up, toggle or redundant constraints).
+
+    Attributes
+    ----------
+    joints : list of str
+        Names of the joints whose constraint rows are involved in the dependency.
+    """
+
+    def __init__(self, message: str, *, joints: list[str] | None = None, **kwargs: Any):
+        super().__init__(message, **kwargs)
+        self.joints = list(joints or [])
+
+
+class IntegrationError(AnalysisError):
+    """The time integrator failed (step size underflow, non-finite state, ...)."""

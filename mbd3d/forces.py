@@ -1,0 +1,414 @@
+"""Applied forces: point forces, torques, translational and rotational spring-damper-actuators.
+
+Gravity is given to the :class:`mbd3d.ModelBuilder`. Each element contributes generalized forces
+``Q = J^T F`` (``J`` the Jacobian of its point of application) through the body type, so the
+same elements serve planar and spatial bodies. Elements of one type are compiled into one group;
+spring-dampers are evaluated for all instances at once.
+
+Values given as callables are evaluated once per right-hand side evaluation:
+
+- ``f(t)``, or
+- ``f(t, state)`` with ``state`` a :class:`ForceState` of the body point (position, velocity,
+  angle, angular velocity), for feedback forces.
+"""
+
+from __future__ import annotations
+
+import inspect
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable
+
+import numpy as np
+
+from mbd3d.body import Body
+from mbd3d.errors import ModelError
+from mbd3d.motion import Motion
+
+if TYPE_CHECKING:
+    from mbd3d.model import BuildContext, Model
+
+__all__ = ["ForceElement", "ForceState", "PointForce", "Torque", "SpringDamper",
+           "RotationalSpringDamper"]
+
+
+@dataclass(frozen=True)
+class ForceState:
+    """State seen by a feedback force ``f(t, state)``: the application point and its body.
+
+    Attributes
+    ----------
+    position, velocity : ndarray (dim,)
+        Global position [m] and velocity [m/s] of the point of application.
+    angle : float
+        Body angle [rad] (planar bodies).
+    angular_velocity : float or ndarray
+        Body angular velocity [rad/s].
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    angle: float
+    angular_velocity: Any
+
+
+class ForceElement(ABC):
+    """Base class of applied force elements."""
+
+    name: str
+
+    @abstractmethod
+    def bodies(self) -> list[tuple[str, Body]]:
+        """``(role, body)`` pairs the element acts on (checked when the model is built)."""
+
+    @classmethod
+    @abstractmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        """Turn all elements of this class into one evaluable group."""
+
+
+class _CompiledForces(ABC):
+    @abstractmethod
+    def apply(self, model: "Model", t: float, fr: Any, Q: np.ndarray) -> None:
+        """Add the generalized forces into ``Q`` (n_bodies + 1, n_coords), ground row last."""
+
+    def potential(self, model: "Model", fr: Any) -> float:
+        """Potential energy stored in the elements [J] (zero for non-conservative ones)."""
+        return 0.0
+
+
+def _value_function(value: Any, what: str, size: int | None) -> Callable:
+    """Return ``g(t, state)`` for a constant, ``f(t)`` or ``f(t, state)``."""
+    if isinstance(value, Motion):
+        return lambda t, state: value.evaluate(t)[0]
+    if callable(value):
+        try:
+            n_args = len(inspect.signature(value).parameters)
+        except (TypeError, ValueError):
+            n_args = 1
+        if n_args == 1:
+            return lambda t, state: value(t)
+        if n_args == 2:
+            return value
+        raise ModelError(f"{what}: a callable must take (t) or (t, state), it takes {n_args} "
+                         "arguments")
+    arr = np.asarray(value, dtype=float)
+    if size is not None:
+        arr = arr.reshape(-1)
+        if arr.size != size:
+            raise ModelError(f"{what} must have {size} components, got {value!r}")
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"{what} must be finite, got {value!r}")
+    const = arr if size is not None else float(arr)
+    return lambda t, state: const
+
+
+def _checked(value: Any, shape: tuple, what: str, t: float) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float).reshape(shape)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} returned {value!r} at t = {t:g} s; expected shape {shape}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"{what} returned a non-finite value {value!r} at t = {t:g} s")
+    return arr
+
+
+def _row(body: Body, model: "Model") -> int:
+    return model.n_bodies if body.is_ground else body.index
+
+
+class PointForce(ForceElement):
+    """A force applied at a point of a body.
+
+    Parameters
+    ----------
+    name : str
+    body : Body
+    force : array_like (dim,) or callable
+        Force [N]: constant, ``f(t)`` or ``f(t, state)`` (see :class:`ForceState`).
+    point : array_like (dim,), optional
+        Point of application in the body frame [m]; default the centre of mass.
+    frame : {"global", "body"}
+        Axes in which ``force`` is given; ``"body"`` forces turn with the body (a thruster).
+    """
+
+    def __init__(self, name: str, body: Body, force: Any, point: Any = None, frame: str = "global"):
+        self.name, self.body, self.force, self.point, self.frame = name, body, force, point, frame
+        if frame not in ("global", "body"):
+            raise ModelError(f"force '{name}': frame must be 'global' or 'body', got {frame!r}")
+
+    def bodies(self) -> list[tuple[str, Body]]:
+        return [("body", self.body)]
+
+    @classmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        return _PointForces(elements, ctx)
+
+
+class _PointForces(_CompiledForces):
+    def __init__(self, elements: list[PointForce], ctx: "BuildContext"):
+        dim = ctx.dim
+        self.items = []
+        for e in elements:
+            u = np.zeros(dim) if e.point is None else ctx.vector(e.point, f"force '{e.name}': point")
+            fn = _value_function(e.force, f"force '{e.name}': force", dim)
+            self.items.append((e, u, fn))
+
+    def apply(self, model, t, fr, Q):
+        bt = model.body_type
+        for e, u, fn in self.items:
+            idx = np.array([_row(e.body, model)])
+            F = _checked(fn(t, _state(model, fr, idx, u)), (model.dim,), f"force '{e.name}'", t)
+            if e.frame == "body":
+                F = bt.vector(fr, idx, F[None])[0]
+            J = bt.point_jacobian(fr, idx, u[None])[0]
+            Q[idx[0]] += J.T @ F
+
+
+def _state(model, fr, idx, u) -> ForceState:
+    bt = model.body_type
+    position = bt.point(fr, idx, u[None])[0]
+    velocity = bt.point_velocity(fr, idx, u[None])[0]
+    angle = float(fr.Q[idx[0], 2]) if model.dim == 2 else np.nan
+    omega = bt.angular_velocity(fr, idx)[0]
+    return ForceState(position, velocity, angle, omega)
+
+
+class Torque(ForceElement):
+    """A pure torque [N m] on a body: constant, ``f(t)`` or ``f(t, state)``.
+
+    In 2D the torque is a scalar about the normal to the plane (counter-clockwise positive).
+    """
+
+    def __init__(self, name: str, body: Body, torque: Any):
+        self.name, self.body, self.torque = name, body, torque
+
+    def bodies(self) -> list[tuple[str, Body]]:
+        return [("body", self.body)]
+
+    @classmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        return _Torques(elements, ctx)
+
+
+class _Torques(_CompiledForces):
+    def __init__(self, elements: list[Torque], ctx: "BuildContext"):
+        size = None if ctx.dim == 2 else 3
+        self.items = [(e, _value_function(e.torque, f"torque '{e.name}'", size)) for e in elements]
+        self.shape = () if ctx.dim == 2 else (3,)
+
+    def apply(self, model, t, fr, Q):
+        bt = model.body_type
+        for e, fn in self.items:
+            idx = np.array([_row(e.body, model)])
+            state = _state(model, fr, idx, np.zeros(model.dim))
+            n = _checked(fn(t, state), self.shape, f"torque '{e.name}'", t)
+            Q[idx[0]] += bt.torque_generalized(fr, idx, n[None])[0]
+
+
+class SpringDamper(ForceElement):
+    """Translational spring-damper-actuator between a point of body i and a point of body j.
+
+    The tension ``T = stiffness (l - free_length) + damping dl/dt + actuator(t)`` [N] pulls the
+    two points together when positive.
+
+    Parameters
+    ----------
+    name : str
+    body_i, body_j : Body
+    point_i, point_j : array_like (dim,), optional
+        Attachment points in the body frames [m]. Alternatively ``at_i``, ``at_j``: the points
+        in global coordinates of the drawing (the bodies' initial guesses).
+    stiffness : float
+        [N/m], >= 0.
+    damping : float
+        [N s/m], >= 0.
+    free_length : float, optional
+        [m]; default the distance of the points in the drawing.
+    actuator : Motion or callable f(t), optional
+        Additional tension [N].
+    """
+
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, point_i: Any = None,
+                 point_j: Any = None, at_i: Any = None, at_j: Any = None, stiffness: float = 0.0,
+                 damping: float = 0.0, free_length: float | None = None, actuator: Any = None):
+        self.name, self.body_i, self.body_j = name, body_i, body_j
+        self.point_i, self.point_j, self.at_i, self.at_j = point_i, point_j, at_i, at_j
+        self.stiffness, self.damping = stiffness, damping
+        self.free_length, self.actuator = free_length, actuator
+
+    def bodies(self) -> list[tuple[str, Body]]:
+        return [("body_i", self.body_i), ("body_j", self.body_j)]
+
+    @classmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        return _SpringDampers(elements, ctx)
+
+
+def resolve_point(ctx: "BuildContext", body: Body, local: Any, drawing: Any, what: str
+                  ) -> np.ndarray:
+    """Body-frame point from either a body-frame ``local`` or a global ``drawing`` point."""
+    if local is not None and drawing is not None:
+        raise ModelError(f"{what}: give the point either in the body frame or in the drawing, "
+                         "not both")
+    if local is not None:
+        return ctx.vector(local, what)
+    if drawing is not None:
+        return ctx.to_local_point(body, ctx.vector(drawing, what))
+    return np.zeros(ctx.dim)
+
+
+class _SpringDampers(_CompiledForces):
+    def __init__(self, elements: list[SpringDamper], ctx: "BuildContext"):
+        self.elements = elements
+        ui, uj, k, c, l0 = [], [], [], [], []
+        self.actuators = []
+        for e in elements:
+            pi = resolve_point(ctx, e.body_i, e.point_i, e.at_i, f"spring '{e.name}': point_i")
+            pj = resolve_point(ctx, e.body_j, e.point_j, e.at_j, f"spring '{e.name}': point_j")
+            stiffness = ctx.scalar(e.stiffness, f"spring '{e.name}': stiffness")
+            damping = ctx.scalar(e.damping, f"spring '{e.name}': damping")
+            if stiffness < 0 or damping < 0:
+                raise ModelError(f"spring '{e.name}': stiffness and damping must be >= 0, got "
+                                 f"{stiffness}, {damping}")
+            if e.free_length is None:
+                length = float(np.linalg.norm(ctx.to_global_point(e.body_j, pj)
+                                              - ctx.to_global_point(e.body_i, pi)))
+            else:
+                length = ctx.scalar(e.free_length, f"spring '{e.name}': free_length")
+                if length < 0:
+                    raise ModelError(f"spring '{e.name}': free_length must be >= 0, got {length}")
+            ui.append(pi), uj.append(pj), k.append(stiffness), c.append(damping), l0.append(length)
+            if e.actuator is not None:
+                self.actuators.append((len(ui) - 1,
+                                       _value_function(e.actuator, f"spring '{e.name}': actuator",
+                                                       None)))
+        self.u_i, self.u_j = np.array(ui), np.array(uj)
+        self.k, self.c, self.l0 = np.array(k), np.array(c), np.array(l0)
+        self._rows = None
+
+    def _indices(self, model):
+        if self._rows is None:
+            self._rows = (np.array([_row(e.body_i, model) for e in self.elements]),
+                          np.array([_row(e.body_j, model) for e in self.elements]))
+        return self._rows
+
+    def geometry(self, model, fr):
+        """Vector d = r_j - r_i, length l and unit vector e of every spring."""
+        bt = model.body_type
+        bi, bj = self._indices(model)
+        d = bt.point(fr, bj, self.u_j) - bt.point(fr, bi, self.u_i)
+        length = np.sqrt(np.einsum("kd,kd->k", d, d))
+        return d, length
+
+    def apply(self, model, t, fr, Q):
+        bt = model.body_type
+        bi, bj = self._indices(model)
+        d, length = self.geometry(model, fr)
+        if np.any(length < 1e-12):
+            bad = self.elements[int(np.argmin(length))].name
+            raise ModelError(f"spring '{bad}': its two points coincide at t = {t:g} s; the force "
+                             "direction is undefined (give the spring a non-zero length)")
+        e = d / length[:, None]
+        d_dot = bt.point_velocity(fr, bj, self.u_j) - bt.point_velocity(fr, bi, self.u_i)
+        rate = np.einsum("kd,kd->k", e, d_dot)
+        tension = self.k * (length - self.l0) + self.c * rate
+        for i, fn in self.actuators:
+            tension[i] += float(_checked(fn(t, None), (), f"spring '{self.elements[i].name}' "
+                                         "actuator", t))
+        force_on_i = tension[:, None] * e
+        Qi = np.einsum("kdn,kd->kn", bt.point_jacobian(fr, bi, self.u_i), force_on_i)
+        Qj = np.einsum("kdn,kd->kn", bt.point_jacobian(fr, bj, self.u_j), -force_on_i)
+        np.add.at(Q, bi, Qi)
+        np.add.at(Q, bj, Qj)
+
+    def potential(self, model, fr) -> float:
+        _, length = self.geometry(model, fr)
+        return float(0.5 * np.sum(self.k * (length - self.l0) ** 2))
+
+
+class RotationalSpringDamper(ForceElement):
+    """Rotational spring-damper-actuator between two planar bodies (across a revolute).
+
+    Torque on body j (opposite on body i), counter-clockwise positive [N m]:
+    ``-stiffness (phi - free_angle) - damping dphi/dt + actuator(t)``, with
+    ``phi = theta_j - theta_i`` the relative rotation.
+
+    Parameters
+    ----------
+    stiffness : float
+        [N m/rad], >= 0.
+    damping : float
+        [N m s/rad], >= 0.
+    free_angle : float, optional
+        [rad]; default the relative angle in the drawing.
+    actuator : Motion or callable f(t), optional
+        Torque on body j [N m].
+    """
+
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, stiffness: float = 0.0,
+                 damping: float = 0.0, free_angle: float | None = None, actuator: Any = None):
+        self.name, self.body_i, self.body_j = name, body_i, body_j
+        self.stiffness, self.damping = stiffness, damping
+        self.free_angle, self.actuator = free_angle, actuator
+
+    def bodies(self) -> list[tuple[str, Body]]:
+        return [("body_i", self.body_i), ("body_j", self.body_j)]
+
+    @classmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        if ctx.dim != 2:
+            raise ModelError("RotationalSpringDamper is planar only for now")
+        return _RotationalSprings(elements, ctx)
+
+
+class _RotationalSprings(_CompiledForces):
+    def __init__(self, elements: list[RotationalSpringDamper], ctx: "BuildContext"):
+        self.elements = elements
+        k, c, phi0 = [], [], []
+        self.actuators = []
+        for n, e in enumerate(elements):
+            stiffness = ctx.scalar(e.stiffness, f"spring '{e.name}': stiffness")
+            damping = ctx.scalar(e.damping, f"spring '{e.name}': damping")
+            if stiffness < 0 or damping < 0:
+                raise ModelError(f"spring '{e.name}': stiffness and damping must be >= 0")
+            if e.free_angle is None:
+                angle = ctx.initial_coordinate(e.body_j, 2) - ctx.initial_coordinate(e.body_i, 2)
+            else:
+                angle = ctx.scalar(e.free_angle, f"spring '{e.name}': free_angle")
+            k.append(stiffness), c.append(damping), phi0.append(angle)
+            if e.actuator is not None:
+                self.actuators.append((n, _value_function(e.actuator,
+                                                          f"spring '{e.name}': actuator", None)))
+        self.k, self.c, self.phi0 = np.array(k), np.array(c), np.array(phi0)
+        self._rows = None
+
+    def _indices(self, model):
+        if self._rows is None:
+            self._rows = (np.array([_row(e.body_i, model) for e in self.elements]),
+                          np.array([_row(e.body_j, model) for e in self.elements]))
+        return self._rows
+
+    def apply(self, model, t, fr, Q):
+        bi, bj = self._indices(model)
+        phi = fr.Q[bj, 2] - fr.Q[bi, 2]
+        phi_dot = fr.Qd[bj, 2] - fr.Qd[bi, 2]
+        torque = -self.k * (phi - self.phi0) - self.c * phi_dot
+        for i, fn in self.actuators:
+            torque[i] += float(_checked(fn(t, None), (), f"spring '{self.elements[i].name}' "
+                                        "actuator", t))
+        np.add.at(Q[:, 2], bj, torque)
+        np.add.at(Q[:, 2], bi, -torque)
+
+    def potential(self, model, fr) -> float:
+        bi, bj = self._indices(model)
+        phi = fr.Q[bj, 2] - fr.Q[bi, 2]
+        return float(0.5 * np.sum(self.k * (phi - self.phi0) ** 2))
+
+
+def compile_forces(elements: tuple, ctx: "BuildContext") -> list[_CompiledForces]:
+    """Group force elements by class and compile each group."""
+    by_class: dict[type, list] = {}
+    for e in elements:
+        by_class.setdefault(type(e), []).append(e)
+    return [cls.compile(items, ctx) for cls, items in by_class.items()]

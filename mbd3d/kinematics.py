@@ -1,0 +1,196 @@
+"""Velocity and acceleration analysis, kinematic analysis over a time grid, inverse dynamics.
+
+For a fully driven mechanism (as many independent constraints as coordinates) the motion follows
+from the constraints alone: positions by Newton-Raphson, then ``Cq qd = -Ct`` and
+``Cq qdd = Qd`` with the same LU factors of ``Cq``. Inverse dynamics then reads the multipliers
+from ``Cq^T lam = Qe + Qv - M qdd`` (the first block row of the augmented equations), again with
+those factors.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d import constraints
+from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.errors import AnalysisError, MBDError, ModelError, NotFullyDrivenError
+from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented
+from mbd3d.position import hold_indices, singular_error, solve_position
+from mbd3d.results import Results
+
+__all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "inverse_dynamics",
+           "check_times"]
+
+
+def check_times(times: Sequence[float]) -> np.ndarray:
+    """A 1-D, finite, strictly increasing array of times [s]."""
+    t = np.atleast_1d(np.asarray(times, dtype=float))
+    if t.ndim != 1 or t.size == 0:
+        raise ModelError(f"times must be a non-empty 1-D sequence of times [s], got shape {t.shape}")
+    if not np.all(np.isfinite(t)):
+        raise ModelError("times must be finite")
+    if t.size > 1 and not np.all(np.diff(t) > 0):
+        raise ModelError("times must be strictly increasing")
+    return t
+
+
+def _require_fully_driven(model, what: str) -> None:
+    n, m = model.n_coordinates, model.n_constraints
+    if m < n:
+        raise NotFullyDrivenError(
+            f"{what} needs a fully driven mechanism, but '{model.name}' has {n} coordinates and "
+            f"{m} constraint equations: {n - m} degree(s) of freedom are not driven. Add "
+            f"{n - m} driver(s) (RotationDriver, TranslationDriver, CoordinateDriver) or use "
+            "mbd3d.forward_dynamics.")
+    if m > n:
+        raise NotFullyDrivenError(
+            f"{what}: '{model.name}' has {m} constraint equations for {n} coordinates; "
+            f"{m - n} are redundant or conflicting (see mbd3d.mobility).")
+
+
+def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[float] | None = None,
+                   hold: Sequence[str | int] | None = None) -> np.ndarray:
+    """Velocities consistent with the constraints: ``Cq qd = -Ct``.
+
+    For a fully driven mechanism the solution is unique. Otherwise it is the mass-weighted
+    projection of ``qd_guess`` (default ``model.qd0``), keeping held coordinates' rates.
+
+    Returns
+    -------
+    qd : ndarray (n,)
+    """
+    q = np.asarray(q, dtype=float)
+    fr = constraints.frames(model, q)
+    Cq = constraints.jacobian(model, q, fr)
+    nu = constraints.velocity_rhs(model, t)
+    n, m = model.n_coordinates, model.n_constraints
+    held = hold_indices(model, hold)
+    guess = np.asarray(model.qd0 if qd_guess is None else qd_guess, dtype=float).reshape(-1)
+    if guess.size != n or not np.all(np.isfinite(guess)):
+        raise ModelError(f"qd_guess must be {n} finite numbers")
+    try:
+        if m == n and not len(held):
+            return Factorization(Cq).solve(nu)
+        if len(held):
+            H = np.zeros((len(held), n))
+            H[np.arange(len(held)), held] = 1.0
+            Cq = sp.vstack([Cq, sp.csr_matrix(H)], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H])
+            nu = np.concatenate([nu, guess[held]])
+        M = mass_matrix(model, fr)
+        qd, _ = solve_augmented(M, Cq, M @ guess, nu)
+        return qd
+    except SingularMatrix:
+        raise singular_error(model, Cq[:m], t, f"velocity analysis of '{model.name}'") from None
+
+
+def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0) -> np.ndarray:
+    """Accelerations of a fully driven mechanism: ``Cq qdd = Qd``."""
+    _require_fully_driven(model, "solve_acceleration")
+    fr = constraints.frames(model, q, qd)
+    try:
+        return Factorization(constraints.jacobian(model, q, fr)).solve(
+            constraints.acceleration_rhs(model, t, q, qd, fr))
+    except SingularMatrix:
+        raise singular_error(model, constraints.jacobian(model, q, fr), t,
+                             f"acceleration analysis of '{model.name}'") from None
+
+
+def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Results:
+    t = check_times(times)
+    _require_fully_driven(model, analysis)
+    n, m = model.n_coordinates, model.n_constraints
+    k_max = len(t)
+    Q = np.empty((k_max, n))
+    Qd = np.empty((k_max, n))
+    Qdd = np.empty((k_max, n))
+    Lam = np.empty((k_max, m)) if with_forces else None
+    start = _time.perf_counter()
+    M = mass_matrix(model, constraints.frames(model, model.q0)) if with_forces else None
+    q = model.q0 if q_guess is None else q_guess
+    done = 0
+
+    def partial(status: str, message: str) -> Results:
+        return Results(model, analysis, t[:done], Q[:done], Qd[:done], Qdd[:done],
+                       None if Lam is None else Lam[:done], status=status, message=message,
+                       stats={"wall_time": _time.perf_counter() - start})
+
+    try:
+        for k, tk in enumerate(t):
+            if k > 0:
+                # second-order Taylor predictor: Newton-Raphson then needs one or two iterations
+                # and stays on the branch of the previous time point
+                h = tk - t[k - 1]
+                q = Q[k - 1] + h * Qd[k - 1] + 0.5 * h * h * Qdd[k - 1]
+            q = solve_position(model, q, tk, tol=tol)
+            fr = constraints.frames(model, q)
+            Cq = constraints.jacobian(model, q, fr)
+            try:
+                lu = Factorization(Cq)
+            except SingularMatrix:
+                raise singular_error(model, Cq, float(tk), f"{analysis} of '{model.name}'") from None
+            qd = lu.solve(constraints.velocity_rhs(model, tk))
+            fr = constraints.frames(model, q, qd)
+            qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
+            if with_forces:
+                if model.body_type.name != "planar":
+                    M = mass_matrix(model, fr)
+                rhs = generalized_forces(model, tk, fr) - M @ qdd
+                Lam[k] = lu.solve(rhs, transpose=True)
+            Q[k], Qd[k], Qdd[k] = q, qd, qdd
+            done = k + 1
+    except AnalysisError as exc:
+        exc.results = partial("failed", str(exc))
+        raise
+    except MBDError as exc:
+        # bad input discovered mid-run (a driver returning NaN): keep what was computed
+        exc.results = partial("failed", str(exc))  # type: ignore[attr-defined]
+        raise
+    except KeyboardInterrupt:
+        return partial("interrupted", f"interrupted by the user at t = {t[done]:g} s")
+    return partial("complete", "")
+
+
+def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
+                       tol: float = 1e-10) -> Results:
+    """Positions, velocities and accelerations of a fully driven mechanism over ``times``.
+
+    Parameters
+    ----------
+    model : Model
+        Must be fully driven (as many constraint equations as coordinates).
+    times : (k,) array_like
+        Strictly increasing times [s].
+    q_guess : (n,) array_like, optional
+        Guess for the first time point (default: the bodies' initial guesses); it selects the
+        assembly branch, which is then followed.
+    tol : float
+        Newton-Raphson tolerance on ``max |C|``.
+
+    Returns
+    -------
+    Results
+        ``q``, ``qd``, ``qdd`` at every time (no multipliers).
+
+    Raises
+    ------
+    NotFullyDrivenError
+        The mechanism has undriven degrees of freedom (or redundant constraints).
+    AssemblyError, SingularJacobianError
+        At a time point that cannot be solved (e.g. a lock-up); ``.results`` holds what was
+        computed before it.
+    """
+    return _sweep(model, times, q_guess, tol, False, "kinematic analysis")
+
+
+def inverse_dynamics(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
+                     tol: float = 1e-10) -> Results:
+    """Kinematic analysis plus the multipliers: joint reactions and driver efforts.
+
+    Same parameters as :func:`kinematic_analysis`; the results also carry ``lam``, so
+    ``results.joint(name).reaction(on=...)`` and ``results.driver(name).effort`` are available.
+    """
+    return _sweep(model, times, q_guess, tol, True, "inverse dynamics")

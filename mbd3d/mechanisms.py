@@ -1,0 +1,142 @@
+"""Ready-made mechanisms, shared by the examples, the tests and the benchmarks.
+
+Each factory returns a built :class:`mbd3d.Model` in SI units with bodies named as in the
+docstring. Joint points are given in body frames, so the bodies' initial guesses may be rough.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mbd3d.forces import Torque
+from mbd3d.model import Model, ModelBuilder
+from mbd3d.motion import Motion, Ramp
+
+__all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions"]
+
+
+def slider_crank_positions(crank_angle: float, crank_length: float, rod_length: float
+                           ) -> tuple[np.ndarray, float, np.ndarray]:
+    """Pin A, rod angle and slider point B of an in-line slider-crank (B on the x axis, right)."""
+    a = crank_length * np.array([math.cos(crank_angle), math.sin(crank_angle)])
+    rod_angle = math.asin(-a[1] / rod_length)
+    b = a + rod_length * np.array([math.cos(rod_angle), math.sin(rod_angle)])
+    return a, rod_angle, b
+
+
+def slider_crank(*, crank_length: float = 0.12, rod_length: float = 0.26,
+                 crank_mass: float = 1.0, crank_inertia: float = 0.001,
+                 rod_mass: float = 2.0, rod_inertia: float = 0.01,
+                 slider_mass: float = 4.0, slider_inertia: float = 0.02,
+                 crank_angle: float = math.radians(65.0), crank_speed: float | None = 2 * math.pi,
+                 crank_motion: Motion | None = None, crank_torque: float | None = None,
+                 gravity: float = 9.81) -> Model:
+    """In-line slider-crank: crank O-A pinned to the ground at the origin, rod A-B, slider B on
+    the global x axis (Nikravesh's data by default).
+
+    Bodies ``crank``, ``rod``, ``slider`` (centres of mass at the link mid-points and at B);
+    joints ``O``, ``A``, ``B`` (revolutes) and ``rail`` (prismatic along x).
+
+    Parameters
+    ----------
+    crank_angle : float
+        Crank angle at t = 0 [rad]; the bodies' guesses are the assembled drawing there.
+    crank_speed : float or None
+        Constant crank speed [rad/s] of the driver ``motor`` (a :class:`~mbd3d.Ramp`). None for
+        no driver (forward dynamics).
+    crank_motion : Motion, optional
+        Any other prescribed crank angle ``f(t)`` for the driver (overrides ``crank_speed``).
+    crank_torque : float, optional
+        Constant torque [N m] on the crank (force element ``torque``).
+    gravity : float
+        [m/s^2] along -y.
+    """
+    from joints import Prismatic, Revolute, RotationDriver
+
+    L1, L2 = crank_length, rod_length
+    a, rod_angle, b_point = slider_crank_positions(crank_angle, L1, L2)
+    b = ModelBuilder(dim=2, gravity=(0.0, -gravity), name="slider-crank")
+    crank = b.add_body("crank", mass=crank_mass, inertia=crank_inertia, position=a / 2,
+                       angle=crank_angle)
+    rod = b.add_body("rod", mass=rod_mass, inertia=rod_inertia, position=(a + b_point) / 2,
+                     angle=rod_angle)
+    slider = b.add_body("slider", mass=slider_mass, inertia=slider_inertia, position=b_point)
+    pin_o = b.add(Revolute("O", b.ground, crank, point_i=(0.0, 0.0), point_j=(-L1 / 2, 0.0)))
+    b.add(Revolute("A", crank, rod, point_i=(L1 / 2, 0.0), point_j=(-L2 / 2, 0.0)))
+    b.add(Revolute("B", rod, slider, point_i=(L2 / 2, 0.0), point_j=(0.0, 0.0)))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0), point_i=(0.0, 0.0),
+                    point_j=(0.0, 0.0)))
+    if crank_motion is not None or crank_speed is not None:
+        motion = crank_motion if crank_motion is not None else Ramp(crank_angle, crank_speed)
+        b.add(RotationDriver("motor", pin_o, motion=motion))
+    if crank_torque is not None:
+        b.add(Torque("torque", crank, crank_torque))
+    return b.build()
+
+
+def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
+             coupler_length: float = 0.35, rocker_length: float = 0.30,
+             mass_per_length: float = 2.0, crank_angle: float = math.radians(60.0),
+             crank_speed: float | None = 2 * math.pi, gravity: float = 9.81) -> Model:
+    """Crank-rocker four-bar: ground pivots O2 = (0, 0) and O4 = (ground_length, 0).
+
+    Bodies ``crank`` (O2-A), ``coupler`` (A-B), ``rocker`` (O4-B), slender uniform bars
+    (``m = mass_per_length L``, ``J = m L^2 / 12``); revolutes ``O2``, ``A``, ``B``, ``O4``;
+    driver ``motor`` at constant crank speed [rad/s] (None: no driver). Assembled with the open
+    configuration (B above the line O4-A).
+    """
+    from joints import Revolute, RotationDriver
+
+    a = crank_length * np.array([math.cos(crank_angle), math.sin(crank_angle)])
+    o4 = np.array([ground_length, 0.0])
+    # B: intersection of the circles |B - A| = coupler and |B - O4| = rocker, upper branch
+    d_vec = o4 - a
+    d = float(np.linalg.norm(d_vec))
+    along = (coupler_length**2 - rocker_length**2 + d * d) / (2 * d)
+    across = math.sqrt(max(coupler_length**2 - along**2, 0.0))
+    e = d_vec / d
+    # the branch to the left of the direction A -> O4: B above that line, the open four-bar
+    b_point = a + along * e + across * np.array([-e[1], e[0]])
+
+    def bar(name, p, q_point):
+        length = float(np.linalg.norm(q_point - p))
+        angle = math.atan2(*(q_point - p)[::-1])
+        m = mass_per_length * length
+        return builder.add_body(name, mass=m, inertia=m * length**2 / 12, position=(p + q_point) / 2,
+                                angle=angle), length
+
+    builder = ModelBuilder(dim=2, gravity=(0.0, -gravity), name="four-bar")
+    crank, L1 = bar("crank", np.zeros(2), a)
+    coupler, L2 = bar("coupler", a, b_point)
+    rocker, L3 = bar("rocker", o4, b_point)
+    o2 = builder.add(Revolute("O2", builder.ground, crank, point_i=(0, 0), point_j=(-L1 / 2, 0)))
+    builder.add(Revolute("A", crank, coupler, point_i=(L1 / 2, 0), point_j=(-L2 / 2, 0)))
+    builder.add(Revolute("B", coupler, rocker, point_i=(L2 / 2, 0), point_j=(L3 / 2, 0)))
+    builder.add(Revolute("O4", builder.ground, rocker, point_i=o4, point_j=(-L3 / 2, 0)))
+    if crank_speed is not None:
+        builder.add(RotationDriver("motor", o2, motion=Ramp(crank_angle, crank_speed)))
+    return builder.build()
+
+
+def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float = 1.0,
+                   angle: float = 0.0, gravity: float = 9.81, sparse: bool | None = None) -> Model:
+    """A chain of ``n_links`` uniform bars pinned end to end, the first to the ground at the
+    origin, laid out at ``angle`` [rad] from the x axis (0: horizontal, -pi/2: hanging).
+
+    Bodies ``link1`` ... ``linkN``; revolutes ``pin1`` (ground) ... ``pinN``.
+    """
+    from joints import Revolute
+
+    L, m = link_length, link_mass
+    b = ModelBuilder(dim=2, gravity=(0.0, -gravity), name=f"{n_links}-link chain")
+    direction = np.array([math.cos(angle), math.sin(angle)])
+    previous = b.ground
+    for k in range(n_links):
+        body = b.add_body(f"link{k + 1}", mass=m, inertia=m * L * L / 12,
+                          position=(k + 0.5) * L * direction, angle=angle)
+        point_i = (0.0, 0.0) if k == 0 else (L / 2, 0.0)
+        b.add(Revolute(f"pin{k + 1}", previous, body, point_i=point_i, point_j=(-L / 2, 0.0)))
+        previous = body
+    return b.build(sparse=sparse)

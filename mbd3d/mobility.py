@@ -1,0 +1,92 @@
+"""Mobility report: Gruebler count against the numerical rank of the constraint Jacobian."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from mbd3d import constraints
+from mbd3d.linalg import dependent_rows
+
+__all__ = ["MobilityReport", "mobility"]
+
+
+@dataclass(frozen=True)
+class MobilityReport:
+    """Degrees of freedom of a model at one configuration.
+
+    Attributes
+    ----------
+    n_bodies, n_coordinates, n_constraints : int
+    gruebler : int
+        ``n_d = x n_b - n_c`` (x = 3 planar): the count from the equations alone.
+    rank : int
+        Numerical rank of ``Cq`` at the configuration.
+    dof : int
+        ``n_coordinates - rank``: the actual mobility.
+    redundant : int
+        ``n_constraints - rank``: constraint equations that depend on others.
+    dependent : list of list of str
+        For each dependency, the row labels ("joint.component") involved.
+    """
+
+    model: str
+    n_bodies: int
+    n_coordinates: int
+    n_constraints: int
+    gruebler: int
+    rank: int
+    dof: int
+    redundant: int
+    dependent: list = field(default_factory=list)
+
+    @property
+    def fully_driven(self) -> bool:
+        return self.dof == 0 and self.redundant == 0
+
+    @property
+    def message(self) -> str:
+        if self.redundant:
+            rows = "; ".join(", ".join(group) for group in self.dependent)
+            return (f"{self.redundant} redundant constraint equation(s): the Gruebler count "
+                    f"({self.gruebler}) understates the mobility ({self.dof}). Dependent rows: "
+                    f"{rows}")
+        if self.dof == 0:
+            return "fully driven (kinematic analysis possible)"
+        return f"{self.dof} degree(s) of freedom (forward dynamics, or add drivers)"
+
+    def __str__(self) -> str:
+        return "\n".join([
+            f"Mobility of '{self.model}'",
+            f"  bodies                 {self.n_bodies}",
+            f"  coordinates            {self.n_coordinates}",
+            f"  constraint equations   {self.n_constraints}",
+            f"  Gruebler n_d = n - m   {self.gruebler}",
+            f"  rank of Cq             {self.rank}",
+            f"  degrees of freedom     {self.dof}",
+            f"  => {self.message}",
+        ])
+
+
+def mobility(model, q: Sequence[float] | None = None, t: float = 0.0) -> MobilityReport:
+    """Count coordinates, constraints and degrees of freedom of ``model`` at ``q``.
+
+    Parameters
+    ----------
+    q : (n,) array_like, optional
+        Configuration (default the bodies' initial guesses). The rank is that of the Jacobian
+        there, so pass an assembled configuration away from singular positions.
+    """
+    q = np.asarray(model.q0 if q is None else q, dtype=float)
+    Cq = constraints.jacobian(model, q, sparse=False)
+    n, m = model.n_coordinates, model.n_constraints
+    if m:
+        rank, groups = dependent_rows(Cq)
+    else:
+        rank, groups = 0, []
+    redundant = m - rank
+    dependent = [[model.row_labels[r] for r in g] for g in groups] if redundant else []
+    return MobilityReport(model.name, model.n_bodies, n, m, n - m, rank, n - rank, redundant,
+                          dependent)

@@ -1,0 +1,494 @@
+"""Building a model: bodies, joints, drivers and forces, then an immutable :class:`Model`.
+
+The builder collects the user's description; :meth:`ModelBuilder.build` checks it, converts joint
+data to body frames, groups the constraint primitives by type (so that each type is evaluated for
+all its instances at once), fixes the sparsity pattern of the Jacobian and returns a
+:class:`Model`. Solvers take the model and plain arrays ``(t, q, qd)`` and never modify it.
+
+Coordinates: body ``k`` owns ``q[k * n_coords:(k + 1) * n_coords]``; constraint rows are numbered
+primitive type by primitive type, and :attr:`Model.row_labels` and :meth:`Model.rows_of` map rows
+back to joints.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from mbd3d.body import Body, BodyType
+from mbd3d.element import ConstraintElement, PrimitiveSpec
+from mbd3d.errors import ModelError
+from mbd3d.linalg import AugmentedPattern
+from mbd3d.motion import Motion
+from mbd3d.primitives import PRIMITIVES
+
+__all__ = ["ModelBuilder", "Model", "BuildContext"]
+
+#: systems with more unknowns than this (coordinates + constraints) use sparse linear algebra;
+#: measured with benchmarks/planar_chain.py on the 2-core reference machine
+SPARSE_THRESHOLD = 400
+
+
+def _body_type(dim: int) -> BodyType:
+    if dim == 2:
+        from planar.body import PlanarBody
+        return PlanarBody()
+    raise ModelError(f"dim must be 2 (planar); got {dim!r}. Spatial bodies (dim=3) are not available yet")
+
+
+def _check_name(name: Any, what: str) -> str:
+    if not isinstance(name, str) or not name.strip():
+        raise ModelError(f"{what} name must be a non-empty string, got {name!r}")
+    return name
+
+
+class BuildContext:
+    """Geometry helpers handed to joints and forces while a model is built.
+
+    Global points and directions of the drawing are converted to body frames with the bodies'
+    initial guesses, so global joint data are only meaningful when the guess is the drawing.
+    """
+
+    def __init__(self, body_type: BodyType, bodies: Sequence[Body], ground: Body):
+        self.body_type = body_type
+        self.dim = body_type.dim
+        self._bodies = {id(b) for b in bodies} | {id(ground)}
+        self.ground = ground
+        n = len(bodies)
+        Q = np.zeros((n + 1, body_type.n_coords))
+        for b in bodies:
+            Q[b.index] = b.q0
+        self._frames = body_type.frames(Q)
+        self._n = n
+
+    def _row(self, body: Body) -> np.ndarray:
+        return np.array([self._n if body.is_ground else body.index])
+
+    def check_body(self, body: Any, element: str, role: str) -> Body:
+        """Return ``body`` if it is a body of this model, else raise naming ``element``."""
+        if not isinstance(body, Body):
+            raise ModelError(f"'{element}': {role} must be a body returned by add_body "
+                             f"(or builder.ground), got {body!r}")
+        if id(body) not in self._bodies:
+            raise ModelError(f"'{element}': {role} '{body.name}' belongs to another model builder")
+        return body
+
+    def vector(self, value: Any, what: str) -> np.ndarray:
+        """A finite vector of ``dim`` components."""
+        try:
+            arr = np.asarray(value, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise ModelError(f"{what} must be {self.dim} numbers, got {value!r}") from None
+        if arr.size != self.dim:
+            raise ModelError(f"{what} must have {self.dim} components, got {arr.size}: {value!r}")
+        if not np.all(np.isfinite(arr)):
+            raise ModelError(f"{what} must be finite, got {value!r}")
+        return arr
+
+    def direction(self, value: Any, what: str) -> np.ndarray:
+        """A unit vector; a zero vector is refused."""
+        arr = self.vector(value, what)
+        norm = float(np.linalg.norm(arr))
+        if norm < 1e-12:
+            raise ModelError(f"{what} must be a non-zero direction, got {value!r}")
+        return arr / norm
+
+    def scalar(self, value: Any, what: str, positive: bool = False) -> float:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ModelError(f"{what} must be a real number, got {value!r}") from None
+        if not math.isfinite(number):
+            raise ModelError(f"{what} must be finite, got {value!r}")
+        if positive and not number > 0.0:
+            raise ModelError(f"{what} must be positive, got {number}")
+        return number
+
+    def rotation(self, body: Body) -> np.ndarray:
+        """Rotation matrix of ``body`` at its initial guess (global frame for the ground)."""
+        return self._frames.A[self._row(body)][0]
+
+    def to_local_point(self, body: Body, point: np.ndarray) -> np.ndarray:
+        """Body-frame coordinates of the global point ``point`` at the initial guess."""
+        R = self._frames.Q[self._row(body)][0, :self.dim]
+        return self.rotation(body).T @ (point - R)
+
+    def to_local_vector(self, body: Body, vector: np.ndarray) -> np.ndarray:
+        return self.rotation(body).T @ vector
+
+    def to_global_point(self, body: Body, u: np.ndarray) -> np.ndarray:
+        return self.body_type.point(self._frames, self._row(body), u[None])[0]
+
+    def initial_coordinate(self, body: Body, coordinate: int) -> float:
+        return float(self._frames.Q[self._row(body)][0, coordinate])
+
+
+class ModelBuilder:
+    """Collects bodies, joints, drivers and forces; :meth:`build` returns a :class:`Model`.
+
+    Parameters
+    ----------
+    dim : int
+        2 for planar mechanisms.
+    gravity : sequence of float, optional
+        Gravitational acceleration [m/s^2], global axes, e.g. ``(0, -9.81)``. Default: none.
+    name : str
+        Name of the model, used in results and messages.
+
+    Examples
+    --------
+    >>> import mbd3d as mb
+    >>> from joints import Revolute
+    >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    >>> bar = b.add_body("bar", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))
+    >>> _ = b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
+    >>> model = b.build()
+    >>> model.n_coordinates, model.n_constraints
+    (3, 2)
+    """
+
+    def __init__(self, dim: int = 2, gravity: Sequence[float] | None = None, name: str = "model"):
+        self.body_type = _body_type(dim)
+        self.dim = dim
+        self.name = _check_name(name, "model")
+        if gravity is None:
+            self.gravity = np.zeros(dim)
+        else:
+            g = np.asarray(gravity, dtype=float).reshape(-1)
+            if g.size != dim or not np.all(np.isfinite(g)):
+                raise ModelError(f"gravity must be {dim} finite numbers [m/s^2], got {gravity!r}")
+            self.gravity = g
+        nc = self.body_type.n_coords
+        self.ground = Body("ground", -1, 0.0, None, np.zeros(nc), np.zeros(nc), is_ground=True)
+        self._bodies: list[Body] = []
+        self._elements: list[Any] = []
+        self._names: dict[str, str] = {"ground": "the ground"}
+        self._built = False
+
+    def _claim(self, name: str, what: str) -> None:
+        if self._built:
+            raise ModelError(f"cannot add {what} '{name}': the model was already built; "
+                             "make a new ModelBuilder")
+        if name in self._names:
+            raise ModelError(f"duplicate name '{name}' for a {what}: already used by "
+                             f"{self._names[name]}; names must be unique in a model")
+        self._names[name] = f"{what} '{name}'"
+
+    def add_body(self, name: str, *, mass: float, inertia: Any, position: Sequence[float],
+                 angle: float | None = None, velocity: Sequence[float] | None = None,
+                 angular_velocity: float | None = None) -> Body:
+        """Add a rigid body and return its handle.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the body.
+        mass : float
+            Mass [kg], positive.
+        inertia : float
+            Centroidal moment of inertia [kg m^2] about the normal to the plane, positive.
+        position : (2,) sequence
+            Initial guess of the centre of mass [m], global frame.
+        angle : float, optional
+            Initial guess of the body angle [rad] (x axis of the body from the global x axis).
+        velocity : (2,) sequence, optional
+            Initial velocity of the centre of mass [m/s] for forward dynamics (default zero).
+        angular_velocity : float, optional
+            Initial angular velocity [rad/s] for forward dynamics (default zero).
+
+        Returns
+        -------
+        Body
+            The handle joints and forces refer to.
+
+        Raises
+        ------
+        ModelError
+            Duplicate name, non-positive or non-finite mass or inertia, non-finite guess.
+        """
+        _check_name(name, "body")
+        self._claim(name, "body")
+        try:
+            mass_value = float(mass)
+        except (TypeError, ValueError):
+            raise ModelError(f"body '{name}': mass must be a real number [kg], got {mass!r}") from None
+        if not math.isfinite(mass_value) or not mass_value > 0.0:
+            raise ModelError(f"body '{name}': mass must be positive and finite [kg], got {mass!r}")
+        bt = self.body_type
+        inertia_value = bt.check_inertia(inertia, name)
+        q0 = bt.initial_coordinates(name, position, angle)
+        qd0 = bt.initial_rates(name, velocity, angular_velocity, q0)
+        body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0)
+        self._bodies.append(body)
+        return body
+
+    def add(self, element: Any) -> Any:
+        """Add a joint, driver or force element; returns it for convenience."""
+        from mbd3d.forces import ForceElement
+
+        if not isinstance(element, (ConstraintElement, ForceElement)):
+            raise ModelError(f"add() takes a joint, driver or force (from joints/ or mbd3d), "
+                             f"got {element!r}")
+        _check_name(element.name, type(element).__name__)
+        kind = "driver" if getattr(element, "is_driver", False) else (
+            "force" if isinstance(element, ForceElement) else "joint")
+        self._claim(element.name, kind)
+        self._elements.append(element)
+        return element
+
+    def build(self, sparse: bool | None = None) -> "Model":
+        """Check the description and return the immutable :class:`Model`.
+
+        Parameters
+        ----------
+        sparse : bool, optional
+            Force sparse (True) or dense (False) linear algebra; by default sparse when the number
+            of coordinates plus constraints exceeds ``SPARSE_THRESHOLD``.
+        """
+        from mbd3d.forces import ForceElement
+
+        if not self._bodies:
+            raise ModelError(f"model '{self.name}' has no bodies; add some with add_body()")
+        ctx = BuildContext(self.body_type, self._bodies, self.ground)
+        specs: list[tuple[int, PrimitiveSpec]] = []
+        constraint_elements = [e for e in self._elements if isinstance(e, ConstraintElement)]
+        for e_index, element in enumerate(constraint_elements):
+            if element.body_i is None:  # drivers of absolute coordinates act against the ground
+                element.body_i = self.ground
+            ctx.check_body(element.body_i, element.name, "body_i")
+            ctx.check_body(element.body_j, element.name, "body_j")
+            if element.body_i is element.body_j:
+                raise ModelError(f"joint '{element.name}' connects body '{element.body_i.name}' "
+                                 "to itself; a joint needs two different bodies")
+            for spec in element.primitives(ctx):
+                specs.append((e_index, spec))
+        force_elements = [e for e in self._elements if isinstance(e, ForceElement)]
+        for force in force_elements:
+            for role, body in force.bodies():
+                ctx.check_body(body, force.name, role)
+        model = Model(self, ctx, constraint_elements, specs, force_elements, sparse)
+        self._built = True
+        return model
+
+
+class _Group:
+    """All instances of one primitive type, with their stacked data and row range."""
+
+    def __init__(self, cls, dim, n_bodies, items: list[tuple[int, PrimitiveSpec]], offset: int):
+        self.cls = cls
+        self.count = len(items)
+        self.rows_per = cls.rows(dim)
+        self.offset = offset
+        self.n_rows = self.count * self.rows_per
+        self.bi = np.array([n_bodies if s.body_i.is_ground else s.body_i.index for _, s in items],
+                           dtype=np.intp)
+        self.bj = np.array([n_bodies if s.body_j.is_ground else s.body_j.index for _, s in items],
+                           dtype=np.intp)
+        self.params = {}
+        for key in cls.params:
+            self.params[key] = np.array([np.asarray(s.params[key]) for _, s in items])
+        self.elements = np.array([e for e, _ in items], dtype=np.intp)
+
+
+class Model:
+    """A built, immutable multibody model. Created by :meth:`ModelBuilder.build`.
+
+    Attributes
+    ----------
+    name : str
+    dim : int
+        2 (planar).
+    body_type : BodyType
+        Kinematics of the bodies.
+    bodies : tuple of Body
+        The moving bodies, in coordinate order.
+    joints : tuple of ConstraintElement
+        Joints and drivers, in the order they were added.
+    forces : tuple of ForceElement
+    n_coordinates : int
+        Length ``n`` of ``q``.
+    n_constraints : int
+        Number ``m`` of constraint equations.
+    q0, qd0 : ndarray, shape (n,)
+        The initial guesses of coordinates and rates given with the bodies.
+    mass : ndarray, shape (n_bodies,)
+    inertia : ndarray
+        Centroidal inertias, (n_bodies,) for planar bodies.
+    gravity : ndarray, shape (dim,)
+    row_labels : list of str
+        ``"joint.component"`` for each constraint row.
+    coordinate_labels : list of str
+        ``"body.coordinate"`` for each coordinate.
+    sparse : bool
+        Whether the solvers use sparse linear algebra for this model.
+    """
+
+    def __init__(self, builder: ModelBuilder, ctx: BuildContext, elements: list,
+                 specs: list[tuple[int, PrimitiveSpec]], forces: list, sparse: bool | None):
+        bt = builder.body_type
+        self.name = builder.name
+        self.dim = builder.dim
+        self.body_type = bt
+        self.bodies = tuple(builder._bodies)
+        self.joints = tuple(elements)
+        self.forces = tuple(forces)
+        self.ground = builder.ground
+        self.gravity = builder.gravity.copy()
+        nb, nc = len(self.bodies), bt.n_coords
+        self.n_bodies = nb
+        self.n_coords_per_body = nc
+        self.n_coordinates = nb * nc
+        self.q0 = np.concatenate([b.q0 for b in self.bodies])
+        self.qd0 = np.concatenate([b.qd0 for b in self.bodies])
+        self.mass = np.array([b.mass for b in self.bodies])
+        self.inertia = np.array([b.inertia for b in self.bodies])
+        self._body_by_name = {b.name: b for b in self.bodies}
+        self._joint_by_name = {e.name: (i, e) for i, e in enumerate(self.joints)}
+        self._force_by_name = {f.name: f for f in self.forces}
+        self.coordinate_labels = [f"{b.name}.{c}" for b in self.bodies for c in bt.coordinate_names]
+
+        # group primitive instances by type, in a fixed order
+        by_kind: OrderedDict[str, list] = OrderedDict((k, []) for k in PRIMITIVES)
+        for e_index, spec in specs:
+            if spec.kind not in PRIMITIVES:
+                raise ModelError(f"joint '{self.joints[e_index].name}': unknown primitive "
+                                 f"{spec.kind!r}")
+            if spec.body_i.is_ground and spec.body_j.is_ground:
+                raise ModelError(f"joint '{self.joints[e_index].name}' connects the ground to itself")
+            by_kind[spec.kind].append((e_index, spec))
+        self.groups: list[_Group] = []
+        offset = 0
+        labels: list[str] = []
+        row_element: list[int] = []
+        c0: list[float] = []
+        driver_rows, driver_motions, driver_names = [], [], []
+        self._instances_of: dict[str, list[tuple[int, int]]] = {e.name: [] for e in self.joints}
+        for kind, items in by_kind.items():
+            if not items:
+                continue
+            group = _Group(PRIMITIVES[kind], self.dim, nb, items, offset)
+            self.groups.append(group)
+            for local, (e_index, spec) in enumerate(items):
+                self._instances_of[self.joints[e_index].name].append((len(self.groups) - 1, local))
+                r = group.rows_per
+                if len(spec.labels) != r:
+                    raise ModelError(f"joint '{self.joints[e_index].name}': primitive {kind} "
+                                     f"needs {r} row labels, got {spec.labels!r}")
+                name = self.joints[e_index].name
+                for k in range(r):
+                    labels.append(f"{name}.{spec.labels[k]}")
+                    row_element.append(e_index)
+                    c0.append(float(spec.c0) if k == 0 else 0.0)
+                if spec.motion is not None:
+                    if r != 1:
+                        raise ModelError(f"joint '{name}': only one-row primitives can be driven")
+                    if not isinstance(spec.motion, Motion):
+                        raise ModelError(f"driver '{name}': motion must be an mbd3d Motion, "
+                                         f"got {spec.motion!r}")
+                    driver_rows.append(offset)
+                    driver_motions.append(spec.motion)
+                    driver_names.append(name)
+                offset += r
+        self.n_constraints = offset
+        self.row_labels = labels
+        self.row_element = np.array(row_element, dtype=np.intp)
+        self.c0 = np.array(c0)
+        self.driver_rows = np.array(driver_rows, dtype=np.intp)
+        self.driver_motions = tuple(driver_motions)
+        self.driver_names = tuple(driver_names)
+        self._rows_of = {e.name: np.flatnonzero(self.row_element == i)
+                         for i, e in enumerate(self.joints)}
+        self._reaction_frames = {e.name: e.reaction_frame(ctx) for e in self.joints}
+        self._build_jacobian_pattern()
+        if sparse is None:
+            sparse = self.n_coordinates + self.n_constraints > SPARSE_THRESHOLD
+        self.sparse = bool(sparse)
+        self._augmented_pattern = AugmentedPattern(self)
+
+        from mbd3d.forces import compile_forces
+        self.force_groups = compile_forces(self.forces, ctx)
+        for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0):
+            arr.setflags(write=False)
+
+    # -- Jacobian sparsity pattern ---------------------------------------------------------------
+    def _build_jacobian_pattern(self) -> None:
+        nb, nc = self.n_bodies, self.n_coords_per_body
+        all_rows, all_cols = [], []
+        for g in self.groups:
+            r = g.rows_per
+            rows = g.offset + np.arange(g.count)[:, None] * r + np.arange(r)[None, :]
+            bodies = np.stack([g.bi, g.bj], axis=1)  # (k, 2)
+            cols = bodies[:, :, None] * nc + np.arange(nc)[None, None, :]
+            cols = np.where(bodies[:, :, None] == nb, -1, cols)  # ground: no columns
+            shape = (g.count, r, 2, nc)
+            all_rows.append(np.broadcast_to(rows[:, :, None, None], shape).ravel())
+            all_cols.append(np.broadcast_to(cols[:, None, :, :], shape).ravel())
+        rows = np.concatenate(all_rows) if all_rows else np.zeros(0, dtype=np.intp)
+        cols = np.concatenate(all_cols) if all_cols else np.zeros(0, dtype=np.intp)
+        take = np.flatnonzero(cols >= 0)
+        rows, cols = rows[take], cols[take]
+        order = np.lexsort((cols, rows))
+        self._jac_take = take[order]
+        self._jac_rows = rows[order]
+        self._jac_cols = cols[order]
+        counts = np.bincount(self._jac_rows, minlength=self.n_constraints)
+        self._jac_indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+
+    # -- named access ----------------------------------------------------------------------------
+    def body(self, name: str) -> Body:
+        """The body called ``name``."""
+        try:
+            return self._body_by_name[name]
+        except KeyError:
+            raise ModelError(f"model '{self.name}' has no body '{name}'; bodies: "
+                             f"{', '.join(self._body_by_name) or '(none)'}") from None
+
+    def joint(self, name: str) -> ConstraintElement:
+        """The joint or driver called ``name``."""
+        return self._joint_by_name[self._check_joint(name)][1]
+
+    def force(self, name: str) -> Any:
+        try:
+            return self._force_by_name[name]
+        except KeyError:
+            raise ModelError(f"model '{self.name}' has no force '{name}'; forces: "
+                             f"{', '.join(self._force_by_name) or '(none)'}") from None
+
+    def _check_joint(self, name: str) -> str:
+        if name not in self._joint_by_name:
+            raise ModelError(f"model '{self.name}' has no joint or driver '{name}'; known: "
+                             f"{', '.join(self._joint_by_name) or '(none)'}")
+        return name
+
+    def rows_of(self, name: str) -> np.ndarray:
+        """Constraint rows of the joint or driver ``name``."""
+        return self._rows_of[self._check_joint(name)]
+
+    def coordinates_of(self, body: str | Body) -> slice:
+        """The slice of ``q`` owned by ``body``."""
+        b = self.body(body) if isinstance(body, str) else body
+        nc = self.n_coords_per_body
+        return slice(b.index * nc, (b.index + 1) * nc)
+
+    def coordinate_index(self, spec: str) -> int:
+        """Index in ``q`` of a coordinate named ``"body.coordinate"``, e.g. ``"crank.theta"``."""
+        body, _, coord = spec.rpartition(".")
+        names = self.body_type.coordinate_names
+        if not body or coord not in names:
+            raise ModelError(f"coordinate {spec!r} must be 'body.c' with c one of {names}")
+        return self.coordinates_of(body).start + names.index(coord)
+
+    def joints_of_rows(self, rows: Iterable[int]) -> list[str]:
+        """Names of the joints owning ``rows``, without repetition, in row order."""
+        seen: dict[str, None] = {}
+        for r in rows:
+            seen[self.joints[self.row_element[r]].name] = None
+        return list(seen)
+
+    def __repr__(self) -> str:
+        return (f"Model({self.name!r}: {self.n_bodies} {self.body_type.name} bodies, "
+                f"{len(self.joints)} joints/drivers, {self.n_coordinates} coordinates, "
+                f"{self.n_constraints} constraints)")

@@ -1,0 +1,161 @@
+"""Position analysis: Newton-Raphson on ``C(q, t) = 0``, the one place it is implemented.
+
+Each iteration solves ``Cq dq = -C``. When the constraints do not fix every coordinate (assembly
+of a mechanism for forward dynamics) the step is the mass-weighted least-change one,
+``min dq^T M dq`` subject to ``Cq dq = -C``, so the guess moves as little as the constraints
+allow and coordinates the user asks to ``hold`` stay where they are. A backtracking line search on
+``|C|`` makes it converge from guesses tens of degrees off; the guess picks the assembly branch
+(elbow up or down).
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d import constraints
+from mbd3d.equations import mass_matrix
+from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
+from mbd3d.linalg import Factorization, SingularMatrix, dependent_rows, solve_augmented
+
+__all__ = ["solve_position", "hold_indices", "singular_error"]
+
+
+def hold_indices(model, hold: Iterable[str | int] | None) -> np.ndarray:
+    """Indices in ``q`` of coordinates given as ``"body.coordinate"`` names or integers."""
+    out = []
+    for item in hold or ():
+        if isinstance(item, (int, np.integer)):
+            if not 0 <= item < model.n_coordinates:
+                raise ModelError(f"hold: coordinate index {item} out of range 0..{model.n_coordinates - 1}")
+            out.append(int(item))
+        else:
+            out.append(model.coordinate_index(str(item)))
+    return np.array(sorted(set(out)), dtype=np.intp)
+
+
+def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJacobianError:
+    """A :class:`SingularJacobianError` naming the joints whose rows depend on each other."""
+    rank, groups = dependent_rows(Cq)
+    rows = np.unique(np.concatenate(groups)) if groups else np.zeros(0, dtype=int)
+    rows = rows[rows < model.n_constraints]
+    joints = model.joints_of_rows(rows)
+    labels = ", ".join(model.row_labels[r] for r in rows[:12])
+    return SingularJacobianError(
+        f"{what}: the constraint Jacobian is singular at t = {t:.6g} s (numerical rank {rank} of "
+        f"{model.n_constraints} rows). Dependent rows: {labels}; joints involved: "
+        f"{', '.join(joints)}. This is a lock-up or toggle position of the mechanism, or "
+        "redundant constraints.", joints=joints, time=t, results=results)
+
+
+def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
+    q = np.array(q, dtype=float).reshape(-1)
+    if q.size != model.n_coordinates:
+        raise ModelError(f"{what} must have {model.n_coordinates} entries (one per coordinate), "
+                         f"got {q.size}")
+    bad = np.flatnonzero(~np.isfinite(q))
+    if bad.size:
+        raise ModelError(f"{what} is not finite at {', '.join(model.coordinate_labels[k] for k in bad[:5])}")
+    return q
+
+
+def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
+                   tol: float = 1e-10, max_iterations: int = 50,
+                   hold: Iterable[str | int] | None = None) -> np.ndarray:
+    """Solve ``C(q, t) = 0`` by Newton-Raphson from ``q_guess``.
+
+    Parameters
+    ----------
+    model : Model
+    q_guess : (n,) array_like, optional
+        Starting point; default ``model.q0`` (the bodies' initial guesses).
+    t : float
+        Time [s] (drivers are evaluated at ``t``).
+    tol : float
+        Convergence when ``max |C| <= tol`` [m, or rad for angular rows].
+    max_iterations : int
+    hold : iterable of str or int, optional
+        Coordinates kept at their guessed values, e.g. ``["crank.theta"]``.
+
+    Returns
+    -------
+    q : ndarray (n,)
+
+    Raises
+    ------
+    AssemblyError
+        No convergence: the message names the constraint rows with the largest residual.
+    SingularJacobianError
+        The Jacobian is singular at the iterate (names the joints involved).
+    """
+    q = _check_finite(model, model.q0 if q_guess is None else q_guess, "q_guess")
+    held = hold_indices(model, hold)
+    q_held = q[held].copy()
+    m, n = model.n_constraints, model.n_coordinates
+    m_total = m + len(held)
+    if m_total > n:
+        raise AssemblyError(
+            f"position analysis of '{model.name}': {m} constraint equations"
+            f"{f' and {len(held)} held coordinates' if len(held) else ''} for {n} coordinates; "
+            "there are redundant constraints (see mbd3d.mobility) or too many held coordinates",
+            time=t)
+
+    def full_residual(qq):
+        C = constraints.residual(model, t, qq)
+        return np.concatenate([C, qq[held] - q_held]) if len(held) else C
+
+    def full_jacobian(qq):
+        Cq = constraints.jacobian(model, qq)
+        if not len(held):
+            return Cq
+        H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))
+        return sp.vstack([Cq, H], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H.toarray()])
+
+    C = full_residual(q)
+    norm = float(np.linalg.norm(C))
+    history = []
+    M = None
+    for iteration in range(max_iterations + 1):
+        worst = float(np.max(np.abs(C))) if C.size else 0.0
+        history.append(worst)
+        if worst <= tol:
+            return q
+        if iteration == max_iterations:
+            break
+        J = full_jacobian(q)
+        try:
+            if m_total == n:
+                dq = Factorization(J).solve(-C)
+            else:
+                if M is None:
+                    M = mass_matrix(model, constraints.frames(model, q))
+                dq, _ = solve_augmented(M, J, np.zeros(n), -C)
+        except SingularMatrix:
+            raise singular_error(model, J[:m] if not sp.issparse(J) else J.tocsr()[:m], t,
+                                 f"position analysis of '{model.name}'") from None
+        # backtracking: accept the first step that reduces |C| (full steps near the solution)
+        step = 1.0
+        while True:
+            q_try = q + step * dq
+            C_try = full_residual(q_try)
+            norm_try = float(np.linalg.norm(C_try))
+            if np.isfinite(norm_try) and norm_try < (1.0 - 1e-4 * step) * norm:
+                break
+            step *= 0.5
+            if step < 1e-6:
+                break
+        if step < 1e-6:
+            # no descent: Newton's direction is useless here (a saddle of |C| or a lost branch)
+            break
+        q, C, norm = q_try, C_try, norm_try
+
+    order = np.argsort(-np.abs(C[:m]))[:3]
+    worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e}" for r in order)
+    raise AssemblyError(
+        f"position analysis of '{model.name}' did not converge at t = {t:.6g} s after "
+        f"{len(history) - 1} Newton-Raphson iterations (max |C| per iteration: "
+        f"{', '.join(f'{h:.1e}' for h in history[-6:])}). Largest residuals: {worst_rows}. "
+        "Check that these joints can be assembled (lengths, points in body frames) and give "
+        "initial guesses closer to an assembled configuration.", time=t)

@@ -1,0 +1,229 @@
+"""Constraint primitives, each evaluated for all its instances at once.
+
+Every constraint row of a model has the form ``C = c(q) - c0 - f(t)``: ``c`` one of the primitive
+functions below, ``c0`` a constant of the row (a distance, a relative angle of the drawing) and
+``f`` an optional prescribed motion (drivers). The primitives are written against
+:class:`mbd3d.body.BodyType` only, so the same code serves planar and spatial bodies.
+
+Conventions (Haug, *Computer-Aided Kinematics and Dynamics of Mechanical Systems*, 1989; verified
+in Rodrigues coordinates in ``shared/rodrigues.md`` section 4): bodies ``i`` and ``j``,
+``d = r_j - r_i``, ``a = A v`` body vectors, and ``gamma = -(Cq qd)_q qd`` is the
+velocity-dependent right-hand side of the acceleration equation (drivers add ``f''`` separately).
+
+Each primitive class provides, for ``k`` instances with body indices ``bi``, ``bj`` (k,) and
+stacked parameters ``p`` (a dict of arrays with leading dimension k):
+
+- ``rows(dim)``: rows per instance;
+- ``evaluate(bt, fr, bi, bj, p, value, jacobian, gamma)`` returning the requested parts
+  ``(c (k, r), dc/dq (k, r, 2, n_coords), gamma (k, r))``, ``None`` for the others. The Jacobian
+  holds the derivatives with respect to body i (``[:, :, 0]``) and body j (``[:, :, 1]``);
+  ``gamma`` needs velocities in ``fr``.
+
+Rotated vectors ``s = A v`` are computed once per call and shared by the three parts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
+           "RelativeAngle"]
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("kd,kd->k", a, b)
+
+
+def _pair(Ji: np.ndarray, Jj: np.ndarray) -> np.ndarray:
+    """Jacobians of one row with respect to bodies i and j, (k, n) each -> (k, 1, 2, n)."""
+    J = np.empty((Ji.shape[0], 1, 2, Ji.shape[1]))
+    J[:, 0, 0] = Ji
+    J[:, 0, 1] = Jj
+    return J
+
+
+def _aJ(a: np.ndarray, J: np.ndarray) -> np.ndarray:
+    """``a^T J`` per instance: (k, d) with (k, d, n) -> (k, n)."""
+    return np.matmul(a[:, None, :], J)[:, 0, :]
+
+
+class PointCoincidence:
+    """``c = r_i - r_j``: point ``u_i`` of body i coincides with point ``u_j`` of body j.
+
+    A planar revolute joint; the point part of a spatial spherical/revolute/universal joint.
+    Reaction: the force ``-lam`` acts on body i at its point and ``+lam`` on body j.
+    """
+
+    kind = "point"
+    params = ("u_i", "u_j")
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return dim
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        si, sj = bt.rotate(fr, bi, p["u_i"]), bt.rotate(fr, bj, p["u_j"])
+        c = J = g = None
+        if value:
+            c = fr.R[bi] + si - fr.R[bj] - sj
+        if jacobian:
+            J = np.empty((len(bi), si.shape[1], 2, bt.n_coords))
+            J[:, :, 0] = bt.jacobian_of(fr, bi, si, True)
+            J[:, :, 1] = bt.jacobian_of(fr, bj, sj, True)
+            J[:, :, 1] *= -1.0
+        if gamma:
+            g = bt.acceleration_term_of(fr, bj, sj) - bt.acceleration_term_of(fr, bi, si)
+        return c, J, g
+
+
+class Dot1:
+    """``c = a_i . a_j``: body vectors kept perpendicular (Haug's dot-1).
+
+    Axis alignment is written as perpendicularity, whose gradient does not vanish at the
+    solution.
+    """
+
+    kind = "dot1"
+    params = ("v_i", "v_j")
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        ai, aj = bt.rotate(fr, bi, p["v_i"]), bt.rotate(fr, bj, p["v_j"])
+        c = J = g = None
+        if value:
+            c = _dot(ai, aj)[:, None]
+        if jacobian:
+            J = _pair(_aJ(aj, bt.jacobian_of(fr, bi, ai, False)),
+                      _aJ(ai, bt.jacobian_of(fr, bj, aj, False)))
+        if gamma:
+            g = -(_dot(aj, bt.acceleration_term_of(fr, bi, ai))
+                  + _dot(ai, bt.acceleration_term_of(fr, bj, aj))
+                  + 2.0 * _dot(bt.velocity_of(fr, bi, ai), bt.velocity_of(fr, bj, aj)))[:, None]
+        return c, J, g
+
+
+class Dot2:
+    """``c = a_i . (r_j - r_i)``: point j stays on a plane (3D) or line (2D) of body i.
+
+    With a motion ``f(t)`` it is a translation driver along ``a_i``.
+    """
+
+    kind = "dot2"
+    params = ("v_i", "u_i", "u_j")
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        ai = bt.rotate(fr, bi, p["v_i"])
+        si, sj = bt.rotate(fr, bi, p["u_i"]), bt.rotate(fr, bj, p["u_j"])
+        d = fr.R[bj] + sj - fr.R[bi] - si
+        c = J = g = None
+        if value:
+            c = _dot(ai, d)[:, None]
+        if jacobian:
+            Ji = _aJ(d, bt.jacobian_of(fr, bi, ai, False)) - _aJ(ai, bt.jacobian_of(fr, bi, si, True))
+            Jj = _aJ(ai, bt.jacobian_of(fr, bj, sj, True))
+            J = _pair(Ji, Jj)
+        if gamma:
+            d_dot = (fr.Rd[bj] + bt.velocity_of(fr, bj, sj)
+                     - fr.Rd[bi] - bt.velocity_of(fr, bi, si))
+            g = -(_dot(d, bt.acceleration_term_of(fr, bi, ai))
+                  + 2.0 * _dot(bt.velocity_of(fr, bi, ai), d_dot)
+                  + _dot(ai, bt.acceleration_term_of(fr, bj, sj)
+                         - bt.acceleration_term_of(fr, bi, si)))[:, None]
+        return c, J, g
+
+
+class Distance:
+    """``c = |r_j - r_i|``: with ``c0 = L`` a massless rigid link of length L.
+
+    ``lam`` is then the compressive force in the link [N] (positive pushes the points apart).
+    """
+
+    kind = "distance"
+    params = ("u_i", "u_j")
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        si, sj = bt.rotate(fr, bi, p["u_i"]), bt.rotate(fr, bj, p["u_j"])
+        d = fr.R[bj] + sj - fr.R[bi] - si
+        # a zero length is refused when the model is built; the floor only avoids 0/0 in an
+        # iterate that passes through coincidence
+        length = np.maximum(np.sqrt(_dot(d, d)), 1e-300)
+        e = d / length[:, None]
+        c = J = g = None
+        if value:
+            c = length[:, None]
+        if jacobian:
+            J = _pair(-_aJ(e, bt.jacobian_of(fr, bi, si, True)),
+                      _aJ(e, bt.jacobian_of(fr, bj, sj, True)))
+        if gamma:
+            d_dot = (fr.Rd[bj] + bt.velocity_of(fr, bj, sj)
+                     - fr.Rd[bi] - bt.velocity_of(fr, bi, si))
+            e_dd = _dot(e, d_dot)
+            g = -(_dot(e, bt.acceleration_term_of(fr, bj, sj) - bt.acceleration_term_of(fr, bi, si))
+                  + (_dot(d_dot, d_dot) - e_dd * e_dd) / length)[:, None]
+        return c, J, g
+
+
+class Coordinate:
+    """``c = q_j[coordinate]``: one coordinate of body j (body i is the ground)."""
+
+    kind = "coordinate"
+    params = ("coordinate",)
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        k = len(bj)
+        c = J = g = None
+        if value:
+            c = fr.Q[bj, p["coordinate"]][:, None]
+        if jacobian:
+            J = np.zeros((k, 1, 2, bt.n_coords))
+            J[np.arange(k), 0, 1, p["coordinate"]] = 1.0
+        if gamma:
+            g = np.zeros((k, 1))
+        return c, J, g
+
+
+class RelativeAngle:
+    """``c = theta_j - theta_i``: rotation of body j relative to body i about the plane normal."""
+
+    kind = "angle"
+    params = ()
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        c = J = g = None
+        if value:
+            c = bt.relative_angle(fr, bi, bj)[:, None]
+        if jacobian:
+            J = bt.relative_angle(fr, bi, bj, jacobian=True)[:, None]
+        if gamma:
+            # theta_j - theta_i is linear in q for planar bodies: no velocity-dependent term
+            g = np.zeros((len(bi), 1))
+        return c, J, g
+
+
+PRIMITIVES = {cls.kind: cls for cls in
+              (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle)}

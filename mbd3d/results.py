@@ -1,0 +1,351 @@
+"""One results object for every analysis: time histories, named access, reactions, export.
+
+``Results`` holds ``t``, ``q``, ``qd``, ``qdd`` and, after inverse or forward dynamics, the
+multipliers ``lam``. Everything else (body poses, point trajectories, joint reactions, driver
+efforts, energies, residuals) is derived from them on request, through the same body kinematics
+and constraint primitives the solvers use.
+
+Sign conventions. With ``M qdd + Cq^T lam = Qe`` the constraint forces are ``-Cq^T lam``. The
+reaction of a joint *on a body* is the force [N] and moment [N m] the joint exerts on that body,
+the moment taken about the joint's point on that body. A driver's effort is the generalized force
+it applies in the direction of its coordinate: ``-lam`` (a torque [N m] for a rotation driver, a
+force [N] for a translation driver).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from mbd3d import constraints
+from mbd3d.body import Body
+from mbd3d.equations import kinetic_energy, potential_energy
+from mbd3d.errors import MBDError, ModelError
+
+__all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "JointHistory"]
+
+
+@dataclass(frozen=True)
+class BodyHistory:
+    """Motion of a body's centre of mass over time (global axes).
+
+    Attributes
+    ----------
+    position, velocity, acceleration : ndarray (k, dim)
+        [m], [m/s], [m/s^2].
+    angle : ndarray (k,)
+        Body angle [rad], planar bodies (unwrapped: it keeps counting turns).
+    angular_velocity, angular_acceleration : ndarray
+        [rad/s], [rad/s^2]; (k,) planar.
+    """
+
+    name: str
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    angle: np.ndarray
+    angular_velocity: np.ndarray
+    angular_acceleration: np.ndarray
+
+    @property
+    def pose(self) -> np.ndarray:
+        """(k, 3) array ``(x, y, angle)`` for planar bodies."""
+        return np.column_stack([self.position, self.angle])
+
+
+@dataclass(frozen=True)
+class PointHistory:
+    """Trajectory of a body point: global position [m], velocity [m/s], acceleration [m/s^2]."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+
+
+@dataclass(frozen=True)
+class Reaction:
+    """Force [N] (k, dim) and moment [N m] ((k,) planar) of a joint on a body, about the joint's
+    point on that body, in the axes named by ``frame`` ("global" or "joint")."""
+
+    body: str
+    frame: str
+    force: np.ndarray
+    moment: np.ndarray
+
+
+class JointHistory:
+    """Multipliers, reactions and (for drivers) efforts of one joint or driver."""
+
+    def __init__(self, results: "Results", name: str):
+        self._results = results
+        self.name = name
+        self.element = results.model.joint(name)
+        self.rows = results.model.rows_of(name)
+
+    @property
+    def lam(self) -> np.ndarray:
+        """Lagrange multipliers of the joint's rows, (k, rows)."""
+        return self._results._require_lam()[:, self.rows]
+
+    @property
+    def effort(self) -> np.ndarray:
+        """Driver effort ``-lam`` [N m or N], (k,): what the actuator must supply."""
+        if not self.element.is_driver:
+            raise ModelError(f"'{self.name}' is a joint, not a driver; it has reactions, not an "
+                             "effort (use .reaction(on=...))")
+        return -self.lam[:, 0]
+
+    def reaction(self, on: str | Body | None = None, frame: str = "global") -> Reaction:
+        """Force and moment this joint exerts on body ``on`` (default: its second body, j).
+
+        Parameters
+        ----------
+        on : str or Body, optional
+            ``body_i`` or ``body_j`` of the joint (the ground is allowed).
+        frame : {"global", "joint"}
+            Axes of the components; "joint" are the joint's axes attached to body i.
+        """
+        return self._results._reaction(self.name, on, frame)
+
+
+class Results:
+    """Time histories of one analysis.
+
+    Attributes
+    ----------
+    model : Model
+    analysis : str
+        "kinematic", "inverse dynamics" or "forward dynamics".
+    t : ndarray (k,)
+        Times [s].
+    q, qd, qdd : ndarray (k, n)
+        Coordinates and their first and second time derivatives.
+    lam : ndarray (k, m) or None
+        Lagrange multipliers (dynamics only).
+    status : str
+        "complete", "failed" or "interrupted"; ``message`` says why when not complete.
+    stats : dict
+        Solver statistics (steps, right-hand side evaluations, projections, wall time [s]).
+    """
+
+    def __init__(self, model, analysis: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
+                 qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
+                 message: str = "", stats: dict | None = None):
+        self.model = model
+        self.analysis = analysis
+        self.t = np.asarray(t, dtype=float)
+        self.q, self.qd, self.qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+        self.lam = None if lam is None else np.asarray(lam, dtype=float)
+        self.status = status
+        self.message = message
+        self.stats = dict(stats or {})
+        self._residuals: tuple[np.ndarray, np.ndarray] | None = None
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __repr__(self) -> str:
+        span = f"t = {self.t[0]:g}..{self.t[-1]:g} s" if len(self.t) else "no time points"
+        return (f"Results({self.analysis} of '{self.model.name}': {len(self.t)} time points, "
+                f"{span}, {self.status})")
+
+    # -- named access ----------------------------------------------------------------------------
+    def _require_lam(self) -> np.ndarray:
+        if self.lam is None:
+            raise MBDError(f"{self.analysis} results carry no multipliers; run "
+                           "mbd3d.inverse_dynamics or mbd3d.forward_dynamics for reactions and "
+                           "driver efforts")
+        return self.lam
+
+    def _body_frames(self, body: Body):
+        """Frames of one body over all times (k rows) and the matching coordinate arrays."""
+        model = self.model
+        sl = model.coordinates_of(body)
+        fr = model.body_type.frames(self.q[:, sl], self.qd[:, sl])
+        return fr, self.qdd[:, sl]
+
+    def _body(self, body: str | Body) -> Body:
+        if isinstance(body, Body):
+            return body
+        if body == "ground":
+            return self.model.ground
+        return self.model.body(body)
+
+    def body(self, name: str) -> BodyHistory:
+        """Centre-of-mass motion of body ``name``."""
+        b = self.model.body(name)
+        sl = self.model.coordinates_of(b)
+        q, qd, qdd = self.q[:, sl], self.qd[:, sl], self.qdd[:, sl]
+        d = self.model.dim
+        return BodyHistory(name, q[:, :d], qd[:, :d], qdd[:, :d], q[:, d], qd[:, d], qdd[:, d])
+
+    def point(self, body: str, point: Sequence[float]) -> PointHistory:
+        """Trajectory of the point ``point`` [m] (body frame) of body ``body``."""
+        b = self.model.body(body)
+        u = np.asarray(point, dtype=float).reshape(-1)
+        if u.size != self.model.dim or not np.all(np.isfinite(u)):
+            raise ModelError(f"point of body '{body}' must be {self.model.dim} finite numbers, "
+                             f"got {point!r}")
+        bt = self.model.body_type
+        fr, qdd = self._body_frames(b)
+        k = len(self.t)
+        idx = np.arange(k)
+        U = np.broadcast_to(u, (k, u.size))
+        acc = (np.einsum("kdn,kn->kd", bt.point_jacobian(fr, idx, U), qdd)
+               + bt.point_acceleration_term(fr, idx, U))
+        return PointHistory(bt.point(fr, idx, U), bt.point_velocity(fr, idx, U), acc)
+
+    def joint(self, name: str) -> JointHistory:
+        """Multipliers, reactions and efforts of joint or driver ``name``."""
+        return JointHistory(self, name)
+
+    driver = joint
+
+    @property
+    def efforts(self) -> dict[str, np.ndarray]:
+        """Effort of every driver, by name."""
+        return {e.name: self.joint(e.name).effort for e in self.model.joints if e.is_driver}
+
+    def _reaction(self, name: str, on: Any, frame: str) -> Reaction:
+        model = self.model
+        element = model.joint(name)
+        lam = self._require_lam()
+        body = element.body_j if on is None else self._body(on)
+        if body is not element.body_i and body is not element.body_j:
+            raise ModelError(f"joint '{name}' connects '{element.body_i.name}' and "
+                             f"'{element.body_j.name}'; it exerts no reaction on '{body.name}'")
+        if frame not in ("global", "joint"):
+            raise ModelError(f"frame must be 'global' or 'joint', got {frame!r}")
+        bt, nc, k = model.body_type, model.n_coords_per_body, len(self.t)
+        # Evaluate the joint's primitives for all times at once: rows 2t and 2t+1 of a stacked
+        # coordinate array hold bodies i and j at time t (zeros for the ground).
+        Q = np.zeros((2 * k, nc))
+        for side, b in enumerate((element.body_i, element.body_j)):
+            if not b.is_ground:
+                Q[side::2] = self.q[:, model.coordinates_of(b)]
+        fr = bt.frames(Q)
+        generalized = np.zeros((k, nc))
+        for g_index, local in model._instances_of[name]:
+            g = model.groups[g_index]
+            rows = g.offset + local * g.rows_per + np.arange(g.rows_per)
+            params = {key: np.broadcast_to(v[local], (k,) + v.shape[1:]) for key, v in g.params.items()}
+            spec_bodies = (g.bi[local], g.bj[local])
+            sides = [s for s, b in enumerate(spec_bodies)
+                     if b == (model.n_bodies if body.is_ground else body.index)]
+            bi = np.arange(k) * 2 + (0 if _same(model, g.bi[local], element.body_i) else 1)
+            bj = np.arange(k) * 2 + (1 if _same(model, g.bj[local], element.body_j) else 0)
+            J = g.cls.evaluate(bt, fr, bi, bj, params, False, True, False)[1]  # (k, r, 2, nc)
+            for s in sides:
+                generalized -= np.einsum("krn,kr->kn", J[:, :, s, :], lam[:, rows])
+        side = 0 if body is element.body_i else 1
+        idx = np.arange(k) * 2 + side
+        force, moment_cm = bt.wrench(fr, idx, generalized)
+        point_i, point_j, axes = model._reaction_frames[name]
+        u = np.broadcast_to(point_i if side == 0 else point_j, (k, model.dim))
+        arm = bt.point(fr, idx, u) - fr.Q[idx, :model.dim]
+        moment = moment_cm - bt.cross(arm, force)
+        if frame == "joint":
+            A_axes = np.einsum("kab,bc->kac", fr.A[np.arange(k) * 2], axes)
+            force = np.einsum("kab,ka->kb", A_axes, force)
+            if model.dim == 3:
+                moment = np.einsum("kab,ka->kb", A_axes, moment)
+        return Reaction(body.name, frame, force, moment)
+
+    # -- checks ----------------------------------------------------------------------------------
+    def _compute_residuals(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._residuals is None:
+            pos = np.empty(len(self.t))
+            vel = np.empty(len(self.t))
+            for k, t in enumerate(self.t):
+                C, data, _ = constraints.evaluate(self.model, t,
+                                                  constraints.frames(self.model, self.q[k]))
+                pos[k] = np.max(np.abs(C), initial=0)
+                Cq = constraints.jacobian_matrix(self.model, data)
+                v = Cq @ self.qd[k] - constraints.velocity_rhs(self.model, t)
+                vel[k] = np.max(np.abs(v), initial=0)
+            self._residuals = (pos, vel)
+        return self._residuals
+
+    @property
+    def position_residual(self) -> np.ndarray:
+        """``max |C|`` at every time point [m or rad]."""
+        return self._compute_residuals()[0]
+
+    @property
+    def velocity_residual(self) -> np.ndarray:
+        """``max |Cq qd + Ct|`` at every time point [m/s or rad/s]."""
+        return self._compute_residuals()[1]
+
+    @property
+    def kinetic_energy(self) -> np.ndarray:
+        """Kinetic energy [J] at every time point."""
+        return np.array([kinetic_energy(self.model, q, qd) for q, qd in zip(self.q, self.qd)])
+
+    @property
+    def potential_energy(self) -> np.ndarray:
+        """Potential energy of gravity (zero at the global origin) and springs [J]."""
+        return np.array([potential_energy(self.model, q) for q in self.q])
+
+    # -- export ----------------------------------------------------------------------------------
+    def columns(self) -> dict[str, np.ndarray]:
+        """All time histories as named columns (the CSV layout)."""
+        cols: dict[str, np.ndarray] = {"t": self.t}
+        labels = self.model.coordinate_labels
+        for name, arr in (("", self.q), ("d/dt ", self.qd), ("d2/dt2 ", self.qdd)):
+            for j, label in enumerate(labels):
+                cols[f"{name}{label}"] = arr[:, j]
+        if self.lam is not None:
+            for j, label in enumerate(self.model.row_labels):
+                cols[f"lam {label}"] = self.lam[:, j]
+            for name, effort in self.efforts.items():
+                cols[f"effort {name}"] = effort
+        return cols
+
+    def to_csv(self, path: str | os.PathLike) -> None:
+        """Write every time history to a CSV file (one row per time point, header of names)."""
+        cols = self.columns()
+        data = np.column_stack(list(cols.values())) if len(self.t) else np.zeros((0, len(cols)))
+        header = ",".join(cols)
+
+        def write(f):
+            np.savetxt(f, data, delimiter=",", header=header, comments="", fmt="%.17g")
+        _atomic_write(path, write, text=True)
+
+    def to_npz(self, path: str | os.PathLike) -> None:
+        """Write the arrays and their labels to a compressed NumPy ``.npz`` file."""
+        arrays = dict(t=self.t, q=self.q, qd=self.qd, qdd=self.qdd,
+                      coordinate_labels=np.array(self.model.coordinate_labels),
+                      row_labels=np.array(self.model.row_labels),
+                      analysis=np.array(self.analysis), status=np.array(self.status),
+                      message=np.array(self.message), model=np.array(self.model.name))
+        if self.lam is not None:
+            arrays["lam"] = self.lam
+
+        def write(f):
+            np.savez_compressed(f, **arrays)
+        _atomic_write(path, write, text=False)
+
+
+def _same(model, padded_index: int, body: Body) -> bool:
+    return padded_index == (model.n_bodies if body.is_ground else body.index)
+
+
+def _atomic_write(path: str | os.PathLike, write, text: bool) -> None:
+    """Write through a temporary file in the same folder, then rename: never a half file."""
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise MBDError(f"cannot write '{path}': folder '{folder}' does not exist")
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".mbd3d-", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w" if text else "wb") as f:
+            write(f)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise

@@ -1,0 +1,146 @@
+"""The planar rigid body: ``q = (Rx, Ry, theta)``, ``A(theta)`` the 2x2 rotation.
+
+Formulas (Nikravesh, *Planar Multibody Dynamics*; Shabana, *Computational Dynamics*, planar
+kinematics): with ``s = A v`` and ``s_perp = (-s_y, s_x) = dA/dtheta v``,
+
+- point ``r = R + s``: ``dr/dq = [I2, s_perp]``, ``rdot = Rdot + thetadot s_perp``;
+- velocity-dependent part of the acceleration of ``s``: ``-thetadot^2 s``;
+- a body vector ``a = A v`` behaves the same without ``R``.
+
+The mass matrix is ``diag(m, m, J)`` and constant; there is no quadratic velocity vector.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from mbd3d.body import BodyType, Frames
+from mbd3d.errors import ModelError
+
+
+_PERP_SIGN = np.array([-1.0, 1.0])
+
+
+def _perp(s: np.ndarray) -> np.ndarray:
+    """Rows turned by +90 degrees: (x, y) -> (-y, x)."""
+    return s[:, ::-1] * _PERP_SIGN
+
+
+def _finite_vector(value: Any, size: int, what: str) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} must be {size} numbers, got {value!r}") from None
+    if arr.size != size:
+        raise ModelError(f"{what} must have {size} components, got {arr.size}: {value!r}")
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"{what} must be finite, got {value!r}")
+    return arr
+
+
+def _finite_scalar(value: Any, what: str) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} must be a real number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise ModelError(f"{what} must be finite, got {value!r}")
+    return number
+
+
+class PlanarBody(BodyType):
+    """Kinematics of planar rigid bodies, batched over bodies (see :class:`mbd3d.body.BodyType`)."""
+
+    dim = 2
+    n_coords = 3
+    coordinate_names = ("x", "y", "theta")
+    name = "planar"
+
+    def check_inertia(self, inertia: Any, body: str) -> float:
+        value = _finite_scalar(inertia, f"body '{body}': inertia")
+        if not value > 0.0:
+            raise ModelError(f"body '{body}': inertia must be positive [kg m^2], got {value}; "
+                             "a planar body needs its centroidal moment of inertia about the normal")
+        return value
+
+    def initial_coordinates(self, body: str, position: Any, orientation: Any) -> np.ndarray:
+        pos = _finite_vector(position, 2, f"body '{body}': position")
+        angle = _finite_scalar(0.0 if orientation is None else orientation, f"body '{body}': angle")
+        return np.array([pos[0], pos[1], angle])
+
+    def initial_rates(self, body: str, velocity: Any, angular_velocity: Any,
+                      q0: np.ndarray) -> np.ndarray:
+        vel = _finite_vector((0.0, 0.0) if velocity is None else velocity, 2,
+                             f"body '{body}': velocity")
+        omega = _finite_scalar(0.0 if angular_velocity is None else angular_velocity,
+                               f"body '{body}': angular_velocity")
+        return np.array([vel[0], vel[1], omega])
+
+    def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None) -> Frames:
+        theta = Q[:, 2]
+        c, s = np.cos(theta), np.sin(theta)
+        A = np.empty((len(theta), 2, 2))
+        A[:, 0, 0] = c
+        A[:, 0, 1] = -s
+        A[:, 1, 0] = s
+        A[:, 1, 1] = c
+        if Qd is None:
+            return Frames(Q=Q, A=A, R=Q[:, :2])
+        return Frames(Q=Q, A=A, R=Q[:, :2], Qd=Qd, Rd=Qd[:, :2], omega=Qd[:, 2])
+
+    def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.matmul(fr.A[idx], v[:, :, None])[:, :, 0]
+
+    def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
+                    ) -> np.ndarray:
+        J = np.zeros((len(s), 2, 3))
+        if translation:
+            J[:, 0, 0] = 1.0
+            J[:, 1, 1] = 1.0
+        J[:, 0, 2] = -s[:, 1]
+        J[:, 1, 2] = s[:, 0]
+        return J
+
+    def velocity_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
+        return fr.omega[idx, None] * _perp(s)
+
+    def acceleration_term_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
+        w = fr.omega[idx, None]
+        return -(w * w) * s
+
+    def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+    def mass_blocks(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+        blocks = np.zeros((len(mass), 3, 3))
+        blocks[:, 0, 0] = mass
+        blocks[:, 1, 1] = mass
+        blocks[:, 2, 2] = inertia
+        return blocks
+
+    def quadratic_velocity(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
+        return np.zeros((len(mass), 3))
+
+    def torque_generalized(self, fr: Frames, idx: np.ndarray, torque: np.ndarray) -> np.ndarray:
+        out = np.zeros((len(idx), 3))
+        out[:, 2] = torque
+        return out
+
+    def wrench(self, fr: Frames, idx: np.ndarray, generalized: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        return generalized[:, :2].copy(), generalized[:, 2].copy()
+
+    def angular_velocity(self, fr: Frames, idx: np.ndarray) -> np.ndarray:
+        return fr.omega[idx]
+
+    def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,
+                       jacobian: bool = False) -> np.ndarray:
+        if jacobian:
+            J = np.zeros((len(idx_i), 2, 3))
+            J[:, 0, 2] = -1.0
+            J[:, 1, 2] = 1.0
+            return J
+        return fr.Q[idx_j, 2] - fr.Q[idx_i, 2]
