@@ -26,7 +26,7 @@ from mbd3d.mobility import MobilityReport, mobility
 from mbd3d.model import Model, ModelBuilder
 from mbd3d.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
 from mbd3d.position import solve_position
-from mbd3d.results import Results
+from mbd3d.results import Results, format_table
 
 __version__ = "0.1.0"
 
@@ -36,7 +36,7 @@ __all__ = [
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "forward_dynamics", "forward_accelerations", "project_state", "METHODS",
-    "mobility", "MobilityReport", "Results", "kinetic_energy", "potential_energy",
+    "mobility", "MobilityReport", "Results", "format_table", "kinetic_energy", "potential_energy",
     "MBDError", "ModelError", "NotFullyDrivenError", "AnalysisError", "AssemblyError",
     "SingularJacobianError", "IntegrationError",
 ]

@@ -155,7 +155,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
 
 
 def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
-                       tol: float = 1e-10) -> Results:
+                       tol: float = 1e-12) -> Results:
     """Positions, velocities and accelerations of a fully driven mechanism over ``times``.
 
     Parameters
@@ -187,7 +187,7 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
 
 
 def inverse_dynamics(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
-                     tol: float = 1e-10) -> Results:
+                     tol: float = 1e-12) -> Results:
     """Kinematic analysis plus the multipliers: joint reactions and driver efforts.
 
     Same parameters as :func:`kinematic_analysis`; the results also carry ``lam``, so

@@ -32,7 +32,10 @@ def hold_indices(model, hold: Iterable[str | int] | None) -> np.ndarray:
                 raise ModelError(f"hold: coordinate index {item} out of range 0..{model.n_coordinates - 1}")
             out.append(int(item))
         else:
-            out.append(model.coordinate_index(str(item)))
+            try:
+                out.append(model.coordinate_index(str(item)))
+            except ModelError as exc:
+                raise ModelError(f"hold: {exc}") from None
     return np.array(sorted(set(out)), dtype=np.intp)
 
 
@@ -62,7 +65,7 @@ def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
 
 
 def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
-                   tol: float = 1e-10, max_iterations: int = 50,
+                   tol: float = 1e-12, max_iterations: int = 50,
                    hold: Iterable[str | int] | None = None) -> np.ndarray:
     """Solve ``C(q, t) = 0`` by Newton-Raphson from ``q_guess``.
 
@@ -74,7 +77,8 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     t : float
         Time [s] (drivers are evaluated at ``t``).
     tol : float
-        Convergence when ``max |C| <= tol`` [m, or rad for angular rows].
+        Convergence when ``max |C| <= tol`` [m, or rad for angular rows]. It is raised to the
+        rounding level of the coordinates, ``100 eps (1 + max |q|)``, when that is larger.
     max_iterations : int
     hold : iterable of str or int, optional
         Coordinates kept at their guessed values, e.g. ``["crank.theta"]``.
@@ -120,7 +124,7 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     for iteration in range(max_iterations + 1):
         worst = float(np.max(np.abs(C))) if C.size else 0.0
         history.append(worst)
-        if worst <= tol:
+        if worst <= max(tol, 100 * np.finfo(float).eps * (1.0 + float(np.max(np.abs(q))))):
             return q
         if iteration == max_iterations:
             break
@@ -147,15 +151,28 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             if step < 1e-6:
                 break
         if step < 1e-6:
-            # no descent: Newton's direction is useless here (a saddle of |C| or a lost branch)
             break
         q, C, norm = q_try, C_try, norm_try
 
     order = np.argsort(-np.abs(C[:m]))[:3]
     worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e}" for r in order)
+    trace = ", ".join(f"{h:.1e}" for h in history[-6:])
+    if iteration < max_iterations:
+        # No descent direction: |C| has a local minimum with C != 0, where the gradient
+        # Cq^T C vanishes, so Cq is singular there. The drivers ask for a position beyond a
+        # lock-up or toggle, or the joints cannot all be assembled.
+        J = full_jacobian(q)
+        J = J.tocsr()[:m] if sp.issparse(J) else J[:m]
+        error = singular_error(model, J, t, f"position analysis of '{model.name}'")
+        raise SingularJacobianError(
+            f"position analysis of '{model.name}' is stuck at t = {t:.6g} s at a singular "
+            f"configuration (max |C| per iteration: {trace}; largest residuals: {worst_rows}). "
+            f"The mechanism cannot reach the position its drivers and joints ask for: it is at a "
+            f"lock-up or toggle position, or cannot be assembled. Joints involved: "
+            f"{', '.join(error.joints)}.", joints=error.joints, time=t)
     raise AssemblyError(
         f"position analysis of '{model.name}' did not converge at t = {t:.6g} s after "
-        f"{len(history) - 1} Newton-Raphson iterations (max |C| per iteration: "
-        f"{', '.join(f'{h:.1e}' for h in history[-6:])}). Largest residuals: {worst_rows}. "
-        "Check that these joints can be assembled (lengths, points in body frames) and give "
-        "initial guesses closer to an assembled configuration.", time=t)
+        f"{max_iterations} Newton-Raphson iterations (max |C| per iteration: {trace}). "
+        f"Largest residuals: {worst_rows}. Check that these joints can be assembled (lengths, "
+        "points in body frames) and give initial guesses closer to an assembled configuration.",
+        time=t)

@@ -26,7 +26,7 @@ from mbd3d.body import Body
 from mbd3d.equations import kinetic_energy, potential_energy
 from mbd3d.errors import MBDError, ModelError
 
-__all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "JointHistory"]
+__all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "JointHistory", "format_table"]
 
 
 @dataclass(frozen=True)
@@ -328,6 +328,24 @@ class Results:
         def write(f):
             np.savez_compressed(f, **arrays)
         _atomic_write(path, write, text=False)
+
+
+def format_table(columns: dict[str, Sequence[float]], precision: int = 5) -> str:
+    """A plain-text table of equally long columns, for printing results in a terminal.
+
+    >>> print(format_table({"t [s]": [0.0, 0.5], "x [m]": [1.0, -0.25]}, precision=3))
+      t [s]  x [m]
+          0      1
+        0.5  -0.25
+    """
+    names = list(columns)
+    # adding 0.0 turns -0.0 into 0.0, which reads better in a table
+    cells = [[f"{float(v) + 0.0:.{precision}g}" for v in columns[name]] for name in names]
+    widths = [max([len(name)] + [len(c) for c in col]) + 1 for name, col in zip(names, cells)]
+    lines = ["".join(name.rjust(w + 1) for name, w in zip(names, widths))]
+    for row in zip(*cells):
+        lines.append("".join(c.rjust(w + 1) for c, w in zip(row, widths)))
+    return "\n".join(line.rstrip() for line in lines)
 
 
 def _same(model, padded_index: int, body: Body) -> bool:

@@ -1,0 +1,202 @@
+"""Bad input and failing analyses: the library's own errors, naming the culprit; partial results
+are kept."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d.mechanisms import pendulum_chain, slider_crank
+from joints import (CoordinateDriver, Distance, Prismatic, Revolute, RotationDriver,
+                    TranslationDriver)
+
+
+def builder_with_bar():
+    b = mb.ModelBuilder(dim=2)
+    bar = b.add_body("bar", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    return b, bar
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(mass=0.0, inertia=1.0), ["'bar'", "mass", "positive"]),
+    (dict(mass=-1.0, inertia=1.0), ["'bar'", "mass"]),
+    (dict(mass=float("nan"), inertia=1.0), ["'bar'", "mass"]),
+    (dict(mass=1.0, inertia=0.0), ["'bar'", "inertia", "positive"]),
+    (dict(mass=1.0, inertia=float("inf")), ["'bar'", "inertia", "finite"]),
+    (dict(mass=1.0, inertia=1.0, position=(0.0, float("nan"))), ["'bar'", "position"]),
+    (dict(mass=1.0, inertia=1.0, angle=float("nan")), ["'bar'", "angle"]),
+    (dict(mass=1.0, inertia=1.0, position=(1.0, 2.0, 3.0)), ["'bar'", "position", "2"]),
+    (dict(mass="heavy", inertia=1.0), ["'bar'", "mass"]),
+])
+def test_body_parameters_are_checked(kwargs, words):
+    b = mb.ModelBuilder(dim=2)
+    kwargs.setdefault("position", (0.0, 0.0))
+    with pytest.raises(mb.ModelError) as info:
+        b.add_body("bar", **kwargs)
+    for word in words:
+        assert word in str(info.value)
+
+
+def test_duplicate_and_unknown_names():
+    b, bar = builder_with_bar()
+    with pytest.raises(mb.ModelError, match="duplicate name 'bar'"):
+        b.add_body("bar", mass=1.0, inertia=1.0, position=(0, 0))
+    b.add(Revolute("pin", b.ground, bar, at=(0, 0)))
+    with pytest.raises(mb.ModelError, match="duplicate name 'pin'.*joint 'pin'"):
+        b.add(Revolute("pin", b.ground, bar, at=(1, 0)))
+    with pytest.raises(mb.ModelError, match="duplicate name 'ground'"):
+        b.add_body("ground", mass=1.0, inertia=1.0, position=(0, 0))
+    model = b.build()
+    with pytest.raises(mb.ModelError, match="no body 'crank'.*bar"):
+        model.body("crank")
+    res = mb.forward_dynamics(model, [0.0, 0.01])
+    with pytest.raises(mb.ModelError, match="no joint or driver 'motor'.*pin"):
+        res.joint("motor")
+
+
+def test_joint_connecting_a_body_to_itself():
+    b, bar = builder_with_bar()
+    b.add(Revolute("self", bar, bar, at=(0, 0)))
+    with pytest.raises(mb.ModelError, match="joint 'self' connects body 'bar' to itself"):
+        b.build()
+
+
+def test_joint_parameters_are_checked():
+    b, bar = builder_with_bar()
+    b.add(Revolute("pin", b.ground, bar, at=(0, float("nan"))))
+    with pytest.raises(mb.ModelError, match="joint 'pin': at must be finite"):
+        b.build()
+    b, bar = builder_with_bar()
+    b.add(Prismatic("rail", b.ground, bar, axis=(0.0, 0.0)))
+    with pytest.raises(mb.ModelError, match="joint 'rail': axis must be a non-zero direction"):
+        b.build()
+    b, bar = builder_with_bar()
+    b.add(Distance("rope", b.ground, bar, length=-1.0))
+    with pytest.raises(mb.ModelError, match="joint 'rope'.*length must be positive"):
+        b.build()
+    b, bar = builder_with_bar()
+    with pytest.raises(mb.ModelError, match="driver 'm'.*Function"):
+        RotationDriver("m", b.ground, bar, motion=lambda t: t)
+    other = mb.ModelBuilder(dim=2)
+    foreign = other.add_body("foreign", mass=1.0, inertia=1.0, position=(0, 0))
+    b.add(Revolute("pin", b.ground, foreign, at=(0, 0)))
+    with pytest.raises(mb.ModelError, match="'pin'.*'foreign' belongs to another model builder"):
+        b.build()
+    with pytest.raises(mb.ModelError, match="add\\(\\) takes a joint"):
+        b.add("not a joint")
+
+
+def test_adding_after_build_is_refused():
+    b, bar = builder_with_bar()
+    b.add(Revolute("pin", b.ground, bar, at=(0, 0)))
+    b.build()
+    with pytest.raises(mb.ModelError, match="already built"):
+        b.add_body("late", mass=1.0, inertia=1.0, position=(0, 0))
+
+
+def test_guess_with_nan_is_refused():
+    model = pendulum_chain(2)
+    guess = model.q0.copy()
+    guess[4] = np.nan
+    with pytest.raises(mb.ModelError, match="q_guess is not finite at link2.y"):
+        mb.solve_position(model, guess)
+
+
+def test_driver_returning_nan_is_named_and_results_kept():
+    b, bar = builder_with_bar()
+    pin = b.add(Revolute("pin", b.ground, bar, at=(0, 0)))
+    bad = mb.Function(lambda t: 0.0 if t < 0.5 else math.nan, lambda t: 0.0, lambda t: 0.0)
+    b.add(RotationDriver("motor", pin, motion=bad))
+    with pytest.raises(mb.ModelError, match="driver 'motor'.*non-finite.*t = 0.5") as info:
+        mb.kinematic_analysis(b.build(), np.linspace(0.0, 1.0, 11))
+    partial = info.value.results
+    assert partial.status == "failed" and len(partial) == 5
+    np.testing.assert_allclose(partial.t, np.linspace(0.0, 0.4, 5))
+
+
+def test_kinematic_analysis_of_a_mechanism_that_is_not_fully_driven():
+    model = slider_crank(crank_speed=None)
+    with pytest.raises(mb.NotFullyDrivenError, match="1 degree\\(s\\) of freedom.*driver"):
+        mb.kinematic_analysis(model, [0.0])
+
+
+def test_newton_raphson_failure_names_the_worst_constraints():
+    model = pendulum_chain(3)
+    guess = model.q0 + 0.4
+    with pytest.raises(mb.AssemblyError) as info:
+        mb.solve_position(model, guess, t=0.25, max_iterations=1)
+    message = str(info.value)
+    assert "t = 0.25 s" in message and "after 1 Newton-Raphson iterations" in message
+    assert "pin" in message and info.value.time == 0.25
+
+
+def test_joints_that_cannot_be_assembled_are_named():
+    # two ropes of 1 m from points 3 m apart cannot both hold the bar's centre: Newton ends at
+    # the ropes' common line, where their rows are dependent
+    b = mb.ModelBuilder(dim=2)
+    bar = b.add_body("bar", mass=1.0, inertia=0.1, position=(0.0, -0.5))
+    b.add(Distance("left", b.ground, bar, at_i=(-1.5, 0.0), length=1.0))
+    b.add(Distance("right", b.ground, bar, at_i=(1.5, 0.0), length=1.0))
+    b.add(CoordinateDriver("hold", bar, "theta", 0.0))
+    with pytest.raises(mb.SingularJacobianError) as info:
+        mb.solve_position(b.build(), t=0.25)
+    message = str(info.value)
+    assert "t = 0.25 s" in message and "left.length" in message and "right.length" in message
+    assert set(info.value.joints) == {"left", "right"}
+    assert info.value.time == 0.25
+
+
+def test_lock_up_is_reported_with_time_and_joints_and_partial_results():
+    # slider driven outwards to the dead centre x = r + l, where crank and rod align
+    r, l = 0.12, 0.26
+    b = mb.ModelBuilder(dim=2)
+    x0 = r * math.cos(1.0) + math.sqrt(l * l - (r * math.sin(1.0)) ** 2)
+    crank = b.add_body("crank", mass=1, inertia=0.001, position=(0.06 * math.cos(1.0), 0.06 * math.sin(1.0)), angle=1.0)
+    a = r * np.array([math.cos(1.0), math.sin(1.0)])
+    psi = math.asin(-a[1] / l)
+    rod = b.add_body("rod", mass=2, inertia=0.01, position=(a + (x0, 0)) / 2, angle=psi)
+    slider = b.add_body("slider", mass=4, inertia=0.02, position=(x0, 0.0))
+    b.add(Revolute("O", b.ground, crank, at=(0, 0)))
+    b.add(Revolute("A", crank, rod, at=a))
+    b.add(Revolute("B", rod, slider, at=(x0, 0)))
+    rail = b.add(Prismatic("rail", b.ground, slider, axis=(1, 0)))
+    b.add(TranslationDriver("piston", rail, motion=mb.Ramp(0.0, (r + l - x0) / 1.0)))
+    model = b.build()
+    # the dead centre is reached at t = 1 s; past it the driver asks for the impossible
+    with pytest.raises(mb.SingularJacobianError) as info:
+        mb.kinematic_analysis(model, [0.0, 0.3, 0.6, 0.9, 1.2])
+    err = info.value
+    assert err.time == pytest.approx(1.2)
+    assert "t = 1.2 s" in str(err) and "lock-up or toggle" in str(err)
+    assert {"O", "A", "B"} <= set(err.joints)
+    assert len(err.results) == 4 and err.results.status == "failed"
+
+
+def test_bad_times_and_options():
+    model = pendulum_chain(1)
+    with pytest.raises(mb.ModelError, match="strictly increasing"):
+        mb.forward_dynamics(model, [0.0, 1.0, 0.5])
+    with pytest.raises(mb.ModelError, match="method must be one of"):
+        mb.forward_dynamics(model, [0.0, 1.0], method="Euler")
+    with pytest.raises(mb.ModelError, match="rtol must be positive"):
+        mb.forward_dynamics(model, [0.0, 1.0], rtol=-1.0)
+    with pytest.raises(mb.ModelError, match="hold.*'link1.z'"):
+        mb.forward_dynamics(model, [0.0, 1.0], hold=["link1.z"])
+
+
+def test_force_returning_nan_is_named():
+    b, bar = builder_with_bar()
+    b.add(Revolute("pin", b.ground, bar, at=(0, 0)))
+    b.add(mb.PointForce("push", bar, lambda t: (math.nan, 0.0)))
+    with pytest.raises(mb.ModelError, match="force 'push' returned a non-finite value") as info:
+        mb.forward_dynamics(b.build(), [0.0, 1.0])
+    assert info.value.results is not None
+
+
+def test_errors_are_library_errors():
+    assert issubclass(mb.ModelError, mb.MBDError) and issubclass(mb.ModelError, ValueError)
+    assert issubclass(mb.SingularJacobianError, mb.AnalysisError)
+    assert issubclass(mb.AssemblyError, mb.MBDError)

@@ -1,0 +1,136 @@
+"""Joints, drivers and force elements against closed forms and minimal equations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import mbd3d as mb
+from joints import CoordinateDriver, Distance, Fixed, Prismatic, Revolute, TranslationDriver
+from mbd3d.mechanisms import slider_crank
+
+G = 9.81
+
+
+def test_spring_damper_on_a_slider_is_a_damped_oscillator():
+    m, k, c, l0 = 2.0, 800.0, 8.0, 1.0
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    mass = b.add_body("mass", mass=m, inertia=0.1, position=(0.0, -l0))
+    b.add(Prismatic("guide", b.ground, mass, axis=(0.0, 1.0)))
+    b.add(mb.SpringDamper("spring", b.ground, mass, at_i=(0.0, 0.0), stiffness=k, damping=c))
+    t = np.linspace(0.0, 1.0, 51)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
+    # z = y + l0 + m g / k obeys m z'' + c z' + k z = 0, z(0) = m g / k, z'(0) = 0
+    wn = math.sqrt(k / m)
+    zeta = c / (2 * math.sqrt(k * m))
+    wd = wn * math.sqrt(1 - zeta**2)
+    z0 = m * G / k
+    z = np.exp(-zeta * wn * t) * (z0 * np.cos(wd * t) + zeta * wn * z0 / wd * np.sin(wd * t))
+    np.testing.assert_allclose(res.body("mass").position[:, 1], z - l0 - m * G / k, atol=1e-10)
+    # the guide carries no vertical force, no moment on a centred mass
+    guide = res.joint("guide").reaction(on="mass", frame="joint")
+    np.testing.assert_allclose(guide.force[:, 0], 0.0, atol=1e-9)
+
+
+def test_rotational_spring_is_a_torsional_oscillator():
+    J, k, w0 = 0.05, 3.0, 2.0
+    b = mb.ModelBuilder(dim=2)
+    disc = b.add_body("disc", mass=1.0, inertia=J, position=(0.0, 0.0), angle=0.3,
+                      angular_velocity=w0)
+    b.add(Revolute("axle", b.ground, disc, at=(0.0, 0.0)))
+    b.add(mb.RotationalSpringDamper("torsion", b.ground, disc, stiffness=k))
+    t = np.linspace(0.0, 2.0, 41)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
+    wn = math.sqrt(k / J)
+    np.testing.assert_allclose(res.body("disc").angle, 0.3 + w0 / wn * np.sin(wn * t), atol=1e-9)
+    energy = res.kinetic_energy + res.potential_energy
+    np.testing.assert_allclose(energy, 0.5 * J * w0**2, rtol=1e-9)
+
+
+def test_free_body_with_feedback_drag_and_torque():
+    m, c, J, T = 3.0, 1.5, 0.2, 0.7
+    b = mb.ModelBuilder(dim=2)
+    body = b.add_body("puck", mass=m, inertia=J, position=(0.0, 0.0), velocity=(1.0, 2.0))
+    b.add(mb.PointForce("drag", body, lambda t, state: -c * state.velocity))
+    b.add(mb.Torque("spin", body, lambda t: T))
+    model = b.build()
+    assert model.n_constraints == 0
+    t = np.linspace(0.0, 2.0, 21)
+    res = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12)
+    decay = np.exp(-c * t / m)
+    np.testing.assert_allclose(res.body("puck").velocity, np.outer(decay, (1.0, 2.0)), atol=1e-9)
+    np.testing.assert_allclose(res.body("puck").position,
+                               np.outer(m / c * (1 - decay), (1.0, 2.0)), atol=1e-9)
+    np.testing.assert_allclose(res.body("puck").angle, 0.5 * T / J * t**2, atol=1e-9)
+
+
+def test_welded_bodies_swing_as_one_compound_pendulum():
+    mA, L, mB, JB = 1.0, 1.0, 0.5, 0.02
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    bar = b.add_body("bar", mass=mA, inertia=mA * L * L / 12, position=(L / 2, 0.0))
+    bob = b.add_body("bob", mass=mB, inertia=JB, position=(L, 0.0), angle=0.4)
+    b.add(Revolute("pivot", b.ground, bar, at=(0.0, 0.0)))
+    b.add(Fixed("weld", bar, bob))
+    t = np.linspace(0.0, 1.5, 31)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
+    I_o = mA * L * L / 3 + JB + mB * L * L
+    sol = solve_ivp(lambda _, y: [y[1], -G * (mA * L / 2 + mB * L) * math.cos(y[0]) / I_o],
+                    (0, 1.5), [0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.body("bar").angle, sol.y[0], atol=1e-8)
+    np.testing.assert_allclose(res.body("bob").angle - res.body("bar").angle, 0.4, atol=1e-12)
+    # Newton-Euler of the bob: the weld supplies m a - m g and the moment J alpha
+    bob_h = res.body("bob")
+    weld = res.joint("weld").reaction(on="bob")
+    np.testing.assert_allclose(weld.force, mB * (bob_h.acceleration - [0.0, -G]), atol=1e-8)
+    np.testing.assert_allclose(weld.moment, JB * bob_h.angular_acceleration, atol=1e-8)
+
+
+def test_distance_joint_is_a_massless_rod():
+    m, L = 1.2, 0.8
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    bob = b.add_body("bob", mass=m, inertia=0.01, position=(L, 0.0), angular_velocity=3.0)
+    b.add(Distance("rod", b.ground, bob, at_i=(0.0, 0.0)))
+    t = np.linspace(0.0, 1.0, 21)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
+    # the rod leaves the bob's rotation free; its centre is a simple pendulum
+    np.testing.assert_allclose(res.body("bob").angular_velocity, 3.0, atol=1e-9)
+    sol = solve_ivp(lambda _, y: [y[1], -G / L * math.cos(y[0])], (0, 1), [0.0, 0.0],
+                    t_eval=t, method="DOP853", rtol=1e-12, atol=1e-12)
+    phi, phi_dot = sol.y
+    pos = res.body("bob").position
+    np.testing.assert_allclose(np.arctan2(pos[:, 1], pos[:, 0]), phi, atol=1e-8)
+    tension = m * L * phi_dot**2 - m * G * np.sin(phi)
+    e = np.column_stack([np.cos(phi), np.sin(phi)])
+    np.testing.assert_allclose(res.joint("rod").reaction(on="bob").force, -tension[:, None] * e,
+                               atol=1e-7)
+
+
+@pytest.mark.parametrize("driver", ["translation", "coordinate"])
+def test_slider_driven_crank_follows_the_law_of_cosines(driver):
+    r, l = 0.12, 0.26
+    model = slider_crank(crank_speed=None)
+    x0 = model.body("slider").q0[0]
+    b = mb.ModelBuilder(dim=2)
+    # rebuild the same mechanism with the slider driven instead of the crank
+    bodies = {body.name: b.add_body(body.name, mass=body.mass, inertia=body.inertia,
+                                    position=body.q0[:2], angle=body.q0[2])
+              for body in model.bodies}
+    crank, rod, slider = bodies["crank"], bodies["rod"], bodies["slider"]
+    b.add(Revolute("O", b.ground, crank, point_i=(0, 0), point_j=(-r / 2, 0)))
+    b.add(Revolute("A", crank, rod, point_i=(r / 2, 0), point_j=(-l / 2, 0)))
+    b.add(Revolute("B", rod, slider, point_i=(l / 2, 0), point_j=(0, 0)))
+    rail = b.add(Prismatic("rail", b.ground, slider, axis=(1, 0)))
+    speed = -0.05
+    if driver == "translation":
+        b.add(TranslationDriver("piston", rail, motion=mb.Ramp(0.0, speed)))
+    else:
+        b.add(CoordinateDriver("piston", slider, "x", mb.Ramp(x0, speed)))
+    t = np.linspace(0.0, 1.0, 11)
+    res = mb.kinematic_analysis(b.build(), t)
+    x = x0 + speed * t
+    phi = np.arccos((r * r + x * x - l * l) / (2 * r * x))
+    np.testing.assert_allclose(res.body("crank").angle, phi, atol=1e-12)
+    np.testing.assert_allclose(res.body("slider").position[:, 0], x, atol=1e-13)

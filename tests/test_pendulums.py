@@ -1,0 +1,90 @@
+"""Simple and double pendulum against their minimal-coordinate equations; a pendulum at rest.
+
+The minimal equations are derived by hand in each test (Lagrange's equations in the absolute
+link angles) and integrated with SciPy at tight tolerance; nothing of mbd3d is used for them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import mbd3d as mb
+from mbd3d.mechanisms import pendulum_chain
+
+G = 9.81
+
+
+def test_simple_pendulum_matches_minimal_equation():
+    L, m = 1.0, 1.0
+    J, c = m * L * L / 12, L / 2
+    model = pendulum_chain(1, link_length=L, link_mass=m, angle=0.0)
+    t = np.linspace(0.0, 3.0, 61)
+    res = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12)
+
+    # (J + m c^2) theta'' = -m g c cos(theta), theta from the x axis
+    sol = solve_ivp(lambda _, y: [y[1], -m * G * c * math.cos(y[0]) / (J + m * c * c)],
+                    (0, 3), [0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.body("link1").angle, sol.y[0], atol=1e-8)
+    np.testing.assert_allclose(res.body("link1").angular_velocity, sol.y[1], atol=1e-7)
+    energy = res.kinetic_energy + res.potential_energy
+    np.testing.assert_allclose(energy, energy[0], atol=1e-9)
+
+
+def test_double_pendulum_matches_minimal_equations():
+    L1, L2, m1, m2 = 1.0, 0.7, 1.5, 0.8
+    I1, I2 = m1 * L1**2 / 12, m2 * L2**2 / 12
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    from joints import Revolute
+    th1, th2 = 0.3, -0.4
+    p1 = 0.5 * L1 * np.array([math.cos(th1), math.sin(th1)])
+    a = 2 * p1
+    p2 = a + 0.5 * L2 * np.array([math.cos(th2), math.sin(th2)])
+    link1 = b.add_body("link1", mass=m1, inertia=I1, position=p1, angle=th1)
+    link2 = b.add_body("link2", mass=m2, inertia=I2, position=p2, angle=th2,
+                       angular_velocity=1.5)
+    b.add(Revolute("O", b.ground, link1, at=(0.0, 0.0)))
+    b.add(Revolute("A", link1, link2, at=a))
+    model = b.build()
+    t = np.linspace(0.0, 2.0, 41)
+    # the guessed rates of link2 are not consistent; hold its angular velocity while projecting
+    res = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12,
+                              hold=["link1.theta", "link2.theta"])
+
+    # Lagrange in the absolute angles, k = m2 L1 L2 / 2:
+    # M11 th1'' + k cos(d) th2'' + k sin(d) th2'^2 + (m1 L1/2 + m2 L1) g cos th1 = 0
+    # k cos(d) th1'' + M22 th2'' - k sin(d) th1'^2 + m2 L2/2 g cos th2 = 0,  d = th1 - th2
+    M11 = I1 + m1 * (L1 / 2) ** 2 + m2 * L1**2
+    M22 = I2 + m2 * (L2 / 2) ** 2
+    k = m2 * L1 * L2 / 2
+
+    def rhs(_, y):
+        q1, q2, w1, w2 = y
+        d = q1 - q2
+        M = np.array([[M11, k * math.cos(d)], [k * math.cos(d), M22]])
+        f = np.array([-k * math.sin(d) * w2 * w2 - (m1 * L1 / 2 + m2 * L1) * G * math.cos(q1),
+                      k * math.sin(d) * w1 * w1 - m2 * L2 / 2 * G * math.cos(q2)])
+        return [w1, w2, *np.linalg.solve(M, f)]
+
+    w0 = res.qd[0, [2, 5]]
+    assert w0[1] == pytest.approx(1.5)  # the held rate was kept
+    sol = solve_ivp(rhs, (0, 2), [th1, th2, *w0], t_eval=t, method="DOP853", rtol=1e-12,
+                    atol=1e-12)
+    np.testing.assert_allclose(res.body("link1").angle, sol.y[0], atol=1e-7)
+    np.testing.assert_allclose(res.body("link2").angle, sol.y[1], atol=1e-7)
+    energy = res.kinetic_energy + res.potential_energy
+    np.testing.assert_allclose(energy, energy[0], atol=1e-8)
+
+
+def test_hanging_pendulum_at_rest_carries_its_weight():
+    m = 2.5
+    model = pendulum_chain(1, link_mass=m, angle=-math.pi / 2)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 1.0, 11))
+    np.testing.assert_allclose(res.body("link1").angle, -math.pi / 2, atol=1e-12)
+    pin = res.joint("pin1")
+    np.testing.assert_allclose(pin.reaction(on="link1").force, [[0.0, m * G]] * 11, atol=1e-9)
+    np.testing.assert_allclose(pin.reaction(on="ground").force, [[0.0, -m * G]] * 11, atol=1e-9)
+    np.testing.assert_allclose(pin.reaction(on="link1").moment, 0.0, atol=1e-12)
