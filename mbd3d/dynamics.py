@@ -27,7 +27,7 @@ from mbd3d import constraints
 from mbd3d.equations import generalized_forces
 from mbd3d.errors import AnalysisError, IntegrationError, MBDError, ModelError
 from mbd3d.kinematics import check_times, solve_velocity
-from mbd3d.linalg import Factorization, SingularMatrix, augmented_system
+from mbd3d.linalg import SingularMatrix, solve_model_augmented
 from mbd3d.position import singular_error, solve_position
 from mbd3d.results import Results
 
@@ -52,11 +52,10 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray
                                f"t = {t:.6g} s (the integration diverged)", time=t)
     fr = constraints.frames(model, q, qd)
     _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
-    K = augmented_system(model, model.body_type.mass_blocks(fr, model.mass, model.inertia),
-                         jac_data)
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
     rhs = np.concatenate([generalized_forces(model, t, fr), gamma])
     try:
-        solution = Factorization(K).solve(rhs)
+        solution = solve_model_augmented(model, blocks, jac_data, rhs)
     except SingularMatrix:
         raise singular_error(model, constraints.jacobian_matrix(model, jac_data), t,
                              f"forward dynamics of '{model.name}'") from None

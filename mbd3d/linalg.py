@@ -13,9 +13,10 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 __all__ = ["SingularMatrix", "Factorization", "dependent_rows", "augmented_matrix",
-           "solve_augmented", "augmented_system",
+           "solve_augmented", "solve_model_augmented",
            "AugmentedPattern"]
 
 #: relative size of the smallest LU pivot below which a matrix counts as singular
@@ -27,13 +28,17 @@ class SingularMatrix(Exception):
 
 
 class Factorization:
-    """LU factors of a square matrix, dense or sparse, reusable for several right-hand sides."""
+    """LU factors of a square matrix, dense or sparse, reusable for several right-hand sides.
 
-    def __init__(self, A):
+    ``ordering`` is SuperLU's column ordering for sparse matrices: its default "COLAMD", or
+    "NATURAL" for a matrix already permuted to a small bandwidth.
+    """
+
+    def __init__(self, A, ordering: str = "COLAMD"):
         self.sparse = sp.issparse(A)
         if self.sparse:
             try:
-                self._lu = spla.splu(sp.csc_matrix(A))
+                self._lu = spla.splu(sp.csc_matrix(A), permc_spec=ordering)
             except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
                 raise SingularMatrix(str(exc)) from None
             pivots = np.abs(self._lu.U.diagonal())
@@ -105,27 +110,45 @@ class AugmentedPattern:
         self.rows = np.concatenate([block_rows, n + jr, jc])
         self.cols = np.concatenate([block_cols, jc, n + jr])
         self.size = n + m
-        if model.sparse:
-            order = np.lexsort((self.rows, self.cols))  # column-major for CSC
-            self.order = order
-            self.indices = self.rows[order]
-            counts = np.bincount(self.cols, minlength=self.size)
+        self.sparse = model.sparse
+        if self.sparse:
+            # A symmetric reverse Cuthill-McKee permutation, computed once: the matrix is then
+            # assembled already permuted to a small bandwidth (a chain's is banded) and SuperLU
+            # factors it in natural order, instead of recomputing a column ordering per solve.
+            structure = sp.csr_matrix((np.ones(len(self.rows)), (self.rows, self.cols)),
+                                      shape=(self.size, self.size))
+            self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
+            inverse = np.empty_like(self.perm)
+            inverse[self.perm] = np.arange(self.size)
+            prow, pcol = inverse[self.rows], inverse[self.cols]
+            self.order = np.lexsort((prow, pcol))  # column-major for CSC
+            self.indices = prow[self.order]
+            counts = np.bincount(pcol, minlength=self.size)
             self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
 
 
-def augmented_system(model, blocks: np.ndarray, jac_data: np.ndarray):
-    """``[M Cq^T; Cq 0]`` from per-body mass blocks and Jacobian values (model's pattern).
+def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: np.ndarray
+                          ) -> np.ndarray:
+    """Solve ``[M Cq^T; Cq 0] x = rhs`` from per-body mass blocks and Jacobian values.
 
-    Dense ndarray, or CSC matrix when ``model.sparse``; the fill pattern was fixed at build.
+    The matrix is filled into the pattern fixed at build: dense below the model's size
+    threshold, otherwise sparse, permuted to a small bandwidth and factored by SuperLU.
+
+    Raises
+    ------
+    SingularMatrix
     """
     pattern = model._augmented_pattern
     values = np.concatenate([blocks.ravel(), jac_data, jac_data])
-    if model.sparse:
-        return sp.csc_matrix((values[pattern.order], pattern.indices, pattern.indptr),
-                             shape=(pattern.size, pattern.size))
+    if pattern.sparse:
+        K = sp.csc_matrix((values[pattern.order], pattern.indices, pattern.indptr),
+                          shape=(pattern.size, pattern.size))
+        x = np.empty(pattern.size)
+        x[pattern.perm] = Factorization(K, ordering="NATURAL").solve(rhs[pattern.perm])
+        return x
     K = np.zeros((pattern.size, pattern.size))
     K[pattern.rows, pattern.cols] = values
-    return K
+    return Factorization(K).solve(rhs)
 
 
 def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -27,9 +27,10 @@ from mbd3d.primitives import PRIMITIVES
 
 __all__ = ["ModelBuilder", "Model", "BuildContext"]
 
-#: systems with more unknowns than this (coordinates + constraints) use sparse linear algebra;
-#: measured with benchmarks/planar_chain.py on the 2-core reference machine
-SPARSE_THRESHOLD = 400
+#: systems with more unknowns than this (coordinates + constraints) use sparse linear algebra:
+#: one augmented solve of a planar chain costs the same dense and sparse at about 150-200
+#: unknowns on the 2-core reference machine (benchmarks/planar_chain.py --crossover)
+SPARSE_THRESHOLD = 180
 
 
 def _body_type(dim: int) -> BodyType:

@@ -292,17 +292,21 @@ class Results:
 
     # -- export ----------------------------------------------------------------------------------
     def columns(self) -> dict[str, np.ndarray]:
-        """All time histories as named columns (the CSV layout)."""
+        """All time histories as named columns (the CSV layout).
+
+        ``t``; ``body.c``, ``body.c_dot``, ``body.c_ddot`` for every coordinate; with
+        multipliers, ``joint.row.lam`` for every constraint row and ``driver.effort``.
+        """
         cols: dict[str, np.ndarray] = {"t": self.t}
         labels = self.model.coordinate_labels
-        for name, arr in (("", self.q), ("d/dt ", self.qd), ("d2/dt2 ", self.qdd)):
+        for suffix, arr in (("", self.q), ("_dot", self.qd), ("_ddot", self.qdd)):
             for j, label in enumerate(labels):
-                cols[f"{name}{label}"] = arr[:, j]
+                cols[f"{label}{suffix}"] = arr[:, j]
         if self.lam is not None:
             for j, label in enumerate(self.model.row_labels):
-                cols[f"lam {label}"] = self.lam[:, j]
+                cols[f"{label}.lam"] = self.lam[:, j]
             for name, effort in self.efforts.items():
-                cols[f"effort {name}"] = effort
+                cols[f"{name}.effort"] = effort
         return cols
 
     def to_csv(self, path: str | os.PathLike) -> None:

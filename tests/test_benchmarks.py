@@ -1,0 +1,17 @@
+"""Smoke test: the benchmark scripts run at their smallest size (no timing is asserted)."""
+
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+
+BENCHMARKS = pathlib.Path(__file__).resolve().parent.parent / "benchmarks"
+
+
+def test_planar_chain_benchmark_runs(capsys):
+    spec = importlib.util.spec_from_file_location("planar_chain", BENCHMARKS / "planar_chain.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    rows = module.main(sizes=(2,), simulate=True)
+    assert rows[0]["N"] == 2 and rows[0]["steps"] > 0
+    assert "augmented solve" in capsys.readouterr().out

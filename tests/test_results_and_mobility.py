@@ -1,0 +1,104 @@
+"""Results export and named access; the mobility report."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from joints import Revolute
+from mbd3d.mechanisms import pendulum_chain, slider_crank
+
+
+@pytest.fixture(scope="module")
+def inverse():
+    model = slider_crank(crank_speed=2 * math.pi)
+    return mb.inverse_dynamics(model, np.linspace(0.0, 0.5, 6))
+
+
+def test_csv_export_reads_back(inverse, tmp_path):
+    path = tmp_path / "slider.csv"
+    inverse.to_csv(path)
+    data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
+    assert len(data) == 6
+    np.testing.assert_array_equal(data["t"], inverse.t)
+    np.testing.assert_array_equal(data["slider.x"], inverse.body("slider").position[:, 0])
+    np.testing.assert_array_equal(data["crank.theta_ddot"], inverse.qdd[:, 2])
+    np.testing.assert_array_equal(data["motor.effort"], inverse.driver("motor").effort)
+    np.testing.assert_array_equal(data["O.x.lam"], inverse.joint("O").lam[:, 0])
+
+
+def test_npz_export_reads_back(inverse, tmp_path):
+    path = tmp_path / "slider.npz"
+    inverse.to_npz(path)
+    with np.load(path) as data:
+        np.testing.assert_array_equal(data["q"], inverse.q)
+        np.testing.assert_array_equal(data["lam"], inverse.lam)
+        assert list(data["coordinate_labels"])[:3] == ["crank.x", "crank.y", "crank.theta"]
+        assert str(data["analysis"]) == "inverse dynamics"
+
+
+def test_export_to_a_missing_folder_is_a_clear_error(inverse, tmp_path):
+    with pytest.raises(mb.MBDError, match="does not exist"):
+        inverse.to_csv(tmp_path / "nowhere" / "x.csv")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_reactions_need_multipliers():
+    model = slider_crank(crank_speed=1.0)
+    res = mb.kinematic_analysis(model, [0.0, 0.1])
+    with pytest.raises(mb.MBDError, match="inverse_dynamics"):
+        res.joint("O").reaction()
+    inv = mb.inverse_dynamics(model, [0.0, 0.1])
+    with pytest.raises(mb.ModelError, match="'A' connects 'crank' and 'rod'.*'slider'"):
+        inv.joint("A").reaction(on="slider")
+    with pytest.raises(mb.ModelError, match="joint, not a driver"):
+        inv.joint("A").effort
+    assert set(inv.efforts) == {"motor"}
+
+
+def test_interrupt_keeps_the_results_so_far(monkeypatch):
+    model = pendulum_chain(2)
+    calls = {"n": 0}
+    import mbd3d.dynamics as dynamics
+    real = dynamics.forward_accelerations
+
+    def interrupted(*args):
+        calls["n"] += 1
+        if calls["n"] > 200:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(dynamics, "forward_accelerations", interrupted)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 5.0, 501))
+    assert res.status == "interrupted" and 1 < len(res) < 501
+    assert "interrupted" in res.message
+    np.testing.assert_array_equal(res.t, np.linspace(0.0, 5.0, 501)[:len(res)])
+
+
+def test_mobility_of_a_fully_driven_and_a_free_mechanism():
+    report = mb.mobility(slider_crank())
+    assert (report.n_coordinates, report.n_constraints, report.gruebler, report.rank,
+            report.dof, report.redundant) == (9, 9, 0, 9, 0, 0)
+    assert report.fully_driven
+    free = mb.mobility(pendulum_chain(4))
+    assert (free.gruebler, free.dof, free.redundant) == (4, 4, 0)
+    assert "4 degree(s) of freedom" in str(free)
+
+
+def test_mobility_finds_the_redundancy_of_a_double_parallelogram():
+    # three parallel cranks and one coupler: Gruebler says 0, the linkage moves (1 DOF)
+    b = mb.ModelBuilder(dim=2)
+    cranks = [b.add_body(f"crank{k}", mass=1.0, inertia=0.1, position=(k, 0.5),
+                         angle=math.pi / 2) for k in range(3)]
+    coupler = b.add_body("coupler", mass=1.0, inertia=0.1, position=(1.0, 1.0))
+    for k, crank in enumerate(cranks):
+        b.add(Revolute(f"ground{k}", b.ground, crank, at=(k, 0.0)))
+        b.add(Revolute(f"top{k}", crank, coupler, at=(k, 1.0)))
+    report = mb.mobility(b.build())
+    assert (report.gruebler, report.rank, report.dof, report.redundant) == (0, 11, 1, 1)
+    assert "redundant" in report.message
+    involved = {label.split(".")[0] for group in report.dependent for label in group}
+    assert involved and involved <= {"ground0", "ground1", "ground2", "top0", "top1", "top2"}
