@@ -25,11 +25,11 @@ import scipy.integrate as si
 
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces
-from mbd3d.errors import AnalysisError, IntegrationError, MBDError, ModelError
+from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.kinematics import check_times, solve_velocity
 from mbd3d.linalg import SingularMatrix, solve_model_augmented
 from mbd3d.position import singular_error, solve_position
-from mbd3d.results import Results
+from mbd3d.results import Results, run_keeping_results
 
 __all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS"]
 
@@ -169,17 +169,17 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         qdd, lam = forward_accelerations(model, t[k], q, qd)
         Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
 
-    try:
+    def loop() -> None:
+        nonlocal done
         q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
                            hold=hold)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold)
         record(0, q, qd)
         done = 1
-        y = np.concatenate([q, qd])
         options = {"rtol": rtol, "atol": atol, "max_step": max_step}
         if method in ("Radau", "BDF", "LSODA"):
             options["jac"] = _difference_jacobian(rhs, 2 * n)
-        solver = solver_cls(rhs, t[0], y, t[-1], **options)
+        solver = solver_cls(rhs, t[0], np.concatenate([q, qd]), t[-1], **options)
         while done < k_max:
             message = solver.step()
             if solver.status == "failed":
@@ -208,12 +208,5 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 h = min(solver.step_size or np.inf, t[-1] - solver.t)
                 solver = solver_cls(rhs, solver.t, np.concatenate([q, qd]), t[-1], first_step=h,
                                     **options)
-    except AnalysisError as exc:
-        exc.results = partial("failed", str(exc))
-        raise
-    except MBDError as exc:
-        exc.results = partial("failed", str(exc))  # type: ignore[attr-defined]
-        raise
-    except KeyboardInterrupt:
-        return partial("interrupted", f"interrupted by the user after t = {t[done - 1]:g} s")
-    return partial("complete", "")
+
+    return run_keeping_results(loop, partial)

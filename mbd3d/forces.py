@@ -17,11 +17,12 @@ from __future__ import annotations
 import inspect
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from mbd3d.body import Body
+from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 from mbd3d.motion import Motion
 
@@ -77,30 +78,30 @@ class _CompiledForces(ABC):
         return 0.0
 
 
-def _value_function(value: Any, what: str, size: int | None) -> Callable:
-    """Return ``g(t, state)`` for a constant, ``f(t)`` or ``f(t, state)``."""
-    if isinstance(value, Motion):
-        return lambda t, state: value.evaluate(t)[0]
-    if callable(value):
-        try:
-            n_args = len(inspect.signature(value).parameters)
-        except (TypeError, ValueError):
-            n_args = 1
-        if n_args == 1:
-            return lambda t, state: value(t)
-        if n_args == 2:
-            return value
-        raise ModelError(f"{what}: a callable must take (t) or (t, state), it takes {n_args} "
-                         "arguments")
-    arr = np.asarray(value, dtype=float)
-    if size is not None:
-        arr = arr.reshape(-1)
-        if arr.size != size:
-            raise ModelError(f"{what} must have {size} components, got {value!r}")
-    if not np.all(np.isfinite(arr)):
-        raise ModelError(f"{what} must be finite, got {value!r}")
-    const = arr if size is not None else float(arr)
-    return lambda t, state: const
+class _Value:
+    """A force value given as a constant, ``f(t)`` or ``f(t, state)``, evaluated uniformly."""
+
+    def __init__(self, value: Any, what: str, size: int | None):
+        self.needs_state = False
+        if isinstance(value, Motion):
+            self._fn = lambda t, state: value.evaluate(t)[0]
+        elif callable(value):
+            try:
+                n_args = len(inspect.signature(value).parameters)
+            except (TypeError, ValueError):
+                n_args = 1
+            if n_args not in (1, 2):
+                raise ModelError(f"{what}: a callable must take (t) or (t, state), it takes "
+                                 f"{n_args} arguments")
+            self.needs_state = n_args == 2
+            self._fn = value if self.needs_state else (lambda t, state: value(t))
+        else:
+            const = (finite_vector(value, size, what) if size is not None
+                     else finite_scalar(value, what))
+            self._fn = lambda t, state: const
+
+    def __call__(self, t: float, state: "ForceState | None") -> Any:
+        return self._fn(t, state)
 
 
 def _checked(value: Any, shape: tuple, what: str, t: float) -> np.ndarray:
@@ -111,10 +112,6 @@ def _checked(value: Any, shape: tuple, what: str, t: float) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ModelError(f"{what} returned a non-finite value {value!r} at t = {t:g} s")
     return arr
-
-
-def _row(body: Body, model: "Model") -> int:
-    return model.n_bodies if body.is_ground else body.index
 
 
 class PointForce(ForceElement):
@@ -151,14 +148,15 @@ class _PointForces(_CompiledForces):
         self.items = []
         for e in elements:
             u = np.zeros(dim) if e.point is None else ctx.vector(e.point, f"force '{e.name}': point")
-            fn = _value_function(e.force, f"force '{e.name}': force", dim)
+            fn = _Value(e.force, f"force '{e.name}': force", dim)
             self.items.append((e, u, fn))
 
     def apply(self, model, t, fr, Q):
         bt = model.body_type
         for e, u, fn in self.items:
-            idx = np.array([_row(e.body, model)])
-            F = _checked(fn(t, _state(model, fr, idx, u)), (model.dim,), f"force '{e.name}'", t)
+            idx = np.array([model.padded_index(e.body)])
+            state = _state(model, fr, idx, u) if fn.needs_state else None
+            F = _checked(fn(t, state), (model.dim,), f"force '{e.name}'", t)
             if e.frame == "body":
                 F = bt.vector(fr, idx, F[None])[0]
             J = bt.point_jacobian(fr, idx, u[None])[0]
@@ -194,16 +192,48 @@ class Torque(ForceElement):
 class _Torques(_CompiledForces):
     def __init__(self, elements: list[Torque], ctx: "BuildContext"):
         size = None if ctx.dim == 2 else 3
-        self.items = [(e, _value_function(e.torque, f"torque '{e.name}'", size)) for e in elements]
+        self.items = [(e, _Value(e.torque, f"torque '{e.name}'", size)) for e in elements]
         self.shape = () if ctx.dim == 2 else (3,)
 
     def apply(self, model, t, fr, Q):
         bt = model.body_type
         for e, fn in self.items:
-            idx = np.array([_row(e.body, model)])
-            state = _state(model, fr, idx, np.zeros(model.dim))
+            idx = np.array([model.padded_index(e.body)])
+            state = _state(model, fr, idx, np.zeros(model.dim)) if fn.needs_state else None
             n = _checked(fn(t, state), self.shape, f"torque '{e.name}'", t)
             Q[idx[0]] += bt.torque_generalized(fr, idx, n[None])[0]
+
+
+class _SpringGroup(_CompiledForces):
+    """What translational and rotational spring-damper groups share: checked stiffness and
+    damping, actuators, and the body indices of each element."""
+
+    def __init__(self, elements: list, ctx: "BuildContext"):
+        self.elements = elements
+        self.k = np.array([ctx.scalar(e.stiffness, f"spring '{e.name}': stiffness")
+                           for e in elements])
+        self.c = np.array([ctx.scalar(e.damping, f"spring '{e.name}': damping")
+                           for e in elements])
+        bad = np.flatnonzero((self.k < 0) | (self.c < 0))
+        if bad.size:
+            e = elements[bad[0]]
+            raise ModelError(f"spring '{e.name}': stiffness and damping must be >= 0, got "
+                             f"{e.stiffness}, {e.damping}")
+        self.actuators = [(n, _Value(e.actuator, f"spring '{e.name}': actuator", None))
+                          for n, e in enumerate(elements) if e.actuator is not None]
+        self._rows = None
+
+    def _indices(self, model):
+        if self._rows is None:
+            self._rows = (np.array([model.padded_index(e.body_i) for e in self.elements]),
+                          np.array([model.padded_index(e.body_j) for e in self.elements]))
+        return self._rows
+
+    def _actuation(self, t: float) -> np.ndarray:
+        out = np.zeros(len(self.elements))
+        for n, fn in self.actuators:
+            out[n] = float(_checked(fn(t, None), (), f"spring '{self.elements[n].name}' actuator", t))
+        return out
 
 
 class SpringDamper(ForceElement):
@@ -258,19 +288,13 @@ def resolve_point(ctx: "BuildContext", body: Body, local: Any, drawing: Any, wha
     return np.zeros(ctx.dim)
 
 
-class _SpringDampers(_CompiledForces):
+class _SpringDampers(_SpringGroup):
     def __init__(self, elements: list[SpringDamper], ctx: "BuildContext"):
-        self.elements = elements
-        ui, uj, k, c, l0 = [], [], [], [], []
-        self.actuators = []
+        super().__init__(elements, ctx)
+        ui, uj, l0 = [], [], []
         for e in elements:
             pi = resolve_point(ctx, e.body_i, e.point_i, e.at_i, f"spring '{e.name}': point_i")
             pj = resolve_point(ctx, e.body_j, e.point_j, e.at_j, f"spring '{e.name}': point_j")
-            stiffness = ctx.scalar(e.stiffness, f"spring '{e.name}': stiffness")
-            damping = ctx.scalar(e.damping, f"spring '{e.name}': damping")
-            if stiffness < 0 or damping < 0:
-                raise ModelError(f"spring '{e.name}': stiffness and damping must be >= 0, got "
-                                 f"{stiffness}, {damping}")
             if e.free_length is None:
                 length = float(np.linalg.norm(ctx.to_global_point(e.body_j, pj)
                                               - ctx.to_global_point(e.body_i, pi)))
@@ -278,33 +302,19 @@ class _SpringDampers(_CompiledForces):
                 length = ctx.scalar(e.free_length, f"spring '{e.name}': free_length")
                 if length < 0:
                     raise ModelError(f"spring '{e.name}': free_length must be >= 0, got {length}")
-            ui.append(pi), uj.append(pj), k.append(stiffness), c.append(damping), l0.append(length)
-            if e.actuator is not None:
-                self.actuators.append((len(ui) - 1,
-                                       _value_function(e.actuator, f"spring '{e.name}': actuator",
-                                                       None)))
-        self.u_i, self.u_j = np.array(ui), np.array(uj)
-        self.k, self.c, self.l0 = np.array(k), np.array(c), np.array(l0)
-        self._rows = None
+            ui.append(pi), uj.append(pj), l0.append(length)
+        self.u_i, self.u_j, self.l0 = np.array(ui), np.array(uj), np.array(l0)
 
-    def _indices(self, model):
-        if self._rows is None:
-            self._rows = (np.array([_row(e.body_i, model) for e in self.elements]),
-                          np.array([_row(e.body_j, model) for e in self.elements]))
-        return self._rows
-
-    def geometry(self, model, fr):
-        """Vector d = r_j - r_i, length l and unit vector e of every spring."""
+    def _length(self, model, fr):
         bt = model.body_type
         bi, bj = self._indices(model)
         d = bt.point(fr, bj, self.u_j) - bt.point(fr, bi, self.u_i)
-        length = np.sqrt(np.einsum("kd,kd->k", d, d))
-        return d, length
+        return d, np.sqrt(np.einsum("kd,kd->k", d, d))
 
     def apply(self, model, t, fr, Q):
         bt = model.body_type
         bi, bj = self._indices(model)
-        d, length = self.geometry(model, fr)
+        d, length = self._length(model, fr)
         if np.any(length < 1e-12):
             bad = self.elements[int(np.argmin(length))].name
             raise ModelError(f"spring '{bad}': its two points coincide at t = {t:g} s; the force "
@@ -312,10 +322,7 @@ class _SpringDampers(_CompiledForces):
         e = d / length[:, None]
         d_dot = bt.point_velocity(fr, bj, self.u_j) - bt.point_velocity(fr, bi, self.u_i)
         rate = np.einsum("kd,kd->k", e, d_dot)
-        tension = self.k * (length - self.l0) + self.c * rate
-        for i, fn in self.actuators:
-            tension[i] += float(_checked(fn(t, None), (), f"spring '{self.elements[i].name}' "
-                                         "actuator", t))
+        tension = self.k * (length - self.l0) + self.c * rate + self._actuation(t)
         force_on_i = tension[:, None] * e
         Qi = np.einsum("kdn,kd->kn", bt.point_jacobian(fr, bi, self.u_i), force_on_i)
         Qj = np.einsum("kdn,kd->kn", bt.point_jacobian(fr, bj, self.u_j), -force_on_i)
@@ -323,7 +330,7 @@ class _SpringDampers(_CompiledForces):
         np.add.at(Q, bj, Qj)
 
     def potential(self, model, fr) -> float:
-        _, length = self.geometry(model, fr)
+        _, length = self._length(model, fr)
         return float(0.5 * np.sum(self.k * (length - self.l0) ** 2))
 
 
@@ -362,41 +369,19 @@ class RotationalSpringDamper(ForceElement):
         return _RotationalSprings(elements, ctx)
 
 
-class _RotationalSprings(_CompiledForces):
+class _RotationalSprings(_SpringGroup):
     def __init__(self, elements: list[RotationalSpringDamper], ctx: "BuildContext"):
-        self.elements = elements
-        k, c, phi0 = [], [], []
-        self.actuators = []
-        for n, e in enumerate(elements):
-            stiffness = ctx.scalar(e.stiffness, f"spring '{e.name}': stiffness")
-            damping = ctx.scalar(e.damping, f"spring '{e.name}': damping")
-            if stiffness < 0 or damping < 0:
-                raise ModelError(f"spring '{e.name}': stiffness and damping must be >= 0")
-            if e.free_angle is None:
-                angle = ctx.initial_coordinate(e.body_j, 2) - ctx.initial_coordinate(e.body_i, 2)
-            else:
-                angle = ctx.scalar(e.free_angle, f"spring '{e.name}': free_angle")
-            k.append(stiffness), c.append(damping), phi0.append(angle)
-            if e.actuator is not None:
-                self.actuators.append((n, _value_function(e.actuator,
-                                                          f"spring '{e.name}': actuator", None)))
-        self.k, self.c, self.phi0 = np.array(k), np.array(c), np.array(phi0)
-        self._rows = None
-
-    def _indices(self, model):
-        if self._rows is None:
-            self._rows = (np.array([_row(e.body_i, model) for e in self.elements]),
-                          np.array([_row(e.body_j, model) for e in self.elements]))
-        return self._rows
+        super().__init__(elements, ctx)
+        self.phi0 = np.array([
+            ctx.initial_coordinate(e.body_j, 2) - ctx.initial_coordinate(e.body_i, 2)
+            if e.free_angle is None else ctx.scalar(e.free_angle, f"spring '{e.name}': free_angle")
+            for e in elements])
 
     def apply(self, model, t, fr, Q):
         bi, bj = self._indices(model)
         phi = fr.Q[bj, 2] - fr.Q[bi, 2]
         phi_dot = fr.Qd[bj, 2] - fr.Qd[bi, 2]
-        torque = -self.k * (phi - self.phi0) - self.c * phi_dot
-        for i, fn in self.actuators:
-            torque[i] += float(_checked(fn(t, None), (), f"spring '{self.elements[i].name}' "
-                                        "actuator", t))
+        torque = -self.k * (phi - self.phi0) - self.c * phi_dot + self._actuation(t)
         np.add.at(Q[:, 2], bj, torque)
         np.add.at(Q[:, 2], bi, -torque)
 

@@ -17,10 +17,10 @@ import scipy.sparse as sp
 
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
-from mbd3d.errors import AnalysisError, MBDError, ModelError, NotFullyDrivenError
+from mbd3d.errors import ModelError, NotFullyDrivenError
 from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented
 from mbd3d.position import hold_indices, singular_error, solve_position
-from mbd3d.results import Results
+from mbd3d.results import Results, run_keeping_results
 
 __all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "inverse_dynamics",
            "check_times"]
@@ -103,22 +103,14 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
     t = check_times(times)
     _require_fully_driven(model, analysis)
     n, m = model.n_coordinates, model.n_constraints
-    k_max = len(t)
-    Q = np.empty((k_max, n))
-    Qd = np.empty((k_max, n))
-    Qdd = np.empty((k_max, n))
-    Lam = np.empty((k_max, m)) if with_forces else None
+    Q, Qd, Qdd = (np.empty((len(t), n)) for _ in range(3))
+    Lam = np.empty((len(t), m)) if with_forces else None
     start = _time.perf_counter()
-    M = mass_matrix(model, constraints.frames(model, model.q0)) if with_forces else None
-    q = model.q0 if q_guess is None else q_guess
     done = 0
 
-    def partial(status: str, message: str) -> Results:
-        return Results(model, analysis, t[:done], Q[:done], Qd[:done], Qdd[:done],
-                       None if Lam is None else Lam[:done], status=status, message=message,
-                       stats={"wall_time": _time.perf_counter() - start})
-
-    try:
+    def loop() -> None:
+        nonlocal done
+        q = model.q0 if q_guess is None else q_guess
         for k, tk in enumerate(t):
             if k > 0:
                 # second-order Taylor predictor: Newton-Raphson then needs one or two iterations
@@ -136,22 +128,18 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
             fr = constraints.frames(model, q, qd)
             qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
             if with_forces:
-                if model.body_type.name != "planar":
-                    M = mass_matrix(model, fr)
-                rhs = generalized_forces(model, tk, fr) - M @ qdd
+                # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
+                rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
                 Lam[k] = lu.solve(rhs, transpose=True)
             Q[k], Qd[k], Qdd[k] = q, qd, qdd
             done = k + 1
-    except AnalysisError as exc:
-        exc.results = partial("failed", str(exc))
-        raise
-    except MBDError as exc:
-        # bad input discovered mid-run (a driver returning NaN): keep what was computed
-        exc.results = partial("failed", str(exc))  # type: ignore[attr-defined]
-        raise
-    except KeyboardInterrupt:
-        return partial("interrupted", f"interrupted by the user at t = {t[done]:g} s")
-    return partial("complete", "")
+
+    def partial(status: str, message: str) -> Results:
+        return Results(model, analysis, t[:done], Q[:done], Qd[:done], Qdd[:done],
+                       None if Lam is None else Lam[:done], status=status, message=message,
+                       stats={"wall_time": _time.perf_counter() - start})
+
+    return run_keeping_results(loop, partial)
 
 
 def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,

@@ -12,13 +12,13 @@ back to joints.
 
 from __future__ import annotations
 
-import math
 from collections import OrderedDict
 from typing import Any, Iterable, Sequence
 
 import numpy as np
 
 from mbd3d.body import Body, BodyType
+from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.linalg import AugmentedPattern
@@ -79,15 +79,7 @@ class BuildContext:
 
     def vector(self, value: Any, what: str) -> np.ndarray:
         """A finite vector of ``dim`` components."""
-        try:
-            arr = np.asarray(value, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise ModelError(f"{what} must be {self.dim} numbers, got {value!r}") from None
-        if arr.size != self.dim:
-            raise ModelError(f"{what} must have {self.dim} components, got {arr.size}: {value!r}")
-        if not np.all(np.isfinite(arr)):
-            raise ModelError(f"{what} must be finite, got {value!r}")
-        return arr
+        return finite_vector(value, self.dim, what)
 
     def direction(self, value: Any, what: str) -> np.ndarray:
         """A unit vector; a zero vector is refused."""
@@ -98,15 +90,7 @@ class BuildContext:
         return arr / norm
 
     def scalar(self, value: Any, what: str, positive: bool = False) -> float:
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
-            raise ModelError(f"{what} must be a real number, got {value!r}") from None
-        if not math.isfinite(number):
-            raise ModelError(f"{what} must be finite, got {value!r}")
-        if positive and not number > 0.0:
-            raise ModelError(f"{what} must be positive, got {number}")
-        return number
+        return finite_scalar(value, what, positive)
 
     def rotation(self, body: Body) -> np.ndarray:
         """Rotation matrix of ``body`` at its initial guess (global frame for the ground)."""
@@ -155,13 +139,8 @@ class ModelBuilder:
         self.body_type = _body_type(dim)
         self.dim = dim
         self.name = _check_name(name, "model")
-        if gravity is None:
-            self.gravity = np.zeros(dim)
-        else:
-            g = np.asarray(gravity, dtype=float).reshape(-1)
-            if g.size != dim or not np.all(np.isfinite(g)):
-                raise ModelError(f"gravity must be {dim} finite numbers [m/s^2], got {gravity!r}")
-            self.gravity = g
+        self.gravity = (np.zeros(dim) if gravity is None
+                        else finite_vector(gravity, dim, "gravity [m/s^2]"))
         nc = self.body_type.n_coords
         self.ground = Body("ground", -1, 0.0, None, np.zeros(nc), np.zeros(nc), is_ground=True)
         self._bodies: list[Body] = []
@@ -212,12 +191,7 @@ class ModelBuilder:
         """
         _check_name(name, "body")
         self._claim(name, "body")
-        try:
-            mass_value = float(mass)
-        except (TypeError, ValueError):
-            raise ModelError(f"body '{name}': mass must be a real number [kg], got {mass!r}") from None
-        if not math.isfinite(mass_value) or not mass_value > 0.0:
-            raise ModelError(f"body '{name}': mass must be positive and finite [kg], got {mass!r}")
+        mass_value = finite_scalar(mass, f"body '{name}': mass [kg]", positive=True)
         bt = self.body_type
         inertia_value = bt.check_inertia(inertia, name)
         q0 = bt.initial_coordinates(name, position, angle)
@@ -467,6 +441,10 @@ class Model:
     def rows_of(self, name: str) -> np.ndarray:
         """Constraint rows of the joint or driver ``name``."""
         return self._rows_of[self._check_joint(name)]
+
+    def padded_index(self, body: Body) -> int:
+        """Row of ``body`` in the per-body arrays of the solvers (the ground is the last row)."""
+        return self.n_bodies if body.is_ground else body.index
 
     def coordinates_of(self, body: str | Body) -> slice:
         """The slice of ``q`` owned by ``body``."""

@@ -16,6 +16,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from mbd3d.checks import finite_scalar
 from mbd3d.errors import ModelError
 
 __all__ = [
@@ -28,16 +29,6 @@ __all__ = [
     "Function",
     "as_motion",
 ]
-
-
-def _finite(value: float, what: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ModelError(f"{what} must be a real number, got {value!r}") from None
-    if not math.isfinite(number):
-        raise ModelError(f"{what} must be finite, got {number}")
-    return number
 
 
 class Motion(ABC):
@@ -75,7 +66,7 @@ class Constant(Motion):
     """``f(t) = value``."""
 
     def __init__(self, value: float):
-        self.value = _finite(value, "Constant value")
+        self.value = finite_scalar(value, "Constant value")
 
     def evaluate(self, t: float) -> tuple[float, float, float]:
         return self.value, 0.0, 0.0
@@ -88,8 +79,8 @@ class Ramp(Motion):
     """``f(t) = initial + rate * t``: constant speed, e.g. a crank turning at ``rate`` rad/s."""
 
     def __init__(self, initial: float, rate: float):
-        self.initial = _finite(initial, "Ramp initial")
-        self.rate = _finite(rate, "Ramp rate")
+        self.initial = finite_scalar(initial, "Ramp initial")
+        self.rate = finite_scalar(rate, "Ramp rate")
 
     def evaluate(self, t: float) -> tuple[float, float, float]:
         return self.initial + self.rate * t, self.rate, 0.0
@@ -102,10 +93,10 @@ class Harmonic(Motion):
     """``f(t) = offset + amplitude * sin(frequency * t + phase)``, frequency in rad/s."""
 
     def __init__(self, amplitude: float, frequency: float, phase: float = 0.0, offset: float = 0.0):
-        self.amplitude = _finite(amplitude, "Harmonic amplitude")
-        self.frequency = _finite(frequency, "Harmonic frequency")
-        self.phase = _finite(phase, "Harmonic phase")
-        self.offset = _finite(offset, "Harmonic offset")
+        self.amplitude = finite_scalar(amplitude, "Harmonic amplitude")
+        self.frequency = finite_scalar(frequency, "Harmonic frequency")
+        self.phase = finite_scalar(phase, "Harmonic phase")
+        self.offset = finite_scalar(offset, "Harmonic offset")
 
     def evaluate(self, t: float) -> tuple[float, float, float]:
         arg = self.frequency * t + self.phase
@@ -122,7 +113,7 @@ class Polynomial(Motion):
     """``f(t) = c0 + c1 t + c2 t^2 + ...`` with coefficients in ascending powers."""
 
     def __init__(self, coefficients: Sequence[float]):
-        coefficients = [_finite(c, "Polynomial coefficient") for c in coefficients]
+        coefficients = [finite_scalar(c, "Polynomial coefficient") for c in coefficients]
         if not coefficients:
             raise ModelError("Polynomial needs at least one coefficient")
         self.poly = np.polynomial.Polynomial(coefficients)
@@ -144,12 +135,12 @@ class SmoothStep(Motion):
     """
 
     def __init__(self, t0: float, t1: float, start: float, end: float):
-        self.t0 = _finite(t0, "SmoothStep t0")
-        self.t1 = _finite(t1, "SmoothStep t1")
+        self.t0 = finite_scalar(t0, "SmoothStep t0")
+        self.t1 = finite_scalar(t1, "SmoothStep t1")
         if not self.t1 > self.t0:
             raise ModelError(f"SmoothStep needs t1 > t0, got t0={self.t0}, t1={self.t1}")
-        self.start = _finite(start, "SmoothStep start")
-        self.end = _finite(end, "SmoothStep end")
+        self.start = finite_scalar(start, "SmoothStep start")
+        self.end = finite_scalar(end, "SmoothStep end")
 
     def evaluate(self, t: float) -> tuple[float, float, float]:
         span = self.t1 - self.t0
@@ -204,4 +195,4 @@ def as_motion(value: "Motion | float", what: str) -> Motion:
         raise ModelError(
             f"{what}: a plain callable has no exact derivatives; wrap it as "
             f"mbd3d.Function(f, df, d2f) or use Constant, Ramp, Harmonic, Polynomial, SmoothStep")
-    return Constant(_finite(value, what))
+    return Constant(finite_scalar(value, what))

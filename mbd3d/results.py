@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 import tempfile
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -228,19 +228,20 @@ class Results:
             if not b.is_ground:
                 Q[side::2] = self.q[:, model.coordinates_of(b)]
         fr = bt.frames(Q)
+        side_of = {model.padded_index(element.body_i): 0, model.padded_index(element.body_j): 1}
+        target = model.padded_index(body)
+        stacked = 2 * np.arange(k)
         generalized = np.zeros((k, nc))
         for g_index, local in model._instances_of[name]:
             g = model.groups[g_index]
             rows = g.offset + local * g.rows_per + np.arange(g.rows_per)
             params = {key: np.broadcast_to(v[local], (k,) + v.shape[1:]) for key, v in g.params.items()}
-            spec_bodies = (g.bi[local], g.bj[local])
-            sides = [s for s, b in enumerate(spec_bodies)
-                     if b == (model.n_bodies if body.is_ground else body.index)]
-            bi = np.arange(k) * 2 + (0 if _same(model, g.bi[local], element.body_i) else 1)
-            bj = np.arange(k) * 2 + (1 if _same(model, g.bj[local], element.body_j) else 0)
-            J = g.cls.evaluate(bt, fr, bi, bj, params, False, True, False)[1]  # (k, r, 2, nc)
-            for s in sides:
-                generalized -= np.einsum("krn,kr->kn", J[:, :, s, :], lam[:, rows])
+            bodies = (g.bi[local], g.bj[local])
+            J = g.cls.evaluate(bt, fr, stacked + side_of[bodies[0]], stacked + side_of[bodies[1]],
+                               params, False, True, False)[1]  # (k, r, 2, nc)
+            for s, b in enumerate(bodies):
+                if b == target:  # constraint force on this body: -Cq^T lam
+                    generalized -= np.einsum("krn,kr->kn", J[:, :, s, :], lam[:, rows])
         side = 0 if body is element.body_i else 1
         idx = np.arange(k) * 2 + side
         force, moment_cm = bt.wrench(fr, idx, generalized)
@@ -334,6 +335,25 @@ class Results:
         _atomic_write(path, write, text=False)
 
 
+def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"]
+                        ) -> "Results":
+    """Run an analysis ``loop`` so that no computed time point is lost.
+
+    ``partial(status, message)`` builds the results of the time points done so far. On an
+    mbd3d error they are attached to it (``error.results``) before it propagates; on Ctrl-C they
+    are returned with status "interrupted".
+    """
+    try:
+        loop()
+    except MBDError as exc:
+        exc.results = partial("failed", str(exc))  # type: ignore[attr-defined]
+        raise
+    except KeyboardInterrupt:
+        return partial("interrupted", "interrupted by the user; the results end at the last "
+                                      "completed time point")
+    return partial("complete", "")
+
+
 def format_table(columns: dict[str, Sequence[float]], precision: int = 5) -> str:
     """A plain-text table of equally long columns, for printing results in a terminal.
 
@@ -350,10 +370,6 @@ def format_table(columns: dict[str, Sequence[float]], precision: int = 5) -> str
     for row in zip(*cells):
         lines.append("".join(c.rjust(w + 1) for c, w in zip(row, widths)))
     return "\n".join(line.rstrip() for line in lines)
-
-
-def _same(model, padded_index: int, body: Body) -> bool:
-    return padded_index == (model.n_bodies if body.is_ground else body.index)
 
 
 def _atomic_write(path: str | os.PathLike, write, text: bool) -> None:

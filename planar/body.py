@@ -12,12 +12,12 @@ The mass matrix is ``diag(m, m, J)`` and constant; there is no quadratic velocit
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
 from mbd3d.body import BodyType, Frames
+from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
 
@@ -29,28 +29,6 @@ def _perp(s: np.ndarray) -> np.ndarray:
     return s[:, ::-1] * _PERP_SIGN
 
 
-def _finite_vector(value: Any, size: int, what: str) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ModelError(f"{what} must be {size} numbers, got {value!r}") from None
-    if arr.size != size:
-        raise ModelError(f"{what} must have {size} components, got {arr.size}: {value!r}")
-    if not np.all(np.isfinite(arr)):
-        raise ModelError(f"{what} must be finite, got {value!r}")
-    return arr
-
-
-def _finite_scalar(value: Any, what: str) -> float:
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise ModelError(f"{what} must be a real number, got {value!r}") from None
-    if not math.isfinite(number):
-        raise ModelError(f"{what} must be finite, got {value!r}")
-    return number
-
-
 class PlanarBody(BodyType):
     """Kinematics of planar rigid bodies, batched over bodies (see :class:`mbd3d.body.BodyType`)."""
 
@@ -60,22 +38,22 @@ class PlanarBody(BodyType):
     name = "planar"
 
     def check_inertia(self, inertia: Any, body: str) -> float:
-        value = _finite_scalar(inertia, f"body '{body}': inertia")
+        value = finite_scalar(inertia, f"body '{body}': inertia")
         if not value > 0.0:
             raise ModelError(f"body '{body}': inertia must be positive [kg m^2], got {value}; "
                              "a planar body needs its centroidal moment of inertia about the normal")
         return value
 
     def initial_coordinates(self, body: str, position: Any, orientation: Any) -> np.ndarray:
-        pos = _finite_vector(position, 2, f"body '{body}': position")
-        angle = _finite_scalar(0.0 if orientation is None else orientation, f"body '{body}': angle")
+        pos = finite_vector(position, 2, f"body '{body}': position")
+        angle = finite_scalar(0.0 if orientation is None else orientation, f"body '{body}': angle")
         return np.array([pos[0], pos[1], angle])
 
     def initial_rates(self, body: str, velocity: Any, angular_velocity: Any,
                       q0: np.ndarray) -> np.ndarray:
-        vel = _finite_vector((0.0, 0.0) if velocity is None else velocity, 2,
+        vel = finite_vector((0.0, 0.0) if velocity is None else velocity, 2,
                              f"body '{body}': velocity")
-        omega = _finite_scalar(0.0 if angular_velocity is None else angular_velocity,
+        omega = finite_scalar(0.0 if angular_velocity is None else angular_velocity,
                                f"body '{body}': angular_velocity")
         return np.array([vel[0], vel[1], omega])
 

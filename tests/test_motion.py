@@ -1,0 +1,63 @@
+"""Prescribed motions: the exact derivatives they supply against finite differences of f."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+
+MOTIONS = [
+    mb.Constant(0.7),
+    mb.Ramp(0.2, -1.5),
+    mb.Harmonic(0.3, 4.0, phase=0.5, offset=1.0),
+    mb.Polynomial([1.0, -2.0, 0.5, 0.25]),
+    mb.SmoothStep(0.2, 0.9, -1.0, 2.0),
+    mb.Function(math.exp, math.exp, math.exp),
+    mb.Ramp(0.0, 1.0) + mb.Harmonic(0.1, 10.0),
+]
+
+
+@pytest.mark.parametrize("motion", MOTIONS, ids=repr)
+def test_derivatives_match_finite_differences(motion):
+    h = 1e-4
+    for t in np.linspace(0.05, 1.1, 23):
+        f, df, d2f = motion.evaluate(t)
+        fd1 = (motion(t + h) - motion(t - h)) / (2 * h)
+        fd2 = (motion(t + h) - 2 * f + motion(t - h)) / (h * h)
+        assert df == pytest.approx(fd1, abs=1e-6)
+        assert d2f == pytest.approx(fd2, abs=1e-4)
+
+
+def test_smooth_step_starts_and_stops_at_rest():
+    step = mb.SmoothStep(1.0, 3.0, 5.0, 7.0)
+    assert step.evaluate(0.0) == (5.0, 0.0, 0.0)
+    assert step.evaluate(4.0) == (7.0, 0.0, 0.0)
+    for t in (1.0, 3.0):
+        f, df, d2f = step.evaluate(t)
+        assert df == pytest.approx(0.0, abs=1e-15) and d2f == pytest.approx(0.0, abs=1e-15)
+    assert step(2.0) == pytest.approx(6.0)
+
+
+def test_bad_motion_parameters():
+    with pytest.raises(mb.ModelError, match="SmoothStep needs t1 > t0"):
+        mb.SmoothStep(1.0, 1.0, 0.0, 1.0)
+    with pytest.raises(mb.ModelError, match="Ramp rate must be finite"):
+        mb.Ramp(0.0, math.inf)
+    with pytest.raises(mb.ModelError, match="Function: df must be callable"):
+        mb.Function(math.sin, 1.0, math.sin)
+
+
+def test_spring_actuator_adds_tension():
+    # an actuator force equal to the weight holds the mass where the spring is slack
+    m = 2.0
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    mass = b.add_body("mass", mass=m, inertia=0.1, position=(0.0, -1.0))
+    from joints import Prismatic
+    b.add(Prismatic("guide", b.ground, mass, axis=(0.0, 1.0)))
+    b.add(mb.SpringDamper("jack", b.ground, mass, at_i=(0.0, 0.0), stiffness=100.0,
+                          damping=1.0, actuator=lambda t: m * 9.81))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 5))
+    np.testing.assert_allclose(res.body("mass").position[:, 1], -1.0, atol=1e-10)
