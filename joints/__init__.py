@@ -7,6 +7,8 @@ against the body kinematics, so the same classes serve every body type that supp
 - :class:`Prismatic`: slider along an axis.
 - :class:`Fixed`: weld (also to the ground).
 - :class:`Distance`: massless rigid link between two points.
+- Spatial only: :class:`Spherical`, :class:`Universal`, :class:`Cylindrical`, :class:`Planar`,
+  :class:`PointOnLine`, :class:`PointOnPlane`.
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 
@@ -15,6 +17,9 @@ from joints.drivers import CoordinateDriver, RotationDriver, TranslationDriver
 from joints.fixed import Fixed
 from joints.prismatic import Prismatic
 from joints.revolute import Revolute
+from joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
+                                   Universal)
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
-           "TranslationDriver"]
+           "TranslationDriver", "Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine",
+           "PointOnPlane"]

@@ -10,6 +10,7 @@ from mbd3d.body import Body
 from mbd3d.element import ConstraintElement
 from mbd3d.errors import ModelError
 from mbd3d.model import BuildContext
+from mbd3d.element import PrimitiveSpec
 
 
 def perpendicular(v: np.ndarray) -> np.ndarray:
@@ -62,6 +63,47 @@ class Joint(ConstraintElement):
         return u_i, u_j, np.eye(ctx.dim)
 
 
+def triad(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit vectors ``(f, g, h)``, right-handed and orthonormal, with ``h`` along ``axis``."""
+    h = axis / np.linalg.norm(axis)
+    # start from the global axis least aligned with h: well conditioned for any h
+    e = np.eye(3)[int(np.argmin(np.abs(h)))]
+    f = np.cross(e, h)
+    f /= np.linalg.norm(f)
+    return f, np.cross(h, f), h
+
+
+class Axes:
+    """A joint's triad ``(f, g, h)`` of the drawing in the frames of bodies i and j."""
+
+    def __init__(self, ctx: BuildContext, joint: ConstraintElement, axis: Any):
+        if axis is None:
+            raise ModelError(f"joint '{joint.name}': a spatial {type(joint).__name__} needs its "
+                             "axis= (a direction of the drawing, global axes)")
+        f, g, h = triad(ctx.direction(axis, f"joint '{joint.name}': axis"))
+        self.i = [ctx.to_local_vector(joint.body_i, v) for v in (f, g, h)]
+        self.j = [ctx.to_local_vector(joint.body_j, v) for v in (f, g, h)]
+
+    def reaction_axes(self, along_x: bool) -> np.ndarray:
+        """Joint axes as columns in body i's frame: the axis as z (revolute-like) or x."""
+        f, g, h = self.i
+        return np.column_stack([h, f, g] if along_x else [f, g, h])
+
+
 def require_planar(ctx: BuildContext, element: str) -> None:
     if ctx.dim != 2:
         raise ModelError(f"'{element}': this joint is available for planar models only (dim=2)")
+
+
+def require_spatial(ctx: BuildContext, element: str) -> None:
+    if ctx.dim != 3:
+        raise ModelError(f"'{element}': this joint is available for spatial models only (dim=3)")
+
+
+def perpendicular_rows(joint: ConstraintElement, axes: Axes) -> list[PrimitiveSpec]:
+    """Two dot-1 rows keeping body j's copy of the axis h perpendicular to f and g of body i:
+    the axes stay aligned (Haug's revolute/cylindrical pair)."""
+    f, g, _ = axes.i
+    h_j = axes.j[2]
+    return [PrimitiveSpec("dot1", joint.body_i, joint.body_j, {"v_i": f, "v_j": h_j}, ("axis_f",)),
+            PrimitiveSpec("dot1", joint.body_i, joint.body_j, {"v_i": g, "v_j": h_j}, ("axis_g",))]

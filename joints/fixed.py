@@ -2,24 +2,31 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from mbd3d.element import PrimitiveSpec
 from mbd3d.model import BuildContext
 
-from joints.base import Joint, require_planar
+from joints.base import Axes, Joint, perpendicular_rows
 
 
 class Fixed(Joint):
     """Welds body j to body i (or to the ground) as they are in the drawing.
 
     Planar form: point coincidence (rows ``x``, ``y``) and constant relative angle (row
-    ``angle``), the angle taken from the bodies' initial guesses. Reaction on body j: force [N]
-    and moment [N m] about the weld point (default body j's centre of mass).
+    ``angle``). Spatial form: point coincidence and three dot-1 rows locking the relative
+    orientation (``axis_f``, ``axis_g``, ``twist``). The relative orientation is that of the
+    bodies' initial guesses. Reaction on body j: force [N] and moment [N m] about the weld point
+    (default body j's centre of mass).
     """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
-        require_planar(ctx, self.name)
         u_i, u_j = self.points(ctx)
-        angle = ctx.initial_coordinate(self.body_j, 2) - ctx.initial_coordinate(self.body_i, 2)
-        return [PrimitiveSpec("point", self.body_i, self.body_j, {"u_i": u_i, "u_j": u_j},
-                              ("x", "y")),
-                PrimitiveSpec("angle", self.body_i, self.body_j, {}, ("angle",), c0=angle)]
+        bi, bj = self.body_i, self.body_j
+        point = PrimitiveSpec("point", bi, bj, {"u_i": u_i, "u_j": u_j}, ("x", "y", "z")[:ctx.dim])
+        if ctx.dim == 2:
+            angle = ctx.initial_coordinate(bj, 2) - ctx.initial_coordinate(bi, 2)
+            return [point, PrimitiveSpec("angle", bi, bj, {}, ("angle",), c0=angle)]
+        axes = Axes(ctx, self, np.array([0.0, 0.0, 1.0]))
+        return [point, *perpendicular_rows(self, axes),
+                PrimitiveSpec("dot1", bi, bj, {"v_i": axes.i[0], "v_j": axes.j[1]}, ("twist",))]

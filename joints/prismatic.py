@@ -10,24 +10,26 @@ from mbd3d.body import Body
 from mbd3d.element import PrimitiveSpec
 from mbd3d.model import BuildContext
 
-from joints.base import Joint, perpendicular, require_planar
+from joints.base import Axes, Joint, perpendicular, perpendicular_rows
 
 
 class Prismatic(Joint):
     """A slider: body j translates along an axis of body i, without relative rotation.
 
     Planar form (Haug's translational joint): with ``h`` the axis and ``n`` its normal on body i,
-    ``n_i . h_j = 0`` (row ``rotation``: no relative rotation) and ``n_i . (r_Pj - r_Pi) = 0``
-    (row ``normal``: point P of body j stays on the line of body i).
+    ``n_i . h_j = 0`` (row ``rotation``) and ``n_i . (r_Pj - r_Pi) = 0`` (row ``normal``: point
+    P of body j stays on the line of body i). Spatial form: the axes stay aligned (``axis_f``,
+    ``axis_g``), P stays on the line (``normal_f``, ``normal_g``, dot-2) and body j does not turn
+    about the axis (``twist``): 5 rows.
 
-    Reaction on body j: force [N] and moment [N m] about its point P; in joint axes the force
-    components are (along the axis, normal to it).
+    Reaction on body j: force [N] and moment [N m] about its point P; in joint axes the first
+    component is along the sliding axis.
 
     Parameters
     ----------
     name : str
     body_i, body_j : Body
-    axis : (2,) array_like
+    axis : array_like
         Direction of sliding in the drawing (global axes).
     at, point_i, point_j : optional
         A point on the sliding line (see :class:`joints.base.Joint`); default body j's centre of
@@ -41,19 +43,27 @@ class Prismatic(Joint):
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, ...]:
         """``(u_i, u_j, h_i, h_j)``: points and unit axis in the frames of bodies i and j."""
-        require_planar(ctx, self.name)
         u_i, u_j = self.points(ctx)
         h = ctx.direction(self.axis, f"joint '{self.name}': axis")
         return u_i, u_j, ctx.to_local_vector(self.body_i, h), ctx.to_local_vector(self.body_j, h)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         u_i, u_j, h_i, h_j = self.geometry(ctx)
-        n_i = perpendicular(h_i)
-        return [PrimitiveSpec("dot1", self.body_i, self.body_j, {"v_i": n_i, "v_j": h_j},
-                              ("rotation",)),
-                PrimitiveSpec("dot2", self.body_i, self.body_j,
-                              {"v_i": n_i, "u_i": u_i, "u_j": u_j}, ("normal",))]
+        bi, bj = self.body_i, self.body_j
+        if ctx.dim == 2:
+            n_i = perpendicular(h_i)
+            return [PrimitiveSpec("dot1", bi, bj, {"v_i": n_i, "v_j": h_j}, ("rotation",)),
+                    PrimitiveSpec("dot2", bi, bj, {"v_i": n_i, "u_i": u_i, "u_j": u_j},
+                                  ("normal",))]
+        axes = Axes(ctx, self, self.axis)
+        f, g, _ = axes.i
+        return [*perpendicular_rows(self, axes),
+                PrimitiveSpec("dot2", bi, bj, {"v_i": f, "u_i": u_i, "u_j": u_j}, ("normal_f",)),
+                PrimitiveSpec("dot2", bi, bj, {"v_i": g, "u_i": u_i, "u_j": u_j}, ("normal_g",)),
+                PrimitiveSpec("dot1", bi, bj, {"v_i": f, "v_j": axes.j[1]}, ("twist",))]
 
     def reaction_frame(self, ctx: BuildContext):
         u_i, u_j, h_i, _ = self.geometry(ctx)
-        return u_i, u_j, np.column_stack([h_i, perpendicular(h_i)])
+        if ctx.dim == 2:
+            return u_i, u_j, np.column_stack([h_i, perpendicular(h_i)])
+        return u_i, u_j, Axes(ctx, self, self.axis).reaction_axes(along_x=True)

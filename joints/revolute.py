@@ -1,31 +1,39 @@
-"""Revolute joint (pin)."""
+"""Revolute joint (pin / hinge)."""
 
 from __future__ import annotations
 
+from typing import Any
+
+from mbd3d.body import Body
 from mbd3d.element import PrimitiveSpec
 from mbd3d.model import BuildContext
 
-from joints.base import Joint, require_planar
+from joints.base import Axes, Joint, perpendicular_rows
 
 
 class Revolute(Joint):
-    """A pin: a point of body i and a point of body j coincide; relative rotation is free.
+    """A pin or hinge: a point of body i and a point of body j coincide; rotation about the axis
+    is free.
 
-    Planar form: ``r_i + A_i u_i - r_j - A_j u_j = 0`` (2 equations; the original program's
-    eqs. 4-6, Nikravesh's revolute). Rows ``x``, ``y``.
+    Planar form: ``r_i + A_i u_i - r_j - A_j u_j = 0`` (rows ``x``, ``y``; the original
+    program's eqs. 4-6). Spatial form (Haug): the same point coincidence (rows ``x``, ``y``,
+    ``z``) and two dot-1 rows keeping the hinge axes aligned (``axis_f``, ``axis_g``).
 
-    Reaction on body j (``results.joint(name).reaction()``): the pin force [N]; the moment about
-    the pin is zero.
+    Reaction on body j (``results.joint(name).reaction()``): the pin force [N] and, in 3D, the
+    moment [N m] about the pin, which is perpendicular to the axis. Joint axes: z along the
+    hinge axis.
 
     Parameters
     ----------
     name : str
     body_i, body_j : Body
         The connected bodies (either may be ``builder.ground``).
-    at : (2,) array_like, optional
+    at : array_like, optional
         The pin in global coordinates of the drawing [m].
-    point_i, point_j : (2,) array_like, optional
+    point_i, point_j : array_like, optional
         The pin in the frames of body i and body j [m] (see :class:`joints.base.Joint`).
+    axis : (3,) array_like
+        Spatial models: the hinge axis in the drawing (global axes). Ignored in 2D.
 
     Examples
     --------
@@ -36,8 +44,21 @@ class Revolute(Joint):
     >>> pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
     """
 
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, at: Any = None,
+                 point_i: Any = None, point_j: Any = None, axis: Any = None):
+        super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
+        self.axis = axis
+
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
-        require_planar(ctx, self.name)
         u_i, u_j = self.points(ctx)
-        return [PrimitiveSpec("point", self.body_i, self.body_j, {"u_i": u_i, "u_j": u_j},
-                              ("x", "y"))]
+        point = PrimitiveSpec("point", self.body_i, self.body_j, {"u_i": u_i, "u_j": u_j},
+                              ("x", "y", "z")[:ctx.dim])
+        if ctx.dim == 2:
+            return [point]
+        return [point, *perpendicular_rows(self, Axes(ctx, self, self.axis))]
+
+    def reaction_frame(self, ctx: BuildContext):
+        u_i, u_j = self.points(ctx)
+        if ctx.dim == 2:
+            return super().reaction_frame(ctx)
+        return u_i, u_j, Axes(ctx, self, self.axis).reaction_axes(along_x=False)

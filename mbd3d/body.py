@@ -44,11 +44,15 @@ class Body:
         Centroidal moment of inertia [kg m^2]: a scalar about the normal axis for planar bodies.
     q0, qd0 : ndarray
         Initial guess of the body's coordinates and their rates (body frame at the centre of mass).
+    chart : ndarray (3, 3) or None
+        Spatial bodies: the reference rotation ``q0`` is relative to.
     """
 
     def __init__(self, name: str, index: int, mass: float, inertia: Any,
-                 q0: np.ndarray, qd0: np.ndarray, is_ground: bool = False):
+                 q0: np.ndarray, qd0: np.ndarray, is_ground: bool = False,
+                 chart: np.ndarray | None = None):
         self.name = name
+        self.chart = chart
         self.index = index
         self.mass = mass
         self.inertia = inertia
@@ -96,21 +100,34 @@ class BodyType(ABC):
         """Validate a centroidal inertia given by the user and return it in canonical form."""
 
     @abstractmethod
-    def initial_coordinates(self, body: str, position: Any, orientation: Any) -> np.ndarray:
-        """Coordinates of a body at ``position`` with ``orientation`` (planar: angle in rad)."""
+    def initial_state(self, body: str, position: Any, orientation: Any
+                      ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Coordinates of a body at ``position`` with ``orientation``, and its chart (the
+        reference rotation the coordinates are relative to; ``None`` for planar bodies)."""
 
     @abstractmethod
-    def initial_rates(self, body: str, velocity: Any, angular_velocity: Any,
-                      q0: np.ndarray) -> np.ndarray:
+    def initial_rates(self, body: str, velocity: Any, angular_velocity: Any, q0: np.ndarray,
+                      chart: np.ndarray | None) -> np.ndarray:
         """Coordinate rates of a body with the given centre-of-mass velocity and angular velocity."""
+
+    def reset_charts(self, q: np.ndarray, qd: np.ndarray | None, charts: np.ndarray | None,
+                     limit: float = 1.0):
+        """Re-reference bodies whose orientation coordinates approach a singularity.
+
+        Returns ``(q, qd, charts, changed)``. Bodies whose coordinates have no singularity
+        (planar) return their inputs unchanged.
+        """
+        return q, qd, charts, False
 
     # -- kinematics ------------------------------------------------------------------------------
     # The primitives work with ``s = A v``, the global components of a body-fixed vector, computed
     # once per vector; every other kinematic quantity of a point or vector is a cheap function of
     # ``s`` and per-body data.
     @abstractmethod
-    def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None) -> Frames:
-        """Per-body quantities for coordinates ``Q`` (n_bodies + 1, n_coords), ground row last."""
+    def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
+               charts: np.ndarray | None = None) -> Frames:
+        """Per-body quantities for coordinates ``Q`` (n_bodies + 1, n_coords), ground row last,
+        relative to the bodies' ``charts`` (reference rotations; ignored by planar bodies)."""
 
     @abstractmethod
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -176,6 +193,11 @@ class BodyType(ABC):
     @abstractmethod
     def angular_velocity(self, fr: Frames, idx: np.ndarray) -> np.ndarray:
         """Angular velocity [rad/s]: (k,) about the normal in 2D, (k, 3) global in 3D."""
+
+    @abstractmethod
+    def angular_acceleration(self, fr: Frames, idx: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """Angular acceleration [rad/s^2] of bodies ``idx`` whose coordinate accelerations are
+        ``qdd`` (k, n_coords): (k,) in 2D, (k, 3) global in 3D."""
 
     @abstractmethod
     def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,

@@ -18,8 +18,13 @@ __all__ = ["frames", "evaluate", "residual", "jacobian", "jacobian_matrix", "vel
            "acceleration_rhs", "driver_values"]
 
 
-def frames(model, q: np.ndarray, qd: np.ndarray | None = None) -> Frames:
-    """Per-body kinematic quantities of state ``(q, qd)``; the ground is the last row."""
+def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
+           charts: np.ndarray | None = None) -> Frames:
+    """Per-body kinematic quantities of state ``(q, qd)``; the ground is the last row.
+
+    ``charts`` (spatial models): the reference rotations ``q`` is relative to, (n_bodies + 1,
+    3, 3); default the model's initial charts, which ``model.q0`` is relative to.
+    """
     nb, nc = model.n_bodies, model.n_coords_per_body
     Q = np.zeros((nb + 1, nc))
     Q[:nb] = np.reshape(q, (nb, nc))
@@ -27,7 +32,7 @@ def frames(model, q: np.ndarray, qd: np.ndarray | None = None) -> Frames:
     if qd is not None:
         Qd = np.zeros((nb + 1, nc))
         Qd[:nb] = np.reshape(qd, (nb, nc))
-    return model.body_type.frames(Q, Qd)
+    return model.body_type.frames(Q, Qd, model.charts0 if charts is None else charts)
 
 
 def driver_values(model, t: float) -> np.ndarray:

@@ -38,9 +38,12 @@ METHODS = {"RK45": si.RK45, "DOP853": si.DOP853, "RK23": si.RK23, "Radau": si.Ra
            "BDF": si.BDF, "LSODA": si.LSODA}
 
 
-def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray
-                          ) -> tuple[np.ndarray, np.ndarray]:
+def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
+                          charts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Accelerations ``qdd`` and multipliers ``lam`` from the augmented equations at ``(t, q, qd)``.
+
+    ``charts``: spatial models, the reference rotations ``q`` is relative to (default the
+    model's initial charts).
 
     Raises
     ------
@@ -50,7 +53,7 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
         raise IntegrationError(f"forward dynamics of '{model.name}': the state is not finite at "
                                f"t = {t:.6g} s (the integration diverged)", time=t)
-    fr = constraints.frames(model, q, qd)
+    fr = constraints.frames(model, q, qd, charts)
     _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
     blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
     rhs = np.concatenate([generalized_forces(model, t, fr), gamma])
@@ -63,11 +66,11 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray
     return solution[:n], solution[n:]
 
 
-def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
+                  charts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Nearest (mass-weighted) state that satisfies the position and velocity constraints."""
-    q = solve_position(model, q, t, tol=tol)
-    return q, solve_velocity(model, q, t, qd_guess=qd)
+    q = solve_position(model, q, t, tol=tol, charts=charts)
+    return q, solve_velocity(model, q, t, qd_guess=qd, charts=charts)
 
 
 def _difference_jacobian(rhs, n_y: int):
@@ -89,8 +92,8 @@ def _difference_jacobian(rhs, n_y: int):
     return jac
 
 
-def _residuals(model, t, q, qd) -> tuple[float, float]:
-    C, jac_data, _ = constraints.evaluate(model, t, constraints.frames(model, q))
+def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
+    C, jac_data, _ = constraints.evaluate(model, t, constraints.frames(model, q, charts=charts))
     v = constraints.jacobian_matrix(model, jac_data) @ qd - constraints.velocity_rhs(model, t)
     return float(np.max(np.abs(C), initial=0.0)), float(np.max(np.abs(v), initial=0.0))
 
@@ -153,24 +156,30 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     k_max = len(t)
     Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
     Lam = np.empty((k_max, model.n_constraints))
+    Charts = None if model.charts0 is None else np.empty((k_max,) + model.charts0.shape)
+    chart = model.charts0  # reference rotations of the current integration segment
+    stats["chart_resets"] = 0
     done = 0
 
     def partial(status: str, message: str) -> Results:
         stats["wall_time"] = _time.perf_counter() - start
         return Results(model, "forward dynamics", t[:done], Q[:done], Qd[:done], Qdd[:done],
-                       Lam[:done], status=status, message=message, stats=stats)
+                       Lam[:done], status=status, message=message, stats=stats,
+                       charts=None if Charts is None else Charts[:done])
 
     def rhs(tt: float, y: np.ndarray) -> np.ndarray:
         stats["rhs_evaluations"] += 1
-        qdd, _ = forward_accelerations(model, tt, y[:n], y[n:])
+        qdd, _ = forward_accelerations(model, tt, y[:n], y[n:], chart)
         return np.concatenate([y[n:], qdd])
 
     def record(k: int, q: np.ndarray, qd: np.ndarray) -> None:
-        qdd, lam = forward_accelerations(model, t[k], q, qd)
+        qdd, lam = forward_accelerations(model, t[k], q, qd, chart)
         Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
+        if Charts is not None:
+            Charts[k] = chart
 
     def loop() -> None:
-        nonlocal done
+        nonlocal done, chart
         q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
                            hold=hold)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold)
@@ -195,16 +204,23 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 dense = solver.dense_output()
                 while done < k_max and t[done] <= solver.t:
                     y_k = dense(t[done])
-                    record(done, *project_state(model, t[done], y_k[:n], y_k[n:], projection_tol))
+                    record(done, *project_state(model, t[done], y_k[:n], y_k[n:], projection_tol,
+                                                chart))
                     done += 1
             if solver.status == "finished" or done >= k_max:
                 break
-            y = solver.y
-            drift = max(_residuals(model, solver.t, y[:n], y[n:]))
+            q, qd = solver.y[:n], solver.y[n:]
+            drift = max(_residuals(model, solver.t, q, qd, chart))
             stats["max_drift"] = max(stats["max_drift"], drift)
-            if drift > constraint_tol:
-                q, qd = project_state(model, solver.t, y[:n], y[n:], projection_tol)
+            restart = drift > constraint_tol
+            if restart:
+                q, qd = project_state(model, solver.t, q, qd, projection_tol, chart)
                 stats["projections"] += 1
+            # between steps only: every stage of a step is evaluated in one chart
+            q, qd, chart, moved = model.body_type.reset_charts(q, qd, chart)
+            if moved:
+                stats["chart_resets"] += 1
+            if restart or moved:
                 h = min(solver.step_size or np.inf, t[-1] - solver.t)
                 solver = solver_cls(rhs, solver.t, np.concatenate([q, qd]), t[-1], first_step=h,
                                     **options)

@@ -36,15 +36,16 @@ def generalized_forces(model, t: float, fr: Frames) -> np.ndarray:
     return Q[:nb].ravel()
 
 
-def kinetic_energy(model, q: np.ndarray, qd: np.ndarray) -> float:
-    """``T = 1/2 qd^T M qd`` [J]."""
-    fr = frames(model, q, qd)
+def kinetic_energy(model, q: np.ndarray, qd: np.ndarray, charts: np.ndarray | None = None
+                   ) -> float:
+    """``T = 1/2 qd^T M qd`` [J] (``charts``: see :func:`mbd3d.constraints.frames`)."""
+    fr = frames(model, q, qd, charts)
     blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
     v = np.reshape(qd, blocks.shape[:2])
     return float(0.5 * np.einsum("ki,kij,kj->", v, blocks, v))
 
 
-def potential_energy(model, q: np.ndarray) -> float:
+def potential_energy(model, q: np.ndarray, charts: np.ndarray | None = None) -> float:
     """Potential energy of gravity (zero at the global origin) and of springs [J]."""
     nb = model.n_bodies
     R = np.reshape(q, (nb, model.n_coords_per_body))[:, :model.dim]
@@ -52,6 +53,6 @@ def potential_energy(model, q: np.ndarray) -> float:
     fr = None
     for group in model.force_groups:
         if fr is None:
-            fr = frames(model, q, np.zeros_like(q))
+            fr = frames(model, q, np.zeros_like(q), charts)
         V += group.potential(model, fr)
     return V

@@ -53,7 +53,8 @@ def _require_fully_driven(model, what: str) -> None:
 
 
 def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[float] | None = None,
-                   hold: Sequence[str | int] | None = None) -> np.ndarray:
+                   hold: Sequence[str | int] | None = None,
+                   charts: np.ndarray | None = None) -> np.ndarray:
     """Velocities consistent with the constraints: ``Cq qd = -Ct``.
 
     For a fully driven mechanism the solution is unique. Otherwise it is the mass-weighted
@@ -64,7 +65,7 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
     qd : ndarray (n,)
     """
     q = np.asarray(q, dtype=float)
-    fr = constraints.frames(model, q)
+    fr = constraints.frames(model, q, charts=charts)
     Cq = constraints.jacobian(model, q, fr)
     nu = constraints.velocity_rhs(model, t)
     n, m = model.n_coordinates, model.n_constraints
@@ -87,10 +88,11 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
         raise singular_error(model, Cq[:m], t, f"velocity analysis of '{model.name}'") from None
 
 
-def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0) -> np.ndarray:
+def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
+                       charts: np.ndarray | None = None) -> np.ndarray:
     """Accelerations of a fully driven mechanism: ``Cq qdd = Qd``."""
     _require_fully_driven(model, "solve_acceleration")
-    fr = constraints.frames(model, q, qd)
+    fr = constraints.frames(model, q, qd, charts)
     try:
         return Factorization(constraints.jacobian(model, q, fr)).solve(
             constraints.acceleration_rhs(model, t, q, qd, fr))
@@ -105,39 +107,46 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
     n, m = model.n_coordinates, model.n_constraints
     Q, Qd, Qdd = (np.empty((len(t), n)) for _ in range(3))
     Lam = np.empty((len(t), m)) if with_forces else None
+    charts = None if model.charts0 is None else np.empty((len(t),) + model.charts0.shape)
     start = _time.perf_counter()
     done = 0
 
     def loop() -> None:
         nonlocal done
         q = model.q0 if q_guess is None else q_guess
+        chart = model.charts0
         for k, tk in enumerate(t):
             if k > 0:
                 # second-order Taylor predictor: Newton-Raphson then needs one or two iterations
                 # and stays on the branch of the previous time point
                 h = tk - t[k - 1]
                 q = Q[k - 1] + h * Qd[k - 1] + 0.5 * h * h * Qdd[k - 1]
-            q = solve_position(model, q, tk, tol=tol)
-            fr = constraints.frames(model, q)
+            # keep orientation coordinates away from their singularity (spatial bodies)
+            q, _, chart, _ = model.body_type.reset_charts(q, None, chart)
+            q = solve_position(model, q, tk, tol=tol, charts=chart)
+            fr = constraints.frames(model, q, charts=chart)
             Cq = constraints.jacobian(model, q, fr)
             try:
                 lu = Factorization(Cq)
             except SingularMatrix:
                 raise singular_error(model, Cq, float(tk), f"{analysis} of '{model.name}'") from None
             qd = lu.solve(constraints.velocity_rhs(model, tk))
-            fr = constraints.frames(model, q, qd)
+            fr = constraints.frames(model, q, qd, chart)
             qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
             if with_forces:
                 # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
                 rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
                 Lam[k] = lu.solve(rhs, transpose=True)
             Q[k], Qd[k], Qdd[k] = q, qd, qdd
+            if charts is not None:
+                charts[k] = chart
             done = k + 1
 
     def partial(status: str, message: str) -> Results:
         return Results(model, analysis, t[:done], Q[:done], Qd[:done], Qdd[:done],
                        None if Lam is None else Lam[:done], status=status, message=message,
-                       stats={"wall_time": _time.perf_counter() - start})
+                       stats={"wall_time": _time.perf_counter() - start},
+                       charts=None if charts is None else charts[:done])
 
     return run_keeping_results(loop, partial)
 

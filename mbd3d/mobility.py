@@ -21,7 +21,7 @@ class MobilityReport:
     ----------
     n_bodies, n_coordinates, n_constraints : int
     gruebler : int
-        ``n_d = x n_b - n_c`` (x = 3 planar): the count from the equations alone.
+        ``n_d = x n_b - n_c`` (x = 3 planar, 6 spatial): the count from the equations alone.
     rank : int
         Numerical rank of ``Cq`` at the configuration.
     dof : int
@@ -70,7 +70,8 @@ class MobilityReport:
         ])
 
 
-def mobility(model, q: Sequence[float] | None = None, t: float = 0.0) -> MobilityReport:
+def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
+             charts: np.ndarray | None = None) -> MobilityReport:
     """Count coordinates, constraints and degrees of freedom of ``model`` at ``q``.
 
     Parameters
@@ -80,7 +81,7 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0) -> Mobilit
         there, so pass an assembled configuration away from singular positions.
     """
     q = np.asarray(model.q0 if q is None else q, dtype=float)
-    Cq = constraints.jacobian(model, q, sparse=False)
+    Cq = constraints.jacobian(model, q, constraints.frames(model, q, charts=charts), sparse=False)
     n, m = model.n_coordinates, model.n_constraints
     if m:
         rank, groups = dependent_rows(Cq)

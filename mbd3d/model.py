@@ -37,13 +37,24 @@ def _body_type(dim: int) -> BodyType:
     if dim == 2:
         from planar.body import PlanarBody
         return PlanarBody()
-    raise ModelError(f"dim must be 2 (planar); got {dim!r}. Spatial bodies (dim=3) are not available yet")
+    if dim == 3:
+        from mbd3d.spatial import SpatialBody
+        return SpatialBody()
+    raise ModelError(f"dim must be 2 (planar) or 3 (spatial), got {dim!r}")
 
 
 def _check_name(name: Any, what: str) -> str:
     if not isinstance(name, str) or not name.strip():
         raise ModelError(f"{what} name must be a non-empty string, got {name!r}")
     return name
+
+
+def _charts(bodies: Sequence[Body]) -> np.ndarray:
+    """Reference rotations of the bodies, and the identity for the ground (last row)."""
+    charts = np.tile(np.eye(3), (len(bodies) + 1, 1, 1))
+    for b in bodies:
+        charts[b.index] = b.chart
+    return charts
 
 
 class BuildContext:
@@ -62,7 +73,8 @@ class BuildContext:
         Q = np.zeros((n + 1, body_type.n_coords))
         for b in bodies:
             Q[b.index] = b.q0
-        self._frames = body_type.frames(Q)
+        self.charts = _charts(bodies) if body_type.dim == 3 else None
+        self._frames = body_type.frames(Q, charts=self.charts)
         self._n = n
 
     def _row(self, body: Body) -> np.ndarray:
@@ -158,8 +170,9 @@ class ModelBuilder:
         self._names[name] = f"{what} '{name}'"
 
     def add_body(self, name: str, *, mass: float, inertia: Any, position: Sequence[float],
-                 angle: float | None = None, velocity: Sequence[float] | None = None,
-                 angular_velocity: float | None = None) -> Body:
+                 angle: float | None = None, orientation: Any = None,
+                 velocity: Sequence[float] | None = None,
+                 angular_velocity: Any = None) -> Body:
         """Add a rigid body and return its handle.
 
         Parameters
@@ -168,16 +181,21 @@ class ModelBuilder:
             Unique name of the body.
         mass : float
             Mass [kg], positive.
-        inertia : float
-            Centroidal moment of inertia [kg m^2] about the normal to the plane, positive.
-        position : (2,) sequence
+        inertia : float or array_like
+            Centroidal inertia [kg m^2]: planar, the moment about the normal to the plane;
+            spatial, the 3x3 tensor in body axes (or its 3 principal values), positive definite.
+        position : (dim,) sequence
             Initial guess of the centre of mass [m], global frame.
         angle : float, optional
-            Initial guess of the body angle [rad] (x axis of the body from the global x axis).
-        velocity : (2,) sequence, optional
+            Planar: initial guess of the body angle [rad] (body x axis from the global x axis).
+        orientation : array_like, optional
+            Spatial: initial orientation, a 3x3 rotation matrix (body axes as columns, global
+            components) or a unit quaternion (w, x, y, z); see :mod:`mbd3d.rotations` for
+            axis-angle and Rodrigues parameters. Default: aligned with the global axes.
+        velocity : (dim,) sequence, optional
             Initial velocity of the centre of mass [m/s] for forward dynamics (default zero).
-        angular_velocity : float, optional
-            Initial angular velocity [rad/s] for forward dynamics (default zero).
+        angular_velocity : float or (3,) sequence, optional
+            Initial angular velocity [rad/s] for forward dynamics (spatial: global axes).
 
         Returns
         -------
@@ -193,10 +211,14 @@ class ModelBuilder:
         self._claim(name, "body")
         mass_value = finite_scalar(mass, f"body '{name}': mass [kg]", positive=True)
         bt = self.body_type
+        if self.dim == 3 and angle is not None:
+            raise ModelError(f"body '{name}': a spatial body takes orientation=, not angle=")
+        if self.dim == 2 and orientation is not None:
+            raise ModelError(f"body '{name}': a planar body takes angle= [rad], not orientation=")
         inertia_value = bt.check_inertia(inertia, name)
-        q0 = bt.initial_coordinates(name, position, angle)
-        qd0 = bt.initial_rates(name, velocity, angular_velocity, q0)
-        body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0)
+        q0, chart = bt.initial_state(name, position, angle if self.dim == 2 else orientation)
+        qd0 = bt.initial_rates(name, velocity, angular_velocity, q0, chart)
+        body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0, chart=chart)
         self._bodies.append(body)
         return body
 
@@ -289,6 +311,8 @@ class Model:
         Number ``m`` of constraint equations.
     q0, qd0 : ndarray, shape (n,)
         The initial guesses of coordinates and rates given with the bodies.
+    charts0 : ndarray (n_bodies + 1, 3, 3) or None
+        Spatial models: the reference rotations ``q0`` is relative to (ground last).
     mass : ndarray, shape (n_bodies,)
     inertia : ndarray
         Centroidal inertias, (n_bodies,) for planar bodies.
@@ -320,6 +344,7 @@ class Model:
         self.qd0 = np.concatenate([b.qd0 for b in self.bodies])
         self.mass = np.array([b.mass for b in self.bodies])
         self.inertia = np.array([b.inertia for b in self.bodies])
+        self.charts0 = ctx.charts
         self._body_by_name = {b.name: b for b in self.bodies}
         self._joint_by_name = {e.name: (i, e) for i, e in enumerate(self.joints)}
         self._force_by_name = {f.name: f for f in self.forces}
@@ -385,7 +410,8 @@ class Model:
 
         from mbd3d.forces import compile_forces
         self.force_groups = compile_forces(self.forces, ctx)
-        for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0):
+        for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0,
+                    *(() if self.charts0 is None else (self.charts0,))):
             arr.setflags(write=False)
 
     # -- Jacobian sparsity pattern ---------------------------------------------------------------

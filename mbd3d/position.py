@@ -66,7 +66,8 @@ def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
 
 def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
                    tol: float = 1e-12, max_iterations: int = 50,
-                   hold: Iterable[str | int] | None = None) -> np.ndarray:
+                   hold: Iterable[str | int] | None = None,
+                   charts: np.ndarray | None = None) -> np.ndarray:
     """Solve ``C(q, t) = 0`` by Newton-Raphson from ``q_guess``.
 
     Parameters
@@ -82,6 +83,9 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     max_iterations : int
     hold : iterable of str or int, optional
         Coordinates kept at their guessed values, e.g. ``["crank.theta"]``.
+    charts : ndarray, optional
+        Spatial models: the reference rotations ``q_guess`` is relative to (default the model's
+        initial charts). The result is relative to the same charts.
 
     Returns
     -------
@@ -107,11 +111,11 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             time=t)
 
     def full_residual(qq):
-        C = constraints.residual(model, t, qq)
+        C = constraints.residual(model, t, qq, constraints.frames(model, qq, charts=charts))
         return np.concatenate([C, qq[held] - q_held]) if len(held) else C
 
     def full_jacobian(qq):
-        Cq = constraints.jacobian(model, qq)
+        Cq = constraints.jacobian(model, qq, constraints.frames(model, qq, charts=charts))
         if not len(held):
             return Cq
         H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))
@@ -134,7 +138,7 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
                 dq = Factorization(J).solve(-C)
             else:
                 if M is None:
-                    M = mass_matrix(model, constraints.frames(model, q))
+                    M = mass_matrix(model, constraints.frames(model, q, charts=charts))
                 dq, _ = solve_augmented(M, J, np.zeros(n), -C)
         except SingularMatrix:
             raise singular_error(model, J[:m] if not sp.issparse(J) else J.tocsr()[:m], t,

@@ -31,30 +31,49 @@ __all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "JointHistory",
 
 @dataclass(frozen=True)
 class BodyHistory:
-    """Motion of a body's centre of mass over time (global axes).
+    """Motion of a body over time (global axes).
 
     Attributes
     ----------
     position, velocity, acceleration : ndarray (k, dim)
-        [m], [m/s], [m/s^2].
-    angle : ndarray (k,)
-        Body angle [rad], planar bodies (unwrapped: it keeps counting turns).
+        Centre of mass [m], [m/s], [m/s^2].
+    rotation : ndarray (k, dim, dim)
+        Orientation: the body axes as columns, in global components.
     angular_velocity, angular_acceleration : ndarray
-        [rad/s], [rad/s^2]; (k,) planar.
+        [rad/s], [rad/s^2]: (k,) about the normal for planar bodies, (k, 3) global for spatial.
+    angle : ndarray (k,) or None
+        Planar bodies: body angle [rad], unwrapped (it keeps counting turns).
     """
 
     name: str
     position: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
-    angle: np.ndarray
+    rotation: np.ndarray
     angular_velocity: np.ndarray
     angular_acceleration: np.ndarray
+    angle: np.ndarray | None = None
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        """Spatial bodies: unit quaternions (k, 4), ``(w, x, y, z)``, sign kept continuous."""
+        from mbd3d.rotations import to_quaternion
+        if self.rotation.shape[-1] != 3:
+            raise ModelError(f"body '{self.name}' is planar: use .angle")
+        q = to_quaternion(self.rotation)
+        # q and -q are the same rotation: pick signs so that the path does not jump
+        for k in range(1, len(q)):
+            if q[k] @ q[k - 1] < 0:
+                q[k] = -q[k]
+        return q
 
     @property
     def pose(self) -> np.ndarray:
-        """(k, 3) array ``(x, y, angle)`` for planar bodies."""
-        return np.column_stack([self.position, self.angle])
+        """(k, 3) ``(x, y, angle)`` for planar bodies; (k, 7) ``(x, y, z, w, qx, qy, qz)``
+        for spatial ones."""
+        if self.angle is not None:
+            return np.column_stack([self.position, self.angle])
+        return np.column_stack([self.position, self.quaternion])
 
 
 @dataclass(frozen=True)
@@ -130,11 +149,14 @@ class Results:
         "complete", "failed" or "interrupted"; ``message`` says why when not complete.
     stats : dict
         Solver statistics (steps, right-hand side evaluations, projections, wall time [s]).
+    charts : ndarray (k, n_bodies + 1, 3, 3) or None
+        Spatial models: the reference rotations the coordinates of each time point are relative
+        to. Use ``body(name).rotation`` or ``.quaternion`` for orientations, never raw ``q``.
     """
 
     def __init__(self, model, analysis: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
                  qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
-                 message: str = "", stats: dict | None = None):
+                 message: str = "", stats: dict | None = None, charts: np.ndarray | None = None):
         self.model = model
         self.analysis = analysis
         self.t = np.asarray(t, dtype=float)
@@ -143,6 +165,7 @@ class Results:
         self.status = status
         self.message = message
         self.stats = dict(stats or {})
+        self.charts = charts
         self._residuals: tuple[np.ndarray, np.ndarray] | None = None
 
     def __len__(self) -> int:
@@ -161,11 +184,21 @@ class Results:
                            "driver efforts")
         return self.lam
 
+    def _state(self, k: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """Coordinates of time point ``k`` and the charts they are relative to."""
+        return self.q[k], None if self.charts is None else self.charts[k]
+
+    def _body_charts(self, body: Body) -> np.ndarray | None:
+        """The reference rotations of one body over all times (k, 3, 3), or None."""
+        if self.charts is None:
+            return None
+        return self.charts[:, self.model.padded_index(body)]
+
     def _body_frames(self, body: Body):
         """Frames of one body over all times (k rows) and the matching coordinate arrays."""
         model = self.model
         sl = model.coordinates_of(body)
-        fr = model.body_type.frames(self.q[:, sl], self.qd[:, sl])
+        fr = model.body_type.frames(self.q[:, sl], self.qd[:, sl], self._body_charts(body))
         return fr, self.qdd[:, sl]
 
     def _body(self, body: str | Body) -> Body:
@@ -176,12 +209,18 @@ class Results:
         return self.model.body(body)
 
     def body(self, name: str) -> BodyHistory:
-        """Centre-of-mass motion of body ``name``."""
+        """Motion of body ``name``: centre of mass, orientation, angular velocity and
+        acceleration."""
         b = self.model.body(name)
-        sl = self.model.coordinates_of(b)
-        q, qd, qdd = self.q[:, sl], self.qd[:, sl], self.qdd[:, sl]
+        bt = self.model.body_type
+        fr, qdd = self._body_frames(b)
+        idx = np.arange(len(self.t))
         d = self.model.dim
-        return BodyHistory(name, q[:, :d], qd[:, :d], qdd[:, :d], q[:, d], qd[:, d], qdd[:, d])
+        sl = self.model.coordinates_of(b)
+        return BodyHistory(name, fr.R.copy(), fr.Rd.copy(), qdd[:, :d].copy(), fr.A,
+                           bt.angular_velocity(fr, idx).copy(),
+                           bt.angular_acceleration(fr, idx, qdd),
+                           self.q[:, sl.start + 2].copy() if d == 2 else None)
 
     def point(self, body: str, point: Sequence[float]) -> PointHistory:
         """Trajectory of the point ``point`` [m] (body frame) of body ``body``."""
@@ -224,10 +263,13 @@ class Results:
         # Evaluate the joint's primitives for all times at once: rows 2t and 2t+1 of a stacked
         # coordinate array hold bodies i and j at time t (zeros for the ground).
         Q = np.zeros((2 * k, nc))
+        charts = None if self.charts is None else np.tile(np.eye(3), (2 * k, 1, 1))
         for side, b in enumerate((element.body_i, element.body_j)):
             if not b.is_ground:
                 Q[side::2] = self.q[:, model.coordinates_of(b)]
-        fr = bt.frames(Q)
+                if charts is not None:
+                    charts[side::2] = self._body_charts(b)
+        fr = bt.frames(Q, charts=charts)
         side_of = {model.padded_index(element.body_i): 0, model.padded_index(element.body_j): 1}
         target = model.padded_index(body)
         stacked = 2 * np.arange(k)
@@ -262,8 +304,9 @@ class Results:
             pos = np.empty(len(self.t))
             vel = np.empty(len(self.t))
             for k, t in enumerate(self.t):
+                q, charts = self._state(k)
                 C, data, _ = constraints.evaluate(self.model, t,
-                                                  constraints.frames(self.model, self.q[k]))
+                                                  constraints.frames(self.model, q, charts=charts))
                 pos[k] = np.max(np.abs(C), initial=0)
                 Cq = constraints.jacobian_matrix(self.model, data)
                 v = Cq @ self.qd[k] - constraints.velocity_rhs(self.model, t)
@@ -284,12 +327,14 @@ class Results:
     @property
     def kinetic_energy(self) -> np.ndarray:
         """Kinetic energy [J] at every time point."""
-        return np.array([kinetic_energy(self.model, q, qd) for q, qd in zip(self.q, self.qd)])
+        return np.array([kinetic_energy(self.model, self.q[k], self.qd[k], self._state(k)[1])
+                         for k in range(len(self.t))])
 
     @property
     def potential_energy(self) -> np.ndarray:
         """Potential energy of gravity (zero at the global origin) and springs [J]."""
-        return np.array([potential_energy(self.model, q) for q in self.q])
+        return np.array([potential_energy(self.model, self.q[k], self._state(k)[1])
+                         for k in range(len(self.t))])
 
     # -- export ----------------------------------------------------------------------------------
     def columns(self) -> dict[str, np.ndarray]:
@@ -329,6 +374,8 @@ class Results:
                       message=np.array(self.message), model=np.array(self.model.name))
         if self.lam is not None:
             arrays["lam"] = self.lam
+        if self.charts is not None:
+            arrays["charts"] = self.charts
 
         def write(f):
             np.savez_compressed(f, **arrays)

@@ -44,20 +44,22 @@ class PlanarBody(BodyType):
                              "a planar body needs its centroidal moment of inertia about the normal")
         return value
 
-    def initial_coordinates(self, body: str, position: Any, orientation: Any) -> np.ndarray:
+    def initial_state(self, body: str, position: Any, orientation: Any
+                      ) -> tuple[np.ndarray, None]:
         pos = finite_vector(position, 2, f"body '{body}': position")
         angle = finite_scalar(0.0 if orientation is None else orientation, f"body '{body}': angle")
-        return np.array([pos[0], pos[1], angle])
+        return np.array([pos[0], pos[1], angle]), None
 
-    def initial_rates(self, body: str, velocity: Any, angular_velocity: Any,
-                      q0: np.ndarray) -> np.ndarray:
+    def initial_rates(self, body: str, velocity: Any, angular_velocity: Any, q0: np.ndarray,
+                      chart: None) -> np.ndarray:
         vel = finite_vector((0.0, 0.0) if velocity is None else velocity, 2,
                              f"body '{body}': velocity")
         omega = finite_scalar(0.0 if angular_velocity is None else angular_velocity,
                                f"body '{body}': angular_velocity")
         return np.array([vel[0], vel[1], omega])
 
-    def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None) -> Frames:
+    def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
+               charts: np.ndarray | None = None) -> Frames:
         theta = Q[:, 2]
         c, s = np.cos(theta), np.sin(theta)
         A = np.empty((len(theta), 2, 2))
@@ -113,6 +115,9 @@ class PlanarBody(BodyType):
 
     def angular_velocity(self, fr: Frames, idx: np.ndarray) -> np.ndarray:
         return fr.omega[idx]
+
+    def angular_acceleration(self, fr: Frames, idx: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        return qdd[:, 2]
 
     def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,
                        jacobian: bool = False) -> np.ndarray:

@@ -1,0 +1,122 @@
+"""Joints that exist only in space: spherical, universal, cylindrical, planar, point-on-line,
+point-on-plane. Each is a composition of the same primitives as the planar joints."""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+
+from mbd3d.body import Body
+from mbd3d.element import PrimitiveSpec
+from mbd3d.errors import ModelError
+from mbd3d.model import BuildContext
+
+from joints.base import Axes, Joint, perpendicular_rows, require_spatial
+
+
+class Spherical(Joint):
+    """Ball joint: a point of body i and a point of body j coincide (rows ``x``, ``y``, ``z``).
+
+    Reaction on body j: the force [N]; no moment about the ball.
+    """
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_spatial(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        return [PrimitiveSpec("point", self.body_i, self.body_j, {"u_i": u_i, "u_j": u_j},
+                              ("x", "y", "z"))]
+
+
+class Universal(Joint):
+    """Cardan joint: coincident points, and the cross's two axes ``axis_i`` (fixed in body i)
+    and ``axis_j`` (fixed in body j) kept perpendicular (rows ``x``, ``y``, ``z``, ``cross``).
+
+    ``axis_i`` and ``axis_j`` are directions of the drawing and must be perpendicular there.
+    """
+
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, axis_i: Any, axis_j: Any,
+                 at: Any = None, point_i: Any = None, point_j: Any = None):
+        super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
+        self.axis_i, self.axis_j = axis_i, axis_j
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_spatial(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        a_i = ctx.direction(self.axis_i, f"joint '{self.name}': axis_i")
+        a_j = ctx.direction(self.axis_j, f"joint '{self.name}': axis_j")
+        if abs(a_i @ a_j) > 1e-9:
+            raise ModelError(f"joint '{self.name}': axis_i and axis_j must be perpendicular in "
+                             f"the drawing (cosine {a_i @ a_j:.3g})")
+        return [PrimitiveSpec("point", self.body_i, self.body_j, {"u_i": u_i, "u_j": u_j},
+                              ("x", "y", "z")),
+                PrimitiveSpec("dot1", self.body_i, self.body_j,
+                              {"v_i": ctx.to_local_vector(self.body_i, a_i),
+                               "v_j": ctx.to_local_vector(self.body_j, a_j)}, ("cross",))]
+
+
+class _AxisJoint(Joint):
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, axis: Any, at: Any = None,
+                 point_i: Any = None, point_j: Any = None):
+        super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
+        self.axis = axis
+
+    def reaction_frame(self, ctx: BuildContext):
+        u_i, u_j = self.points(ctx)
+        return u_i, u_j, Axes(ctx, self, self.axis).reaction_axes(along_x=True)
+
+
+class Cylindrical(_AxisJoint):
+    """Body j slides along and turns about an axis of body i: axes aligned (``axis_f``,
+    ``axis_g``) and the point of j on the line (``normal_f``, ``normal_g``); 4 rows."""
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_spatial(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        axes = Axes(ctx, self, self.axis)
+        f, g, _ = axes.i
+        bi, bj = self.body_i, self.body_j
+        return [*perpendicular_rows(self, axes),
+                PrimitiveSpec("dot2", bi, bj, {"v_i": f, "u_i": u_i, "u_j": u_j}, ("normal_f",)),
+                PrimitiveSpec("dot2", bi, bj, {"v_i": g, "u_i": u_i, "u_j": u_j}, ("normal_g",))]
+
+
+class Planar(_AxisJoint):
+    """Body j slides on a plane of body i and turns about its normal ``axis``: normals aligned
+    (``axis_f``, ``axis_g``) and the point of j in the plane (``plane``); 3 rows."""
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_spatial(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        axes = Axes(ctx, self, self.axis)
+        return [*perpendicular_rows(self, axes),
+                PrimitiveSpec("dot2", self.body_i, self.body_j,
+                              {"v_i": axes.i[2], "u_i": u_i, "u_j": u_j}, ("plane",))]
+
+
+class PointOnLine(_AxisJoint):
+    """The point of body j stays on the line of body i through its point along ``axis``
+    (``normal_f``, ``normal_g``); rotations are free. 2 rows."""
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_spatial(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        f, g, _ = Axes(ctx, self, self.axis).i
+        return [PrimitiveSpec("dot2", self.body_i, self.body_j, {"v_i": v, "u_i": u_i, "u_j": u_j},
+                              (label,)) for v, label in ((f, "normal_f"), (g, "normal_g"))]
+
+
+class PointOnPlane(_AxisJoint):
+    """The point of body j stays in the plane of body i through its point with normal ``axis``
+    (row ``plane``); everything else is free. 1 row."""
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        require_spatial(ctx, self.name)
+        u_i, u_j = self.points(ctx)
+        h = Axes(ctx, self, self.axis).i[2]
+        return [PrimitiveSpec("dot2", self.body_i, self.body_j, {"v_i": h, "u_i": u_i, "u_j": u_j},
+                              ("plane",))]
+
+
+__all__ = ["Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine", "PointOnPlane"]
+

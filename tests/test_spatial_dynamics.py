@@ -1,0 +1,183 @@
+"""Spatial bodies in motion, against oracles independent of mbd3d: an integration of Euler's
+equations in quaternions (numpy-quaternion), closed forms (steady precession), conservation
+laws, and the planar models for mechanisms whose spatial model is restricted to the plane."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import quaternion as npq
+from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
+
+import mbd3d as mb
+from mbd3d.mechanisms import pendulum_chain, slider_crank, slider_crank_positions
+from joints import Prismatic, Revolute, Spherical, Universal
+
+G = 9.81
+
+
+def euler_quaternion_reference(J, omega_bar0, A0, t):
+    """Orientation and body angular velocity of a torque-free body: Euler's equations and
+    q' = q (0, omega_bar) / 2, integrated by SciPy; rotations through numpy-quaternion."""
+    J_inv = np.linalg.inv(J)
+
+    def rhs(_, y):
+        q = npq.from_float_array(y[:4])
+        w = y[4:]
+        q_dot = 0.5 * q * npq.quaternion(0.0, *w)
+        return np.concatenate([npq.as_float_array(q_dot), J_inv @ -np.cross(w, J @ w)])
+
+    q0 = npq.as_float_array(npq.from_rotation_matrix(A0))
+    sol = solve_ivp(rhs, (t[0], t[-1]), np.concatenate([q0, omega_bar0]), t_eval=t,
+                    method="DOP853", rtol=1e-13, atol=1e-13)
+    quats = npq.from_float_array(sol.y[:4].T)
+    return npq.as_rotation_matrix(quats), sol.y[4:].T
+
+
+def test_dzhanibekov_flip_across_many_half_turns():
+    """Intermediate-axis spin (shared/validation.md 4.3): I = (1, 2, 3), omega_bar(0) =
+    (1e-3, 1, 0); omega_2 flips sign at T/4 = 14.3657 s."""
+    J = np.diag([1.0, 2.0, 3.0])
+    omega_bar0 = np.array([1e-3, 1.0, 0.0])
+    A0 = Rotation.from_rotvec([2.5, -0.4, 1.1]).as_matrix()  # starts beyond 90 degrees
+    b = mb.ModelBuilder(dim=3)
+    b.add_body("body", mass=2.0, inertia=J, position=(0.0, 0.0, 0.0), orientation=A0,
+               velocity=(0.1, 0.0, -0.2), angular_velocity=A0 @ omega_bar0)
+    t = np.linspace(0.0, 30.0, 61)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-12)
+    body = res.body("body")
+    A_ref, w_ref = euler_quaternion_reference(J, omega_bar0, A0, t)
+    np.testing.assert_allclose(body.rotation, A_ref, atol=1e-8)
+    omega_bar = np.einsum("kji,kj->ki", body.rotation, body.angular_velocity)
+    np.testing.assert_allclose(omega_bar, w_ref, atol=1e-8)
+    assert omega_bar[t == 10.0, 1] > 0.9 and omega_bar[t == 20.0, 1] < -0.9  # the flip
+    energy = 0.5 * np.einsum("ki,ij,kj->k", omega_bar, J, omega_bar)
+    momentum = np.einsum("kij,jl,kl->ki", body.rotation, J, omega_bar)
+    assert np.max(np.abs(energy / energy[0] - 1)) < 1e-9
+    assert np.max(np.linalg.norm(momentum - momentum[0], axis=1)) < 1e-9 * np.linalg.norm(momentum[0])
+    np.testing.assert_allclose(body.position, np.outer(t, (0.1, 0.0, -0.2)), atol=1e-10)
+    assert res.stats["chart_resets"] >= 10  # the half-turn singularity was passed many times
+    # the quaternion is reported continuously through every chart reset
+    quat = body.quaternion
+    assert np.min(np.einsum("ki,ki->k", quat[1:], quat[:-1])) > 0.5
+
+
+def test_heavy_top_steady_precession():
+    """shared/validation.md 4.2 (cone of Kinon-Betsch): the symmetry axis keeps its nutation
+    angle and precesses at omega_p when spun at omega_s = m g l/(C omega_p) + (A - C)/C
+    omega_p cos(alpha0)."""
+    m, J1, J3, l = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075
+    alpha0, omega_p = math.pi / 3, 10.0
+    A, C = J1 + m * l * l, J3
+    omega_s = m * G * l / (C * omega_p) + (A - C) / C * omega_p * math.cos(alpha0)
+    tilt = Rotation.from_rotvec([0.0, alpha0, 0.0]).as_matrix()
+    d3 = tilt[:, 2]
+    omega = omega_p * np.array([0.0, 0.0, 1.0]) + omega_s * d3
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    top = b.add_body("top", mass=m, inertia=np.diag([J1, J1, J3]), position=l * d3,
+                     orientation=tilt, velocity=np.cross(omega, l * d3), angular_velocity=omega)
+    b.add(Spherical("tip", b.ground, top, at=(0.0, 0.0, 0.0)))
+    t = np.linspace(0.0, 1.0, 21)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-12)
+    axis = res.body("top").rotation[:, :, 2]
+    np.testing.assert_allclose(np.arccos(axis[:, 2]), alpha0, atol=1e-8)
+    azimuth = np.unwrap(np.arctan2(axis[:, 1], axis[:, 0]))
+    np.testing.assert_allclose(azimuth, omega_p * t, atol=1e-8)
+    # the tip carries the weight plus the centripetal force of the precessing centre of mass
+    radius = l * math.sin(alpha0)
+    force = res.joint("tip").reaction(on="top").force
+    np.testing.assert_allclose(force[:, 2], m * G, atol=1e-7)
+    np.testing.assert_allclose(np.linalg.norm(force[:, :2], axis=1), m * omega_p**2 * radius,
+                               rtol=1e-7)
+
+
+def test_spherical_pendulum_conserves_energy_and_vertical_momentum():
+    m, L = 1.3, 0.9
+    J = np.diag([0.01, 0.02, 0.015])
+    start = np.array([L * math.sin(1.0), 0.0, -L * math.cos(1.0)])
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    bob = b.add_body("bob", mass=m, inertia=J, position=start, velocity=(0.0, 2.5, 0.0),
+                     angular_velocity=(0.3, -0.2, 1.0))
+    b.add(Spherical("pivot", b.ground, bob, point_i=(0.0, 0.0, 0.0), point_j=-start))
+    t = np.linspace(0.0, 3.0, 31)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-12)
+    h = res.body("bob")
+    energy = res.kinetic_energy + res.potential_energy
+    assert np.max(np.abs(energy - energy[0])) < 1e-9 * np.max(np.abs(res.kinetic_energy))
+    spin = np.einsum("kij,jl,kml,km->ki", h.rotation, J, h.rotation, h.angular_velocity)
+    vertical = m * np.cross(h.position, h.velocity)[:, 2] + spin[:, 2]
+    np.testing.assert_allclose(vertical, vertical[0], atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(h.position, axis=1), L, atol=1e-9)
+
+
+def spatial_double_pendulum():
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, -G, 0.0))
+    previous = b.ground
+    for k in range(2):
+        body = b.add_body(f"link{k + 1}", mass=1.0, inertia=np.diag([0.01, 1 / 12, 1 / 12]),
+                          position=(k + 0.5, 0.0, 0.0))
+        b.add(Revolute(f"pin{k + 1}", previous, body, axis=(0.0, 0.0, 1.0),
+                       point_i=(0.0, 0.0, 0.0) if k == 0 else (0.5, 0.0, 0.0),
+                       point_j=(-0.5, 0.0, 0.0)))
+        previous = body
+    return b.build()
+
+
+def test_planar_restricted_double_pendulum_reproduces_the_planar_model():
+    t = np.linspace(0.0, 2.0, 41)
+    planar = mb.forward_dynamics(pendulum_chain(2), t, method="DOP853", rtol=1e-12, atol=1e-12)
+    spatial = mb.forward_dynamics(spatial_double_pendulum(), t, method="DOP853", rtol=1e-12,
+                                  atol=1e-12)
+    assert spatial.stats["chart_resets"] > 0
+    for name in ("link1", "link2"):
+        p, s = planar.body(name), spatial.body(name)
+        angle = np.unwrap(np.arctan2(s.rotation[:, 1, 0], s.rotation[:, 0, 0]))
+        np.testing.assert_allclose(angle, p.angle, atol=1e-8)
+        np.testing.assert_allclose(s.position[:, :2], p.position, atol=1e-8)
+        np.testing.assert_allclose(s.position[:, 2], 0.0, atol=1e-12)
+        np.testing.assert_allclose(s.angular_velocity[:, 2], p.angular_velocity, atol=1e-7)
+    for pin in ("pin1", "pin2"):
+        fp = planar.joint(pin).reaction(on="link1" if pin == "pin1" else "link2").force
+        fs = spatial.joint(pin).reaction(on="link1" if pin == "pin1" else "link2").force
+        np.testing.assert_allclose(fs[:, :2], fp, atol=1e-6)
+        np.testing.assert_allclose(fs[:, 2], 0.0, atol=1e-9)
+        np.testing.assert_allclose(spatial.joint(pin).lam[:, :2], planar.joint(pin).lam, atol=1e-6)
+
+
+def test_planar_restricted_slider_crank_reproduces_the_planar_model():
+    phi0, L1, L2 = math.radians(65.0), 0.12, 0.26
+    a, psi, b_point = slider_crank_positions(phi0, L1, L2)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, -G, 0.0))
+    rz = lambda angle: Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()  # noqa: E731
+    flat = lambda inertia: np.diag([inertia, inertia, inertia])  # noqa: E731
+    crank = b.add_body("crank", mass=1.0, inertia=flat(0.001), position=(*a / 2, 0.0),
+                       orientation=rz(phi0))
+    rod = b.add_body("rod", mass=2.0, inertia=flat(0.01), position=(*(a + b_point) / 2, 0.0),
+                     orientation=rz(psi))
+    slider = b.add_body("slider", mass=4.0, inertia=flat(0.02), position=(*b_point, 0.0))
+    z = (0.0, 0.0, 1.0)
+    b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0, 0.0), axis=z))
+    # a planar loop of spatial revolutes would be overconstrained: a universal and a ball
+    # joint close it with exactly one degree of freedom
+    b.add(Universal("A", crank, rod, at=(*a, 0.0), axis_i=z,
+                    axis_j=(-math.sin(psi), math.cos(psi), 0.0)))
+    b.add(Spherical("B", rod, slider, at=(*b_point, 0.0)))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0, 0.0)))
+    b.add(mb.Torque("torque", crank, (0.0, 0.0, 2.0)))
+    model = b.build()
+    report = mb.mobility(model)
+    assert (report.dof, report.redundant) == (1, 0)
+    t = np.linspace(0.0, 1.0, 21)
+    spatial = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-12, atol=1e-12)
+    planar = mb.forward_dynamics(slider_crank(crank_speed=None, crank_torque=2.0), t,
+                                 method="DOP853", rtol=1e-12, atol=1e-12)
+    crank_s = spatial.body("crank")
+    angle = np.unwrap(np.arctan2(crank_s.rotation[:, 1, 0], crank_s.rotation[:, 0, 0]))
+    np.testing.assert_allclose(angle, planar.body("crank").angle, atol=1e-8)
+    np.testing.assert_allclose(spatial.body("slider").position[:, 0],
+                               planar.body("slider").position[:, 0], atol=1e-9)
+    np.testing.assert_allclose(spatial.joint("O").reaction(on="crank").force[:, :2],
+                               planar.joint("O").reaction(on="crank").force, atol=1e-6)
