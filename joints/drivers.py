@@ -17,7 +17,7 @@ from mbd3d.errors import ModelError
 from mbd3d.model import BuildContext
 from mbd3d.motion import Motion, as_motion
 
-from joints.base import require_planar
+from joints.base import Axes
 from joints.prismatic import Prismatic
 from joints.revolute import Revolute
 
@@ -29,8 +29,8 @@ class CoordinateDriver(ConstraintElement):
     ----------
     name : str
     body : Body
-    coordinate : {"x", "y", "theta"} or int
-        Which coordinate (centre-of-mass position [m] or body angle [rad]).
+    coordinate : str or int
+        Which coordinate: planar "x", "y" [m] or "theta" [rad]; spatial "x", "y", "z" [m].
     motion : Motion or float
         ``f(t)``; a number is a constant.
     """
@@ -59,6 +59,10 @@ class CoordinateDriver(ConstraintElement):
                              f"index 0..{len(names) - 1}, got {c!r}")
         if self.body_j.is_ground:
             raise ModelError(f"driver '{self.name}': the ground has no coordinates to drive")
+        if ctx.dim == 3 and index >= 3:
+            raise ModelError(f"driver '{self.name}': the orientation coordinates {names[3:]} are "
+                             "relative to a chart that moves during a run; drive rotations with "
+                             "RotationDriver across a Revolute")
         return [PrimitiveSpec("coordinate", self.body_i, self.body_j, {"coordinate": index},
                               (label,), motion=self.motion)]
 
@@ -67,14 +71,16 @@ class RotationDriver(ConstraintElement):
     """Prescribes the rotation of body j relative to body i: ``theta_j - theta_i = f(t)``.
 
     The angle is measured from body i's x axis to body j's x axis, counter-clockwise [rad]; for a
-    crank driven from the ground it is the crank's absolute angle. The effort is the motor torque
-    on body j [N m] (the reaction torque on body i is opposite).
+    crank driven from the ground it is the crank's absolute angle. In space the rotation is about
+    the revolute's axis and the x axes are projected on the plane normal to it (a body whose x
+    axis lies along the hinge uses its y axis); any number of turns is allowed. The effort is the
+    motor torque on body j about the axis [N m] (the reaction torque on body i is opposite).
 
     Parameters
     ----------
     name : str
     joint : Revolute or Body
-        The revolute across which the rotation is driven (its bodies are used), or body i.
+        The revolute across which the rotation is driven (its bodies are used), or body i (2D).
     body_j : Body, optional
         Body j, when ``joint`` is body i.
     motion : Motion or float
@@ -99,14 +105,33 @@ class RotationDriver(ConstraintElement):
         self.motion = as_motion(motion, f"driver '{name}': motion")
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
-        require_planar(ctx, self.name)
-        return [PrimitiveSpec("angle", self.body_i, self.body_j, {}, ("angle",),
+        if ctx.dim == 2:
+            return [PrimitiveSpec("angle", self.body_i, self.body_j, {}, ("angle",),
+                                  motion=self.motion)]
+        if self.joint is None:
+            raise ModelError(f"driver '{self.name}': in space, give the Revolute whose rotation "
+                             "is driven (its axis defines the angle)")
+        axes = Axes(ctx, self.joint, self.joint.axis)
+        h_i, h_j = axes.i[2], axes.j[2]
+        f_i = _reference_direction(h_i, f"driver '{self.name}'")
+        f_j = _reference_direction(h_j, f"driver '{self.name}'")
+        return [PrimitiveSpec("rotation", self.body_i, self.body_j,
+                              {"f_i": f_i, "g_i": np.cross(h_i, f_i), "f_j": f_j}, ("angle",),
                               motion=self.motion)]
 
     def reaction_frame(self, ctx: BuildContext):
         if self.joint is not None:
             return self.joint.reaction_frame(ctx)
         return super().reaction_frame(ctx)
+
+
+def _reference_direction(h: np.ndarray, what: str) -> np.ndarray:
+    """The body's x axis projected on the plane normal to ``h`` (body frame), else its y axis."""
+    for axis in np.eye(3)[:2]:
+        v = axis - (axis @ h) * h
+        if np.linalg.norm(v) > 1e-6:
+            return v / np.linalg.norm(v)
+    raise ModelError(f"{what}: no reference direction normal to the axis")  # pragma: no cover
 
 
 class TranslationDriver(ConstraintElement):

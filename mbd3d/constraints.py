@@ -36,24 +36,34 @@ def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
 
 
 def driver_values(model, t: float) -> np.ndarray:
-    """``(f, f', f'')`` of every driven row, shape (3, n_drivers).
+    """``(f, f', f'')`` of every row driven by ``c(q) - f(t)``, shape (3, n_drivers).
 
     Raises
     ------
     ModelError
         If a driver's motion returns a non-finite value (names the driver and the time).
     """
-    out = np.empty((3, len(model.driver_motions)))
-    for k, motion in enumerate(model.driver_motions):
+    return _motion_values(model.driver_motions, model.driver_names, t).T
+
+
+def _motion_values(motions, names, t: float) -> np.ndarray:
+    """``(f, f', f'')`` of ``motions`` at ``t``, (k, 3), checked to be finite."""
+    out = np.empty((len(motions), 3))
+    for k, motion in enumerate(motions):
         try:
-            out[:, k] = motion.evaluate(t)
+            out[k] = motion.evaluate(t)
         except (TypeError, ValueError) as exc:
-            raise ModelError(f"driver '{model.driver_names[k]}': its motion failed at "
-                             f"t = {t:g} s: {exc}") from exc
-        if not np.all(np.isfinite(out[:, k])):
-            raise ModelError(f"driver '{model.driver_names[k]}': its motion returned a non-finite "
-                             f"value (f, f', f'') = {tuple(out[:, k])} at t = {t:g} s")
+            raise ModelError(f"driver '{names[k]}': its motion failed at t = {t:g} s: {exc}") from exc
+        if not np.all(np.isfinite(out[k])):
+            raise ModelError(f"driver '{names[k]}': its motion returned a non-finite value "
+                             f"(f, f', f'') = {tuple(out[k])} at t = {t:g} s")
     return out
+
+
+def _params(g, t: float) -> dict:
+    if not g.motions:
+        return g.params
+    return {**g.params, "phi": _motion_values(g.motions, g.motion_names, t)}
 
 
 def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,
@@ -68,7 +78,7 @@ def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = T
     Qd = np.empty(m) if gamma else None
     parts = []
     for g in model.groups:
-        c, J, gam = g.cls.evaluate(bt, fr, g.bi, g.bj, g.params, value, jacobian, gamma)
+        c, J, gam = g.cls.evaluate(bt, fr, g.bi, g.bj, _params(g, t), value, jacobian, gamma)
         rows = slice(g.offset, g.offset + g.n_rows)
         if value:
             C[rows] = c.ravel()
@@ -105,17 +115,29 @@ def residual(model, t: float, q: np.ndarray, fr: Frames | None = None) -> np.nda
     return evaluate(model, t, frames(model, q) if fr is None else fr, True, False)[0]
 
 
-def jacobian(model, q: np.ndarray, fr: Frames | None = None, sparse: bool | None = None):
-    """Constraint Jacobian ``Cq``, shape (m, n): ndarray, or CSR matrix when sparse."""
-    data = evaluate(model, 0.0, frames(model, q) if fr is None else fr, False, True)[1]
+def jacobian(model, t: float, q: np.ndarray, fr: Frames | None = None,
+             sparse: bool | None = None):
+    """Constraint Jacobian ``Cq`` at time ``t`` [s] (rotation drivers' rows depend on it),
+    shape (m, n): ndarray, or CSR matrix when sparse."""
+    data = evaluate(model, t, frames(model, q) if fr is None else fr, False, True)[1]
     return jacobian_matrix(model, data, sparse)
 
 
-def velocity_rhs(model, t: float) -> np.ndarray:
-    """Right-hand side ``-Ct`` of ``Cq qd = -Ct``: ``f'(t)`` on driven rows, zero elsewhere."""
+def velocity_rhs(model, t: float, fr: Frames | None = None) -> np.ndarray:
+    """Right-hand side ``-Ct`` of ``Cq qd = -Ct``: ``f'(t)`` on driven rows, zero elsewhere.
+
+    Rows whose time dependence sits inside the primitive (spatial rotation drivers) need the
+    configuration ``fr``.
+    """
     nu = np.zeros(model.n_constraints)
     if len(model.driver_rows):
         nu[model.driver_rows] = driver_values(model, t)[1]
+    for g in model.groups:
+        if g.motions:
+            if fr is None:
+                raise ValueError("velocity_rhs needs the configuration (fr) for this model")
+            nu[g.offset:g.offset + g.n_rows] = g.cls.rate(model.body_type, fr, g.bi, g.bj,
+                                                          _params(g, t)).ravel()
     return nu
 
 

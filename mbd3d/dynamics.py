@@ -93,8 +93,9 @@ def _difference_jacobian(rhs, n_y: int):
 
 
 def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
-    C, jac_data, _ = constraints.evaluate(model, t, constraints.frames(model, q, charts=charts))
-    v = constraints.jacobian_matrix(model, jac_data) @ qd - constraints.velocity_rhs(model, t)
+    fr = constraints.frames(model, q, charts=charts)
+    C, jac_data, _ = constraints.evaluate(model, t, fr)
+    v = constraints.jacobian_matrix(model, jac_data) @ qd - constraints.velocity_rhs(model, t, fr)
     return float(np.max(np.abs(C), initial=0.0)), float(np.max(np.abs(v), initial=0.0))
 
 

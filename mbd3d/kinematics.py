@@ -66,8 +66,8 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
     """
     q = np.asarray(q, dtype=float)
     fr = constraints.frames(model, q, charts=charts)
-    Cq = constraints.jacobian(model, q, fr)
-    nu = constraints.velocity_rhs(model, t)
+    Cq = constraints.jacobian(model, t, q, fr)
+    nu = constraints.velocity_rhs(model, t, fr)
     n, m = model.n_coordinates, model.n_constraints
     held = hold_indices(model, hold)
     guess = np.asarray(model.qd0 if qd_guess is None else qd_guess, dtype=float).reshape(-1)
@@ -94,10 +94,10 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
     _require_fully_driven(model, "solve_acceleration")
     fr = constraints.frames(model, q, qd, charts)
     try:
-        return Factorization(constraints.jacobian(model, q, fr)).solve(
+        return Factorization(constraints.jacobian(model, t, q, fr)).solve(
             constraints.acceleration_rhs(model, t, q, qd, fr))
     except SingularMatrix:
-        raise singular_error(model, constraints.jacobian(model, q, fr), t,
+        raise singular_error(model, constraints.jacobian(model, t, q, fr), t,
                              f"acceleration analysis of '{model.name}'") from None
 
 
@@ -125,12 +125,12 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
             q, _, chart, _ = model.body_type.reset_charts(q, None, chart)
             q = solve_position(model, q, tk, tol=tol, charts=chart)
             fr = constraints.frames(model, q, charts=chart)
-            Cq = constraints.jacobian(model, q, fr)
+            Cq = constraints.jacobian(model, tk, q, fr)
             try:
                 lu = Factorization(Cq)
             except SingularMatrix:
                 raise singular_error(model, Cq, float(tk), f"{analysis} of '{model.name}'") from None
-            qd = lu.solve(constraints.velocity_rhs(model, tk))
+            qd = lu.solve(constraints.velocity_rhs(model, tk, fr))
             fr = constraints.frames(model, q, qd, chart)
             qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
             if with_forces:

@@ -81,7 +81,7 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
         there, so pass an assembled configuration away from singular positions.
     """
     q = np.asarray(model.q0 if q is None else q, dtype=float)
-    Cq = constraints.jacobian(model, q, constraints.frames(model, q, charts=charts), sparse=False)
+    Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts), sparse=False)
     n, m = model.n_coordinates, model.n_constraints
     if m:
         rank, groups = dependent_rows(Cq)

@@ -288,6 +288,9 @@ class _Group:
         for key in cls.params:
             self.params[key] = np.array([np.asarray(s.params[key]) for _, s in items])
         self.elements = np.array([e for e, _ in items], dtype=np.intp)
+        # primitives whose rows depend on time themselves (the spatial rotation driver)
+        self.motions = tuple(s.motion for _, s in items) if getattr(cls, "time_dependent", False) else ()
+        self.motion_names = ()
 
 
 class Model:
@@ -382,7 +385,12 @@ class Model:
                     labels.append(f"{name}.{spec.labels[k]}")
                     row_element.append(e_index)
                     c0.append(float(spec.c0) if k == 0 else 0.0)
-                if spec.motion is not None:
+                if spec.motion is not None and group.motions:
+                    if not isinstance(spec.motion, Motion):
+                        raise ModelError(f"driver '{name}': motion must be an mbd3d Motion, "
+                                         f"got {spec.motion!r}")
+                    group.motion_names += (name,)
+                elif spec.motion is not None:
                     if r != 1:
                         raise ModelError(f"joint '{name}': only one-row primitives can be driven")
                     if not isinstance(spec.motion, Motion):

@@ -115,7 +115,7 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         return np.concatenate([C, qq[held] - q_held]) if len(held) else C
 
     def full_jacobian(qq):
-        Cq = constraints.jacobian(model, qq, constraints.frames(model, qq, charts=charts))
+        Cq = constraints.jacobian(model, t, qq, constraints.frames(model, qq, charts=charts))
         if not len(held):
             return Cq
         H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle"]
+           "RelativeAngle", "Rotation"]
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -225,5 +225,58 @@ class RelativeAngle:
         return c, J, g
 
 
+class Rotation:
+    """Spatial rotation driver across a hinge: ``C = f_j . (g_i cos(phi) - f_i sin(phi))``,
+    ``phi = f(t)``.
+
+    ``f_i, g_i`` span body i's plane normal to the hinge, ``f_j`` is body j's reference
+    direction in that plane; with ``theta`` the angle from ``f_i`` to ``f_j`` about the hinge,
+    ``C = sin(theta - phi)``: no turn counting, any number of revolutions, and ``lam`` is minus
+    the driving torque about the hinge. The time dependence sits inside the row, so this class
+    supplies its own ``-C_t`` (``rate``) and time terms of ``Qd``; ``p["phi"]`` holds
+    ``(f, f', f'')`` per instance. With ``u = A_i (g cos(phi) - f sin(phi))`` and
+    ``w = A_i (f cos(phi) + g sin(phi))``: ``-C_t = (f_j . w) phi'`` and
+    ``Qd = gamma_dot1(u, f_j) + 2 phi' (f_j . (omega_i x w) + w . (omega_j x f_j))
+    + (f_j . u) phi'^2 + (f_j . w) phi''``.
+    """
+
+    kind = "rotation"
+    params = ("f_i", "g_i", "f_j")
+    time_dependent = True
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+    @staticmethod
+    def _vectors(p):
+        c, s = np.cos(p["phi"][:, 0]), np.sin(p["phi"][:, 0])
+        u_bar = p["g_i"] * c[:, None] - p["f_i"] * s[:, None]
+        w_bar = p["f_i"] * c[:, None] + p["g_i"] * s[:, None]
+        return u_bar, w_bar
+
+    @staticmethod
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+        u_bar, w_bar = Rotation._vectors(p)
+        c, J, g = Dot1.evaluate(bt, fr, bi, bj, {"v_i": u_bar, "v_j": p["f_j"]}, value,
+                                jacobian, gamma)
+        if gamma:
+            rate, accel = p["phi"][:, 1], p["phi"][:, 2]
+            u = bt.rotate(fr, bi, u_bar)
+            w = bt.rotate(fr, bi, w_bar)
+            f_j = bt.rotate(fr, bj, p["f_j"])
+            mixed = _dot(f_j, bt.velocity_of(fr, bi, w)) + _dot(w, bt.velocity_of(fr, bj, f_j))
+            g = g + (2.0 * rate * mixed + _dot(f_j, u) * rate * rate
+                     + _dot(f_j, w) * accel)[:, None]
+        return c, J, g
+
+    @staticmethod
+    def rate(bt, fr, bi, bj, p) -> np.ndarray:
+        """``-C_t``, shape (k, 1)."""
+        _, w_bar = Rotation._vectors(p)
+        w = bt.rotate(fr, bi, w_bar)
+        return (_dot(bt.rotate(fr, bj, p["f_j"]), w) * p["phi"][:, 1])[:, None]
+
+
 PRIMITIVES = {cls.kind: cls for cls in
-              (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle)}
+              (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation)}

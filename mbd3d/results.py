@@ -305,11 +305,11 @@ class Results:
             vel = np.empty(len(self.t))
             for k, t in enumerate(self.t):
                 q, charts = self._state(k)
-                C, data, _ = constraints.evaluate(self.model, t,
-                                                  constraints.frames(self.model, q, charts=charts))
+                fr = constraints.frames(self.model, q, charts=charts)
+                C, data, _ = constraints.evaluate(self.model, t, fr)
                 pos[k] = np.max(np.abs(C), initial=0)
                 Cq = constraints.jacobian_matrix(self.model, data)
-                v = Cq @ self.qd[k] - constraints.velocity_rhs(self.model, t)
+                v = Cq @ self.qd[k] - constraints.velocity_rhs(self.model, t, fr)
                 vel[k] = np.max(np.abs(v), initial=0)
             self._residuals = (pos, vel)
         return self._residuals

@@ -41,7 +41,7 @@ def random_model(seed: int):
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_jacobian_equals_central_differences(seed):
     model, q, _ = random_model(seed)
-    Cq = constraints.jacobian(model, q, sparse=False)
+    Cq = constraints.jacobian(model, 0.0, q, sparse=False)
     h = 1e-6
     fd = np.empty_like(Cq)
     for j in range(model.n_coordinates):
@@ -67,8 +67,8 @@ def test_gamma_equals_second_directional_derivative(seed):
 
 def test_sparse_and_dense_jacobians_agree():
     model, q, _ = random_model(5)
-    dense = constraints.jacobian(model, q, sparse=False)
-    sparse = constraints.jacobian(model, q, sparse=True).toarray()
+    dense = constraints.jacobian(model, 0.0, q, sparse=False)
+    sparse = constraints.jacobian(model, 0.0, q, sparse=True).toarray()
     np.testing.assert_array_equal(dense, sparse)
 
 

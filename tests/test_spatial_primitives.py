@@ -47,7 +47,7 @@ def random_spatial_model(seed: int):
 def test_spatial_jacobian_equals_central_differences(seed):
     model, q, _, charts = random_spatial_model(seed)
     C = lambda x: constraints.residual(model, 0.0, x, constraints.frames(model, x, charts=charts))  # noqa: E731
-    Cq = constraints.jacobian(model, q, constraints.frames(model, q, charts=charts), sparse=False)
+    Cq = constraints.jacobian(model, 0.0, q, constraints.frames(model, q, charts=charts), sparse=False)
     h = 1e-6
     fd = np.column_stack([(C(q + h * e) - C(q - h * e)) / (2 * h) for e in np.eye(len(q))])
     np.testing.assert_allclose(Cq, fd, atol=2e-8)

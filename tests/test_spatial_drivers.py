@@ -1,0 +1,124 @@
+"""The spatial rotation driver: its time terms against finite differences in (q, t), and the
+planar-restricted slider-crank in kinematic and inverse dynamics against the planar model."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import mbd3d as mb
+from mbd3d import constraints
+from mbd3d.mechanisms import slider_crank, slider_crank_positions
+from joints import CoordinateDriver, Prismatic, Revolute, RotationDriver, Spherical, Universal
+
+
+def driven_pair(seed: int):
+    rng = np.random.default_rng(seed)
+    b = mb.ModelBuilder(dim=3)
+    A = Rotation.random(2, random_state=seed).as_matrix()
+    arm = b.add_body("arm", mass=1.0, inertia=(0.1, 0.2, 0.25), position=rng.normal(size=3),
+                     orientation=A[0])
+    tip = b.add_body("tip", mass=2.0, inertia=(0.3, 0.2, 0.4), position=rng.normal(size=3),
+                     orientation=A[1])
+    hinge = b.add(Revolute("hinge", arm, tip, point_i=rng.normal(size=3),
+                           point_j=rng.normal(size=3), axis=rng.normal(size=3)))
+    b.add(RotationDriver("motor", hinge, motion=mb.Harmonic(0.8, 3.0, phase=0.4, offset=0.3)))
+    model = b.build()
+    q = model.q0 + 0.2 * rng.normal(size=model.n_coordinates)
+    qd = rng.normal(size=model.n_coordinates)
+    charts = np.tile(np.eye(3), (3, 1, 1))
+    charts[:2] = Rotation.random(2, random_state=seed + 50).as_matrix()
+    return model, q, qd, charts
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_rotation_driver_time_terms_match_finite_differences(seed):
+    model, q, qd, charts = driven_pair(seed)
+    t, h = 0.37, 1e-3
+    C = lambda x, tt: constraints.residual(model, tt, x, constraints.frames(model, x, charts=charts))  # noqa: E731
+    fr = constraints.frames(model, q, qd, charts)
+    # -C_t
+    nu = constraints.velocity_rhs(model, t, fr)
+    ct = (C(q, t + 2 * h) * -1 + 8 * C(q, t + h) - 8 * C(q, t - h) + C(q, t - 2 * h)) / (12 * h)
+    np.testing.assert_allclose(nu, -ct, atol=1e-9)
+    # Qd = -d2/de2 C(q + e qd, t + e)
+    path = lambda e: C(q + e * qd, t + e)  # noqa: E731
+    second = (-path(2 * h) + 16 * path(h) - 30 * path(0) + 16 * path(-h) - path(-2 * h)) / (12 * h * h)
+    np.testing.assert_allclose(constraints.acceleration_rhs(model, t, q, qd, fr), -second, atol=1e-6)
+
+
+def spatial_slider_crank(speed: float | None):
+    phi0, L1, L2 = math.radians(65.0), 0.12, 0.26
+    a, psi, b_point = slider_crank_positions(phi0, L1, L2)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, -9.81, 0.0))
+    rz = lambda angle: Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()  # noqa: E731
+    crank = b.add_body("crank", mass=1.0, inertia=(0.0005, 0.001, 0.001), position=(*a / 2, 0.0),
+                       orientation=rz(phi0))
+    rod = b.add_body("rod", mass=2.0, inertia=(0.002, 0.01, 0.01),
+                     position=(*(a + b_point) / 2, 0.0), orientation=rz(psi))
+    slider = b.add_body("slider", mass=4.0, inertia=(0.02, 0.02, 0.02), position=(*b_point, 0.0))
+    z = (0.0, 0.0, 1.0)
+    pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0, 0.0), axis=z))
+    b.add(Universal("A", crank, rod, at=(*a, 0.0), axis_i=z,
+                    axis_j=(-math.sin(psi), math.cos(psi), 0.0)))
+    b.add(Spherical("B", rod, slider, at=(*b_point, 0.0)))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0, 0.0)))
+    if speed is not None:
+        b.add(RotationDriver("motor", pin, motion=mb.Ramp(phi0, speed)))
+    return b.build()
+
+
+def test_planar_restricted_slider_crank_inverse_dynamics_equals_planar():
+    # the planar model with the in-plane inertias of the spatial one (J about z)
+    planar_model = slider_crank(crank_inertia=0.001, rod_inertia=0.01, slider_inertia=0.02)
+    t = np.linspace(0.0, 2.0, 49)  # two crank turns: the crank's chart is reset on the way
+    planar = mb.inverse_dynamics(planar_model, t)
+    spatial = mb.inverse_dynamics(spatial_slider_crank(2 * math.pi), t)
+    assert mb.mobility(spatial.model).fully_driven
+    crank = spatial.body("crank")
+    angle = np.unwrap(np.arctan2(crank.rotation[:, 1, 0], crank.rotation[:, 0, 0]))
+    np.testing.assert_allclose(angle, planar.body("crank").angle, atol=1e-10)
+    for name in ("crank", "rod", "slider"):
+        np.testing.assert_allclose(spatial.body(name).position[:, :2],
+                                   planar.body(name).position, atol=1e-12)
+        np.testing.assert_allclose(spatial.body(name).acceleration[:, :2],
+                                   planar.body(name).acceleration, atol=1e-9)
+    np.testing.assert_allclose(spatial.driver("motor").effort, planar.driver("motor").effort,
+                               atol=1e-9)
+    np.testing.assert_allclose(spatial.joint("O").reaction(on="crank").force[:, :2],
+                               planar.joint("O").reaction(on="crank").force, atol=1e-9)
+    # the out-of-plane reactions carry nothing
+    np.testing.assert_allclose(spatial.joint("O").reaction(on="crank").force[:, 2], 0.0, atol=1e-9)
+
+
+def test_coordinate_driver_refuses_orientation_coordinates():
+    b = mb.ModelBuilder(dim=3)
+    body = b.add_body("b", mass=1.0, inertia=(1, 1, 1), position=(0, 0, 0))
+    b.add(CoordinateDriver("spin", body, "g3", 0.0))
+    with pytest.raises(mb.ModelError, match="driver 'spin'.*RotationDriver"):
+        b.build()
+
+
+def test_joints_of_the_wrong_dimension_are_refused():
+    b3 = mb.ModelBuilder(dim=3)
+    body = b3.add_body("b", mass=1.0, inertia=(1, 1, 1), position=(0, 0, 0))
+    b3.add(Revolute("hinge", b3.ground, body, at=(0, 0, 0)))
+    with pytest.raises(mb.ModelError, match="joint 'hinge'.*needs its axis="):
+        b3.build()
+    b2 = mb.ModelBuilder(dim=2)
+    flat = b2.add_body("f", mass=1.0, inertia=1.0, position=(0, 0))
+    b2.add(Spherical("ball", b2.ground, flat, at=(0, 0)))
+    with pytest.raises(mb.ModelError, match="'ball'.*spatial models only"):
+        b2.build()
+    with pytest.raises(mb.ModelError, match="spatial body takes orientation="):
+        b3.add_body("c", mass=1.0, inertia=(1, 1, 1), position=(0, 0, 0), angle=0.3)
+    with pytest.raises(mb.ModelError, match="J1 \\+ J2 >= J3"):
+        b3.add_body("d", mass=1.0, inertia=(1.0, 1.0, 3.0), position=(0, 0, 0))
+    with pytest.raises(mb.ModelError, match="axis must be a non-zero"):
+        b4 = mb.ModelBuilder(dim=3)
+        c = b4.add_body("c", mass=1.0, inertia=(1, 1, 1), position=(0, 0, 0))
+        b4.add(Revolute("h", b4.ground, c, at=(0, 0, 0), axis=(0, 0, 0)))
+        b4.build()
