@@ -31,8 +31,9 @@ def median_time(fn, repeat: int) -> float:
     return float(np.median(times))
 
 
-def measure(n_links: int, simulate: bool = True, sparse: bool | None = None) -> dict:
-    model = pendulum_chain(n_links, sparse=sparse)
+def measure(n_links: int, simulate: bool = True, sparse: bool | None = None,
+            factory=pendulum_chain) -> dict:
+    model = factory(n_links, sparse=sparse)
     q, qd = model.q0.copy(), np.zeros(model.n_coordinates)
     repeat = 30 if n_links <= 100 else 10
     row = {
@@ -50,10 +51,11 @@ def measure(n_links: int, simulate: bool = True, sparse: bool | None = None) -> 
     return row
 
 
-def main(sizes=(10, 100, 1000), simulate: bool = True) -> list[dict]:
-    print(f"planar N-link chain, {platform.processor() or platform.machine()}, "
+def report(title: str, factory, sizes, simulate: bool) -> list[dict]:
+    """Measure chains of the given sizes built by ``factory`` and print the table."""
+    print(f"{title}, {platform.processor() or platform.machine()}, "
           f"Python {platform.python_version()}, NumPy {np.__version__}")
-    rows = [measure(n, simulate) for n in sizes]
+    rows = [measure(n, simulate, factory=factory) for n in sizes]
     print(mb.format_table({
         "N": [r["N"] for r in rows],
         "Jacobian [ms]": [r["jacobian_ms"] for r in rows],
@@ -67,6 +69,10 @@ def main(sizes=(10, 100, 1000), simulate: bool = True) -> list[dict]:
     print("(medians; 'augmented solve' includes evaluating M, Cq, Qe and Qd; solver: "
           + ", ".join(f"N={r['N']} {r['solver']}" for r in rows) + ")")
     return rows
+
+
+def main(sizes=(10, 100, 1000), simulate: bool = True) -> list[dict]:
+    return report("planar N-link chain", pendulum_chain, sizes, simulate)
 
 
 def crossover(sizes=(5, 10, 20, 30, 40, 60)) -> None:

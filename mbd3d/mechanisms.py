@@ -14,7 +14,8 @@ from mbd3d.forces import Torque
 from mbd3d.model import Model, ModelBuilder
 from mbd3d.motion import Motion, Ramp
 
-__all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions"]
+__all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions",
+           "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "frame_along"]
 
 
 def slider_crank_positions(crank_angle: float, crank_length: float, rod_length: float
@@ -140,3 +141,120 @@ def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float =
         b.add(Revolute(f"pin{k + 1}", previous, body, point_i=point_i, point_j=(-L / 2, 0.0)))
         previous = body
     return b.build(sparse=sparse)
+
+
+def frame_along(direction: np.ndarray, hint: np.ndarray = np.array([0.0, 0.0, 1.0])) -> np.ndarray:
+    """Rotation matrix whose x axis is ``direction`` and whose z axis is as close to ``hint``
+    as that allows (body axes as columns)."""
+    x = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
+    y = np.cross(hint, x)
+    if np.linalg.norm(y) < 1e-9:
+        y = np.cross(np.array([0.0, 1.0, 0.0]), x)
+    y /= np.linalg.norm(y)
+    return np.column_stack([x, y, np.cross(x, y)])
+
+
+def spatial_slider_crank(*, crank_length: float = 0.10, rod_length: float = 0.30,
+                         offset_y: float = 0.04, offset_z: float = 0.06,
+                         crank_angle: float = 0.0, crank_speed: float | None = 2 * math.pi,
+                         gravity: float = 9.81) -> Model:
+    """Spatial slider-crank: the crank turns about the global z axis at the origin, the slider
+    runs along a line parallel to x at ``y = offset_y``, ``z = offset_z`` (out of the crank's
+    plane), and the rod joins them with a universal joint at the crank and a ball joint at the
+    slider (an all-revolute or ball-ball rod would add a redundancy or an idle spin).
+
+    Bodies ``crank``, ``rod``, ``slider`` (steel-like bars); joints ``O`` (revolute), ``A``
+    (universal), ``B`` (spherical), ``rail`` (prismatic); driver ``motor`` at ``crank_speed``
+    [rad/s] (None: none). Gravity along -z. Closed form of the slider position:
+    ``x = r cos(phi) + sqrt(l^2 - e^2 - (d - r sin(phi))^2)``.
+    """
+    from joints import Prismatic, Revolute, RotationDriver, Spherical, Universal
+
+    r, l, d, e = crank_length, rod_length, offset_y, offset_z
+    a = r * np.array([math.cos(crank_angle), math.sin(crank_angle), 0.0])
+    x_b = a[0] + math.sqrt(l * l - e * e - (d - a[1]) ** 2)
+    b_point = np.array([x_b, d, e])
+    rod_dir = (b_point - a) / l
+    z = np.array([0.0, 0.0, 1.0])
+    builder = ModelBuilder(dim=3, gravity=(0.0, 0.0, -gravity), name="spatial slider-crank")
+
+    def bar(length: float, mass: float) -> np.ndarray:
+        return mass * np.array([1e-2 * length**2, length**2 / 12, length**2 / 12])
+
+    crank = builder.add_body("crank", mass=0.5, inertia=bar(r, 0.5), position=a / 2,
+                             orientation=frame_along(a))
+    rod = builder.add_body("rod", mass=1.0, inertia=bar(l, 1.0), position=(a + b_point) / 2,
+                           orientation=frame_along(rod_dir))
+    slider = builder.add_body("slider", mass=2.0, inertia=(0.002, 0.002, 0.002), position=b_point)
+    pin = builder.add(Revolute("O", builder.ground, crank, at=(0.0, 0.0, 0.0), axis=z))
+    builder.add(Universal("A", crank, rod, at=a, axis_i=z,
+                          axis_j=np.cross(rod_dir, z) / np.linalg.norm(np.cross(rod_dir, z))))
+    builder.add(Spherical("B", rod, slider, at=b_point))
+    builder.add(Prismatic("rail", builder.ground, slider, axis=(1.0, 0.0, 0.0)))
+    if crank_speed is not None:
+        builder.add(RotationDriver("motor", pin, motion=Ramp(crank_angle, crank_speed)))
+    return builder.build()
+
+
+def spatial_four_bar(*, all_revolute: bool = False, crank_speed: float | None = 2 * math.pi,
+                     gravity: float = 9.81) -> Model:
+    """RSUR spatial four-bar: crank O2-A turning about z at the origin, coupler A-B, rocker O4-B
+    turning about the global y axis at O4 = (0.25, 0, 0.1).
+
+    The coupler has a ball joint at A and a universal joint at B, which closes the loop with one
+    degree of freedom. With ``all_revolute=True`` the same linkage is built with four revolutes
+    (crank and rocker axes as above, coupler pins parallel to them): a spatial four-bar of
+    revolutes only moves when its axes meet Bennett's conditions, so this one is rigid, and
+    :func:`mbd3d.mobility` reports 0 degrees of freedom with 2 redundant rows.
+    """
+    from joints import Revolute, RotationDriver, Spherical, Universal
+
+    o4 = np.array([0.25, 0.0, 0.1])
+    a = np.array([0.08, 0.0, 0.0])
+    b_point = o4 + np.array([0.0, 0.0, 0.2])  # rocker straight up in the drawing
+    z, y = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
+    builder = ModelBuilder(dim=3, gravity=(0.0, 0.0, -gravity), name="spatial four-bar")
+
+    def add_bar(name: str, p: np.ndarray, q: np.ndarray):
+        length = float(np.linalg.norm(q - p))
+        m = 2.0 * length
+        return builder.add_body(name, mass=m, inertia=m * np.array([1e-2, 1.0, 1.0]) * length**2 / 12,
+                                position=(p + q) / 2, orientation=frame_along(q - p))
+
+    crank = add_bar("crank", np.zeros(3), a)
+    coupler = add_bar("coupler", a, b_point)
+    rocker = add_bar("rocker", o4, b_point)
+    o2 = builder.add(Revolute("O2", builder.ground, crank, at=(0.0, 0.0, 0.0), axis=z))
+    builder.add(Revolute("O4", builder.ground, rocker, at=o4, axis=y))
+    if all_revolute:
+        builder.add(Revolute("A", crank, coupler, at=a, axis=z))
+        builder.add(Revolute("B", coupler, rocker, at=b_point, axis=y))
+    else:
+        builder.add(Spherical("A", crank, coupler, at=a))
+        coupler_dir = (b_point - a) / np.linalg.norm(b_point - a)
+        cross = np.cross(coupler_dir, y)
+        builder.add(Universal("B", coupler, rocker, at=b_point, axis_i=cross / np.linalg.norm(cross),
+                              axis_j=y))
+    if crank_speed is not None:
+        builder.add(RotationDriver("motor", o2, motion=Ramp(0.0, crank_speed)))
+    return builder.build()
+
+
+def spatial_chain(n_links: int, *, link_length: float = 1.0, link_mass: float = 1.0,
+                  gravity: float = 9.81, sparse: bool | None = None) -> Model:
+    """A chain of ``n_links`` uniform bars joined by ball joints, the first to the ground at the
+    origin, laid along x; gravity along -z. Bodies ``link1`` ...; joints ``ball1`` ...."""
+    from joints import Spherical
+
+    L, m = link_length, link_mass
+    builder = ModelBuilder(dim=3, gravity=(0.0, 0.0, -gravity), name=f"{n_links}-link spatial chain")
+    previous = builder.ground
+    for k in range(n_links):
+        body = builder.add_body(f"link{k + 1}", mass=m,
+                                inertia=m * L * L * np.array([1e-2, 1 / 12, 1 / 12]),
+                                position=((k + 0.5) * L, 0.0, 0.0))
+        point_i = (0.0, 0.0, 0.0) if k == 0 else (L / 2, 0.0, 0.0)
+        builder.add(Spherical(f"ball{k + 1}", previous, body, point_i=point_i,
+                              point_j=(-L / 2, 0.0, 0.0)))
+        previous = body
+    return builder.build(sparse=sparse)

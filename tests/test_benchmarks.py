@@ -8,8 +8,13 @@ import pathlib
 BENCHMARKS = pathlib.Path(__file__).resolve().parent.parent / "benchmarks"
 
 
-def test_planar_chain_benchmark_runs(capsys):
-    spec = importlib.util.spec_from_file_location("planar_chain", BENCHMARKS / "planar_chain.py")
+import pytest
+
+
+@pytest.mark.parametrize("name", ["planar_chain", "spatial_chain"])
+def test_chain_benchmark_runs(name, capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     rows = module.main(sizes=(2,), simulate=True)

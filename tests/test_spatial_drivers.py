@@ -122,3 +122,57 @@ def test_joints_of_the_wrong_dimension_are_refused():
         c = b4.add_body("c", mass=1.0, inertia=(1, 1, 1), position=(0, 0, 0))
         b4.add(Revolute("h", b4.ground, c, at=(0, 0, 0), axis=(0, 0, 0)))
         b4.build()
+
+
+def test_spatial_slider_crank_matches_its_closed_form():
+    from mbd3d.mechanisms import spatial_slider_crank
+    r, l, d, e, w = 0.10, 0.30, 0.04, 0.06, 2 * math.pi
+    res = mb.inverse_dynamics(spatial_slider_crank(crank_length=r, rod_length=l, offset_y=d,
+                                                   offset_z=e, crank_speed=w),
+                              np.linspace(0.0, 2.0, 73))  # two turns, 10 degree steps
+
+    def x(phi):  # complex-safe closed form of the slider position
+        return r * np.cos(phi) + np.sqrt(l * l - e * e - (d - r * np.sin(phi)) ** 2)
+
+    def dx(phi):
+        return np.imag(x(phi + 1e-30j)) / 1e-30
+
+    def dx_hand(phi):  # derivative written out, to check the complex step
+        S = np.sqrt(l * l - e * e - (d - r * np.sin(phi)) ** 2)
+        return -r * np.sin(phi) + (d - r * np.sin(phi)) * r * np.cos(phi) / S
+
+    phi = w * res.t
+    np.testing.assert_allclose(dx(phi), dx_hand(phi), rtol=1e-14)
+    h = 1e-4
+    d2x = (dx_hand(phi + h) - dx_hand(phi - h)) / (2 * h)
+    slider = res.body("slider")
+    np.testing.assert_allclose(slider.position[:, 0], x(phi), atol=1e-12)
+    np.testing.assert_allclose(slider.position[:, 1:], np.tile((d, e), (len(phi), 1)), atol=1e-12)
+    np.testing.assert_allclose(slider.velocity[:, 0], w * dx(phi), atol=1e-10)
+    np.testing.assert_allclose(slider.acceleration[:, 0], w * w * d2x, atol=1e-6)
+    # the rod keeps its length and the crank end its circle
+    a = res.point("crank", (r / 2, 0.0, 0.0)).position
+    np.testing.assert_allclose(a, r * np.column_stack([np.cos(phi), np.sin(phi), 0 * phi]),
+                               atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(slider.position - a, axis=1), l, atol=1e-12)
+    # power balance: motor power = rate of kinetic + potential energy (gravity along -z)
+    rate = np.zeros(len(phi))
+    for body in res.model.bodies:
+        hist = res.body(body.name)
+        J_global = np.einsum("kij,jl,kml->kim", hist.rotation, body.inertia, hist.rotation)
+        spin = np.einsum("kij,kj->ki", J_global, hist.angular_velocity)
+        rate += body.mass * np.einsum("kd,kd->k", hist.velocity, hist.acceleration + (0, 0, 9.81))
+        rate += np.einsum("ki,ki->k", spin, hist.angular_acceleration)
+    np.testing.assert_allclose(res.driver("motor").effort * w, rate, atol=1e-9)
+
+
+def test_all_revolute_spatial_four_bar_reports_its_redundancy():
+    from mbd3d.mechanisms import spatial_four_bar
+    # a generic spatial 4R is rigid: 20 rows of rank 18, no mobility and 2 dependent rows
+    report = mb.mobility(spatial_four_bar(all_revolute=True, crank_speed=None))
+    assert (report.n_constraints, report.gruebler, report.rank) == (20, -2, 18)
+    assert (report.dof, report.redundant) == (0, 2)
+    involved = {label.split(".")[0] for group in report.dependent for label in group}
+    assert involved <= {"O2", "A", "B", "O4"}
+    fine = mb.mobility(spatial_four_bar(crank_speed=None))
+    assert (fine.gruebler, fine.dof, fine.redundant) == (1, 1, 0)
