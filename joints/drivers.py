@@ -111,18 +111,27 @@ class RotationDriver(ConstraintElement):
         if self.joint is None:
             raise ModelError(f"driver '{self.name}': in space, give the Revolute whose rotation "
                              "is driven (its axis defines the angle)")
-        axes = Axes(ctx, self.joint, self.joint.axis)
-        h_i, h_j = axes.i[2], axes.j[2]
-        f_i = _reference_direction(h_i, f"driver '{self.name}'")
-        f_j = _reference_direction(h_j, f"driver '{self.name}'")
+        f_i, g_i, f_j = hinge_directions(ctx, self.joint, f"driver '{self.name}'")
         return [PrimitiveSpec("rotation", self.body_i, self.body_j,
-                              {"f_i": f_i, "g_i": np.cross(h_i, f_i), "f_j": f_j}, ("angle",),
+                              {"f_i": f_i, "g_i": g_i, "f_j": f_j}, ("angle",),
                               motion=self.motion)]
 
     def reaction_frame(self, ctx: BuildContext):
         if self.joint is not None:
             return self.joint.reaction_frame(ctx)
         return super().reaction_frame(ctx)
+
+
+def hinge_directions(ctx: BuildContext, joint: Revolute, what: str
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(f_i, g_i, f_j)`` in body frames: the reference directions from which a rotation about
+    a spatial revolute's axis is measured (``g_i = h_i x f_i``)."""
+    if not isinstance(joint, Revolute):
+        raise ModelError(f"{what}: needs a Revolute, got {joint!r}")
+    axes = Axes(ctx, joint, joint.axis)
+    h_i, h_j = axes.i[2], axes.j[2]
+    f_i = _reference_direction(h_i, what)
+    return f_i, np.cross(h_i, f_i), _reference_direction(h_j, what)
 
 
 def _reference_direction(h: np.ndarray, what: str) -> np.ndarray:

@@ -175,11 +175,15 @@ def _state(model, fr, idx, u) -> ForceState:
 class Torque(ForceElement):
     """A pure torque [N m] on a body: constant, ``f(t)`` or ``f(t, state)``.
 
-    In 2D the torque is a scalar about the normal to the plane (counter-clockwise positive).
+    In 2D the torque is a scalar about the normal to the plane (counter-clockwise positive). In
+    3D it is a vector in global axes, or in body axes with ``frame="body"`` (it turns with the
+    body, like a motor's torque on its rotor).
     """
 
-    def __init__(self, name: str, body: Body, torque: Any):
-        self.name, self.body, self.torque = name, body, torque
+    def __init__(self, name: str, body: Body, torque: Any, frame: str = "global"):
+        self.name, self.body, self.torque, self.frame = name, body, torque, frame
+        if frame not in ("global", "body"):
+            raise ModelError(f"torque '{name}': frame must be 'global' or 'body', got {frame!r}")
 
     def bodies(self) -> list[tuple[str, Body]]:
         return [("body", self.body)]
@@ -201,6 +205,8 @@ class _Torques(_CompiledForces):
             idx = np.array([model.padded_index(e.body)])
             state = _state(model, fr, idx, np.zeros(model.dim)) if fn.needs_state else None
             n = _checked(fn(t, state), self.shape, f"torque '{e.name}'", t)
+            if e.frame == "body" and model.dim == 3:
+                n = bt.rotate(fr, idx, n[None])[0]
             Q[idx[0]] += bt.torque_generalized(fr, idx, n[None])[0]
 
 
@@ -335,14 +341,21 @@ class _SpringDampers(_SpringGroup):
 
 
 class RotationalSpringDamper(ForceElement):
-    """Rotational spring-damper-actuator between two planar bodies (across a revolute).
+    """Rotational spring-damper-actuator across a revolute: a torque on body j about the hinge
+    (opposite on body i) [N m], ``-stiffness (phi - free_angle) - damping dphi/dt + actuator(t)``.
 
-    Torque on body j (opposite on body i), counter-clockwise positive [N m]:
-    ``-stiffness (phi - free_angle) - damping dphi/dt + actuator(t)``, with
-    ``phi = theta_j - theta_i`` the relative rotation.
+    ``phi`` is the rotation of body j relative to body i: planar, ``theta_j - theta_i``
+    (unwrapped, so the spring can be wound by many turns); spatial, the angle about the
+    revolute's axis between the bodies' x axes projected on the plane normal to it (as for
+    :class:`joints.RotationDriver`), within half a turn of ``free_angle``.
 
     Parameters
     ----------
+    name : str
+    body_i, body_j : Body
+        Planar models: the two bodies. Spatial models: give ``joint`` instead.
+    joint : Revolute, optional
+        The revolute across which the spring acts (required in 3D: its axis).
     stiffness : float
         [N m/rad], >= 0.
     damping : float
@@ -353,9 +366,14 @@ class RotationalSpringDamper(ForceElement):
         Torque on body j [N m].
     """
 
-    def __init__(self, name: str, body_i: Body, body_j: Body, *, stiffness: float = 0.0,
-                 damping: float = 0.0, free_angle: float | None = None, actuator: Any = None):
-        self.name, self.body_i, self.body_j = name, body_i, body_j
+    def __init__(self, name: str, body_i: Body | None = None, body_j: Body | None = None, *,
+                 joint: Any = None, stiffness: float = 0.0, damping: float = 0.0,
+                 free_angle: float | None = None, actuator: Any = None):
+        if joint is not None:
+            body_i, body_j = joint.body_i, joint.body_j
+        if body_i is None or body_j is None:
+            raise ModelError(f"spring '{name}': give body_i and body_j, or the joint")
+        self.name, self.body_i, self.body_j, self.joint = name, body_i, body_j, joint
         self.stiffness, self.damping = stiffness, damping
         self.free_angle, self.actuator = free_angle, actuator
 
@@ -364,31 +382,62 @@ class RotationalSpringDamper(ForceElement):
 
     @classmethod
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
-        if ctx.dim != 2:
-            raise ModelError("RotationalSpringDamper is planar only for now")
         return _RotationalSprings(elements, ctx)
 
 
 class _RotationalSprings(_SpringGroup):
     def __init__(self, elements: list[RotationalSpringDamper], ctx: "BuildContext"):
         super().__init__(elements, ctx)
-        self.phi0 = np.array([
-            ctx.initial_coordinate(e.body_j, 2) - ctx.initial_coordinate(e.body_i, 2)
-            if e.free_angle is None else ctx.scalar(e.free_angle, f"spring '{e.name}': free_angle")
-            for e in elements])
+        self.planar = ctx.dim == 2
+        if not self.planar:
+            from joints.drivers import hinge_directions
+            vectors = []
+            for e in elements:
+                if e.joint is None:
+                    raise ModelError(f"spring '{e.name}': in space, give the Revolute it acts "
+                                     "across (joint=): its axis is the spring's axis")
+                vectors.append(hinge_directions(ctx, e.joint, f"spring '{e.name}'"))
+            self.f_i, self.g_i, self.f_j = (np.array(v) for v in zip(*vectors))
+        free = [e.free_angle for e in elements]
+        self.phi0 = np.zeros(len(elements))
+        if any(a is None for a in free):
+            bi = np.array([ctx.row(e.body_i) for e in self.elements])
+            bj = np.array([ctx.row(e.body_j) for e in self.elements])
+            drawing = self._angle(ctx.body_type, ctx.frames, bi, bj)
+        for n, a in enumerate(free):
+            self.phi0[n] = (drawing[n] if a is None
+                            else ctx.scalar(a, f"spring '{elements[n].name}': free_angle"))
+
+    def _angle(self, bt, fr, bi, bj) -> np.ndarray:
+        if self.planar:
+            return fr.Q[bj, 2] - fr.Q[bi, 2]
+        f_j = bt.rotate(fr, bj, self.f_j)
+        return np.arctan2(np.einsum("kd,kd->k", f_j, bt.rotate(fr, bi, self.g_i)),
+                          np.einsum("kd,kd->k", f_j, bt.rotate(fr, bi, self.f_i)))
+
+    def _stretch(self, bt, fr, bi, bj) -> np.ndarray:
+        stretch = self._angle(bt, fr, bi, bj) - self.phi0
+        # spatial angles are known modulo a turn: take the branch nearest the free angle
+        return stretch if self.planar else np.angle(np.exp(1j * stretch))
 
     def apply(self, model, t, fr, Q):
+        bt = model.body_type
         bi, bj = self._indices(model)
-        phi = fr.Q[bj, 2] - fr.Q[bi, 2]
-        phi_dot = fr.Qd[bj, 2] - fr.Qd[bi, 2]
-        torque = -self.k * (phi - self.phi0) - self.c * phi_dot + self._actuation(t)
-        np.add.at(Q[:, 2], bj, torque)
-        np.add.at(Q[:, 2], bi, -torque)
+        if self.planar:
+            rate = fr.Qd[bj, 2] - fr.Qd[bi, 2]
+            axis = None
+        else:
+            axis = bt.rotate(fr, bi, np.cross(self.f_i, self.g_i))
+            rate = np.einsum("kd,kd->k", bt.angular_velocity(fr, bj) - bt.angular_velocity(fr, bi),
+                             axis)
+        torque = -self.k * self._stretch(bt, fr, bi, bj) - self.c * rate + self._actuation(t)
+        vector = torque if axis is None else torque[:, None] * axis
+        np.add.at(Q, bj, bt.torque_generalized(fr, bj, vector))
+        np.add.at(Q, bi, bt.torque_generalized(fr, bi, -vector))
 
     def potential(self, model, fr) -> float:
         bi, bj = self._indices(model)
-        phi = fr.Q[bj, 2] - fr.Q[bi, 2]
-        return float(0.5 * np.sum(self.k * (phi - self.phi0) ** 2))
+        return float(0.5 * np.sum(self.k * self._stretch(model.body_type, fr, bi, bj) ** 2))
 
 
 def compile_forces(elements: tuple, ctx: "BuildContext") -> list[_CompiledForces]:

@@ -74,11 +74,16 @@ class BuildContext:
         for b in bodies:
             Q[b.index] = b.q0
         self.charts = _charts(bodies) if body_type.dim == 3 else None
-        self._frames = body_type.frames(Q, charts=self.charts)
+        #: frames of the drawing (the bodies' initial guesses), ground last
+        self.frames = body_type.frames(Q, charts=self.charts)
         self._n = n
 
+    def row(self, body: Body) -> int:
+        """Row of ``body`` in :attr:`frames` (the ground is the last row)."""
+        return self._n if body.is_ground else body.index
+
     def _row(self, body: Body) -> np.ndarray:
-        return np.array([self._n if body.is_ground else body.index])
+        return np.array([self.row(body)])
 
     def check_body(self, body: Any, element: str, role: str) -> Body:
         """Return ``body`` if it is a body of this model, else raise naming ``element``."""
@@ -106,21 +111,21 @@ class BuildContext:
 
     def rotation(self, body: Body) -> np.ndarray:
         """Rotation matrix of ``body`` at its initial guess (global frame for the ground)."""
-        return self._frames.A[self._row(body)][0]
+        return self.frames.A[self._row(body)][0]
 
     def to_local_point(self, body: Body, point: np.ndarray) -> np.ndarray:
         """Body-frame coordinates of the global point ``point`` at the initial guess."""
-        R = self._frames.Q[self._row(body)][0, :self.dim]
+        R = self.frames.Q[self._row(body)][0, :self.dim]
         return self.rotation(body).T @ (point - R)
 
     def to_local_vector(self, body: Body, vector: np.ndarray) -> np.ndarray:
         return self.rotation(body).T @ vector
 
     def to_global_point(self, body: Body, u: np.ndarray) -> np.ndarray:
-        return self.body_type.point(self._frames, self._row(body), u[None])[0]
+        return self.body_type.point(self.frames, self._row(body), u[None])[0]
 
     def initial_coordinate(self, body: Body, coordinate: int) -> float:
-        return float(self._frames.Q[self._row(body)][0, coordinate])
+        return float(self.frames.Q[self._row(body)][0, coordinate])
 
 
 class ModelBuilder:

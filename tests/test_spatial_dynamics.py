@@ -181,3 +181,75 @@ def test_planar_restricted_slider_crank_reproduces_the_planar_model():
                                planar.body("slider").position[:, 0], atol=1e-9)
     np.testing.assert_allclose(spatial.joint("O").reaction(on="crank").force[:, :2],
                                planar.joint("O").reaction(on="crank").force, atol=1e-6)
+
+
+def test_spatial_torsion_spring_about_a_skew_axis():
+    J_axis, k, w0 = 0.05, 3.0, 2.0
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    frame = Rotation.align_vectors([axis], [[0.0, 0.0, 1.0]])[0].as_matrix()  # body z = axis
+    b = mb.ModelBuilder(dim=3)
+    disc = b.add_body("disc", mass=1.0, inertia=(0.03, 0.04, J_axis), position=(0, 0, 0),
+                      orientation=frame, angular_velocity=w0 * axis)
+    hinge = b.add(Revolute("axle", b.ground, disc, at=(0.0, 0.0, 0.0), axis=axis))
+    b.add(mb.RotationalSpringDamper("torsion", joint=hinge, stiffness=k))
+    t = np.linspace(0.0, 1.0, 21)
+    # few, long steps: the integrator tolerance must be below the 1e-9 checked
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-13)
+    wn = math.sqrt(k / J_axis)
+    np.testing.assert_allclose(res.body("disc").angular_velocity @ axis, w0 * np.cos(wn * t),
+                               atol=1e-8)
+    energy = res.kinetic_energy + res.potential_energy
+    np.testing.assert_allclose(energy, 0.5 * J_axis * w0**2, rtol=1e-9)
+
+
+def test_torque_in_body_axes_turns_with_the_body():
+    J3, T = 0.2, 0.7
+    A0 = Rotation.from_rotvec([0.4, -1.0, 0.3]).as_matrix()
+    b = mb.ModelBuilder(dim=3)
+    body = b.add_body("rotor", mass=1.0, inertia=(0.1, 0.1, J3), position=(0, 0, 0),
+                      orientation=A0)
+    b.add(mb.Torque("motor", body, (0.0, 0.0, T), frame="body"))
+    t = np.linspace(0.0, 2.0, 11)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
+    rotor = res.body("rotor")
+    np.testing.assert_allclose(rotor.angular_velocity, np.outer(T / J3 * t, A0[:, 2]), atol=1e-9)
+    np.testing.assert_allclose(rotor.rotation[:, :, 2], np.tile(A0[:, 2], (11, 1)), atol=1e-9)
+
+
+def test_planar_restricted_four_bar_reproduces_the_planar_model():
+    """The four-bar of mbd3d.mechanisms.four_bar rebuilt with spatial bodies, hinges along z and
+    a universal and a ball joint on the coupler (four spatial revolutes would be redundant)."""
+    from joints import RotationDriver
+    from mbd3d.mechanisms import four_bar
+    planar_model = four_bar(crank_speed=2 * math.pi)
+    planar = mb.inverse_dynamics(planar_model, np.linspace(0.0, 1.0, 25))
+    # the drawing: pivots, crank end A and coupler end B from the planar model at t = 0
+    o2, o4 = np.zeros(2), np.array([0.30, 0.0])
+    a = planar.point("crank", (0.05, 0.0)).position[0]
+    b_point = planar.point("rocker", (0.15, 0.0)).position[0]
+    z = (0.0, 0.0, 1.0)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, -G, 0.0))
+    bodies = {}
+    for body in planar_model.bodies:
+        bodies[body.name] = b.add_body(
+            body.name, mass=body.mass, inertia=(body.inertia,) * 3,
+            position=(*planar.body(body.name).position[0], 0.0),
+            orientation=Rotation.from_rotvec([0.0, 0.0, planar.body(body.name).angle[0]]).as_matrix())
+    coupler_dir = np.r_[(b_point - a) / np.linalg.norm(b_point - a), 0.0]
+    o2_pin = b.add(Revolute("O2", b.ground, bodies["crank"], at=(*o2, 0.0), axis=z))
+    b.add(Universal("A", bodies["crank"], bodies["coupler"], at=(*a, 0.0), axis_i=z,
+                    axis_j=np.cross(coupler_dir, z)))
+    b.add(Spherical("B", bodies["coupler"], bodies["rocker"], at=(*b_point, 0.0)))
+    b.add(Revolute("O4", b.ground, bodies["rocker"], at=(*o4, 0.0), axis=z))
+    b.add(RotationDriver("motor", o2_pin, motion=mb.Ramp(math.radians(60.0), 2 * math.pi)))
+    spatial = mb.inverse_dynamics(b.build(), planar.t)
+    for name in ("crank", "coupler", "rocker"):
+        rot = spatial.body(name).rotation
+        angle = np.unwrap(np.arctan2(rot[:, 1, 0], rot[:, 0, 0]))
+        np.testing.assert_allclose(angle, planar.body(name).angle, atol=1e-10)
+        np.testing.assert_allclose(spatial.body(name).position[:, :2], planar.body(name).position,
+                                   atol=1e-12)
+    np.testing.assert_allclose(spatial.driver("motor").effort, planar.driver("motor").effort,
+                               atol=1e-9)
+    np.testing.assert_allclose(spatial.joint("O4").reaction(on="rocker").force[:, :2],
+                               planar.joint("O4").reaction(on="rocker").force, atol=1e-9)
