@@ -1,4 +1,4 @@
-"""mbd3d: kinematic and dynamic analysis of mechanisms in absolute coordinates.
+"""mbd3d: kinematic and dynamic analysis of planar and spatial mechanisms in absolute coordinates.
 
 Build a model with :class:`ModelBuilder` (bodies here, joints and drivers from the ``joints``
 package, forces from here), then run an analysis; every analysis returns a :class:`Results`.
@@ -15,6 +15,7 @@ package, forces from here), then run an analysis; every analysis returns a :clas
 6.283185
 """
 
+from mbd3d import rotations
 from mbd3d.body import Body
 from mbd3d.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
 from mbd3d.equations import kinetic_energy, potential_energy
@@ -31,7 +32,7 @@ from mbd3d.results import Results, format_table
 __version__ = "0.1.0"
 
 __all__ = [
-    "ModelBuilder", "Model", "Body",
+    "ModelBuilder", "Model", "Body", "rotations",
     "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",

@@ -25,6 +25,19 @@ def test_quick_start_runs(tmp_path, monkeypatch, capsys):
     assert abs(res.body("slider").position[0, 0] - x) < 1e-12
 
 
+def test_spatial_snippet_runs(capsys):
+    text = README.read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    spatial = [b for b in blocks if "dim=3" in b]
+    assert spatial
+    namespace: dict = {}
+    exec(compile(spatial[0], "README spatial snippet", "exec"), namespace)
+    res = namespace["res"]
+    assert res.status == "complete" and res.stats["chart_resets"] > 0
+    energy = res.kinetic_energy + res.potential_energy
+    assert np.max(np.abs(energy - energy[0])) < 1e-6 * np.max(res.kinetic_energy)
+
+
 def test_first_two_commands_are_install_and_test():
     text = README.read_text()
     commands = re.search(r"```bash\n(.*?)```", text, re.S).group(1).strip().splitlines()
