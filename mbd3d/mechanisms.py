@@ -80,13 +80,15 @@ def slider_crank(*, crank_length: float = 0.12, rod_length: float = 0.26,
 def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
              coupler_length: float = 0.35, rocker_length: float = 0.30,
              mass_per_length: float = 2.0, crank_angle: float = math.radians(60.0),
-             crank_speed: float | None = 2 * math.pi, gravity: float = 9.81) -> Model:
+             crank_speed: float | None = 2 * math.pi, crank_torque: float | None = None,
+             gravity: float = 9.81) -> Model:
     """Crank-rocker four-bar: ground pivots O2 = (0, 0) and O4 = (ground_length, 0).
 
     Bodies ``crank`` (O2-A), ``coupler`` (A-B), ``rocker`` (O4-B), slender uniform bars
     (``m = mass_per_length L``, ``J = m L^2 / 12``); revolutes ``O2``, ``A``, ``B``, ``O4``;
-    driver ``motor`` at constant crank speed [rad/s] (None: no driver). Assembled with the open
-    configuration (B above the line O4-A).
+    driver ``motor`` at constant crank speed [rad/s] (None: no driver); optional constant
+    ``crank_torque`` [N m] (force element ``torque``). Assembled with the open configuration
+    (B above the line O4-A).
     """
     from joints import Revolute, RotationDriver
 
@@ -118,6 +120,8 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
     builder.add(Revolute("O4", builder.ground, rocker, point_i=o4, point_j=(-L3 / 2, 0)))
     if crank_speed is not None:
         builder.add(RotationDriver("motor", o2, motion=Ramp(crank_angle, crank_speed)))
+    if crank_torque is not None:
+        builder.add(Torque("torque", crank, crank_torque))
     return builder.build()
 
 

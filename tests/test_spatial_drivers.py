@@ -176,3 +176,27 @@ def test_all_revolute_spatial_four_bar_reports_its_redundancy():
     assert involved <= {"O2", "A", "B", "O4"}
     fine = mb.mobility(spatial_four_bar(crank_speed=None))
     assert (fine.gruebler, fine.dof, fine.redundant) == (1, 1, 0)
+
+
+def test_translation_driver_and_joint_axes_reactions_in_space():
+    from joints import TranslationDriver
+    m, g = 3.0, np.array([0.0, 0.0, -9.81])
+    axis = np.array([2.0, -1.0, 2.0]) / 3.0
+    b = mb.ModelBuilder(dim=3, gravity=g)
+    block = b.add_body("block", mass=m, inertia=(0.1, 0.1, 0.1), position=(0.2, 0.1, 0.3),
+                       orientation=Rotation.from_rotvec([0.3, 0.2, -0.5]).as_matrix())
+    rail = b.add(Prismatic("rail", b.ground, block, axis=axis))
+    b.add(TranslationDriver("push", rail, motion=mb.Ramp(0.0, 0.4)))
+    res = mb.inverse_dynamics(b.build(), np.linspace(0.0, 1.0, 6))
+    np.testing.assert_allclose(res.body("block").position,
+                               (0.2, 0.1, 0.3) + np.outer(0.4 * res.t, axis), atol=1e-12)
+    # constant speed: the actuator holds the weight's component along the rail
+    np.testing.assert_allclose(res.driver("push").effort, -m * g @ axis, atol=1e-10)
+    reaction = res.joint("rail").reaction(on="block", frame="joint")
+    np.testing.assert_allclose(reaction.force[:, 0], 0.0, atol=1e-10)  # frictionless slide
+    weight_normal = m * (g - (g @ axis) * axis)
+    np.testing.assert_allclose(np.linalg.norm(reaction.force, axis=1),
+                               np.linalg.norm(weight_normal), atol=1e-10)
+    np.testing.assert_allclose(reaction.moment, 0.0, atol=1e-10)  # centre of mass on the line
+    np.testing.assert_allclose(res.joint("rail").reaction(on="block").force, -weight_normal[None]
+                               * np.ones((6, 1)), atol=1e-10)

@@ -216,14 +216,12 @@ def test_torque_in_body_axes_turns_with_the_body():
     np.testing.assert_allclose(rotor.rotation[:, :, 2], np.tile(A0[:, 2], (11, 1)), atol=1e-9)
 
 
-def test_planar_restricted_four_bar_reproduces_the_planar_model():
+def spatial_four_bar_in_plane(planar: mb.Results, driven: bool, torque: float = 0.0) -> mb.Model:
     """The four-bar of mbd3d.mechanisms.four_bar rebuilt with spatial bodies, hinges along z and
-    a universal and a ball joint on the coupler (four spatial revolutes would be redundant)."""
+    a universal and a ball joint on the coupler (four spatial revolutes would be redundant);
+    the drawing is read from the planar results at t = 0."""
     from joints import RotationDriver
-    from mbd3d.mechanisms import four_bar
-    planar_model = four_bar(crank_speed=2 * math.pi)
-    planar = mb.inverse_dynamics(planar_model, np.linspace(0.0, 1.0, 25))
-    # the drawing: pivots, crank end A and coupler end B from the planar model at t = 0
+    planar_model = planar.model
     o2, o4 = np.zeros(2), np.array([0.30, 0.0])
     a = planar.point("crank", (0.05, 0.0)).position[0]
     b_point = planar.point("rocker", (0.15, 0.0)).position[0]
@@ -241,8 +239,17 @@ def test_planar_restricted_four_bar_reproduces_the_planar_model():
                     axis_j=np.cross(coupler_dir, z)))
     b.add(Spherical("B", bodies["coupler"], bodies["rocker"], at=(*b_point, 0.0)))
     b.add(Revolute("O4", b.ground, bodies["rocker"], at=(*o4, 0.0), axis=z))
-    b.add(RotationDriver("motor", o2_pin, motion=mb.Ramp(math.radians(60.0), 2 * math.pi)))
-    spatial = mb.inverse_dynamics(b.build(), planar.t)
+    if driven:
+        b.add(RotationDriver("motor", o2_pin, motion=mb.Ramp(math.radians(60.0), 2 * math.pi)))
+    else:
+        b.add(mb.Torque("torque", bodies["crank"], (0.0, 0.0, torque)))
+    return b.build()
+
+
+def test_planar_restricted_four_bar_reproduces_the_planar_model():
+    from mbd3d.mechanisms import four_bar
+    planar = mb.inverse_dynamics(four_bar(crank_speed=2 * math.pi), np.linspace(0.0, 1.0, 25))
+    spatial = mb.inverse_dynamics(spatial_four_bar_in_plane(planar, driven=True), planar.t)
     for name in ("crank", "coupler", "rocker"):
         rot = spatial.body(name).rotation
         angle = np.unwrap(np.arctan2(rot[:, 1, 0], rot[:, 0, 0]))
@@ -253,3 +260,20 @@ def test_planar_restricted_four_bar_reproduces_the_planar_model():
                                atol=1e-9)
     np.testing.assert_allclose(spatial.joint("O4").reaction(on="rocker").force[:, :2],
                                planar.joint("O4").reaction(on="rocker").force, atol=1e-9)
+
+
+def test_planar_restricted_four_bar_forward_dynamics():
+    from mbd3d.mechanisms import four_bar
+    drawing = mb.inverse_dynamics(four_bar(crank_speed=0.0), [0.0])
+    t = np.linspace(0.0, 1.0, 21)
+    planar = mb.forward_dynamics(four_bar(crank_speed=None, crank_torque=0.5), t,
+                                 method="DOP853", rtol=1e-12, atol=1e-12)
+    spatial = mb.forward_dynamics(spatial_four_bar_in_plane(drawing, driven=False, torque=0.5), t,
+                                  method="DOP853", rtol=1e-12, atol=1e-12)
+    for name in ("crank", "rocker"):
+        rot = spatial.body(name).rotation
+        # the crank speeds up to about pi per output interval: compare angles modulo a turn
+        difference = np.arctan2(rot[:, 1, 0], rot[:, 0, 0]) - planar.body(name).angle
+        np.testing.assert_allclose(np.angle(np.exp(1j * difference)), 0.0, atol=1e-8)
+    np.testing.assert_allclose(spatial.joint("O2").reaction(on="crank").force[:, :2],
+                               planar.joint("O2").reaction(on="crank").force, atol=1e-6)
