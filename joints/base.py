@@ -90,11 +90,6 @@ class Axes:
         return np.column_stack([h, f, g] if along_x else [f, g, h])
 
 
-def require_planar(ctx: BuildContext, element: str) -> None:
-    if ctx.dim != 2:
-        raise ModelError(f"'{element}': this joint is available for planar models only (dim=2)")
-
-
 def require_spatial(ctx: BuildContext, element: str) -> None:
     if ctx.dim != 3:
         raise ModelError(f"'{element}': this joint is available for spatial models only (dim=3)")

@@ -130,17 +130,18 @@ def hinge_directions(ctx: BuildContext, joint: Revolute, what: str
         raise ModelError(f"{what}: needs a Revolute, got {joint!r}")
     axes = Axes(ctx, joint, joint.axis)
     h_i, h_j = axes.i[2], axes.j[2]
-    f_i = _reference_direction(h_i, what)
-    return f_i, np.cross(h_i, f_i), _reference_direction(h_j, what)
+    f_i = _reference_direction(h_i)
+    return f_i, np.cross(h_i, f_i), _reference_direction(h_j)
 
 
-def _reference_direction(h: np.ndarray, what: str) -> np.ndarray:
-    """The body's x axis projected on the plane normal to ``h`` (body frame), else its y axis."""
-    for axis in np.eye(3)[:2]:
-        v = axis - (axis @ h) * h
-        if np.linalg.norm(v) > 1e-6:
-            return v / np.linalg.norm(v)
-    raise ModelError(f"{what}: no reference direction normal to the axis")  # pragma: no cover
+def _reference_direction(h: np.ndarray) -> np.ndarray:
+    """The body's x axis projected on the plane normal to ``h`` (body frame), or its y axis
+    when x lies along ``h`` (both cannot)."""
+    x, y = np.eye(3)[0], np.eye(3)[1]
+    v = x - (x @ h) * h
+    if np.linalg.norm(v) < 1e-6:
+        v = y - (y @ h) * h
+    return v / np.linalg.norm(v)
 
 
 class TranslationDriver(ConstraintElement):

@@ -131,8 +131,9 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     -------
     Results
         With ``lam`` (reactions, driver efforts) at every output time; ``stats`` holds
-        ``steps``, ``rhs_evaluations``, ``projections``, ``max_drift`` (largest residual found at
-        a step end before projection) and ``wall_time`` [s].
+        ``steps``, ``rhs_evaluations``, ``projections``, ``chart_resets`` (spatial bodies
+        re-referenced), ``max_drift`` (largest residual found at a step end before projection)
+        and ``wall_time`` [s].
 
     Raises
     ------
@@ -153,13 +154,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     projection_tol = constraint_tol * 1e-3
     start = _time.perf_counter()
     stats = {"method": method, "steps": 0, "rhs_evaluations": 0, "projections": 0,
-             "max_drift": 0.0, "wall_time": 0.0}
+             "chart_resets": 0, "max_drift": 0.0, "wall_time": 0.0}
     k_max = len(t)
     Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
     Lam = np.empty((k_max, model.n_constraints))
     Charts = None if model.charts0 is None else np.empty((k_max,) + model.charts0.shape)
     chart = model.charts0  # reference rotations of the current integration segment
-    stats["chart_resets"] = 0
     done = 0
 
     def partial(status: str, message: str) -> Results:

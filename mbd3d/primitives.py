@@ -34,6 +34,11 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("kd,kd->k", a, b)
 
 
+def _relative_velocity(bt, fr, bi, bj, si: np.ndarray, sj: np.ndarray) -> np.ndarray:
+    """Time derivative of ``d = r_j - r_i`` for body points with rotated offsets ``si``, ``sj``."""
+    return fr.Rd[bj] + bt.velocity_of(fr, bj, sj) - fr.Rd[bi] - bt.velocity_of(fr, bi, si)
+
+
 def _pair(Ji: np.ndarray, Jj: np.ndarray) -> np.ndarray:
     """Jacobians of one row with respect to bodies i and j, (k, n) each -> (k, 1, 2, n)."""
     J = np.empty((Ji.shape[0], 1, 2, Ji.shape[1]))
@@ -133,8 +138,7 @@ class Dot2:
             Jj = _aJ(ai, bt.jacobian_of(fr, bj, sj, True))
             J = _pair(Ji, Jj)
         if gamma:
-            d_dot = (fr.Rd[bj] + bt.velocity_of(fr, bj, sj)
-                     - fr.Rd[bi] - bt.velocity_of(fr, bi, si))
+            d_dot = _relative_velocity(bt, fr, bi, bj, si, sj)
             g = -(_dot(d, bt.acceleration_term_of(fr, bi, ai))
                   + 2.0 * _dot(bt.velocity_of(fr, bi, ai), d_dot)
                   + _dot(ai, bt.acceleration_term_of(fr, bj, sj)
@@ -170,8 +174,7 @@ class Distance:
             J = _pair(-_aJ(e, bt.jacobian_of(fr, bi, si, True)),
                       _aJ(e, bt.jacobian_of(fr, bj, sj, True)))
         if gamma:
-            d_dot = (fr.Rd[bj] + bt.velocity_of(fr, bj, sj)
-                     - fr.Rd[bi] - bt.velocity_of(fr, bi, si))
+            d_dot = _relative_velocity(bt, fr, bi, bj, si, sj)
             e_dd = _dot(e, d_dot)
             g = -(_dot(e, bt.acceleration_term_of(fr, bj, sj) - bt.acceleration_term_of(fr, bi, si))
                   + (_dot(d_dot, d_dot) - e_dd * e_dd) / length)[:, None]
