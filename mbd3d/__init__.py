@@ -24,6 +24,7 @@ from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDErr
 from mbd3d.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
 from mbd3d.mobility import MobilityReport, mobility
+from mbd3d.observers import Observer, ProgressBar
 from mbd3d.model import Model, ModelBuilder
 from mbd3d.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
 from mbd3d.position import solve_position
@@ -38,6 +39,7 @@ __all__ = [
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "forward_dynamics", "forward_accelerations", "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "format_table", "kinetic_energy", "potential_energy",
+    "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "AnalysisError", "AssemblyError",
     "SingularJacobianError", "IntegrationError",
 ]

@@ -29,6 +29,7 @@ from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.kinematics import check_times, solve_velocity
 from mbd3d.linalg import SingularMatrix, solve_model_augmented
 from mbd3d.position import singular_error, solve_position
+from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, run_keeping_results
 
 __all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS"]
@@ -102,7 +103,9 @@ def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
 def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None = None,
                      qd0: Sequence[float] | None = None, *, method: str = "RK45",
                      rtol: float = 1e-8, atol: float = 1e-10, constraint_tol: float = 1e-8,
-                     max_step: float = np.inf, hold: Sequence[str | int] | None = None) -> Results:
+                     max_step: float = np.inf, hold: Sequence[str | int] | None = None,
+                     observers: Sequence[Observer] | None = None,
+                     progress: bool | None = None) -> Results:
     """Integrate the equations of motion from ``times[0]`` to ``times[-1]``.
 
     Parameters
@@ -126,6 +129,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     hold : sequence of str or int, optional
         Coordinates kept at their given values (and rates) while assembling the initial state,
         e.g. ``["crank.theta"]``.
+    observers : sequence of Observer, optional
+        Watch the run as it goes (e.g. ``viewer.Recorder`` to stream to Rerun); see
+        :mod:`mbd3d.observers`.
+    progress : bool, optional
+        Show a progress bar on stderr; default only when stderr is a terminal.
 
     Returns
     -------
@@ -186,6 +194,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold)
         record(0, q, qd)
         done = 1
+        watch.tick(t[0], 0)
         options = {"rtol": rtol, "atol": atol, "max_step": max_step}
         if method in ("Radau", "BDF", "LSODA"):
             options["jac"] = _difference_jacobian(rhs, 2 * n)
@@ -208,6 +217,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                     record(done, *project_state(model, t[done], y_k[:n], y_k[n:], projection_tol,
                                                 chart))
                     done += 1
+            watch.tick(solver.t, stats["steps"])
             if solver.status == "finished" or done >= k_max:
                 break
             q, qd = solver.y[:n], solver.y[n:]
@@ -226,4 +236,5 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 solver = solver_cls(rhs, solver.t, np.concatenate([q, qd]), t[-1], first_step=h,
                                     **options)
 
-    return run_keeping_results(loop, partial)
+    watch = Watch(observers, progress, model, t, "forward dynamics", partial)
+    return run_keeping_results(loop, partial, watch)

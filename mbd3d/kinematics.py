@@ -20,6 +20,7 @@ from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.errors import ModelError, NotFullyDrivenError
 from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented
 from mbd3d.position import hold_indices, singular_error, solve_position
+from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, run_keeping_results
 
 __all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "inverse_dynamics",
@@ -101,7 +102,8 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                              f"acceleration analysis of '{model.name}'") from None
 
 
-def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Results:
+def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
+           progress) -> Results:
     t = check_times(times)
     _require_fully_driven(model, analysis)
     n, m = model.n_coordinates, model.n_constraints
@@ -141,6 +143,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
             if charts is not None:
                 charts[k] = chart
             done = k + 1
+            watch.tick(tk, done)
 
     def partial(status: str, message: str) -> Results:
         return Results(model, analysis, t[:done], Q[:done], Qd[:done], Qdd[:done],
@@ -148,11 +151,13 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str) -> Resu
                        stats={"wall_time": _time.perf_counter() - start},
                        charts=None if charts is None else charts[:done])
 
-    return run_keeping_results(loop, partial)
+    watch = Watch(observers, progress, model, t, analysis, partial)
+    return run_keeping_results(loop, partial, watch)
 
 
 def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
-                       tol: float = 1e-12) -> Results:
+                       tol: float = 1e-12, observers: Sequence[Observer] | None = None,
+                       progress: bool | None = None) -> Results:
     """Positions, velocities and accelerations of a fully driven mechanism over ``times``.
 
     Parameters
@@ -166,6 +171,10 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
         assembly branch, which is then followed.
     tol : float
         Newton-Raphson tolerance on ``max |C|``.
+    observers : sequence of Observer, optional
+        Watch the analysis as it goes (e.g. ``viewer.Recorder``); see :mod:`mbd3d.observers`.
+    progress : bool, optional
+        Show a progress bar on stderr; default only when stderr is a terminal.
 
     Returns
     -------
@@ -180,14 +189,15 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
         At a time point that cannot be solved (e.g. a lock-up); ``.results`` holds what was
         computed before it.
     """
-    return _sweep(model, times, q_guess, tol, False, "kinematic analysis")
+    return _sweep(model, times, q_guess, tol, False, "kinematic analysis", observers, progress)
 
 
 def inverse_dynamics(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
-                     tol: float = 1e-12) -> Results:
+                     tol: float = 1e-12, observers: Sequence[Observer] | None = None,
+                     progress: bool | None = None) -> Results:
     """Kinematic analysis plus the multipliers: joint reactions and driver efforts.
 
     Same parameters as :func:`kinematic_analysis`; the results also carry ``lam``, so
     ``results.joint(name).reaction(on=...)`` and ``results.driver(name).effort`` are available.
     """
-    return _sweep(model, times, q_guess, tol, True, "inverse dynamics")
+    return _sweep(model, times, q_guess, tol, True, "inverse dynamics", observers, progress)

@@ -481,6 +481,12 @@ class Model:
         """Constraint rows of the joint or driver ``name``."""
         return self._rows_of[self._check_joint(name)]
 
+    def reaction_frame(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where joint or driver ``name`` acts: ``(u_i, u_j, axes)``, its point in the frames of
+        body i and body j [m] and its axes as columns in body i's frame (what reactions are
+        reported about and in)."""
+        return self._reaction_frames[self._check_joint(name)]
+
     def padded_index(self, body: Body) -> int:
         """Row of ``body`` in the per-body arrays of the solvers (the ground is the last row)."""
         return self.n_bodies if body.is_ground else body.index

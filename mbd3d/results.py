@@ -21,10 +21,10 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from mbd3d import constraints
+from mbd3d import history
 from mbd3d.body import Body
-from mbd3d.equations import kinetic_energy, potential_energy
 from mbd3d.errors import MBDError, ModelError
+from mbd3d.rotations import continuous_quaternions, to_quaternion
 
 __all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "JointHistory", "format_table"]
 
@@ -57,15 +57,9 @@ class BodyHistory:
     @property
     def quaternion(self) -> np.ndarray:
         """Spatial bodies: unit quaternions (k, 4), ``(w, x, y, z)``, sign kept continuous."""
-        from mbd3d.rotations import to_quaternion
         if self.rotation.shape[-1] != 3:
             raise ModelError(f"body '{self.name}' is planar: use .angle")
-        q = to_quaternion(self.rotation)
-        # q and -q are the same rotation: pick signs so that the path does not jump
-        for k in range(1, len(q)):
-            if q[k] @ q[k - 1] < 0:
-                q[k] = -q[k]
-        return q
+        return continuous_quaternions(to_quaternion(self.rotation))
 
     @property
     def pose(self) -> np.ndarray:
@@ -167,6 +161,7 @@ class Results:
         self.stats = dict(stats or {})
         self.charts = charts
         self._residuals: tuple[np.ndarray, np.ndarray] | None = None
+        self._energies: tuple[np.ndarray, np.ndarray] | None = None
 
     def __len__(self) -> int:
         return len(self.t)
@@ -221,6 +216,30 @@ class Results:
                            bt.angular_velocity(fr, idx).copy(),
                            bt.angular_acceleration(fr, idx, qdd),
                            self.q[:, sl.start + 2].copy() if d == 2 else None)
+
+    def poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every body's pose at every time, as a 3D pose (what a viewer draws).
+
+        Returns
+        -------
+        position : ndarray (k, n_bodies, 3)
+            Centres of mass [m], global axes; planar bodies lie in the plane z = 0.
+        quaternion : ndarray (k, n_bodies, 4)
+            Orientations as unit quaternions ``(w, x, y, z)``; planar bodies turn about z.
+        """
+        model = self.model
+        k, nb, nc, d = len(self.t), model.n_bodies, model.n_coords_per_body, model.dim
+        Q = self.q.reshape(k, nb, nc)
+        position = np.zeros((k, nb, 3))
+        position[:, :, :d] = Q[:, :, :d]
+        if d == 2:
+            half = 0.5 * Q[:, :, 2]
+            quaternion = np.zeros((k, nb, 4))
+            quaternion[:, :, 0], quaternion[:, :, 3] = np.cos(half), np.sin(half)
+            return position, quaternion
+        charts = None if self.charts is None else self.charts[:, :nb].reshape(k * nb, 3, 3)
+        A = model.body_type.frames(Q.reshape(k * nb, nc), None, charts).A
+        return position, to_quaternion(A).reshape(k, nb, 4)
 
     def point(self, body: str, point: Sequence[float]) -> PointHistory:
         """Trajectory of the point ``point`` [m] (body frame) of body ``body``."""
@@ -287,7 +306,7 @@ class Results:
         side = 0 if body is element.body_i else 1
         idx = np.arange(k) * 2 + side
         force, moment_cm = bt.wrench(fr, idx, generalized)
-        point_i, point_j, axes = model._reaction_frames[name]
+        point_i, point_j, axes = model.reaction_frame(name)
         u = np.broadcast_to(point_i if side == 0 else point_j, (k, model.dim))
         arm = bt.point(fr, idx, u) - fr.Q[idx, :model.dim]
         moment = moment_cm - bt.cross(arm, force)
@@ -301,18 +320,13 @@ class Results:
     # -- checks ----------------------------------------------------------------------------------
     def _compute_residuals(self) -> tuple[np.ndarray, np.ndarray]:
         if self._residuals is None:
-            pos = np.empty(len(self.t))
-            vel = np.empty(len(self.t))
-            for k, t in enumerate(self.t):
-                q, charts = self._state(k)
-                fr = constraints.frames(self.model, q, charts=charts)
-                C, data, _ = constraints.evaluate(self.model, t, fr)
-                pos[k] = np.max(np.abs(C), initial=0)
-                Cq = constraints.jacobian_matrix(self.model, data)
-                v = Cq @ self.qd[k] - constraints.velocity_rhs(self.model, t, fr)
-                vel[k] = np.max(np.abs(v), initial=0)
-            self._residuals = (pos, vel)
+            self._residuals = history.residuals(self.model, self.t, self.q, self.qd, self.charts)
         return self._residuals
+
+    def _compute_energies(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._energies is None:
+            self._energies = history.energies(self.model, self.q, self.qd, self.charts)
+        return self._energies
 
     @property
     def position_residual(self) -> np.ndarray:
@@ -327,14 +341,12 @@ class Results:
     @property
     def kinetic_energy(self) -> np.ndarray:
         """Kinetic energy [J] at every time point."""
-        return np.array([kinetic_energy(self.model, self.q[k], self.qd[k], self._state(k)[1])
-                         for k in range(len(self.t))])
+        return self._compute_energies()[0]
 
     @property
     def potential_energy(self) -> np.ndarray:
         """Potential energy of gravity (zero at the global origin) and springs [J]."""
-        return np.array([potential_energy(self.model, self.q[k], self._state(k)[1])
-                         for k in range(len(self.t))])
+        return self._compute_energies()[1]
 
     # -- export ----------------------------------------------------------------------------------
     def columns(self) -> dict[str, np.ndarray]:
@@ -382,23 +394,37 @@ class Results:
         _atomic_write(path, write, text=False)
 
 
-def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"]
-                        ) -> "Results":
+def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"],
+                        watch: Any = None) -> "Results":
     """Run an analysis ``loop`` so that no computed time point is lost.
 
-    ``partial(status, message)`` builds the results of the time points done so far. On an
-    mbd3d error they are attached to it (``error.results``) before it propagates; on Ctrl-C they
-    are returned with status "interrupted".
+    ``partial(status, message)`` builds the results of the time points done so far. On an error
+    they are attached to it (``error.results``) before it propagates; on Ctrl-C they are
+    returned with status "interrupted". ``watch`` (:class:`mbd3d.observers.Watch`) is started
+    before the loop and handed the final results however the loop ends, so a recording of a
+    failing run keeps everything up to the failure.
     """
+    if watch is not None:
+        watch.start()
     try:
         loop()
-    except MBDError as exc:
-        exc.results = partial("failed", str(exc))  # type: ignore[attr-defined]
-        raise
     except KeyboardInterrupt:
-        return partial("interrupted", "interrupted by the user; the results end at the last "
-                                      "completed time point")
-    return partial("complete", "")
+        results = partial("interrupted", "interrupted by the user; the results end at the last "
+                                         "completed time point")
+    except Exception as exc:
+        results = partial("failed", str(exc))
+        try:
+            exc.results = results  # type: ignore[attr-defined]
+        except AttributeError:  # exception types with __slots__
+            pass
+        if watch is not None:
+            watch.finish(results, failing=True)
+        raise
+    else:
+        results = partial("complete", "")
+    if watch is not None:
+        watch.finish(results, failing=False)
+    return results
 
 
 def format_table(columns: dict[str, Sequence[float]], precision: int = 5) -> str:

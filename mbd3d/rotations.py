@@ -24,7 +24,7 @@ from mbd3d.errors import ModelError
 
 __all__ = ["skew", "from_rodrigues", "to_rodrigues", "from_quaternion", "to_quaternion",
            "axis_angle", "g_bar", "g_bar_inverse", "initial_chart", "as_rotation_matrix",
-           "compose_rodrigues"]
+           "compose_rodrigues", "continuous_quaternions"]
 
 
 def skew(a: np.ndarray) -> np.ndarray:
@@ -49,28 +49,43 @@ def to_quaternion(A: np.ndarray) -> np.ndarray:
     """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of rotation matrices (Shepperd's method:
     the largest of ``tr A, A11, A22, A33`` chooses the stable formula; rodrigues.md 1.8)."""
     A = np.asarray(A, dtype=float)
-    flat = A.reshape(-1, 3, 3)
-    q = np.empty((flat.shape[0], 4))
-    tr = np.trace(flat, axis1=1, axis2=2)
-    diag = np.diagonal(flat, axis1=1, axis2=2)
+    M = A.reshape(-1, 3, 3)
+    tr = np.trace(M, axis1=1, axis2=2)
+    diag = np.diagonal(M, axis1=1, axis2=2)
     choice = np.argmax(np.column_stack([tr, diag]), axis=1)
-    for k, M in enumerate(flat):
-        c = choice[k]
-        if c == 0:
-            r = np.sqrt(1.0 + tr[k])
-            q[k] = [0.5 * r, (M[2, 1] - M[1, 2]) / (2 * r), (M[0, 2] - M[2, 0]) / (2 * r),
-                    (M[1, 0] - M[0, 1]) / (2 * r)]
-        else:
-            i = c - 1
-            j, m = (i + 1) % 3, (i + 2) % 3
-            r = np.sqrt(1.0 + 2.0 * M[i, i] - tr[k])
-            v = np.empty(3)
-            v[i] = 0.5 * r
-            v[j] = (M[j, i] + M[i, j]) / (2 * r)
-            v[m] = (M[m, i] + M[i, m]) / (2 * r)
-            q[k] = [(M[m, j] - M[j, m]) / (2 * r), *v]
+    # K = 4 q q^T, q = (w, x, y, z): every entry is a sum of entries of A, so all four rows are
+    # known; the row of the largest diagonal entry divides by the largest component (stable)
+    skew = np.stack([M[:, 2, 1] - M[:, 1, 2], M[:, 0, 2] - M[:, 2, 0],
+                     M[:, 1, 0] - M[:, 0, 1]], axis=1)
+    K = np.empty((len(M), 4, 4))
+    K[:, 0, 0] = 1.0 + tr
+    K[:, 0, 1:] = K[:, 1:, 0] = skew
+    K[:, 1:, 1:] = M + np.swapaxes(M, 1, 2)
+    for i in range(3):
+        K[:, 1 + i, 1 + i] = 1.0 + 2.0 * diag[:, i] - tr
+    rows = K[np.arange(len(M)), choice]           # 4 q_c q, with q_c the largest component
+    q = rows / (2.0 * np.sqrt(rows[np.arange(len(M)), choice]))[:, None]
     q[q[:, 0] < 0] *= -1.0
     return q.reshape(A.shape[:-2] + (4,))
+
+
+def continuous_quaternions(q: np.ndarray) -> np.ndarray:
+    """The path of unit quaternions ``q`` (k, 4) with signs flipped so that consecutive ones
+    are in the same hemisphere: ``q`` and ``-q`` are the same rotation, and a path without
+    jumps is what interpolation and plots need.
+
+    >>> continuous_quaternions(np.array([[1.0, 0, 0, 0], [-0.6, 0.8, 0, 0], [0.6, -0.8, 0, 0]]))
+    array([[ 1. ,  0. ,  0. ,  0. ],
+           [ 0.6, -0.8, -0. , -0. ],
+           [ 0.6, -0.8,  0. ,  0. ]])
+    """
+    q = np.array(q, dtype=float)
+    if len(q) > 1:
+        # flipping q[k] flips its product with q[k+1] too: the signs accumulate
+        flips = np.sign(np.einsum("ki,ki->k", q[1:], q[:-1]))
+        flips[flips == 0] = 1.0
+        q[1:] *= np.cumprod(flips)[:, None]
+    return q
 
 
 def from_quaternion(q: np.ndarray) -> np.ndarray:
