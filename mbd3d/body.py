@@ -46,12 +46,15 @@ class Body:
         Initial guess of the body's coordinates and their rates (body frame at the centre of mass).
     chart : ndarray (3, 3) or None
         Spatial bodies: the reference rotation ``q0`` is relative to.
+    shape : trimesh.Trimesh or None
+        The body's geometry in the body frame [m], drawn by the viewer.
     """
 
     def __init__(self, name: str, index: int, mass: float, inertia: Any,
                  q0: np.ndarray, qd0: np.ndarray, is_ground: bool = False,
-                 chart: np.ndarray | None = None):
+                 chart: np.ndarray | None = None, shape: Any = None):
         self.name = name
+        self.shape = shape
         self.chart = chart
         self.index = index
         self.mass = mass

@@ -174,11 +174,14 @@ class ModelBuilder:
                              f"{self._names[name]}; names must be unique in a model")
         self._names[name] = f"{what} '{name}'"
 
-    def add_body(self, name: str, *, mass: float, inertia: Any, position: Sequence[float],
-                 angle: float | None = None, orientation: Any = None,
-                 velocity: Sequence[float] | None = None,
-                 angular_velocity: Any = None) -> Body:
+    def add_body(self, name: str, *, mass: float | None = None, inertia: Any = None,
+                 position: Sequence[float], angle: float | None = None,
+                 orientation: Any = None, velocity: Sequence[float] | None = None,
+                 angular_velocity: Any = None, shape: Any = None,
+                 density: float | None = None) -> Body:
         """Add a rigid body and return its handle.
+
+        Give either ``mass`` and ``inertia``, or a closed ``shape`` and its ``density``.
 
         Parameters
         ----------
@@ -189,6 +192,14 @@ class ModelBuilder:
         inertia : float or array_like
             Centroidal inertia [kg m^2]: planar, the moment about the normal to the plane;
             spatial, the 3x3 tensor in body axes (or its 3 principal values), positive definite.
+        shape : trimesh.Trimesh or path, optional
+            The body's geometry (a mesh or an STL/OBJ/PLY file), lengths in metres; what the
+            viewer draws. With ``density`` it also gives the mass properties and the body frame
+            is put at the mesh's centre of mass (mesh axes; for a planar body the mesh's x-y
+            plane is the plane of motion). Without, the mesh is drawn as given, in the body
+            frame.
+        density : float, optional
+            [kg/m^3] of the solid ``shape`` (uniform); replaces ``mass`` and ``inertia``.
         position : (dim,) sequence
             Initial guess of the centre of mass [m], global frame.
         angle : float, optional
@@ -210,10 +221,31 @@ class ModelBuilder:
         Raises
         ------
         ModelError
-            Duplicate name, non-positive or non-finite mass or inertia, non-finite guess.
+            Duplicate name, non-positive or non-finite mass, inertia or density, non-finite
+            guess, a shape that is not a closed mesh when its mass properties are asked.
         """
         _check_name(name, "body")
-        self._claim(name, "body")
+        if self._built or name in self._names:
+            self._claim(name, "body")  # raises the duplicate / already-built error
+        mesh = None
+        if density is not None:
+            if shape is None:
+                raise ModelError(f"body '{name}': density= needs the body's shape= (a closed "
+                                 "mesh) to compute its mass properties")
+            if mass is not None or inertia is not None:
+                raise ModelError(f"body '{name}': give mass= and inertia=, or shape= with "
+                                 "density=, not both")
+            from mbd3d.mass_properties import mesh_properties
+            props = mesh_properties(shape, density, name)
+            mass, mesh = props.mass, props.mesh
+            inertia = props.inertia if self.dim == 3 else props.inertia[2, 2]
+        else:
+            if mass is None or inertia is None:
+                raise ModelError(f"body '{name}': give its mass= [kg] and inertia= [kg m^2], or "
+                                 "a closed shape= mesh with its density= [kg/m^3]")
+            if shape is not None:
+                from mbd3d.mass_properties import load_mesh
+                mesh = load_mesh(shape, f"body '{name}'")
         mass_value = finite_scalar(mass, f"body '{name}': mass [kg]", positive=True)
         bt = self.body_type
         if self.dim == 3 and angle is not None:
@@ -223,7 +255,9 @@ class ModelBuilder:
         inertia_value = bt.check_inertia(inertia, name)
         q0, chart = bt.initial_state(name, position, angle if self.dim == 2 else orientation)
         qd0 = bt.initial_rates(name, velocity, angular_velocity, q0, chart)
-        body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0, chart=chart)
+        body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0, chart=chart,
+                    shape=mesh)
+        self._claim(name, "body")  # only once valid: a refused body leaves its name free
         self._bodies.append(body)
         return body
 

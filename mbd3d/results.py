@@ -132,7 +132,7 @@ class Results:
     ----------
     model : Model
     analysis : str
-        "kinematic", "inverse dynamics" or "forward dynamics".
+        "kinematic analysis", "inverse dynamics" or "forward dynamics".
     t : ndarray (k,)
         Times [s].
     q, qd, qdd : ndarray (k, n)
@@ -170,6 +170,14 @@ class Results:
         span = f"t = {self.t[0]:g}..{self.t[-1]:g} s" if len(self.t) else "no time points"
         return (f"Results({self.analysis} of '{self.model.name}': {len(self.t)} time points, "
                 f"{span}, {self.status})")
+
+    def subset(self, start: int, stop: int | None = None) -> "Results":
+        """The time points ``start <= k < stop`` as results of their own (views, not copies)."""
+        sl = slice(start, stop)
+        return Results(self.model, self.analysis, self.t[sl], self.q[sl], self.qd[sl],
+                       self.qdd[sl], None if self.lam is None else self.lam[sl],
+                       status=self.status, message=self.message, stats=self.stats,
+                       charts=None if self.charts is None else self.charts[sl])
 
     # -- named access ----------------------------------------------------------------------------
     def _require_lam(self) -> np.ndarray:

@@ -1,0 +1,290 @@
+"""Recordings read back with Rerun's own reader equal the results they were made from.
+
+Everything here is headless: files are written and read back, the live stream goes to a Rerun
+server on loopback that saves what it receives; no window is opened.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import socket
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import quaternion as npq
+import rerun as rr
+import trimesh
+from rerun.chunk import RrdReader
+
+import mbd3d as mb
+from mbd3d.mechanisms import pendulum_chain, slider_crank
+from joints import Spherical
+from viewer import Recorder, RecordingError, entity_paths, read_component, record, rerun_executable
+
+
+@pytest.fixture(autouse=True)
+def strict_rerun():
+    """Invalid data raises instead of being dropped with a warning."""
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(False)
+
+
+def lifted(a: np.ndarray) -> np.ndarray:
+    out = np.zeros((len(a), 3))
+    out[:, :a.shape[1]] = a
+    return out
+
+
+def has_footer(path) -> bool:
+    try:
+        RrdReader(str(path)).store()
+        return True
+    except RuntimeError:
+        return False
+
+
+def test_slider_crank_recording_holds_its_poses_and_both_screens(tmp_path):
+    model = slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
+    res = mb.inverse_dynamics(model, np.linspace(0.0, 1.0, 41))
+    path = tmp_path / "slider_crank.rrd"
+    record(res, path, points={"coupler": ("rod", (0.0, 0.05))}, announce=False)
+
+    paths = entity_paths(path)
+    bodies = ("crank", "rod", "slider")
+    expected = {f"/world/bodies/{b}{part}" for b in bodies for part in ("", "/shape", "/joints")}
+    expected |= {f"/plots/{q}/{b}" for q in ("position", "velocity", "acceleration", "angle")
+                 for b in bodies}
+    expected |= {"/world/efforts/motor", "/plots/efforts/motor", "/world/trails/coupler",
+                 "/plots/energy", "/plots/residuals/position", "/world/ground/rails", "/info"}
+    expected |= {f"/world/reactions/{j}" for j in ("O", "A", "B", "rail")}
+    assert expected <= paths, expected - paths
+    assert len(RrdReader(str(path)).blueprints()) == 1 and has_footer(path)
+
+    k = len(res)
+    for name in bodies:
+        body = res.body(name)
+        steps, translation = read_component(path, f"/world/bodies/{name}",
+                                            "Transform3D:translation")
+        np.testing.assert_array_equal(steps, np.arange(k))
+        np.testing.assert_allclose(translation[:, 0], lifted(body.position), rtol=1e-6, atol=1e-7)
+        times, quat = read_component(path, f"/world/bodies/{name}", "Transform3D:quaternion",
+                                     "sim_time")
+        np.testing.assert_array_equal(times, np.round(res.t * 1e9).astype("timedelta64[ns]"))
+        # a turn by the body angle about z, read from the file: (x, y, z, w)
+        half = 0.5 * body.angle
+        np.testing.assert_allclose(quat[:, 0], np.column_stack(
+            [0 * half, 0 * half, np.sin(half), np.cos(half)]), atol=2e-7)
+        # the plots are float64: exactly the results
+        _, x = read_component(path, f"/plots/position/{name}", "Scalars:scalars")
+        np.testing.assert_array_equal(x, body.position)
+        _, a = read_component(path, f"/plots/acceleration/{name}", "Scalars:scalars")
+        np.testing.assert_array_equal(a, body.acceleration)
+    _, effort = read_component(path, "/plots/efforts/motor", "Scalars:scalars")
+    np.testing.assert_array_equal(effort[:, 0], res.driver("motor").effort)
+    pin = res.joint("O").reaction(on="crank")
+    _, force = read_component(path, "/plots/reactions/O/force", "Scalars:scalars")
+    np.testing.assert_array_equal(force, pin.force)
+    _, energy = read_component(path, "/plots/energy", "Scalars:scalars")
+    np.testing.assert_array_equal(energy[:, 0], res.kinetic_energy)
+    np.testing.assert_array_equal(energy[:, 2], res.kinetic_energy + res.potential_energy)
+    # the reaction arrow starts at the ground pin and points along the force
+    _, origins = read_component(path, "/world/reactions/O", "Arrows3D:origins")
+    _, vectors = read_component(path, "/world/reactions/O", "Arrows3D:vectors")
+    np.testing.assert_allclose(origins[:, 0], 0.0, atol=1e-7)
+    ratio = np.linalg.norm(vectors[:, 0], axis=1) / np.linalg.norm(pin.force, axis=1)
+    np.testing.assert_allclose(ratio, ratio[0], rtol=1e-5)
+    np.testing.assert_allclose(vectors[:, 0, :2] / ratio[:, None], pin.force, rtol=1e-5,
+                               atol=1e-5 * np.abs(pin.force).max())
+    # the motor torque arrow lies along the crank axis, with the torque's sign
+    _, torque = read_component(path, "/world/efforts/motor", "Arrows3D:vectors")
+    np.testing.assert_allclose(torque[:, 0, :2], 0.0, atol=1e-12)
+    assert np.all(np.sign(torque[:, 0, 2]) == np.sign(res.driver("motor").effort))
+    # the trail is the coupler point's path
+    _, trail = read_component(path, "/world/trails/coupler", "Points3D:positions")
+    np.testing.assert_allclose(trail[:, 0], lifted(res.point("rod", (0.0, 0.05)).position),
+                               rtol=1e-6, atol=1e-7)
+    # the default crank is a bar from pin to pin (0.12 m long)
+    _, vertices = read_component(path, "/world/bodies/crank/shape", "Mesh3D:vertex_positions",
+                                 None)
+    span = np.ptp(vertices[0][:, 0])
+    assert 0.12 < span < 0.12 * 1.2
+
+
+def test_spatial_top_recording_turns_like_the_results(tmp_path):
+    tilt = mb.rotations.axis_angle((0.0, 1.0, 0.0), math.radians(30))
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    cone = trimesh.creation.cone(radius=0.05, height=0.1, sections=48)
+    top = b.add_body("top", shape=cone, density=2700.0, position=0.075 * tilt[:, 2],
+                     orientation=tilt, angular_velocity=150.0 * tilt[:, 2])
+    b.add(Spherical("tip", b.ground, top, at=(0.0, 0.0, 0.0)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 0.3, 61), method="DOP853")
+    assert res.stats["chart_resets"] > 5  # the recording spans many half turns of the charts
+    path = tmp_path / "top.rrd"
+    record(res, path, announce=False)
+    steps, quat = read_component(path, "/world/bodies/top", "Transform3D:quaternion")
+    assert len(steps) == len(res)
+    xyzw = quat[:, 0].astype(float)
+    recorded = npq.as_rotation_matrix(npq.from_float_array(xyzw[:, [3, 0, 1, 2]]))
+    np.testing.assert_allclose(recorded, res.body("top").rotation, atol=2e-6)
+    # the body is drawn with its own mesh, centred on the centre of mass
+    _, vertices = read_component(path, "/world/bodies/top/shape", "Mesh3D:vertex_positions", None)
+    np.testing.assert_allclose(vertices[0], top.shape.vertices, rtol=1e-6, atol=1e-7)
+    assert {"/plots/angular_velocity/top", "/world/reactions/tip"} <= entity_paths(path)
+
+
+def raising_force(after: float, error: type[BaseException]):
+    def force(t, state):
+        if t > after:
+            raise error("the force model broke")
+        return np.array([0.0, 0.0])
+    return force
+
+
+def test_live_recording_equals_the_recording_of_the_results(tmp_path):
+    model = slider_crank(crank_angle=math.radians(65.0), crank_speed=None, crank_torque=2.0)
+    live = tmp_path / "live.rrd"
+    t = np.linspace(0.0, 0.5, 51)
+    res = mb.forward_dynamics(model, t, observers=[Recorder(live, interval=0.0, announce=False)])
+    after = tmp_path / "after.rrd"
+    record(res, after, announce=False)
+    for entity, component in (("/world/bodies/rod", "Transform3D:translation"),
+                              ("/plots/reactions/A/force", "Scalars:scalars"),
+                              ("/plots/energy", "Scalars:scalars")):
+        s1, v1 = read_component(live, entity, component)
+        s2, v2 = read_component(after, entity, component)
+        np.testing.assert_array_equal(s1, np.arange(len(res)))
+        np.testing.assert_array_equal(s1, s2)
+        np.testing.assert_array_equal(v1, v2)
+    assert has_footer(live)
+    # the live recording went out in several blocks, not at the end
+    blocks = [c for c in RrdReader(str(live)).stream().to_chunks()
+              if c.entity_path == "/world/bodies/rod" and not c.is_static]
+    assert len(blocks) > 1
+
+
+@pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt])
+def test_a_run_that_fails_or_is_interrupted_leaves_a_valid_recording(tmp_path, error):
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    bar = b.add_body("bar", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))
+    from joints import Revolute
+    b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
+    b.add(mb.PointForce("push", bar, raising_force(0.3, error)))
+    path = tmp_path / "broken.rrd"
+    recorder = Recorder(path, interval=0.0, announce=False)
+    t = np.linspace(0.0, 1.0, 101)
+    if error is KeyboardInterrupt:
+        res = mb.forward_dynamics(b.build(), t, observers=[recorder])
+        assert res.status == "interrupted"
+    else:
+        with pytest.raises(RuntimeError, match="force model broke") as info:
+            mb.forward_dynamics(b.build(), t, observers=[recorder])
+        res = info.value.results
+    assert 25 <= len(res) <= 31  # everything up to t = 0.3 s
+    assert has_footer(path)
+    steps, translation = read_component(path, "/world/bodies/bar", "Transform3D:translation")
+    np.testing.assert_array_equal(steps, np.arange(len(res)))
+    np.testing.assert_allclose(translation[:, 0, :2], res.body("bar").position, rtol=1e-6,
+                               atol=1e-7)
+    _, text = read_component(path, "/info", "TextDocument:text", None)
+    assert res.status in str(text[0])
+
+
+def test_bad_destinations_are_refused_clearly(tmp_path):
+    existing = tmp_path / "old.rrd"
+    existing.write_bytes(b"keep me")
+    with pytest.raises(RecordingError, match="already exists.*overwrite=True"):
+        Recorder(existing)
+    assert existing.read_bytes() == b"keep me"
+    with pytest.raises(RecordingError, match="does not exist"):
+        Recorder(tmp_path / "missing" / "x.rrd")
+    with pytest.raises(RecordingError, match="is a folder"):
+        Recorder(tmp_path)
+    with pytest.raises(RecordingError, match="needs somewhere"):
+        Recorder()
+    if os.geteuid() != 0:  # root may write anywhere
+        locked = tmp_path / "locked"
+        locked.mkdir()
+        locked.chmod(0o500)
+        with pytest.raises(RecordingError, match="no permission"):
+            Recorder(locked / "x.rrd")
+    model = slider_crank(crank_angle=1.0, crank_speed=1.0)
+    res = mb.kinematic_analysis(model, [0.0, 0.1])
+    record(res, existing, overwrite=True, announce=False)
+    assert has_footer(existing)
+    with pytest.raises(mb.ModelError, match="no body 'piston'"):
+        record(res, tmp_path / "a.rrd", plots=["piston"])
+    with pytest.raises(mb.ModelError, match="shapes= names no body.*wheel"):
+        record(res, tmp_path / "b.rrd", shapes={"wheel": trimesh.creation.box()})
+    recorder = record(res, tmp_path / "c.rrd", announce=False)
+    with pytest.raises(RecordingError, match="already recorded"):
+        recorder.start(model, res.t, res.analysis)
+
+
+def test_large_models_record_poses_without_plots_by_default(tmp_path):
+    model = pendulum_chain(30)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.05, 3))
+    path = tmp_path / "chain.rrd"
+    record(res, path, plots=["link1"], announce=False)
+    paths = entity_paths(path)
+    assert sum(p.startswith("/world/bodies/") and p.count("/") == 3 for p in paths) == 30
+    assert {p for p in paths if p.startswith("/plots/position/")} == {"/plots/position/link1"}
+    assert not any(p.startswith("/world/reactions/") for p in paths)
+
+
+def test_the_main_job_says_where_the_recording_went(tmp_path, capsys):
+    res = mb.kinematic_analysis(slider_crank(crank_angle=1.0, crank_speed=1.0), [0.0, 0.1])
+    path = tmp_path / "my run.rrd"
+    record(res, path)
+    out = capsys.readouterr().out
+    assert str(path) in out and f'rerun "{path}"' in out
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_live_stream_reaches_a_rerun_server_on_loopback(tmp_path):
+    port = free_port()
+    saved = tmp_path / "received.rrd"
+    server = subprocess.Popen([rerun_executable(), "--bind", "127.0.0.1", "--port", str(port),
+                               "--save", str(saved)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, env={**os.environ, "CI": "true"})
+    try:
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+                break
+            except OSError:
+                if time.monotonic() > deadline or server.poll() is not None:
+                    pytest.fail("the rerun server did not start")
+                time.sleep(0.1)
+        model = slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
+        res = mb.inverse_dynamics(model, np.linspace(0.0, 0.5, 26), observers=[
+            Recorder(connect=f"rerun+http://127.0.0.1:{port}/proxy", interval=0.0)])
+        expected = np.round(lifted(res.body("slider").position), 6)
+        deadline = time.monotonic() + 30
+        while True:  # the server writes what it receives; wait for all of it
+            try:
+                steps, translation = read_component(saved, "/world/bodies/slider",
+                                                    "Transform3D:translation")
+                if len(steps) == len(res):
+                    break
+            except (KeyError, OSError, RuntimeError, ValueError):
+                pass
+            if time.monotonic() > deadline:
+                pytest.fail("the server did not receive the whole recording")
+            time.sleep(0.2)
+        np.testing.assert_allclose(translation[:, 0], expected, atol=2e-6)
+    finally:
+        server.terminate()
+        try:
+            server.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            server.kill()

@@ -1,0 +1,20 @@
+"""Rerun as the GUI of mbd3d: live viewing and ``.rrd`` recordings of analyses.
+
+Usage::
+
+    from viewer import Recorder, record, show
+    res = mb.forward_dynamics(model, t, observers=[Recorder("run.rrd")])   # live, to a file
+    record(res, "again.rrd")                                               # finished results
+    show("run.rrd")                                    # opens the viewer (needs a display)
+
+Open a recording with ``rerun run.rrd``: the mechanism moves on the left (bodies, joints,
+reaction and effort arrows, point trails); the plots of the kinematic and force analyses, the
+energies and the constraint residuals are on the right.
+"""
+
+from viewer.readback import entity_paths, read_component
+from viewer.recorder import Recorder, RecordingError, record, rerun_executable, show
+from viewer.scene import SIM_TIME, STEP
+
+__all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable", "entity_paths",
+           "read_component", "SIM_TIME", "STEP"]

@@ -1,0 +1,283 @@
+"""Recording analyses for the Rerun viewer: live while they run, or from finished results.
+
+A :class:`Recorder` is an observer of an analysis (``observers=[Recorder(...)]``): it streams
+the time points to a viewer and/or an ``.rrd`` file as the solver produces them, and closes the
+file however the analysis ends, so a failing or interrupted run leaves a valid recording of
+everything computed. :func:`record` writes finished results the same way.
+
+What is recorded (entity paths):
+
+- ``world/bodies/<body>``: the pose (translation, quaternion) on the timelines ``sim_time``
+  (simulated time) and ``step`` (output time point); ``.../shape`` the body's mesh and
+  ``.../joints`` its joint points, both fixed in the body frame;
+- ``world/ground``: the ground's joint points and sliding rails;
+- ``world/reactions/<joint>``, ``world/efforts/<driver>``: arrows of the reaction forces on the
+  joints' moving bodies and of the driver efforts (torques along their axis, right-hand rule);
+- ``world/springs/<spring>``: spring-dampers as lines; ``world/trails/<point>``: paths of
+  requested body points;
+- ``plots/...``: time series of positions, angles, velocities, accelerations, driver efforts,
+  joint reactions, energies and constraint residuals;
+- ``info``: the model, the analysis, its status and the arrow scales.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import uuid
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from mbd3d.errors import MBDError, ModelError
+from mbd3d.observers import Observer
+from mbd3d.results import Results
+from viewer.scene import Scene, _rerun
+
+__all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable"]
+
+
+class RecordingError(MBDError, OSError):
+    """A recording cannot be written or sent (path, viewer address)."""
+
+
+def _application_id(model_name: str) -> str:
+    # blueprints apply per application id: one per model, so that a layout made for one
+    # mechanism is not applied to another
+    return "mbd3d " + (re.sub(r"[^A-Za-z0-9_\- ]", "_", model_name)[:160] or "model")
+
+
+def check_output_path(path: str | os.PathLike, overwrite: bool) -> str:
+    """The absolute path of a new ``.rrd`` file, or a :class:`RecordingError` saying why it
+    cannot be written there."""
+    path = os.path.abspath(os.fspath(path))
+    folder = os.path.dirname(path)
+    if os.path.isdir(path):
+        raise RecordingError(f"cannot record to '{path}': it is a folder; give a file name "
+                             "ending in .rrd")
+    if not os.path.isdir(folder):
+        raise RecordingError(f"cannot record to '{path}': folder '{folder}' does not exist")
+    if os.path.exists(path) and not overwrite:
+        raise RecordingError(f"'{path}' already exists; pass overwrite=True to replace it, or "
+                             "choose another file name")
+    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise RecordingError(f"cannot record to '{path}': no permission to write there; choose "
+                             "a folder you can write to")
+    return path
+
+
+class Recorder(Observer):
+    """Records an analysis for the Rerun viewer, live as it runs.
+
+    Pass it to an analysis, ``mb.forward_dynamics(model, t, observers=[Recorder("run.rrd")])``,
+    or record finished results with :func:`record`. One recorder records one analysis.
+
+    Parameters
+    ----------
+    save : str or path, optional
+        Write an ``.rrd`` file there (open it with ``rerun FILE``).
+    spawn : bool
+        Start a Rerun viewer on this machine and stream to it (needs a display).
+    connect : str, optional
+        Stream to a running viewer or server at this gRPC address, e.g.
+        ``"rerun+http://127.0.0.1:9876/proxy"`` (what ``rerun`` listens on by default).
+    overwrite : bool
+        Replace an existing ``save`` file (refused by default).
+    plots : sequence of str, optional
+        Bodies whose position, angle (planar) or angular velocity (spatial), velocity and
+        acceleration are plotted; default all bodies up to 12, none above.
+    points : mapping, optional
+        Body points to plot and trace: ``{label: (body, point)}``, the point [m] in the body
+        frame; each gets plots and a trail of its path in the 3D view.
+    reactions : sequence of str, optional
+        Joints whose reactions are plotted and drawn as arrows (dynamics); default all joints
+        up to 24, none above.
+    shapes : mapping, optional
+        ``{body: mesh}`` to draw bodies with a trimesh mesh or mesh file (body frame [m])
+        instead of their default shape.
+    interval : float
+        Smallest wall time [s] between two live updates.
+    announce : bool
+        Print where the file went and how to open it when the recording is closed.
+
+    Raises
+    ------
+    RecordingError
+        No destination; ``save`` in a missing or read-only folder, or an existing file without
+        ``overwrite=True``.
+    """
+
+    def __init__(self, save: str | os.PathLike | None = None, *, spawn: bool = False,
+                 connect: str | None = None, overwrite: bool = False,
+                 plots: Sequence[str] | None = None,
+                 points: Mapping[str, tuple[str, Sequence[float]]] | None = None,
+                 reactions: Sequence[str] | None = None,
+                 shapes: Mapping[str, Any] | None = None, interval: float = 0.5,
+                 announce: bool = True):
+        if save is None and not spawn and connect is None:
+            raise RecordingError("a Recorder needs somewhere to send the recording: save= "
+                                 "(an .rrd file), spawn=True (a viewer) or connect= (an address)")
+        self.path = None if save is None else check_output_path(save, overwrite)
+        self.spawn, self.connect, self.overwrite = bool(spawn), connect, overwrite
+        self.plots = None if plots is None else list(plots)
+        self.points = dict(points or {})
+        self.reactions = None if reactions is None else list(reactions)
+        self.shapes = dict(shapes or {})
+        self.interval = float(interval)
+        self.announce = announce
+        self.stream = None
+        self._scene = None
+        self._sent = 0
+        self._used = False
+
+    # -- the Observer interface ------------------------------------------------------------------
+    def start(self, model, times: np.ndarray, analysis: str) -> None:
+        """Open the recording and log what does not change: shapes, joints, layout."""
+        if self._used:
+            raise RecordingError("this Recorder has already recorded an analysis; make a new "
+                                 "Recorder (and file) for each analysis")
+        self._used = True
+        scene = Scene(model, analysis, plots=self.plots, points=self.points,
+                      reactions=self.reactions, shapes=self.shapes)
+        self._open(model, scene)
+        self._scene = scene
+        scene.log_static(self.stream, times)
+        self._sent = 0
+
+    def update(self, results: Results, time: float, steps: int) -> None:
+        """Send the time points computed since the last update."""
+        self._send(results)
+
+    def finish(self, results: Results) -> None:
+        """Send the rest, record how the analysis ended and close the file."""
+        if self.stream is None:
+            return
+        try:
+            self._send(results)
+            self._scene.log_info(self.stream, results)
+        finally:
+            self.close()
+        if self.announce and self.path is not None:
+            print(f"recording of {len(results)} time points written to {self.path}\n"
+                  f"  open it with: rerun {_quote(self.path)}")
+
+    # -- plumbing --------------------------------------------------------------------------------
+    def _open(self, model, scene) -> None:
+        rr = _rerun()
+        stream = rr.RecordingStream(_application_id(model.name), recording_id=uuid.uuid4())
+        sinks = []
+        if self.path is not None:
+            # checked again now: the file may have appeared since the Recorder was made
+            check_output_path(self.path, self.overwrite)
+            sinks.append(rr.FileSink(self.path))
+        if self.spawn:
+            port = 9876
+            try:
+                rr.spawn(port=port, connect=False)
+            except Exception as exc:
+                raise RecordingError(f"could not start a Rerun viewer: {exc}") from exc
+            sinks.append(rr.GrpcSink(f"rerun+http://127.0.0.1:{port}/proxy"))
+        if self.connect is not None:
+            sinks.append(rr.GrpcSink(self.connect))
+        try:
+            stream.set_sinks(*sinks, default_blueprint=scene.blueprint())
+        except Exception as exc:
+            raise RecordingError(f"cannot open the recording ({self._where()}): {exc}") from exc
+        self.stream = stream
+
+    def _where(self) -> str:
+        places = [] if self.path is None else [f"file '{self.path}'"]
+        if self.spawn:
+            places.append("a spawned viewer")
+        if self.connect is not None:
+            places.append(f"viewer at {self.connect}")
+        return ", ".join(places)
+
+    def _send(self, results: Results) -> None:
+        if self.stream is None or len(results) <= self._sent:
+            return
+        start = self._sent
+        self._scene.log_block(self.stream, results.subset(start), start)
+        self._sent = len(results)
+
+    def close(self) -> None:
+        """Flush and close the recording (the file gets its footer). Safe to call twice."""
+        stream, self.stream = self.stream, None
+        if stream is None:
+            return
+        try:
+            stream.flush(timeout_sec=30.0)
+        except Exception as exc:
+            raise RecordingError(f"could not deliver the recording to {self._where()}: {exc}"
+                                 ) from exc
+        finally:
+            stream.disconnect()
+
+    def __enter__(self) -> "Recorder":
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Recorder({self._where()})"
+
+
+def record(results: Results, save: str | os.PathLike | None = None, **options: Any) -> Recorder:
+    """Record finished ``results`` (any analysis) to an ``.rrd`` file and/or a viewer.
+
+    Parameters
+    ----------
+    results : Results
+    save : str or path, optional
+        The ``.rrd`` file to write.
+    **options
+        ``spawn``, ``connect``, ``overwrite``, ``plots``, ``points``, ``reactions``, ``shapes``,
+        ``announce``: see :class:`Recorder`.
+
+    Returns
+    -------
+    Recorder
+        Closed; ``.path`` is the file written.
+    """
+    if not isinstance(results, Results):
+        raise ModelError(f"record() takes the Results of an analysis, got {type(results).__name__}")
+    recorder = Recorder(save, **options)
+    recorder.start(results.model, results.t, results.analysis)
+    recorder.finish(results)
+    return recorder
+
+
+def rerun_executable() -> str:
+    """The path of the ``rerun`` viewer that comes with the installed rerun-sdk."""
+    try:
+        import rerun_cli  # noqa: PLC0415
+
+        candidate = os.path.join(os.path.dirname(rerun_cli.__file__), "rerun")
+        if os.path.isfile(candidate):
+            return candidate
+    except ImportError:
+        pass
+    found = shutil.which("rerun")
+    if found is None:
+        raise RecordingError("the rerun viewer is not installed; pip install rerun-sdk==0.41.0")
+    return found
+
+
+def show(path: str | os.PathLike) -> subprocess.Popen:
+    """Open an ``.rrd`` recording in the Rerun viewer (a separate process; needs a display)."""
+    path = os.path.abspath(os.fspath(path))
+    if not os.path.isfile(path):
+        raise RecordingError(f"no recording at '{path}'")
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                 or os.environ.get("WAYLAND_DISPLAY")):
+        raise RecordingError(f"no display to open a viewer on; copy '{path}' to a machine with "
+                             "one and run: rerun FILE there")
+    return subprocess.Popen([rerun_executable(), path])
+
+
+def _quote(path: str) -> str:
+    return f'"{path}"' if " " in path else path

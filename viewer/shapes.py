@@ -1,0 +1,195 @@
+"""What each body looks like in the viewer: its own mesh, or one drawn from where it is joined.
+
+A body given a ``shape`` (see ``ModelBuilder.add_body``) is drawn with it. Otherwise the shape
+comes from the model, the way a mechanism is sketched on paper: a link is a bar (a capsule)
+between its joint points, a ternary link the outline through its points, a slider a block along
+its sliding axis, and a body joined at one point or none (a top, a free body) the box with the
+same mass and principal inertia. All shapes are trimesh meshes in the body frame [m].
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import trimesh
+
+from joints import Prismatic
+from mbd3d.body import Body
+from mbd3d.forces import SpringDamper
+from mbd3d.model import Model
+
+__all__ = ["attachment_points", "body_shape", "model_size", "initial_frames", "initial_points",
+           "color_of", "GROUND_COLOR"]
+
+#: body colours, cycled (RGBA, 0-255): distinguishable and readable on the dark background
+PALETTE = np.array([[76, 144, 226, 255], [240, 140, 50, 255], [90, 190, 110, 255],
+                    [220, 80, 90, 255], [160, 110, 210, 255], [200, 180, 60, 255],
+                    [70, 190, 200, 255], [230, 120, 180, 255]], dtype=np.uint8)
+GROUND_COLOR = np.array([150, 150, 150, 255], dtype=np.uint8)
+
+
+def color_of(body: Body) -> np.ndarray:
+    """The RGBA colour (uint8) of a body."""
+    return PALETTE[body.index % len(PALETTE)]
+
+
+def _lift(u: np.ndarray) -> np.ndarray:
+    """A body-frame point as 3 components (planar points lie in z = 0)."""
+    out = np.zeros(3)
+    out[:len(u)] = u
+    return out
+
+
+def attachment_points(model: Model) -> dict[str, list[tuple[str, np.ndarray]]]:
+    """Where each body (and the ground) is joined: ``{body: [(element, point)]}``, body frame
+    [m], 3 components. Joints and the ends of spring-dampers count; drivers act at the points of
+    their joints and add none."""
+    points: dict[str, list[tuple[str, np.ndarray]]] = {b.name: [] for b in model.bodies}
+    points["ground"] = []
+    for element in model.joints:
+        if element.is_driver:
+            continue
+        u_i, u_j, _ = model.reaction_frame(element.name)
+        points[element.body_i.name].append((element.name, _lift(u_i)))
+        points[element.body_j.name].append((element.name, _lift(u_j)))
+    for group in model.force_groups:
+        if not hasattr(group, "u_i"):
+            continue
+        for n, element in enumerate(group.elements):
+            if isinstance(element, SpringDamper):
+                points[element.body_i.name].append((element.name, _lift(group.u_i[n])))
+                points[element.body_j.name].append((element.name, _lift(group.u_j[n])))
+    return points
+
+
+def initial_frames(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (n_bodies + 1, 3) [m] and rotations (n_bodies + 1, 3, 3) of the bodies at
+    their initial guesses, the ground last (the drawing the model was built from)."""
+    bt, nb = model.body_type, model.n_bodies
+    Q = np.zeros((nb + 1, model.n_coords_per_body))
+    Q[:nb] = model.q0.reshape(nb, -1)
+    fr = bt.frames(Q, charts=model.charts0)
+    position = np.zeros((nb + 1, 3))
+    position[:, :model.dim] = fr.Q[:, :model.dim]
+    rotation = np.tile(np.eye(3), (nb + 1, 1, 1))
+    rotation[:, :model.dim, :model.dim] = fr.A
+    return position, rotation
+
+
+def initial_points(model: Model, points: dict[str, list[tuple[str, np.ndarray]]],
+                   meshes: dict[str, Any] | None = None) -> np.ndarray:
+    """Global positions [m], (p, 3), at the bodies' initial guesses of the centres of mass, of
+    the attachment points ``points`` and of the bounding-box corners of the ``meshes`` given
+    for some bodies (body frames)."""
+    position, rotation = initial_frames(model)
+    cloud = [position[:model.n_bodies]]
+    local = {name: [u for _, u in joined] for name, joined in points.items()}
+    for name, mesh in (meshes or {}).items():
+        lo, hi = mesh.bounds
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])
+        local[name] = local.get(name, []) + list(corners)
+    for name, us in local.items():
+        if us:
+            row = model.n_bodies if name == "ground" else model.body(name).index
+            cloud.append(position[row] + np.asarray(us) @ rotation[row].T)
+    return np.vstack(cloud)
+
+
+def model_size(model: Model, points: dict[str, list[tuple[str, np.ndarray]]],
+               meshes: dict[str, Any] | None = None) -> float:
+    """A length [m] that sizes the default shapes, arrows and the camera: the extent of the
+    mechanism (centres of mass, joint points, given meshes) in its initial configuration
+    (1 m if that is a single point)."""
+    cloud = initial_points(model, points, meshes)
+    extent = float(np.max(np.ptp(cloud, axis=0))) if len(cloud) > 1 else 0.0
+    return extent if extent > 1e-9 else 1.0
+
+
+def _capsule(a: np.ndarray, b: np.ndarray, radius: float) -> trimesh.Trimesh:
+    """A capsule of ``radius`` whose axis runs from ``a`` to ``b``."""
+    axis = b - a
+    length = float(np.linalg.norm(axis))
+    mesh = trimesh.creation.capsule(height=max(length, 1e-12), radius=radius, count=[16, 16])
+    if length > 1e-12:
+        mesh.apply_transform(trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis / length))
+    mesh.apply_translation(0.5 * (a + b))
+    return mesh
+
+
+def _inertia_box(body: Body, dim: int, size: float) -> trimesh.Trimesh:
+    """The uniform box with the body's mass and centroidal inertia (a flat square plate of the
+    same polar moment for a planar body), so that a heavier-looking body is heavier."""
+    if dim == 2:
+        side = np.sqrt(6.0 * float(body.inertia) / body.mass)  # I = m s^2 / 6
+        side = float(np.clip(side, 0.05 * size, 0.5 * size))
+        return trimesh.creation.box(extents=(side, side, 0.2 * side))
+    principal, axes = np.linalg.eigh(np.asarray(body.inertia, dtype=float))
+    if np.linalg.det(axes) < 0:
+        axes[:, 2] = -axes[:, 2]
+    # edge a_k of a box: I_k = m (a_l^2 + a_m^2) / 12, so a_k^2 = 6 (I_l + I_m - I_k) / m
+    squares = 6.0 * (principal.sum() - 2.0 * principal) / body.mass
+    extents = np.sqrt(np.clip(squares, (0.02 * size) ** 2, None))
+    extents = np.minimum(extents, size)
+    transform = np.eye(4)
+    transform[:3, :3] = axes
+    return trimesh.creation.box(extents=extents, transform=transform)
+
+
+def _distinct(points: list[np.ndarray], tolerance: float) -> list[np.ndarray]:
+    out: list[np.ndarray] = []
+    for p in points:
+        if all(np.linalg.norm(p - o) > tolerance for o in out):
+            out.append(p)
+    return out
+
+
+def _outline(points: list[np.ndarray]) -> list[np.ndarray]:
+    """Points of a planar link in order around their convex hull (all of them if collinear)."""
+    xy = np.array(points)[:, :2]
+    centre = xy.mean(axis=0)
+    order = np.argsort(np.arctan2(xy[:, 1] - centre[1], xy[:, 0] - centre[0]))
+    return [points[k] for k in order]
+
+
+def _slider_axis(model: Model, body: Body) -> np.ndarray | None:
+    """The sliding direction of ``body`` in its own frame, if it is the moving side of a
+    prismatic joint."""
+    for element in model.joints:
+        if isinstance(element, Prismatic) and body in (element.body_i, element.body_j):
+            axis_i = _lift(model.reaction_frame(element.name)[2][:, 0])
+            if element.body_i is body:
+                return axis_i
+            # the axis is stored in body i's frame; the drawing turns it into body j's
+            _, rotation = initial_frames(model)
+            rows = [model.padded_index(element.body_i), model.padded_index(body)]
+            return rotation[rows[1]].T @ rotation[rows[0]] @ axis_i
+    return None
+
+
+def body_shape(model: Model, body: Body, joined: list[tuple[str, np.ndarray]],
+               size: float) -> trimesh.Trimesh:
+    """The default mesh drawn for ``body`` (body frame, [m]); see the module docstring."""
+    radius = 0.02 * size
+    points = _distinct([p for _, p in joined], 0.5 * radius)
+    parts: list[trimesh.Trimesh] = []
+    axis = _slider_axis(model, body)
+    if axis is not None:
+        block = np.array([0.16, 0.08, 0.08]) * size
+        transform = np.eye(4)
+        transform[:3, :3] = trimesh.geometry.align_vectors([1.0, 0.0, 0.0], axis)[:3, :3]
+        parts.append(trimesh.creation.box(extents=block, transform=transform))
+        points = [p for p in points if np.linalg.norm(p) > 0.1 * size]
+        parts += [_capsule(np.zeros(3), p, radius) for p in points]
+    elif len(points) == 2:
+        parts.append(_capsule(points[0], points[1], radius))
+    elif len(points) >= 3 and model.dim == 2:
+        ring = _outline(points)
+        parts += [_capsule(a, b, radius) for a, b in zip(ring, ring[1:] + ring[:1])]
+    elif len(points) >= 3:
+        parts += [_capsule(np.zeros(3), p, radius) for p in points]
+    else:
+        parts.append(_inertia_box(body, model.dim, size))
+        parts += [_capsule(np.zeros(3), p, radius) for p in points]
+    return trimesh.util.concatenate(parts)
