@@ -6,18 +6,23 @@ The table shows the rocker swing, the transmission angle (between coupler and ro
 linkage runs badly when it nears 0 or 180 degrees), the path of the coupler's midpoint and the
 motor torque.
 
-Run: python examples/four_bar.py
+Recorded to four_bar.rrd with the coupler midpoint's path: rerun four_bar.rrd
+
+Run: python examples/four_bar.py [--rrd FILE] [--show]
 """
 
 from __future__ import annotations
+
+import argparse
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import four_bar
+from viewer import record
 
 
-def main(n_points: int = 13) -> mb.Results:
+def main(n_points: int = 241, rrd: str | None = None, show: bool = False) -> mb.Results:
     model = four_bar(crank_speed=2 * np.pi)
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 1.0, n_points)
@@ -33,11 +38,18 @@ def main(n_points: int = 13) -> mb.Results:
         "coupler mid x [m]": midpoint[:, 0],
         "coupler mid y [m]": midpoint[:, 1],
         "torque [N m]": res.driver("motor").effort,
-    }))
+    }, rows=13))
     swing = np.degrees(rocker.angle.max() - rocker.angle.min())
     print(f"\nrocker swing over the sampled cycle: {swing:.2f} deg")
+    if rrd is not None:
+        record(res, rrd, overwrite=True, points={"coupler middle": ("coupler", (0.0, 0.0))},
+               show=show)
     return res
 
 
 if __name__ == "__main__":
-    main()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rrd", default="four_bar.rrd", help="the Rerun recording to write")
+    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
+    args = parser.parse_args()
+    main(rrd=args.rrd, show=args.show)

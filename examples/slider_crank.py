@@ -10,7 +10,10 @@ a piston sliding on a ground line (crank 0.12 m, rod 0.26 m, Nikravesh's masses;
    from rest; the crank angle and speed, and the energy balance (work of the moment =
    change of kinetic + potential energy).
 
-Run: python examples/slider_crank.py [--csv FOLDER]
+The inverse-dynamics run (both screens) is recorded to slider_crank.rrd and the forward run
+to slider_crank_forward.rrd, for the Rerun viewer: rerun slider_crank.rrd
+
+Run: python examples/slider_crank.py [--rrd FILE] [--show] [--csv FOLDER]
 """
 
 from __future__ import annotations
@@ -23,10 +26,12 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import slider_crank
+from viewer import record
 
 
-def main(n_points: int = 9, duration: float = 1.0, moment: float = 2.0,
-         csv_folder: str | None = None) -> dict[str, mb.Results]:
+def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,
+         csv_folder: str | None = None, rrd: str | None = None,
+         show: bool = False) -> dict[str, mb.Results]:
     # 1. kinematics: crank at constant speed from 65 degrees
     model = slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
     print(mb.mobility(model), "\n")
@@ -41,7 +46,7 @@ def main(n_points: int = 9, duration: float = 1.0, moment: float = 2.0,
         "x_slider [m]": slider.position[:, 0],
         "v_slider [m/s]": slider.velocity[:, 0],
         "a_slider [m/s2]": slider.acceleration[:, 0],
-    }))
+    }, rows=9))
 
     # 2. forces: what the motor must supply and what the pins carry
     pin_o = kin.joint("O").reaction(on="crank")
@@ -55,7 +60,7 @@ def main(n_points: int = 9, duration: float = 1.0, moment: float = 2.0,
         "O_y on crank [N]": pin_o.force[:, 1],
         "B_x on slider [N]": pin_b.force[:, 0],
         "rail normal [N]": rail.force[:, 1],
-    }))
+    }, rows=9))
 
     # 3. forward dynamics: a known moment on the crank instead of the motor
     free = slider_crank(crank_angle=math.radians(65.0), crank_speed=None, crank_torque=moment)
@@ -71,7 +76,7 @@ def main(n_points: int = 9, duration: float = 1.0, moment: float = 2.0,
         "x_slider [m]": dyn.body("slider").position[:, 0],
         "work - dE [J]": work - (energy - energy[0]),
         "|C| [m]": dyn.position_residual,
-    }))
+    }, rows=9))
     print(f"  {dyn.stats['steps']} steps, {dyn.stats['projections']} projections, "
           f"{dyn.stats['wall_time']:.2f} s")
 
@@ -80,11 +85,18 @@ def main(n_points: int = 9, duration: float = 1.0, moment: float = 2.0,
             path = os.path.join(csv_folder, f"{name}.csv")
             res.to_csv(path)
             print(f"wrote {path}")
+    if rrd is not None:
+        # a path with the coupler's midpoint traced; prints where the file went
+        record(kin, rrd, overwrite=True, points={"rod middle": ("rod", (0.0, 0.0))}, show=show)
+        stem, ext = os.path.splitext(rrd)
+        record(dyn, f"{stem}_forward{ext or '.rrd'}", overwrite=True)
     return {"inverse": kin, "forward": dyn}
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--csv", metavar="FOLDER", help="also write the results as CSV files")
+    parser.add_argument("--rrd", default="slider_crank.rrd", help="the Rerun recording to write")
+    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
     args = parser.parse_args()
-    main(csv_folder=args.csv)
+    main(csv_folder=args.csv, rrd=args.rrd, show=args.show)

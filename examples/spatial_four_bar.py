@@ -5,18 +5,23 @@ loop is rigid (a spatial four-bar of revolutes moves only under Bennett's condit
 mobility report says so and names the dependent rows. With a ball joint and a universal joint
 on the coupler the same loop has one degree of freedom, and the crank drives the rocker.
 
-Run: python examples/spatial_four_bar.py
+The RSUR linkage is recorded to spatial_four_bar.rrd: rerun spatial_four_bar.rrd
+
+Run: python examples/spatial_four_bar.py [--rrd FILE] [--show]
 """
 
 from __future__ import annotations
+
+import argparse
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import spatial_four_bar
+from viewer import record
 
 
-def main(n_points: int = 9) -> mb.Results:
+def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:
     print(mb.mobility(spatial_four_bar(all_revolute=True, crank_speed=None)), "\n")
     model = spatial_four_bar(crank_speed=2 * np.pi)
     print(mb.mobility(model), "\n")
@@ -29,9 +34,15 @@ def main(n_points: int = 9) -> mb.Results:
         "rocker [deg]": np.degrees(np.arctan2(rocker[:, 2], rocker[:, 0])),
         "torque [N m]": res.driver("motor").effort,
         "|force at O4| [N]": np.linalg.norm(res.joint("O4").reaction(on="rocker").force, axis=1),
-    }))
+    }, rows=9))
+    if rrd is not None:
+        record(res, rrd, overwrite=True, show=show)
     return res
 
 
 if __name__ == "__main__":
-    main()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rrd", default="spatial_four_bar.rrd", help="the Rerun recording to write")
+    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
+    args = parser.parse_args()
+    main(rrd=args.rrd, show=args.show)

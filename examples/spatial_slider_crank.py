@@ -6,18 +6,23 @@ the slider. The table compares the slider position with its closed form
 x = r cos(phi) + sqrt(l^2 - e^2 - (d - r sin(phi))^2) and shows the motor torque and the moment
 the universal joint transmits.
 
-Run: python examples/spatial_slider_crank.py
+Recorded to spatial_slider_crank.rrd: rerun spatial_slider_crank.rrd
+
+Run: python examples/spatial_slider_crank.py [--rrd FILE] [--show]
 """
 
 from __future__ import annotations
+
+import argparse
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import spatial_slider_crank
+from viewer import record
 
 
-def main(n_points: int = 9) -> mb.Results:
+def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:
     model = spatial_slider_crank(crank_speed=2 * np.pi)
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 1.0, n_points)
@@ -34,9 +39,15 @@ def main(n_points: int = 9) -> mb.Results:
         "v_slider [m/s]": slider.velocity[:, 0],
         "torque [N m]": res.driver("motor").effort,
         "|moment at A| [N m]": np.linalg.norm(joint_a.moment, axis=1),
-    }))
+    }, rows=9))
+    if rrd is not None:
+        record(res, rrd, overwrite=True, show=show)
     return res
 
 
 if __name__ == "__main__":
-    main()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rrd", default="spatial_slider_crank.rrd", help="the Rerun recording to write")
+    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
+    args = parser.parse_args()
+    main(rrd=args.rrd, show=args.show)

@@ -5,21 +5,28 @@ from the vertical. Spun at omega_s = m g l / (C omega_p) + (A - C)/C omega_p cos
 its axis, it precesses at exactly omega_p = 10 rad/s without nodding. The table shows the
 nutation angle staying at 60 degrees, the azimuth advancing 10 rad/s, and the tip reaction.
 
-Run: python examples/spinning_top.py
+Recorded to spinning_top.rrd (drawn as the cone, with the path of a point on its rim):
+rerun spinning_top.rrd
+
+Run: python examples/spinning_top.py [--rrd FILE] [--show]
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 
 import numpy as np
+import trimesh
 
 import mbd3d as mb
 from mbd3d import rotations
 from joints import Spherical
+from viewer import record
 
 
-def main(duration: float = 1.0, n_points: int = 11) -> mb.Results:
+def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,
+         show: bool = False) -> mb.Results:
     m, J1, J3, l = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075  # cone, about its centre
     alpha, omega_p = math.radians(60.0), 10.0
     A, C = J1 + m * l * l, J3
@@ -28,9 +35,14 @@ def main(duration: float = 1.0, n_points: int = 11) -> mb.Results:
     axis = tilt[:, 2]
     omega = omega_p * np.array([0.0, 0.0, 1.0]) + omega_s * axis
 
+    # drawn as the cone, apex down at the tip; its centre of mass is a quarter height up
+    cone = trimesh.creation.cone(radius=0.05, height=0.1, sections=64)
+    cone.apply_transform(trimesh.transformations.rotation_matrix(math.pi, (1, 0, 0)))
+    cone.apply_translation((0.0, 0.0, 0.025))
+
     b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
     top = b.add_body("top", mass=m, inertia=(J1, J1, J3), position=l * axis, orientation=tilt,
-                     velocity=np.cross(omega, l * axis), angular_velocity=omega)
+                     velocity=np.cross(omega, l * axis), angular_velocity=omega, shape=cone)
     b.add(Spherical("tip", b.ground, top, at=(0.0, 0.0, 0.0)))
     t = np.linspace(0.0, duration, n_points)
     res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
@@ -42,11 +54,17 @@ def main(duration: float = 1.0, n_points: int = 11) -> mb.Results:
         "nutation [deg]": np.degrees(np.arccos(symmetry_axis[:, 2])),
         "azimuth [rad]": np.unwrap(np.arctan2(symmetry_axis[:, 1], symmetry_axis[:, 0])),
         "tip force z [N]": res.joint("tip").reaction(on="top").force[:, 2],
-    }, precision=8))
+    }, precision=8, rows=11))
     print(f"\n{res.stats['steps']} steps, {res.stats['chart_resets']} chart resets "
           f"(the top turns {omega_s * duration / (2 * math.pi):.0f} times about its axis)")
+    if rrd is not None:
+        record(res, rrd, overwrite=True, points={"rim": ("top", (0.05, 0.0, 0.025))}, show=show)
     return res
 
 
 if __name__ == "__main__":
-    main()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rrd", default="spinning_top.rrd", help="the Rerun recording to write")
+    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
+    args = parser.parse_args()
+    main(rrd=args.rrd, show=args.show)

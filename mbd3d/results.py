@@ -435,17 +435,30 @@ def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], 
     return results
 
 
-def format_table(columns: dict[str, Sequence[float]], precision: int = 5) -> str:
-    """A plain-text table of equally long columns, for printing results in a terminal.
+def format_table(columns: dict[str, Sequence[float]], precision: int = 5,
+                 rows: int | None = None) -> str:
+    """A plain-text table of equally long columns (numbers or text), for printing in a terminal.
+
+    ``rows`` limits a long table to that many rows, evenly spaced, first and last included.
 
     >>> print(format_table({"t [s]": [0.0, 0.5], "x [m]": [1.0, -0.25]}, precision=3))
       t [s]  x [m]
           0      1
         0.5  -0.25
+    >>> print(format_table({"k": range(11)}, rows=3))
+       k
+       0
+       5
+      10
     """
     names = list(columns)
+    length = len(columns[names[0]]) if names else 0
+    shown = range(length)
+    if rows is not None and length > rows:
+        shown = np.unique(np.round(np.linspace(0, length - 1, max(rows, 2))).astype(int))
     # adding 0.0 turns -0.0 into 0.0, which reads better in a table
-    cells = [[f"{float(v) + 0.0:.{precision}g}" for v in columns[name]] for name in names]
+    cells = [[v if isinstance(v, str) else f"{float(v) + 0.0:.{precision}g}"
+              for v in (columns[name][k] for k in shown)] for name in names]
     widths = [max([len(name)] + [len(c) for c in col]) + 1 for name, col in zip(names, cells)]
     lines = ["".join(name.rjust(w + 1) for name, w in zip(names, widths))]
     for row in zip(*cells):

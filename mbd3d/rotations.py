@@ -38,11 +38,17 @@ def skew(a: np.ndarray) -> np.ndarray:
 
 
 def from_rodrigues(g: np.ndarray) -> np.ndarray:
-    """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` (rodrigues.md 1.1)."""
+    """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` (rodrigues.md 1.1), ``s = g.g``.
+
+    Evaluated as ``((1 - s) I + 2 (g g^T + g~)) / (1 + s)`` (using ``g~^2 = g g^T - s I``):
+    element-wise, with no batched 3x3 products, since it runs for every body and state.
+    """
     g = np.asarray(g, dtype=float)
-    G = skew(g)
     s = np.einsum("...i,...i->...", g, g)
-    return np.eye(3) + (2.0 / (1.0 + s))[..., None, None] * (G + G @ G)
+    A = 2.0 * (g[..., :, None] * g[..., None, :] + skew(g))
+    diagonal = np.einsum("...ii->...i", A)
+    diagonal += (1.0 - s)[..., None]
+    return A / (1.0 + s)[..., None, None]
 
 
 def to_quaternion(A: np.ndarray) -> np.ndarray:

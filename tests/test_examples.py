@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import re
 import pathlib
 
 import numpy as np
 import pytest
+
+from viewer import entity_paths, read_component
 
 EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
 
@@ -19,41 +22,72 @@ def load(name: str):
     return module
 
 
+def recorded_steps(path, body: str) -> int:
+    """Number of time points of ``body``'s pose in a recording."""
+    return len(read_component(path, f"/world/bodies/{body}", "Transform3D:translation")[0])
+
+
 def test_slider_crank_example(capsys, tmp_path):
-    results = load("slider_crank").main(n_points=5, duration=0.5, csv_folder=str(tmp_path))
+    rrd = tmp_path / "sc.rrd"
+    results = load("slider_crank").main(n_points=5, duration=0.5, csv_folder=str(tmp_path),
+                                        rrd=str(rrd))
     out = capsys.readouterr().out
     assert "Kinematic analysis" in out and "Force analysis" in out and "Forward dynamics" in out
     assert (tmp_path / "slider_crank_forward.csv").exists()
+    assert f"rerun {rrd}" in out and recorded_steps(rrd, "slider") == 5
+    assert recorded_steps(tmp_path / "sc_forward.rrd", "crank") == 5
     dyn = results["forward"]
     energy = dyn.kinetic_energy + dyn.potential_energy
     work = 2.0 * (dyn.body("crank").angle - dyn.body("crank").angle[0])
     np.testing.assert_allclose(work, energy - energy[0], atol=1e-8)
 
 
-def test_four_bar_example(capsys):
-    res = load("four_bar").main(n_points=7)
+def test_four_bar_example(capsys, tmp_path):
+    res = load("four_bar").main(n_points=7, rrd=str(tmp_path / "fb.rrd"))
     assert "rocker swing" in capsys.readouterr().out
+    assert "/world/trails/coupler middle" in {p.replace("\\", "") for p in
+                                              entity_paths(tmp_path / "fb.rrd")}
     assert np.all(np.isfinite(res.driver("motor").effort))
     np.testing.assert_allclose(res.body("crank").angle, math.radians(60) + 2 * math.pi * res.t)
 
 
-def test_spatial_slider_crank_example(capsys):
-    res = load("spatial_slider_crank").main(n_points=5)
+def test_spatial_slider_crank_example(capsys, tmp_path):
+    res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out
+    assert recorded_steps(tmp_path / "ssc.rrd", "rod") == 5
     phi = 2 * math.pi * res.t
     x = 0.1 * np.cos(phi) + np.sqrt(0.09 - 0.06**2 - (0.04 - 0.1 * np.sin(phi)) ** 2)
     np.testing.assert_allclose(res.body("slider").position[:, 0], x, atol=1e-12)
 
 
-def test_spinning_top_example(capsys):
-    res = load("spinning_top").main(duration=0.2, n_points=3)
+def test_spinning_top_example(capsys, tmp_path):
+    res = load("spinning_top").main(duration=0.2, n_points=3, rrd=str(tmp_path / "top.rrd"))
     assert "chart resets" in capsys.readouterr().out
+    # drawn as the cone with its apex at the tip: 0.075 m below the centre of mass
+    _, vertices = read_component(tmp_path / "top.rrd", "/world/bodies/top/shape",
+                                 "Mesh3D:vertex_positions", None)
+    assert vertices[0][:, 2].min() == pytest.approx(-0.075, abs=1e-7)
     axis = res.body("top").rotation[:, :, 2]
     np.testing.assert_allclose(np.arccos(axis[:, 2]), math.radians(60.0), atol=1e-8)
 
 
-def test_spatial_four_bar_example(capsys):
-    res = load("spatial_four_bar").main(n_points=5)
+def test_spatial_four_bar_example(capsys, tmp_path):
+    res = load("spatial_four_bar").main(n_points=5, rrd=str(tmp_path / "sfb.rrd"))
+    assert recorded_steps(tmp_path / "sfb.rrd", "coupler") == 5
     out = capsys.readouterr().out
     assert "2 redundant constraint equation(s)" in out and "fully driven" in out
     assert np.all(np.isfinite(res.driver("motor").effort))
+
+
+def test_mesh_bodies_example(capsys, tmp_path):
+    res = load("mesh_bodies").main(periods=2.2, n_points=221, rrd=str(tmp_path / "mesh.rrd"))
+    out = capsys.readouterr().out
+    simulated, formula = (float(x) for x in re.search(
+        r"period: simulated ([\d.]+) s, formula ([\d.]+) s", out).groups())
+    # the compound-pendulum period, with its amplitude correction, from the mesh properties
+    assert simulated == pytest.approx(formula, rel=2e-6)
+    arm = res.model.body("arm")
+    m = 7850.0 * 0.04 * 0.40 * 0.02
+    assert arm.mass == pytest.approx(m, rel=1e-12)
+    assert arm.inertia[2, 2] == pytest.approx(m * (0.04**2 + 0.40**2) / 12, rel=1e-12)
+    assert recorded_steps(tmp_path / "mesh.rrd", "disc") == 221

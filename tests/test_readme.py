@@ -19,6 +19,7 @@ def test_quick_start_runs(tmp_path, monkeypatch, capsys):
     res = namespace["res"]
     assert "degrees of freedom     0" in capsys.readouterr().out
     assert (tmp_path / "slider_crank.csv").exists()
+    assert (tmp_path / "slider_crank.rrd").exists()
     # the guesses in the README are off; the assembled slider sits at the closed-form position
     phi = np.radians(65)
     x = 0.12 * np.cos(phi) + np.sqrt(0.26**2 - (0.12 * np.sin(phi)) ** 2)

@@ -226,7 +226,8 @@ class Recorder(Observer):
         return f"Recorder({self._where()})"
 
 
-def record(results: Results, save: str | os.PathLike | None = None, **options: Any) -> Recorder:
+def record(results: Results, save: str | os.PathLike | None = None, *, show: bool = False,
+           **options: Any) -> Recorder:
     """Record finished ``results`` (any analysis) to an ``.rrd`` file and/or a viewer.
 
     Parameters
@@ -234,6 +235,8 @@ def record(results: Results, save: str | os.PathLike | None = None, **options: A
     results : Results
     save : str or path, optional
         The ``.rrd`` file to write.
+    show : bool
+        Then open the file in the Rerun viewer (see :func:`show`).
     **options
         ``spawn``, ``connect``, ``overwrite``, ``plots``, ``points``, ``reactions``, ``shapes``,
         ``announce``: see :class:`Recorder`.
@@ -248,6 +251,10 @@ def record(results: Results, save: str | os.PathLike | None = None, **options: A
     recorder = Recorder(save, **options)
     recorder.start(results.model, results.t, results.analysis)
     recorder.finish(results)
+    if show:
+        if recorder.path is None:
+            raise RecordingError("show=True needs save= (the file to open)")
+        _open_viewer(recorder.path)
     return recorder
 
 
@@ -277,6 +284,9 @@ def show(path: str | os.PathLike) -> subprocess.Popen:
         raise RecordingError(f"no display to open a viewer on; copy '{path}' to a machine with "
                              "one and run: rerun FILE there")
     return subprocess.Popen([rerun_executable(), path])
+
+
+_open_viewer = show  # record() has a parameter called show
 
 
 def _quote(path: str) -> str:

@@ -53,6 +53,26 @@ def _lift(v: np.ndarray) -> np.ndarray:
     return out
 
 
+class _Block:
+    """A block of results whose body histories are computed once however often asked for."""
+
+    def __init__(self, results: Results):
+        self.results = results
+        self._bodies: dict[str, Any] = {}
+
+    def body(self, name: str):
+        if name not in self._bodies:
+            self._bodies[name] = self.results.body(name)
+        return self._bodies[name]
+
+    def point_position(self, body, u: np.ndarray) -> np.ndarray:
+        """(k, 3) global positions [m] of the body-frame point ``u`` (global for the ground)."""
+        if body.is_ground:
+            return np.broadcast_to(_lift(np.asarray(u)), (len(self.results), 3))
+        history = self.body(body.name)
+        return _lift(history.position + np.einsum("kab,b->ka", history.rotation, u))
+
+
 class Scene:
     """The content of a recording of ``model`` (see :mod:`viewer.recorder` for the entities).
 
@@ -288,6 +308,7 @@ class Scene:
         times = [rr.TimeColumn(SIM_TIME, duration=nanoseconds),
                  rr.TimeColumn(STEP, sequence=np.arange(first_step, first_step + k))]
         send = stream.send_columns
+        view = _Block(block)
         position, quaternion = block.poses()
         xyzw = quaternion[..., [1, 2, 3, 0]]
         for n, body in enumerate(self.model.bodies):
@@ -295,7 +316,7 @@ class Scene:
                  columns=rr.Transform3D.columns(translation=position[:, n],
                                                 quaternion=xyzw[:, n]))
         for name in self.plotted:
-            history = block.body(name)
+            history = view.body(name)
             part = _part(name)
             for quantity, values in (("position", history.position),
                                      ("velocity", history.velocity),
@@ -320,12 +341,12 @@ class Scene:
                 positions=_lift(history.position), radii=np.full(k, 0.006 * self.size),
                 colors=np.tile(color_of(self.model.body(body)), (k, 1))))
         for spring in self.springs:
-            ends = self._spring_ends(block, spring)
+            ends = self._spring_ends(view, spring)
             send(f"world/springs/{_part(spring.name)}", indexes=times,
                  columns=rr.LineStrips3D.columns(strips=ends, colors=np.tile(SPRING_COLOR, (k, 1)),
                                                  radii=np.full(k, 0.008 * self.size)))
         if self.dynamic:
-            self._log_forces(stream, block, times)
+            self._log_forces(stream, view, times)
         kinetic, potential = block.kinetic_energy, block.potential_energy
         send("plots/energy", indexes=times, columns=rr.Scalars.columns(
             scalars=np.column_stack([kinetic, potential, kinetic + potential])))
@@ -334,17 +355,12 @@ class Scene:
         send("plots/residuals/velocity", indexes=times,
              columns=rr.Scalars.columns(scalars=block.velocity_residual))
 
-    def _spring_ends(self, block: Results, spring: SpringDamper) -> np.ndarray:
+    def _spring_ends(self, view: _Block, spring: SpringDamper) -> np.ndarray:
         """(k, 2, 3) global positions of a spring's two ends."""
         group = next(g for g in self.model.force_groups if spring in getattr(g, "elements", ()))
         n = group.elements.index(spring)
-        ends = []
-        for body, u in ((spring.body_i, group.u_i[n]), (spring.body_j, group.u_j[n])):
-            if body.is_ground:
-                ends.append(np.broadcast_to(_lift(u), (len(block), 3)))
-            else:
-                ends.append(_lift(block.point(body.name, u).position))
-        return np.stack(ends, axis=1)
+        return np.stack([view.point_position(spring.body_i, group.u_i[n]),
+                         view.point_position(spring.body_j, group.u_j[n])], axis=1)
 
     def _moving_side(self, element) -> tuple[Any, np.ndarray]:
         """The body a joint's reaction is drawn on (body j unless it is the ground) and the
@@ -374,20 +390,22 @@ class Scene:
             return "torque", model.ground, np.array([0.0, 0.0, 1.0])
         return "force", model.ground, np.zeros(3)  # an unknown driver type: no arrow
 
-    def _global(self, block: Results, body, vector: np.ndarray) -> np.ndarray:
+    def _global(self, view: _Block, body, vector: np.ndarray) -> np.ndarray:
         """(k, 3): a vector fixed in ``body`` in global components over the block."""
+        k = len(view.results)
         if body.is_ground:
-            return np.broadcast_to(vector, (len(block), 3))
-        rotation = block.body(body.name).rotation
+            return np.broadcast_to(vector, (k, 3))
+        rotation = view.body(body.name).rotation
         if self.model.dim == 2:
-            lifted = np.zeros((len(block), 3))
+            lifted = np.zeros((k, 3))
             lifted[:, :2] = np.einsum("kab,b->ka", rotation, vector[:2])
             lifted[:, 2] = vector[2]
             return lifted
         return np.einsum("kab,b->ka", rotation, vector)
 
-    def _log_forces(self, stream, block: Results, times: list) -> None:
+    def _log_forces(self, stream, view: _Block, times: list) -> None:
         rr = _rerun()
+        block = view.results
         send, k = stream.send_columns, len(block)
         arrows = []  # (entity, origins, vectors, kind)
         for name in self.reactions:
@@ -411,16 +429,16 @@ class Scene:
             if self._moments[name]:
                 send(f"plots/reactions/{part}/moment", indexes=times,
                      columns=rr.Scalars.columns(scalars=moment))
-            arrows.append((f"world/reactions/{part}",
-                           _lift(block.point(body.name, u).position), force, "force"))
+            arrows.append((f"world/reactions/{part}", view.point_position(body, u), force,
+                           "force"))
         for driver in self.drivers:
             effort = block.driver(driver.name).effort
             send(f"plots/efforts/{_part(driver.name)}", indexes=times,
                  columns=rr.Scalars.columns(scalars=effort))
             kind, axis_body, axis = self._effort_kind(driver)
             body, u = self._moving_side(driver)
-            origin = _lift(block.point(body.name, u).position)
-            vectors = effort[:, None] * self._global(block, axis_body, axis)
+            origin = view.point_position(body, u)
+            vectors = effort[:, None] * self._global(view, axis_body, axis)
             arrows.append((f"world/efforts/{_part(driver.name)}", origin, vectors, kind))
         # fixed on the first block that has forces: arrows of later blocks compare with them
         for kind, attribute in (("force", "force_scale"), ("torque", "torque_scale")):
