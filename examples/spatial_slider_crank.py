@@ -47,7 +47,8 @@ def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="spatial_slider_crank.rrd", help="the Rerun recording to write")
+    parser.add_argument("--rrd", default="spatial_slider_crank.rrd",
+                        help="the Rerun recording to write")
     parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
     args = parser.parse_args()
     main(rrd=args.rrd, show=args.show)

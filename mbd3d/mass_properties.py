@@ -90,8 +90,9 @@ def mesh_properties(mesh: Any, density: float, name: str = "body") -> MassProper
     --------
     >>> import trimesh
     >>> props = mesh_properties(trimesh.creation.box(extents=(0.3, 0.1, 0.02)), 7800.0)
-    >>> print(f"{props.mass:.3f} kg, I_zz / (m (a^2 + b^2) / 12) = {props.inertia[2, 2] / (props.mass * (0.3**2 + 0.1**2) / 12):.12f}")
-    4.680 kg, I_zz / (m (a^2 + b^2) / 12) = 1.000000000000
+    >>> closed_form = props.mass * (0.3**2 + 0.1**2) / 12  # I_zz of a box
+    >>> print(f"{props.mass:.3f} kg, I_zz / closed form = {props.inertia[2, 2] / closed_form:.12f}")
+    4.680 kg, I_zz / closed form = 1.000000000000
     """
     what = f"body '{name}'"
     mesh = load_mesh(mesh, what)

@@ -219,6 +219,10 @@ def test_bad_destinations_are_refused_clearly(tmp_path):
         record(res, tmp_path / "a.rrd", plots=["piston"])
     with pytest.raises(mb.ModelError, match="shapes= names no body.*wheel"):
         record(res, tmp_path / "b.rrd", shapes={"wheel": trimesh.creation.box()})
+    with pytest.raises(mb.ModelError, match="point label 'rod' is the name of a body"):
+        record(res, tmp_path / "d.rrd", points={"rod": ("rod", (0.0, 0.0))})
+    with pytest.raises(mb.ModelError, match="point 'tip' of body 'rod' must be 2 finite"):
+        record(res, tmp_path / "e.rrd", points={"tip": ("rod", (0.0, 0.0, 1.0))})
     recorder = record(res, tmp_path / "c.rrd", announce=False)
     with pytest.raises(RecordingError, match="already recorded"):
         recorder.start(model, res.t, res.analysis)

@@ -18,7 +18,7 @@ from mbd3d.forces import SpringDamper
 from mbd3d.results import Results
 from mbd3d.mass_properties import load_mesh
 from viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
-                           initial_frames, initial_points, model_size)
+                           initial_points, model_size)
 
 __all__ = ["Scene", "SIM_TIME", "STEP"]
 
@@ -116,6 +116,9 @@ class Scene:
             if u.size != model.dim or not np.all(np.isfinite(u)):
                 raise ModelError(f"point '{label}' of body '{body}' must be {model.dim} finite "
                                  f"numbers [m], got {spec[1]!r}")
+            if str(label) in names:
+                raise ModelError(f"point label '{label}' is the name of a body, whose plots it "
+                                 "would share; choose another label")
             self.points[str(label)] = (model.body(body).name, u)
         joints = [e for e in model.joints if not e.is_driver]
         if reactions is None:
