@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import argparse
 import os
+import pathlib
 import platform
+import sys
 import tempfile
-import time
 
 import numpy as np
 
@@ -24,15 +25,8 @@ import mbd3d as mb
 from mbd3d.mechanisms import pendulum_chain, spatial_chain
 from viewer import Recorder, record
 
-
-def median_wall(fn, repeat: int = 3) -> float:
-    """Median wall time of ``fn()`` over ``repeat`` runs [s]."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from planar_chain import median_time  # noqa: E402  (the shared timer)
 
 
 def main(points: int = 10_000, links: int = 10, repeat: int = 3) -> list[dict]:
@@ -62,7 +56,7 @@ def measure(kind: str, factory, points: int, links: int, repeat: int, folder: st
 
     def record_once():
         record(res, os.path.join(folder, f"{kind}-{next(counter)}.rrd"), announce=False)
-    recording = median_wall(record_once, repeat)
+    recording = median_time(record_once, repeat)
     size = os.path.getsize(os.path.join(folder, f"{kind}-0.rrd"))
 
     def simulate(live: bool):
@@ -73,8 +67,8 @@ def measure(kind: str, factory, points: int, links: int, repeat: int, folder: st
     # alternate the two so that machine noise hits both alike
     plain, live = [], []
     for _ in range(repeat):
-        plain.append(median_wall(lambda: simulate(False), 1))
-        live.append(median_wall(lambda: simulate(True), 1))
+        plain.append(median_time(lambda: simulate(False), 1))
+        live.append(median_time(lambda: simulate(True), 1))
     row = {"model": kind, "record_s": recording, "file_mb": size / 1e6,
            "simulate_s": float(np.median(plain)), "live_s": float(np.median(live))}
     row["slowdown"] = row["live_s"] / row["simulate_s"]

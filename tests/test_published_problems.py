@@ -3,19 +3,9 @@ published reference numbers (sources in each test and in ../shared/validation.md
 
 from __future__ import annotations
 
-import importlib.util
-import pathlib
-
 import numpy as np
 
-EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
-
-
-def load(name: str):
-    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from test_examples import load
 
 
 def test_andrews_squeezing_mechanism_matches_the_test_set_at_30_ms(capsys, tmp_path):
@@ -35,11 +25,11 @@ def test_andrews_squeezing_mechanism_matches_the_test_set_at_30_ms(capsys, tmp_p
     assert "relative error" in capsys.readouterr().out
 
 
-def test_iftomm_a01_pendulum_follows_the_reference_series(capsys):
+def test_iftomm_a01_pendulum_follows_the_reference_series(capsys, validation_data):
     """IFToMM / MBS benchmark A01 (M. Gonzalez et al., Univ. of A Coruna): the reference
     series of the point mass, every 0.5 s; here its first 20 s (the example runs all 2000 s)."""
-    reference = np.loadtxt(EXAMPLES.parent.parent / "shared" / "validation-data" /
-                           "iftomm_A01_simple_pendulum_P1.txt", skiprows=1)[:41]
+    reference = np.loadtxt(validation_data / "iftomm_A01_simple_pendulum_P1.txt",
+                           skiprows=1)[:41]
     res = load("iftomm_pendulum").main(duration=20.0)
     # the file holds 6 significant digits: agreement to its last digit, 1e-3 m is the criterion
     np.testing.assert_allclose(res.body("P1").position, reference[:, 1:], rtol=0, atol=6e-7)

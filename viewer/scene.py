@@ -318,14 +318,16 @@ class Scene:
             send(f"world/bodies/{_part(body.name)}", indexes=times,
                  columns=rr.Transform3D.columns(translation=position[:, n],
                                                 quaternion=xyzw[:, n]))
+
+        def send_motion(part: str, history) -> None:
+            for quantity in ("position", "velocity", "acceleration"):
+                send(f"plots/{quantity}/{part}", indexes=times,
+                     columns=rr.Scalars.columns(scalars=getattr(history, quantity)))
+
         for name in self.plotted:
             history = view.body(name)
             part = _part(name)
-            for quantity, values in (("position", history.position),
-                                     ("velocity", history.velocity),
-                                     ("acceleration", history.acceleration)):
-                send(f"plots/{quantity}/{part}", indexes=times,
-                     columns=rr.Scalars.columns(scalars=values))
+            send_motion(part, history)
             if self.model.dim == 2:
                 send(f"plots/angle/{part}", indexes=times,
                      columns=rr.Scalars.columns(scalars=history.angle))
@@ -335,11 +337,7 @@ class Scene:
         for label, (body, u) in self.points.items():
             history = block.point(body, u)
             part = _part(label)
-            for quantity, values in (("position", history.position),
-                                     ("velocity", history.velocity),
-                                     ("acceleration", history.acceleration)):
-                send(f"plots/{quantity}/{part}", indexes=times,
-                     columns=rr.Scalars.columns(scalars=values))
+            send_motion(part, history)
             send(f"world/trails/{part}", indexes=times, columns=rr.Points3D.columns(
                 positions=_lift(history.position), radii=np.full(k, 0.006 * self.size),
                 colors=np.tile(color_of(self.model.body(body)), (k, 1))))
