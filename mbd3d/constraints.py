@@ -14,8 +14,8 @@ import scipy.sparse as sp
 from mbd3d.body import Frames
 from mbd3d.errors import ModelError
 
-__all__ = ["frames", "evaluate", "residual", "jacobian", "jacobian_matrix", "velocity_rhs",
-           "acceleration_rhs", "driver_values"]
+__all__ = ["frames", "evaluate", "residual", "jacobian", "jacobian_matrix", "jacobian_times",
+           "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs", "driver_values"]
 
 
 def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
@@ -108,6 +108,18 @@ def jacobian_matrix(model, data: np.ndarray, sparse: bool | None = None):
     Cq = np.zeros(shape)
     Cq[model._jac_rows, model._jac_cols] = data
     return Cq
+
+
+def jacobian_times(model, data: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``Cq x`` from the Jacobian values, without assembling the matrix."""
+    return np.bincount(model._jac_rows, weights=data * x[model._jac_cols],
+                       minlength=model.n_constraints)
+
+
+def jacobian_transpose_times(model, data: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``Cq^T y`` from the Jacobian values, without assembling the matrix."""
+    return np.bincount(model._jac_cols, weights=data * y[model._jac_rows],
+                       minlength=model.n_coordinates)
 
 
 def residual(model, t: float, q: np.ndarray, fr: Frames | None = None) -> np.ndarray:

@@ -26,17 +26,21 @@ import scipy.integrate as si
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces
 from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, solve_velocity
 from mbd3d.linalg import SingularMatrix, solve_model_augmented
 from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, run_keeping_results
 
-__all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS"]
+__all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS",
+           "GENERALIZED_ALPHA"]
 
 #: integrators selectable by name; "RK45" is the Dormand-Prince 5(4) pair of MATLAB's ode45
 METHODS = {"RK45": si.RK45, "DOP853": si.DOP853, "RK23": si.RK23, "Radau": si.Radau,
            "BDF": si.BDF, "LSODA": si.LSODA}
+#: the implicit index-3 integrator of :mod:`mbd3d.implicit`
+GENERALIZED_ALPHA = "generalized-alpha"
 
 
 def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
@@ -68,10 +72,12 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
 
 
 def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
-                  charts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest (mass-weighted) state that satisfies the position and velocity constraints."""
-    q = solve_position(model, q, t, tol=tol, charts=charts)
-    return q, solve_velocity(model, q, t, qd_guess=qd, charts=charts)
+                  charts: np.ndarray | None = None, redundant: bool = False
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest (mass-weighted) state that satisfies the position and velocity constraints
+    (``redundant``: see :func:`mbd3d.solve_position`)."""
+    q = solve_position(model, q, t, tol=tol, charts=charts, redundant=redundant)
+    return q, solve_velocity(model, q, t, qd_guess=qd, charts=charts, redundant=redundant)
 
 
 def _difference_jacobian(rhs, n_y: int):
@@ -103,7 +109,8 @@ def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
 def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None = None,
                      qd0: Sequence[float] | None = None, *, method: str = "RK45",
                      rtol: float = 1e-8, atol: float = 1e-10, constraint_tol: float = 1e-8,
-                     max_step: float = np.inf, hold: Sequence[str | int] | None = None,
+                     max_step: float = np.inf, step: float | None = None,
+                     rho_inf: float = 0.9, hold: Sequence[str | int] | None = None,
                      observers: Sequence[Observer] | None = None,
                      progress: bool | None = None) -> Results:
     """Integrate the equations of motion from ``times[0]`` to ``times[-1]``.
@@ -116,16 +123,26 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     q0, qd0 : (n,) array_like, optional
         Initial guesses of coordinates and rates (default the bodies' guesses). They are first
         made consistent: positions by Newton-Raphson, velocities by mass-weighted projection.
-    method : {"RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA"}
-        SciPy integrator. "RK45" (Dormand-Prince, as MATLAB's ode45) for general use, "DOP853"
-        for tight tolerances.
+    method : {"RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA", "generalized-alpha"}
+        "RK45" (Dormand-Prince, as MATLAB's ode45) for general use, "DOP853" for tight
+        tolerances: SciPy's explicit pairs on the index-1 equations with projection.
+        "generalized-alpha": the implicit index-3 method of :mod:`mbd3d.implicit`, for stiff
+        models (stiff springs), long runs, redundant constraints and mechanisms that pass
+        singular configurations; second order, so it needs small steps for many digits.
     rtol, atol : float
-        Integrator tolerances (relative; absolute in the units of ``q`` and ``qd``).
+        Integrator tolerances (relative; absolute in the units of ``q`` and ``qd``); not used
+        by "generalized-alpha", whose accuracy is set by ``step``.
     constraint_tol : float
         Largest position [m, rad] and velocity [m/s, rad/s] constraint residual allowed at the
         end of a step before the state is projected back. Reported states are projected too.
     max_step : float
         Largest step [s].
+    step : float, optional
+        "generalized-alpha" only, and required there: the fixed step [s] (shortened to land on
+        output times). Its error is second order: halving the step quarters it.
+    rho_inf : float
+        "generalized-alpha" only: spectral radius at infinite frequency, in [0, 1]; 1 adds
+        no numerical damping, lower values damp the highest frequencies (stiff springs).
     hold : sequence of str or int, optional
         Coordinates kept at their given values (and rates) while assembling the initial state,
         e.g. ``["crank.theta"]``.
@@ -152,17 +169,26 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     t = check_times(times)
     if len(t) < 2:
         raise ModelError("forward_dynamics needs at least two output times (start and end)")
-    if method not in METHODS:
-        raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if method not in METHODS and method != GENERALIZED_ALPHA:
+        raise ModelError(f"method must be one of {', '.join(METHODS)}, {GENERALIZED_ALPHA}; "
+                         f"got {method!r}")
     for label, value in (("rtol", rtol), ("atol", atol), ("constraint_tol", constraint_tol)):
         if not (np.isfinite(value) and value > 0):
             raise ModelError(f"{label} must be positive and finite, got {value!r}")
+    if method == GENERALIZED_ALPHA:
+        return integrate_generalized_alpha(
+            model, t, q0, qd0, step=step, rho_inf=rho_inf, rtol=rtol, atol=atol,
+            constraint_tol=constraint_tol, max_step=max_step, hold=hold, observers=observers,
+            progress=progress)
+    if step is not None:
+        raise ModelError(f"step applies to method='{GENERALIZED_ALPHA}'; the {method} "
+                         "integrator chooses its own steps (limit them with max_step)")
     solver_cls = METHODS[method]
     n = model.n_coordinates
     projection_tol = constraint_tol * 1e-3
     start = _time.perf_counter()
     stats = {"method": method, "steps": 0, "rhs_evaluations": 0, "projections": 0,
-             "chart_resets": 0, "max_drift": 0.0, "wall_time": 0.0}
+             "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
     k_max = len(t)
     Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
     Lam = np.empty((k_max, model.n_constraints))
@@ -176,22 +202,37 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                        Lam[:done], status=status, message=message, stats=stats,
                        charts=None if Charts is None else Charts[:done])
 
+    redundant = False  # set at the start: the constraint rows depend on each other
+
+    def accelerations(tt, q, qd):
+        if not redundant:
+            return forward_accelerations(model, tt, q, qd, chart)
+        qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, redundant=True)
+        return qdd, lam
+
     def rhs(tt: float, y: np.ndarray) -> np.ndarray:
         stats["rhs_evaluations"] += 1
-        qdd, _ = forward_accelerations(model, tt, y[:n], y[n:], chart)
-        return np.concatenate([y[n:], qdd])
+        return np.concatenate([y[n:], accelerations(tt, y[:n], y[n:])[0]])
 
     def record(k: int, q: np.ndarray, qd: np.ndarray) -> None:
-        qdd, lam = forward_accelerations(model, t[k], q, qd, chart)
+        qdd, lam = accelerations(t[k], q, qd)
+        if redundant:
+            stats["singular_outputs"].append(float(t[k]))
         Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
         if Charts is not None:
             Charts[k] = chart
 
     def loop() -> None:
-        nonlocal done, chart
+        nonlocal done, chart, redundant
         q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
                            hold=hold)
-        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold)
+        redundant = rows_dependent(model, t[0], q, chart)
+        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
+        # Redundant constraints (dependent rows from the start, as in Bricard's mechanism)
+        # are solved throughout by the augmented Lagrangian, which gives the accelerations
+        # and minimum-norm multipliers continuously. Rows that become dependent later (a
+        # singular position) stop the run with a SingularJacobianError instead: there the
+        # index-1 accelerations jump, and generalized-alpha is the method to use.
         record(0, q, qd)
         done = 1
         watch.tick(t[0], 0)
@@ -215,7 +256,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 while done < k_max and t[done] <= solver.t:
                     y_k = dense(t[done])
                     record(done, *project_state(model, t[done], y_k[:n], y_k[n:], projection_tol,
-                                                chart))
+                                                chart, redundant))
                     done += 1
             watch.tick(solver.t, stats["steps"])
             if solver.status == "finished" or done >= k_max:
@@ -225,7 +266,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             stats["max_drift"] = max(stats["max_drift"], drift)
             restart = drift > constraint_tol
             if restart:
-                q, qd = project_state(model, solver.t, q, qd, projection_tol, chart)
+                q, qd = project_state(model, solver.t, q, qd, projection_tol, chart, redundant)
                 stats["projections"] += 1
             # between steps only: every stage of a step is evaluated in one chart
             q, qd, chart, moved = model.body_type.reset_charts(q, qd, chart)

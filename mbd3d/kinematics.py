@@ -18,8 +18,8 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.errors import ModelError, NotFullyDrivenError
-from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented
-from mbd3d.position import hold_indices, singular_error, solve_position
+from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented, solve_augmented_lagrangian
+from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, run_keeping_results
 
@@ -55,8 +55,12 @@ def _require_fully_driven(model, what: str) -> None:
 
 def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[float] | None = None,
                    hold: Sequence[str | int] | None = None,
-                   charts: np.ndarray | None = None) -> np.ndarray:
+                   charts: np.ndarray | None = None, redundant: bool = False) -> np.ndarray:
     """Velocities consistent with the constraints: ``Cq qd = -Ct``.
+
+    ``redundant``: the rows are known to depend on each other (see :func:`mbd3d.mobility`);
+    the projection then goes straight to the augmented Lagrangian, since an LU of dependent
+    rows can pass its pivot test by rounding and return an arbitrary null-space component.
 
     For a fully driven mechanism the solution is unique. Otherwise it is the mass-weighted
     projection of ``qd_guess`` (default ``model.qd0``), keeping held coordinates' rates.
@@ -75,6 +79,8 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
     if guess.size != n or not np.all(np.isfinite(guess)):
         raise ModelError(f"qd_guess must be {n} finite numbers")
     try:
+        if redundant:
+            raise SingularMatrix("dependent rows")
         if m == n and not len(held):
             return Factorization(Cq).solve(nu)
         if len(held):
@@ -86,7 +92,18 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
         qd, _ = solve_augmented(M, Cq, M @ guess, nu)
         return qd
     except SingularMatrix:
-        raise singular_error(model, Cq[:m], t, f"velocity analysis of '{model.name}'") from None
+        pass
+    # dependent rows: with redundant constraints the mass-weighted projection still exists
+    # (the augmented Lagrangian finds it); with inconsistent ones (a lock-up) it does not
+    try:
+        M = mass_matrix(model, fr)
+        qd, _, iterations = solve_augmented_lagrangian(M, Cq, M @ guess, nu,
+                                                       max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+        if iterations < MAX_AUGMENTED_LAGRANGIAN:
+            return qd
+    except SingularMatrix:
+        pass
+    raise singular_error(model, Cq[:m], t, f"velocity analysis of '{model.name}'")
 
 
 def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,

@@ -17,10 +17,12 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 __all__ = ["SingularMatrix", "Factorization", "dependent_rows", "augmented_matrix",
            "solve_augmented", "solve_model_augmented",
-           "AugmentedPattern"]
+           "AugmentedPattern", "PenaltyPattern", "PatternedFactorization", "penalty_scale", "penalty_matrix", "solve_augmented_lagrangian"]
 
 #: relative size of the smallest LU pivot below which a matrix counts as singular
 PIVOT_TOLERANCE = 1e-12
+#: relative constraint violation accepted when the augmented-Lagrangian iteration stalls
+STALL_TOLERANCE = 1e-10
 
 
 class SingularMatrix(Exception):
@@ -127,6 +129,82 @@ class AugmentedPattern:
             self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
 
 
+class PenaltyPattern:
+    """Where the mass blocks and the products of Jacobian values go in ``a M + p Cq^T Cq``,
+    fixed per model, so that the iteration matrix of the implicit integrator is filled by one
+    ``bincount`` instead of sparse matrix products.
+
+    ``Cq^T Cq`` couples the coordinates of every pair of Jacobian entries in one row: with the
+    entries sorted by row (CSR order) those pairs are enumerated once, here.
+    """
+
+    def __init__(self, model):
+        nb, nc, n = model.n_bodies, model.n_coords_per_body, model.n_coordinates
+        base = np.arange(nb)[:, None, None] * nc
+        block_rows = np.broadcast_to(base + np.arange(nc)[None, :, None], (nb, nc, nc)).ravel()
+        block_cols = np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel()
+        rows, cols, indptr = model._jac_rows, model._jac_cols, model._jac_indptr
+        per_row = np.diff(indptr)[rows]  # entries in the row of each entry
+        self.first = np.repeat(np.arange(len(rows)), per_row)
+        start = np.repeat(np.cumsum(per_row) - per_row, per_row)
+        self.second = indptr[rows[self.first]] + np.arange(len(self.first)) - start
+        all_rows = np.concatenate([block_rows, cols[self.first]])
+        all_cols = np.concatenate([block_cols, cols[self.second]])
+        linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
+        self.n_blocks = len(block_rows)
+        self.size = n
+        self.sparse = model.sparse
+        self.rows, self.cols = linear // n, linear % n
+        if self.sparse:
+            # a symmetric reverse Cuthill-McKee order, once: SuperLU then factors a banded
+            # matrix in natural order (see AugmentedPattern)
+            structure = sp.csr_matrix((np.ones(len(linear)), (self.rows, self.cols)),
+                                      shape=(n, n))
+            self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
+            inverse = np.empty_like(self.perm)
+            inverse[self.perm] = np.arange(n)
+            prow, pcol = inverse[self.rows], inverse[self.cols]
+            self.order = np.lexsort((prow, pcol))
+            self.indices = prow[self.order]
+            counts = np.bincount(pcol, minlength=n)
+            self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+
+    def values(self, mass_factor: float, blocks: np.ndarray, penalty: float,
+               jac_data: np.ndarray) -> np.ndarray:
+        """Entries of ``mass_factor M + penalty Cq^T Cq`` in the pattern's order."""
+        weights = np.concatenate([mass_factor * blocks.ravel(),
+                                  penalty * jac_data[self.first] * jac_data[self.second]])
+        return np.bincount(self.target, weights=weights, minlength=len(self.rows))
+
+    def matrix(self, values: np.ndarray, extra=None):
+        """The matrix (dense, or CSC in the permuted order) with ``extra`` (n, n) added."""
+        if self.sparse:
+            A = sp.csc_matrix((values[self.order], self.indices, self.indptr),
+                              shape=(self.size, self.size))
+            if extra is not None:
+                extra = sp.csr_matrix(extra)[self.perm][:, self.perm]
+                A = sp.csc_matrix(A + extra)
+            return A
+        A = np.zeros((self.size, self.size))
+        A[self.rows, self.cols] = values
+        return A if extra is None else A + extra
+
+
+class PatternedFactorization:
+    """LU factors of a matrix built by :class:`PenaltyPattern`, solving in the original order."""
+
+    def __init__(self, pattern: PenaltyPattern, A):
+        self.pattern = pattern
+        self.lu = Factorization(A, ordering="NATURAL") if pattern.sparse else Factorization(A)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if not self.pattern.sparse:
+            return self.lu.solve(b)
+        x = np.empty_like(b)
+        x[self.pattern.perm] = self.lu.solve(b[self.pattern.perm])
+        return x
+
+
 def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: np.ndarray
                           ) -> np.ndarray:
     """Solve ``[M Cq^T; Cq 0] x = rhs`` from per-body mass blocks and Jacobian values.
@@ -163,3 +241,78 @@ def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndar
     K = augmented_matrix(M, Cq)
     sol = Factorization(K).solve(np.concatenate([top, bottom]))
     return sol[:n], sol[n:]
+
+
+def penalty_scale(A, Cq) -> float:
+    """Penalty [units of ``A`` per squared unit of ``Cq``] that weighs the constraints like
+    ``A``: mean diagonal of ``A`` over the mean squared row norm of ``Cq``."""
+    diag_A = A.diagonal() if sp.issparse(A) else np.diag(A)
+    rows = (np.asarray(Cq.multiply(Cq).sum(axis=1)).ravel() if sp.issparse(Cq)
+            else np.einsum("ij,ij->i", Cq, Cq))
+    rows = rows[rows > 0]
+    if not rows.size:
+        return 1.0
+    return float(np.mean(np.abs(diag_A))) / float(np.mean(rows))
+
+
+def penalty_matrix(A, Cq, penalty: float):
+    """``A + penalty Cq^T Cq``, sparse (CSC) when either block is sparse."""
+    if sp.issparse(A) or sp.issparse(Cq):
+        Cq = sp.csr_matrix(Cq)
+        return sp.csc_matrix(sp.csr_matrix(A) + penalty * (Cq.T @ Cq))
+    return A + penalty * (Cq.T @ Cq)
+
+
+def solve_augmented_lagrangian(A, Cq, b: np.ndarray, c: np.ndarray, *, relative_penalty: float = 1e6,
+                               lam: np.ndarray | None = None, tol: float = 1e-13,
+                               max_iterations: int = 50) -> tuple[np.ndarray, np.ndarray, int]:
+    """Solve ``[A Cq^T; Cq 0] [x; lam] = [b; c]`` by the augmented-Lagrangian iteration.
+
+    ``(A + p Cq^T Cq) x_k = b - Cq^T lam_k + p Cq^T c``, ``lam_{k+1} = lam_k + p (Cq x_k - c)``,
+    with ``p = relative_penalty * penalty_scale(A, Cq)``. Unlike the LU of the augmented matrix
+    it needs ``A`` positive definite only on the null space of ``Cq`` and never divides by a
+    vanishing pivot of ``Cq``: with dependent rows (redundant constraints) or at a singular
+    configuration of the mechanism it converges to the solution ``x`` of the consistent part
+    and to multipliers without a component in the null space of ``Cq^T`` (the minimum-norm
+    ones when started from ``lam = 0``). Each iteration cuts the constraint error in a
+    direction of singular value ``s`` by ``a / (a + p s^2)``.
+
+    Returns
+    -------
+    x, lam : ndarray
+    iterations : int
+        Iterations used; ``max_iterations`` when ``|Cq x - c|`` did not reach ``tol`` relative
+        to the size of its terms (the best iterate is returned).
+
+    Raises
+    ------
+    SingularMatrix
+        If ``A + p Cq^T Cq`` is singular (``A`` is not positive definite on the null space of
+        ``Cq``: a body without mass that nothing constrains).
+    """
+    p = relative_penalty * penalty_scale(A, Cq)
+    lu = Factorization(penalty_matrix(A, Cq, p))
+    lam = np.zeros(Cq.shape[0]) if lam is None else np.array(lam, dtype=float)
+    CqT = Cq.T
+    abs_Cq = abs(Cq) if sp.issparse(Cq) else np.abs(Cq)
+    rhs0 = b + p * (CqT @ c)
+    best = None
+    for iteration in range(1, max_iterations + 1):
+        x = lu.solve(rhs0 - CqT @ lam)
+        violation = Cq @ x - c
+        lam = lam + p * violation
+        size = float(np.max(np.abs(violation), initial=0.0))
+        # rounding in Cq x - c is relative to the terms summed, not to the (small) result
+        scale = float(np.max(np.abs(c), initial=0.0)) + float(
+            np.max(abs_Cq @ np.abs(x), initial=0.0))
+        stalled = best is not None and size > 0.5 * best[0]
+        if best is None or size < best[0]:
+            best = (size, x, lam)
+        if size <= tol * max(scale, 1e-300):
+            return x, lam, iteration
+        if stalled and best[0] <= STALL_TOLERANCE * max(scale, 1e-300):
+            # rows dependent only up to rounding (a configuration assembled to 1e-12 leaves
+            # a singular value of that size): the violation stops at that level, far below
+            # anything an inconsistent (locked) system would leave
+            return best[1], best[2], iteration
+    return best[1], best[2], max_iterations

@@ -21,7 +21,7 @@ from mbd3d.body import Body, BodyType
 from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
-from mbd3d.linalg import AugmentedPattern
+from mbd3d.linalg import AugmentedPattern, PenaltyPattern
 from mbd3d.motion import Motion
 from mbd3d.primitives import PRIMITIVES
 
@@ -454,6 +454,7 @@ class Model:
             sparse = self.n_coordinates + self.n_constraints > SPARSE_THRESHOLD
         self.sparse = bool(sparse)
         self._augmented_pattern = AugmentedPattern(self)
+        self._penalty_pattern = PenaltyPattern(self)
 
         from mbd3d.forces import compile_forces
         self.force_groups = compile_forces(self.forces, ctx)

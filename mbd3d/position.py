@@ -18,7 +18,12 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import mass_matrix
 from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
-from mbd3d.linalg import Factorization, SingularMatrix, dependent_rows, solve_augmented
+from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
+                          solve_augmented_lagrangian)
+
+#: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
+#: inconsistent (a lock-up), not redundant
+MAX_AUGMENTED_LAGRANGIAN = 50
 
 __all__ = ["solve_position", "hold_indices", "singular_error"]
 
@@ -50,7 +55,8 @@ def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJaco
         f"{what}: the constraint Jacobian is singular at t = {t:.6g} s (numerical rank {rank} of "
         f"{model.n_constraints} rows). Dependent rows: {labels}; joints involved: "
         f"{', '.join(joints)}. This is a lock-up or toggle position of the mechanism, or "
-        "redundant constraints.", joints=joints, time=t, results=results)
+        "redundant constraints. Forward dynamics passes singular positions with "
+        "method='generalized-alpha'.", joints=joints, time=t, results=results)
 
 
 def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
@@ -64,10 +70,25 @@ def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
     return q
 
 
+def _least_change_step(model, q, charts, J, C, m):
+    """Mass-weighted least-change ``dq`` with ``J dq = -C`` when ``J`` has dependent rows
+    (None if even the penalty matrix is singular). Where the linearised rows are slightly
+    inconsistent (a drifted state of a redundant mechanism: second-order small) the best
+    iterate is still a descent step; at a lock-up it is not, and the line search then stops
+    the iteration with the joints named."""
+    M = mass_matrix(model, constraints.frames(model, q, charts=charts))
+    try:
+        dq, _, _ = solve_augmented_lagrangian(M, J, np.zeros(len(q)), -C,
+                                              max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+    except SingularMatrix:
+        return None
+    return dq if np.all(np.isfinite(dq)) else None
+
+
 def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
                    tol: float = 1e-12, max_iterations: int = 50,
                    hold: Iterable[str | int] | None = None,
-                   charts: np.ndarray | None = None) -> np.ndarray:
+                   charts: np.ndarray | None = None, redundant: bool = False) -> np.ndarray:
     """Solve ``C(q, t) = 0`` by Newton-Raphson from ``q_guess``.
 
     Parameters
@@ -86,6 +107,10 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     charts : ndarray, optional
         Spatial models: the reference rotations ``q_guess`` is relative to (default the model's
         initial charts). The result is relative to the same charts.
+    redundant : bool
+        The rows are known to depend on each other (see :func:`mbd3d.mobility`): every step
+        is the mass-weighted least-change one by the augmented Lagrangian, never an LU of the
+        dependent rows (which rounding can let through with an arbitrary null-space part).
 
     Returns
     -------
@@ -134,6 +159,8 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             break
         J = full_jacobian(q)
         try:
+            if redundant:
+                raise SingularMatrix("dependent rows")
             if m_total == n:
                 dq = Factorization(J).solve(-C)
             else:
@@ -141,8 +168,12 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
                     M = mass_matrix(model, constraints.frames(model, q, charts=charts))
                 dq, _ = solve_augmented(M, J, np.zeros(n), -C)
         except SingularMatrix:
-            raise singular_error(model, J[:m] if not sp.issparse(J) else J.tocsr()[:m], t,
-                                 f"position analysis of '{model.name}'") from None
+            # dependent rows: redundant constraints (solvable, least change) or a lock-up
+            # (no solution); the augmented Lagrangian tells them apart by converging or not
+            dq = _least_change_step(model, q, charts, J, C, m)
+            if dq is None:
+                raise singular_error(model, J[:m] if not sp.issparse(J) else J.tocsr()[:m], t,
+                                     f"position analysis of '{model.name}'") from None
         # backtracking: accept the first step that reduces |C| (full steps near the solution)
         step = 1.0
         while True:

@@ -347,6 +347,14 @@ class Results:
         return self._compute_residuals()[1]
 
     @property
+    def reactions_unique(self) -> bool:
+        """False when the constraint rows were dependent at some time point (redundant
+        constraints, a singular position): the multipliers there, hence the reactions and
+        efforts, are one of many that balance the mechanism (the minimum-norm one).
+        ``stats["singular_outputs"]`` lists those times [s]."""
+        return not self.stats.get("singular_outputs")
+
+    @property
     def kinetic_energy(self) -> np.ndarray:
         """Kinetic energy [J] at every time point."""
         return self._compute_energies()[0]

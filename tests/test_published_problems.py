@@ -4,7 +4,12 @@ published reference numbers (sources in each test and in ../shared/validation.md
 from __future__ import annotations
 
 import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
 
+import mbd3d as mb
+from mbd3d import constraints
+from mbd3d.equations import generalized_forces, mass_matrix
 from test_examples import load
 
 
@@ -36,3 +41,107 @@ def test_iftomm_a01_pendulum_follows_the_reference_series(capsys, validation_dat
     energy = res.kinetic_energy + res.potential_energy
     assert abs(energy[0]) < 1e-12 and np.max(np.abs(energy)) < 1e-6
     assert "largest error against the reference" in capsys.readouterr().out
+
+
+def four_bar_oscillator(bars: int, t: np.ndarray) -> np.ndarray:
+    """B0 = (cos phi, sin phi) on the parallelogram branch, where all cranks share the angle
+    phi and the couplers translate: ((N+1)/3 + N) phi'' = -((N+1)/2 + N) g cos(phi),
+    phi(0) = pi/2, phi'(0) = -1 rad/s (derived in ../shared/validation.md, section 1.2)."""
+    inertia, moment = (bars + 1) / 3 + bars, (bars + 1) / 2 + bars
+    sol = solve_ivp(lambda _, y: [y[1], -moment * 9.81 * np.cos(y[0]) / inertia],
+                    (t[0], t[-1]), [np.pi / 2, -1.0], t_eval=t, method="DOP853", rtol=1e-12,
+                    atol=1e-12)
+    return np.column_stack([np.cos(sol.y[0]), np.sin(sol.y[0])])
+
+
+def test_iftomm_a02_forty_four_bars_follow_the_adams_series_through_singular_positions(
+        capsys, validation_data, tmp_path):
+    """IFToMM / MBS benchmark A02 (M. Gonzalez et al., Univ. of A Coruna), N = 40: the
+    reference series of B0 from ADAMS/Solver, every 0.05 s for 20 s, within the library's
+    high-precision criterion of 1e-3 m; the chain lies flat (Cq loses 40 ranks) 16 times."""
+    reference = np.loadtxt(validation_data / "iftomm_A02_n_four_bar_B0.txt", comments="#")
+    res = load("iftomm_four_bar").main(bars=40, duration=20.0, rrd=str(tmp_path / "a02.rrd"))
+    assert (tmp_path / "a02.rrd").stat().st_size > 0
+    b0 = res.point("crank0", (0.5, 0.0)).position
+    np.testing.assert_allclose(res.t, reference[:, 0], atol=1e-12)
+    assert np.max(np.abs(b0 - reference[:, 1:])) < 1e-3
+    # and the separately derived one-degree-of-freedom equation, to the method's h^2 error
+    assert np.max(np.abs(b0 - four_bar_oscillator(40, res.t))) < 1e-3
+    # it stayed on the parallelogram branch: every crank at the first one's angle
+    angles = np.array([res.body(f"crank{k}").angle for k in range(41)])
+    assert np.max(np.abs(angles - angles[0])) < 1e-8
+    assert res.position_residual.max() < 1e-8 and res.velocity_residual.max() < 1e-8
+    energy = res.kinetic_energy + res.potential_energy
+    assert np.max(np.abs(energy - energy[0])) < 0.05  # of 620 J (h^2 energy error)
+    assert "largest error against the ADAMS reference" in capsys.readouterr().out
+
+
+def test_iftomm_a02_two_four_bars_converge_to_the_reduced_equation():
+    """N = 2 (the variant MBS-BOS and Exudyn simulate): x_B0(10 s) against the reduced
+    equation; Exudyn's generalized-alpha at h = 1e-3 is 4.7e-5 m off (validation.md)."""
+    example = load("iftomm_four_bar")
+    t = np.linspace(0.0, 10.0, 201)
+    exact = four_bar_oscillator(2, t)
+    errors = []
+    for step in (2e-3, 1e-3):
+        res = mb.forward_dynamics(example.build(2), t, method="generalized-alpha", step=step)
+        b0 = res.point("crank0", (0.5, 0.0)).position
+        errors.append(np.max(np.abs(b0 - exact)))
+    assert abs(b0[-1, 0] - exact[-1, 0]) < 4.7e-5  # x_B0(10 s), as good as Exudyn's
+    assert errors[1] < 3e-4  # over the whole series: 14 passages through the flat position
+    assert 3.5 < errors[0] / errors[1] < 6.0  # second order through the singular positions
+
+
+def test_explicit_methods_stop_at_the_singular_position_naming_joints_and_time():
+    example = load("iftomm_four_bar")
+    with pytest.raises(mb.SingularJacobianError) as error:
+        mb.forward_dynamics(example.build(2), np.linspace(0.0, 3.0, 61), method="RK45")
+    # the index-1 accelerations jump where the chain lies flat; an explicit method may step
+    # over one such point unharmed but is stopped at one of them (sin phi = 0), with its name
+    time = error.value.time
+    b0 = four_bar_oscillator(2, np.array([0.0, time]))[-1]
+    assert abs(b0[1]) < 0.05, (time, b0)
+    assert "generalized-alpha" in str(error.value)
+    assert error.value.joints
+    results = error.value.results
+    assert 0 < len(results) and results.t[-1] <= time
+    # what was computed before is right
+    np.testing.assert_allclose(results.point("crank0", (0.5, 0.0)).position,
+                               four_bar_oscillator(2, results.t), atol=1e-6)
+
+
+def test_iftomm_a04_bricard_redundant_constraint_found_and_motion_computed(capsys, tmp_path):
+    """IFToMM / MBS benchmark A04: Bricard's mechanism. No reference series exists; checked by
+    the mobility report, energy conservation, and two formulations agreeing (the index-3
+    implicit one and the explicit index-1 one with minimum-norm multipliers)."""
+    example = load("bricard")
+    report = mb.mobility(example.build())
+    assert (report.gruebler, report.rank, report.dof) == (0, 29, 1)
+    res = example.main(duration=2.0, n_points=41, step=5e-4, rrd=str(tmp_path / "bricard.rrd"))
+    assert (tmp_path / "bricard.rrd").stat().st_size > 0
+    assert "reactions unique: False" in capsys.readouterr().out
+    assert not res.reactions_unique
+    energy = res.kinetic_energy + res.potential_energy
+    assert np.max(np.abs(energy - energy[0])) < 1e-5  # T + V, from rest, of 29 J
+    assert np.ptp(res.point("rod2", (0.5, 0.0, 0.0)).position[:, 2]) > 0.3  # it moved
+    assert res.position_residual.max() < 1e-10
+    explicit = mb.forward_dynamics(example.build(), res.t, method="DOP853", rtol=1e-10,
+                                   atol=1e-12)
+    assert not explicit.reactions_unique
+    for k in range(1, 6):  # poses (raw q would depend on when each run re-referenced charts)
+        implicit_body, explicit_body = res.body(f"rod{k}"), explicit.body(f"rod{k}")
+        np.testing.assert_allclose(implicit_body.position, explicit_body.position, atol=5e-6)
+        np.testing.assert_allclose(implicit_body.rotation, explicit_body.rotation, atol=5e-6)
+    # minimum-norm multipliers: no component along the dependency of the rows, and the
+    # equations of motion hold with them
+    for k in (10, 40):
+        fr = constraints.frames(explicit.model, explicit.q[k], explicit.qd[k],
+                                explicit.charts[k])
+        Cq = constraints.jacobian(explicit.model, explicit.t[k], explicit.q[k], fr)
+        left_null = np.linalg.svd(Cq)[0][:, -1]
+        assert abs(left_null @ explicit.lam[k]) < 1e-6 * np.abs(explicit.lam[k]).max()
+        M = mass_matrix(explicit.model, fr)
+        balance = M @ explicit.qdd[k] + Cq.T @ explicit.lam[k] - generalized_forces(
+            explicit.model, explicit.t[k], fr)
+        assert np.abs(balance).max() < 1e-8
+    np.testing.assert_allclose(res.lam, explicit.lam, atol=1e-3 * np.abs(explicit.lam).max())

@@ -1,0 +1,357 @@
+"""Implicit index-3 generalized-alpha integration with augmented-Lagrangian Newton iterations.
+
+The generalized-alpha method of Chung and Hulbert (1993), applied to the index-3 equations of
+motion as Arnold and Bruls (2007) do::
+
+    M(q) qdd + Cq^T lam = Qe(t, q, qd)        C(q, t) = 0
+
+at every step ``t_n -> t_n + h``. With ``a`` the method's acceleration-like variable,
+
+    (1 - alpha_m) a_{n+1} + alpha_m a_n = (1 - alpha_f) qdd_{n+1} + alpha_f qdd_n
+    q_{n+1}  = q_n + h qd_n + h^2 (1/2 - beta) a_n + h^2 beta a_{n+1}
+    qd_{n+1} = qd_n + h (1 - gamma) a_n + h gamma a_{n+1}
+
+so that ``qdd_{n+1} = beta' (q_{n+1} - q_hat)`` and ``qd_{n+1} = qd_hat + gamma' (q_{n+1} -
+q_hat)`` are affine in the new positions. The one unknown is ``q_{n+1}``; the constraints are
+enforced at position level by the method of multipliers (the index-3 augmented Lagrangian of
+Bayo, Garcia de Jalon and Serna; Cuadrado et al.'s ALI3-P): Newton iterations on
+
+    r(q) = M qdd + Cq^T (lam + p C(q)) - Qe = 0,   lam <- lam + p C after each iteration,
+
+with the iteration matrix ``beta' M + gamma' D + K + p Cq^T Cq`` (``D``, ``K`` the tangent of the
+applied forces, by finite differences when the model has force elements). That matrix stays
+positive definite where ``Cq`` loses rank, so the method passes singular configurations (the
+IFToMM N-four-bar) and handles redundant constraints (Bricard's mechanism) without special
+cases, and its sparsity is that of the mechanism (banded for a chain). After each step the
+velocities are projected onto ``Cq qd = -Ct`` with the same factors (mass-orthogonal), so
+position and velocity drift stay at the Newton tolerance however long the run.
+
+The iteration matrix is factored once per step and kept for its Newton iterations (two per
+step are typical); it cannot be kept longer, because its penalty part outweighs the mass
+matrix by the penalty ratio and follows the configuration. The spectral radius at infinity ``rho_inf`` (1: no numerical
+damping; 0: asymptotic annihilation) sets the coefficients; the method is second order.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d import constraints
+from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.linalg import (PatternedFactorization, SingularMatrix, solve_augmented_lagrangian,
+                          solve_model_augmented)
+from mbd3d.observers import Watch
+from mbd3d.kinematics import solve_velocity
+from mbd3d.position import singular_error, solve_position
+from mbd3d.results import Results, run_keeping_results
+
+__all__ = ["GeneralizedAlpha", "consistent_accelerations", "rows_dependent",
+           "integrate_generalized_alpha"]
+
+
+@dataclass(frozen=True)
+class GeneralizedAlpha:
+    """Coefficients of the generalized-alpha method for a spectral radius ``rho_inf`` in [0, 1]
+    (Chung and Hulbert 1993: second order, unconditionally stable, least low-frequency
+    damping for the high-frequency damping asked)."""
+
+    rho_inf: float
+
+    def __post_init__(self):
+        if not (np.isfinite(self.rho_inf) and 0.0 <= self.rho_inf <= 1.0):
+            raise ModelError(f"rho_inf must be between 0 and 1, got {self.rho_inf!r}")
+
+    @property
+    def alpha_m(self) -> float:
+        return (2.0 * self.rho_inf - 1.0) / (self.rho_inf + 1.0)
+
+    @property
+    def alpha_f(self) -> float:
+        return self.rho_inf / (self.rho_inf + 1.0)
+
+    @property
+    def gamma(self) -> float:
+        return 0.5 + self.alpha_f - self.alpha_m
+
+    @property
+    def beta(self) -> float:
+        return 0.25 * (self.gamma + 0.5) ** 2
+
+
+def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, charts=None,
+                             lam: np.ndarray | None = None, redundant: bool = False
+                             ) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``qdd`` and ``lam`` of the augmented equations, also where ``Cq`` loses rank.
+
+    The augmented matrix is factored by LU as in :func:`mbd3d.forward_accelerations`; where it
+    is singular (a singular configuration, redundant constraints) the augmented-Lagrangian
+    iteration gives the accelerations of the consistent equations and the multipliers without
+    a component in the null space of ``Cq^T`` (minimum-norm from ``lam = 0``). With
+    ``redundant`` (rows known to be dependent) the LU is skipped: rounding can lift its
+    smallest pivot above the singularity threshold, and the solution would be noise.
+
+    Returns
+    -------
+    qdd, lam : ndarray
+    regular : bool
+        False when the augmented matrix was singular (multipliers not unique).
+    """
+    fr = constraints.frames(model, q, qd, charts)
+    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    Qe = generalized_forces(model, t, fr)
+    n = model.n_coordinates
+    if not redundant:
+        try:
+            x = solve_model_augmented(model, blocks, jac_data, np.concatenate([Qe, gamma]))
+            return x[:n], x[n:], True
+        except SingularMatrix:
+            pass
+    M = mass_matrix(model, fr)
+    Cq = constraints.jacobian_matrix(model, jac_data)
+    try:
+        qdd, lam, _ = solve_augmented_lagrangian(M, Cq, Qe, gamma, lam=lam)
+    except SingularMatrix:
+        raise singular_error(model, Cq, t, f"forward dynamics of '{model.name}'") from None
+    return qdd, lam, False
+
+
+def rows_dependent(model, t: float, q: np.ndarray, charts=None) -> bool:
+    """Whether the augmented matrix ``[M Cq^T; Cq 0]`` is singular at ``q``: constraint rows
+    that depend on each other (redundant constraints, or a singular configuration)."""
+    fr = constraints.frames(model, q, charts=charts)
+    _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    try:
+        solve_model_augmented(model, blocks, jac_data,
+                              np.zeros(model.n_coordinates + model.n_constraints))
+    except SingularMatrix:
+        return True
+    return False
+
+
+def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
+    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` by forward differences, or
+    None when only gravity acts (then the applied forces do not depend on the state, apart
+    from the spatial bodies' quadratic velocity terms that modified Newton absorbs)."""
+    if not model.force_groups:
+        return None
+    n = model.n_coordinates
+    f0 = generalized_forces(model, t, constraints.frames(model, q, qd, charts))
+    T = np.empty((n, n))
+    for j in range(n):
+        for vector, weight in ((q, 1.0), (qd, gamma_prime)):
+            h = 1.5e-8 * max(1.0, abs(vector[j]))
+            shifted = vector.copy()
+            shifted[j] += h
+            args = (shifted, qd) if vector is q else (q, shifted)
+            f = generalized_forces(model, t, constraints.frames(model, *args, charts))
+            column = -(f - f0) / h * weight
+            T[:, j] = column if vector is q else T[:, j] + column
+    return sp.csr_matrix(T) if model.sparse else T
+
+
+class _IterationMatrix:
+    """Factors of ``beta' M + gamma' D + K + p Cq^T Cq`` at the start of a step."""
+
+    def __init__(self, model, t, q, qd, charts, beta_prime, gamma_prime, relative_penalty):
+        fr = constraints.frames(model, q, qd, charts)
+        _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
+        blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+        pattern = model._penalty_pattern
+        # penalty in units of the mass matrix over the squared Jacobian entries (see
+        # linalg.penalty_scale), so that the ratio means the same for any model
+        row_norms = np.bincount(model._jac_rows, weights=jac_data * jac_data,
+                                minlength=model.n_constraints)
+        row_norms = row_norms[row_norms > 0]
+        mean_mass = float(np.mean(np.abs(np.einsum("kii->ki", blocks))))
+        scale = mean_mass / float(np.mean(row_norms)) if row_norms.size else 1.0
+        self.penalty = relative_penalty * beta_prime * scale
+        values = pattern.values(beta_prime, blocks, self.penalty, jac_data)
+        tangent = _force_tangent(model, t, q, qd, charts, gamma_prime)
+        self.lu = PatternedFactorization(pattern, pattern.matrix(values, tangent))
+
+
+def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
+                                rho_inf: float, rtol: float, atol: float,
+                                constraint_tol: float, max_step: float, hold, observers,
+                                progress, newton_tol: float = 1e-10,
+                                relative_penalty: float = 1e8,
+                                max_newton_iterations: int = 30) -> Results:
+    """Generalized-alpha integration over the output times ``t``; see
+    :func:`mbd3d.forward_dynamics` (``method="generalized-alpha"``) for the parameters.
+
+    The step is fixed: shortened only to land on output times, or for one step to a
+    quarter when Newton does not converge (near a singular configuration).
+    """
+    coefficients = GeneralizedAlpha(rho_inf)
+    am, af = coefficients.alpha_m, coefficients.alpha_f
+    beta, gamma = coefficients.beta, coefficients.gamma
+    if step is None:
+        raise ModelError("method='generalized-alpha' needs a fixed step [s], e.g. step=1e-3 "
+                         "(the error of this second-order method scales with step^2)")
+    if not (np.isfinite(step) and step > 0):
+        raise ModelError(f"step must be a positive time [s], got {step!r}")
+    n = model.n_coordinates
+    projection_tol = constraint_tol * 1e-3
+    start = _time.perf_counter()
+    stats = {"method": "generalized-alpha", "rho_inf": rho_inf, "steps": 0,
+             "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
+             "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
+    k_max = len(t)
+    Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
+    Lam = np.empty((k_max, model.n_constraints))
+    Charts = None if model.charts0 is None else np.empty((k_max,) + model.charts0.shape)
+    done = 0
+
+    def partial(status: str, message: str) -> Results:
+        stats["wall_time"] = _time.perf_counter() - start
+        return Results(model, "forward dynamics", t[:done], Q[:done], Qd[:done], Qdd[:done],
+                       Lam[:done], status=status, message=message, stats=stats,
+                       charts=None if Charts is None else Charts[:done])
+
+    redundant = False  # set at the start: the constraint rows depend on each other
+
+    def record(k: int, q, qd, chart, lam_guess):
+        # from lam = 0 where the rows depend on each other: the minimum-norm multipliers
+        qdd, lam, regular = consistent_accelerations(model, t[k], q, qd, chart,
+                                                     None if redundant else lam_guess,
+                                                     redundant)
+        if not regular:
+            stats["singular_outputs"].append(float(t[k]))
+        Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
+        if Charts is not None:
+            Charts[k] = chart
+        return qdd, lam
+
+    def project_velocity(tt, q, qd, chart, lu, penalty):
+        """Mass-orthogonal projection onto ``Cq qd = -Ct`` with the iteration matrix's
+        factors: each pass cuts the violation by the penalty ratio."""
+        fr = constraints.frames(model, q, charts=chart)
+        C, jac_data, _ = constraints.evaluate(model, tt, fr)
+        nu = constraints.velocity_rhs(model, tt, fr)
+        violation = constraints.jacobian_times(model, jac_data, qd) - nu
+        stats["max_drift"] = max(stats["max_drift"], float(np.max(np.abs(C), initial=0.0)),
+                                 float(np.max(np.abs(violation), initial=0.0)))
+        for _ in range(8):
+            if np.max(np.abs(violation), initial=0.0) <= projection_tol:
+                break
+            qd = qd - lu.solve(penalty * constraints.jacobian_transpose_times(model, jac_data,
+                                                                               violation))
+            violation = constraints.jacobian_times(model, jac_data, qd) - nu
+        return qd
+
+    def newton(tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
+        """One step: the new state and the iteration matrix, or None when Newton does not
+        converge."""
+        shift = (af * qdd_n - am * a_n) / (1.0 - am)
+        q_hat = q_n + h * qd_n + h * h * (0.5 - beta) * a_n + h * h * beta * shift
+        qd_hat = qd_n + h * (1.0 - gamma) * a_n + h * gamma * shift
+        beta_prime = (1.0 - am) / (h * h * beta * (1.0 - af))
+        gamma_prime = gamma / (h * beta)
+        q = q_hat + qdd_n / beta_prime  # predictor: unchanged accelerations
+        lam = lam_n.copy()
+        previous = np.inf
+        for iteration in range(max_newton_iterations):
+            qdd = beta_prime * (q - q_hat)
+            qd = qd_hat + gamma_prime * (q - q_hat)
+            if iteration == 0:
+                # new factors every step: the penalty term p Cq^T Cq outweighs the mass
+                # matrix by the penalty ratio, so factors of the previous configuration
+                # would not converge
+                S = _IterationMatrix(model, tt, q, qd, chart, beta_prime, gamma_prime,
+                                     relative_penalty)
+                stats["factorizations"] += 1
+            fr = constraints.frames(model, q, qd, chart)
+            C, jac_data, _ = constraints.evaluate(model, tt, fr)
+            blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+            Mqdd = np.einsum("kij,kj->ki", blocks, qdd.reshape(blocks.shape[:2])).ravel()
+            if iteration:
+                lam = lam + S.penalty * C  # method of multipliers, C at the new iterate
+            lam_effective = lam + S.penalty * C
+            r = (Mqdd + constraints.jacobian_transpose_times(model, jac_data, lam_effective)
+                 - generalized_forces(model, tt, fr))
+            dq = -S.lu.solve(r)
+            if not np.all(np.isfinite(dq)):
+                return None
+            q = q + dq
+            stats["newton_iterations"] += 1
+            size = float(np.max(np.abs(dq) / (1.0 + np.abs(q))))
+            rate = size / previous if iteration else np.inf
+            # near a singular configuration the multipliers converge only linearly (rate
+            # a / (a + p s^2) along a small singular value s): judge the remaining error
+            # by the observed rate, as for any linearly convergent iteration
+            remaining = size * rate / (1.0 - rate) if rate < 1.0 else np.inf
+            if (min(size, remaining) <= newton_tol
+                    and np.max(np.abs(C), initial=0.0) <= projection_tol):
+                qdd = beta_prime * (q - q_hat)
+                qd = qd_hat + gamma_prime * (q - q_hat)
+                a = shift + (1.0 - af) / (1.0 - am) * qdd
+                return (q, qd, qdd, a, lam_effective), S
+            if iteration >= 2 and rate > 0.9:
+                return None  # diverging or stalled: shorten the step
+            previous = size
+        return None
+
+    def loop() -> None:
+        nonlocal done, redundant
+        chart = model.charts0
+        q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
+                           hold=hold)
+        redundant = rows_dependent(model, t[0], q, chart)
+        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
+        qdd, lam = record(0, q, qd, chart, None)
+        a = qdd.copy()
+        done = 1
+        watch.tick(t[0], 0)
+        tt = float(t[0])
+        h = min(step, max_step)
+        while done < k_max:
+            target = float(t[done])
+            h_try = min(h, target - tt)
+            if target - (tt + h_try) < 1e-9 * max(h, 1e-300):
+                h_try = target - tt
+            elif target - (tt + h_try) < 0.05 * h:
+                h_try = 0.5 * (target - tt)  # two even steps instead of a sliver
+            result = newton(tt + h_try, h_try, q, qd, qdd, a, lam, chart)
+            if result is None:
+                stats["rejected_steps"] += 1
+                h = 0.25 * h_try
+                if h < 1e-14 * max(1.0, abs(tt)):
+                    raise IntegrationError(
+                        f"forward dynamics of '{model.name}': generalized-alpha Newton "
+                        f"iterations do not converge at t = {tt:.6g} s even with a step of "
+                        f"{h_try:.3g} s. Check the model's stiffness and masses, or try a "
+                        "smaller step.", time=tt)
+                continue
+            (q_new, qd_new, qdd_new, a_new, lam_new), S = result
+            tt += h_try
+            stats["steps"] += 1
+            q, qd, qdd, a, lam = q_new, qd_new, qdd_new, a_new, lam_new
+            if not np.all(np.isfinite(q)) or not np.all(np.isfinite(qd)):
+                raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
+                                       f"non-finite at t = {tt:.6g} s", time=tt)
+            h = min(step, max_step)  # back to the nominal step after a recovery
+            if tt >= target - 1e-12 * max(1.0, abs(target)):
+                tt = target
+                # the reported velocities are projected onto Cq qd = -Ct; the recursion keeps
+                # its own, because projecting them inside it costs the method its order
+                record(done, q, project_velocity(tt, q, qd, chart, S.lu, S.penalty), chart, lam)
+                done += 1
+            watch.tick(tt, stats["steps"])
+            q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart)
+            if moved:
+                # new orientation coordinates: restart the recursion from consistent
+                # accelerations in the new charts (as at the initial time)
+                stats["chart_resets"] += 1
+                q, qd, chart = q_moved, qd_moved, chart_new
+                qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, lam, redundant)
+                a = qdd.copy()
+
+    watch = Watch(observers, progress, model, t, "forward dynamics", partial)
+    return run_keeping_results(loop, partial, watch)
