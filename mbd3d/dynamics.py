@@ -177,7 +177,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             raise ModelError(f"{label} must be positive and finite, got {value!r}")
     if method == GENERALIZED_ALPHA:
         return integrate_generalized_alpha(
-            model, t, q0, qd0, step=step, rho_inf=rho_inf, rtol=rtol, atol=atol,
+            model, t, q0, qd0, step=step, rho_inf=rho_inf,
             constraint_tol=constraint_tol, max_step=max_step, hold=hold, observers=observers,
             progress=progress)
     if step is not None:

@@ -178,7 +178,7 @@ class _IterationMatrix:
 
 
 def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
-                                rho_inf: float, rtol: float, atol: float,
+                                rho_inf: float,
                                 constraint_tol: float, max_step: float, hold, observers,
                                 progress, newton_tol: float = 1e-10,
                                 relative_penalty: float = 1e8,
