@@ -17,21 +17,18 @@ same way, so every reported state satisfies the constraints.
 
 from __future__ import annotations
 
-import time as _time
 from typing import Sequence
 
 import numpy as np
 import scipy.integrate as si
 
 from mbd3d import constraints
-from mbd3d.equations import generalized_forces
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, solve_velocity
-from mbd3d.linalg import SingularMatrix, solve_model_augmented
-from mbd3d.position import singular_error, solve_position
+from mbd3d.position import solve_position
 from mbd3d.observers import Observer, Watch
-from mbd3d.results import Results, run_keeping_results
+from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
 __all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS",
            "GENERALIZED_ALPHA"]
@@ -58,17 +55,8 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
         raise IntegrationError(f"forward dynamics of '{model.name}': the state is not finite at "
                                f"t = {t:.6g} s (the integration diverged)", time=t)
-    fr = constraints.frames(model, q, qd, charts)
-    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
-    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-    rhs = np.concatenate([generalized_forces(model, t, fr), gamma])
-    try:
-        solution = solve_model_augmented(model, blocks, jac_data, rhs)
-    except SingularMatrix:
-        raise singular_error(model, constraints.jacobian_matrix(model, jac_data), t,
-                             f"forward dynamics of '{model.name}'") from None
-    n = model.n_coordinates
-    return solution[:n], solution[n:]
+    qdd, lam, _ = consistent_accelerations(model, t, q, qd, charts, fallback=False)
+    return qdd, lam
 
 
 def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
@@ -186,21 +174,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     solver_cls = METHODS[method]
     n = model.n_coordinates
     projection_tol = constraint_tol * 1e-3
-    start = _time.perf_counter()
     stats = {"method": method, "steps": 0, "rhs_evaluations": 0, "projections": 0,
              "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
     k_max = len(t)
-    Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
-    Lam = np.empty((k_max, model.n_constraints))
-    Charts = None if model.charts0 is None else np.empty((k_max,) + model.charts0.shape)
+    out = ResultsBuffer(model, "forward dynamics", t, stats)
     chart = model.charts0  # reference rotations of the current integration segment
-    done = 0
-
-    def partial(status: str, message: str) -> Results:
-        stats["wall_time"] = _time.perf_counter() - start
-        return Results(model, "forward dynamics", t[:done], Q[:done], Qd[:done], Qdd[:done],
-                       Lam[:done], status=status, message=message, stats=stats,
-                       charts=None if Charts is None else Charts[:done])
 
     redundant = False  # set at the start: the constraint rows depend on each other
 
@@ -214,16 +192,15 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         stats["rhs_evaluations"] += 1
         return np.concatenate([y[n:], accelerations(tt, y[:n], y[n:])[0]])
 
-    def record(k: int, q: np.ndarray, qd: np.ndarray) -> None:
-        qdd, lam = accelerations(t[k], q, qd)
+    def record(q: np.ndarray, qd: np.ndarray) -> None:
+        tk = t[out.done]
+        qdd, lam = accelerations(tk, q, qd)
         if redundant:
-            stats["singular_outputs"].append(float(t[k]))
-        Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
-        if Charts is not None:
-            Charts[k] = chart
+            stats["singular_outputs"].append(float(tk))
+        out.store(q, qd, qdd, lam, chart)
 
     def loop() -> None:
-        nonlocal done, chart, redundant
+        nonlocal chart, redundant
         q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
                            hold=hold)
         redundant = rows_dependent(model, t[0], q, chart)
@@ -233,14 +210,13 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         # and minimum-norm multipliers continuously. Rows that become dependent later (a
         # singular position) stop the run with a SingularJacobianError instead: there the
         # index-1 accelerations jump, and generalized-alpha is the method to use.
-        record(0, q, qd)
-        done = 1
+        record(q, qd)
         watch.tick(t[0], 0)
         options = {"rtol": rtol, "atol": atol, "max_step": max_step}
         if method in ("Radau", "BDF", "LSODA"):
             options["jac"] = _difference_jacobian(rhs, 2 * n)
         solver = solver_cls(rhs, t[0], np.concatenate([q, qd]), t[-1], **options)
-        while done < k_max:
+        while out.done < k_max:
             message = solver.step()
             if solver.status == "failed":
                 raise IntegrationError(
@@ -251,15 +227,15 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             if not np.all(np.isfinite(solver.y)):
                 raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
                                        f"non-finite at t = {solver.t:.6g} s", time=float(solver.t))
-            if t[done] <= solver.t:
+            if t[out.done] <= solver.t:
                 dense = solver.dense_output()
-                while done < k_max and t[done] <= solver.t:
-                    y_k = dense(t[done])
-                    record(done, *project_state(model, t[done], y_k[:n], y_k[n:], projection_tol,
-                                                chart, redundant))
-                    done += 1
+                while out.done < k_max and t[out.done] <= solver.t:
+                    tk = t[out.done]
+                    y_k = dense(tk)
+                    record(*project_state(model, tk, y_k[:n], y_k[n:], projection_tol, chart,
+                                          redundant))
             watch.tick(solver.t, stats["steps"])
-            if solver.status == "finished" or done >= k_max:
+            if solver.status == "finished" or out.done >= k_max:
                 break
             q, qd = solver.y[:n], solver.y[n:]
             drift = max(_residuals(model, solver.t, q, qd, chart))
@@ -277,5 +253,5 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 solver = solver_cls(rhs, solver.t, np.concatenate([q, qd]), t[-1], first_step=h,
                                     **options)
 
-    watch = Watch(observers, progress, model, t, "forward dynamics", partial)
-    return run_keeping_results(loop, partial, watch)
+    watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)
+    return run_keeping_results(loop, out.partial, watch)

@@ -34,7 +34,6 @@ damping; 0: asymptotic annihilation) sets the coefficients; the method is second
 
 from __future__ import annotations
 
-import time as _time
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,12 +42,12 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.errors import IntegrationError, ModelError
-from mbd3d.linalg import (PatternedFactorization, SingularMatrix, solve_augmented_lagrangian,
+from mbd3d.linalg import (SingularMatrix, penalty_scale, solve_augmented_lagrangian,
                           solve_model_augmented)
 from mbd3d.observers import Watch
 from mbd3d.kinematics import solve_velocity
 from mbd3d.position import singular_error, solve_position
-from mbd3d.results import Results, run_keeping_results
+from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
 __all__ = ["GeneralizedAlpha", "consistent_accelerations", "rows_dependent",
            "integrate_generalized_alpha"]
@@ -84,8 +83,8 @@ class GeneralizedAlpha:
 
 
 def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, charts=None,
-                             lam: np.ndarray | None = None, redundant: bool = False
-                             ) -> tuple[np.ndarray, np.ndarray, bool]:
+                             lam: np.ndarray | None = None, redundant: bool = False,
+                             fallback: bool = True) -> tuple[np.ndarray, np.ndarray, bool]:
     """``qdd`` and ``lam`` of the augmented equations, also where ``Cq`` loses rank.
 
     The augmented matrix is factored by LU as in :func:`mbd3d.forward_accelerations`; where it
@@ -93,7 +92,8 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
     iteration gives the accelerations of the consistent equations and the multipliers without
     a component in the null space of ``Cq^T`` (minimum-norm from ``lam = 0``). With
     ``redundant`` (rows known to be dependent) the LU is skipped: rounding can lift its
-    smallest pivot above the singularity threshold, and the solution would be noise.
+    smallest pivot above the singularity threshold, and the solution would be noise. Without
+    ``fallback`` a singular matrix raises instead (the explicit integrators' rule).
 
     Returns
     -------
@@ -111,7 +111,9 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
             x = solve_model_augmented(model, blocks, jac_data, np.concatenate([Qe, gamma]))
             return x[:n], x[n:], True
         except SingularMatrix:
-            pass
+            if not fallback:
+                raise singular_error(model, constraints.jacobian_matrix(model, jac_data), t,
+                                     f"forward dynamics of '{model.name}'") from None
     M = mass_matrix(model, fr)
     Cq = constraints.jacobian_matrix(model, jac_data)
     try:
@@ -164,17 +166,14 @@ class _IterationMatrix:
         _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
         blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
         pattern = model._penalty_pattern
-        # penalty in units of the mass matrix over the squared Jacobian entries (see
-        # linalg.penalty_scale), so that the ratio means the same for any model
+        # so that the ratio means the same for any model (see linalg.penalty_scale)
         row_norms = np.bincount(model._jac_rows, weights=jac_data * jac_data,
                                 minlength=model.n_constraints)
-        row_norms = row_norms[row_norms > 0]
-        mean_mass = float(np.mean(np.abs(np.einsum("kii->ki", blocks))))
-        scale = mean_mass / float(np.mean(row_norms)) if row_norms.size else 1.0
-        self.penalty = relative_penalty * beta_prime * scale
+        self.penalty = relative_penalty * beta_prime * penalty_scale(
+            np.einsum("kii->ki", blocks), row_norms)
         values = pattern.values(beta_prime, blocks, self.penalty, jac_data)
         tangent = _force_tangent(model, t, q, qd, charts, gamma_prime)
-        self.lu = PatternedFactorization(pattern, pattern.matrix(values, tangent))
+        self.lu = pattern.factor(pattern.matrix(values, tangent))
 
 
 def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
@@ -199,34 +198,23 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         raise ModelError(f"step must be a positive time [s], got {step!r}")
     n = model.n_coordinates
     projection_tol = constraint_tol * 1e-3
-    start = _time.perf_counter()
     stats = {"method": "generalized-alpha", "rho_inf": rho_inf, "steps": 0,
              "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
              "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
     k_max = len(t)
-    Q, Qd, Qdd = (np.empty((k_max, n)) for _ in range(3))
-    Lam = np.empty((k_max, model.n_constraints))
-    Charts = None if model.charts0 is None else np.empty((k_max,) + model.charts0.shape)
-    done = 0
-
-    def partial(status: str, message: str) -> Results:
-        stats["wall_time"] = _time.perf_counter() - start
-        return Results(model, "forward dynamics", t[:done], Q[:done], Qd[:done], Qdd[:done],
-                       Lam[:done], status=status, message=message, stats=stats,
-                       charts=None if Charts is None else Charts[:done])
+    out = ResultsBuffer(model, "forward dynamics", t, stats)
 
     redundant = False  # set at the start: the constraint rows depend on each other
 
-    def record(k: int, q, qd, chart, lam_guess):
+    def record(q, qd, chart, lam_guess):
+        tk = t[out.done]
         # from lam = 0 where the rows depend on each other: the minimum-norm multipliers
-        qdd, lam, regular = consistent_accelerations(model, t[k], q, qd, chart,
+        qdd, lam, regular = consistent_accelerations(model, tk, q, qd, chart,
                                                      None if redundant else lam_guess,
                                                      redundant)
         if not regular:
-            stats["singular_outputs"].append(float(t[k]))
-        Q[k], Qd[k], Qdd[k], Lam[k] = q, qd, qdd, lam
-        if Charts is not None:
-            Charts[k] = chart
+            stats["singular_outputs"].append(float(tk))
+        out.store(q, qd, qdd, lam, chart)
         return qdd, lam
 
     def project_velocity(tt, q, qd, chart, lu, penalty):
@@ -299,20 +287,19 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         return None
 
     def loop() -> None:
-        nonlocal done, redundant
+        nonlocal redundant
         chart = model.charts0
         q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
                            hold=hold)
         redundant = rows_dependent(model, t[0], q, chart)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
-        qdd, lam = record(0, q, qd, chart, None)
+        qdd, lam = record(q, qd, chart, None)
         a = qdd.copy()
-        done = 1
         watch.tick(t[0], 0)
         tt = float(t[0])
         h = min(step, max_step)
-        while done < k_max:
-            target = float(t[done])
+        while out.done < k_max:
+            target = float(t[out.done])
             h_try = min(h, target - tt)
             if target - (tt + h_try) < 1e-9 * max(h, 1e-300):
                 h_try = target - tt
@@ -341,8 +328,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 tt = target
                 # the reported velocities are projected onto Cq qd = -Ct; the recursion keeps
                 # its own, because projecting them inside it costs the method its order
-                record(done, q, project_velocity(tt, q, qd, chart, S.lu, S.penalty), chart, lam)
-                done += 1
+                record(q, project_velocity(tt, q, qd, chart, S.lu, S.penalty), chart, lam)
             watch.tick(tt, stats["steps"])
             q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart)
             if moved:
@@ -353,5 +339,5 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, lam, redundant)
                 a = qdd.copy()
 
-    watch = Watch(observers, progress, model, t, "forward dynamics", partial)
-    return run_keeping_results(loop, partial, watch)
+    watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)
+    return run_keeping_results(loop, out.partial, watch)

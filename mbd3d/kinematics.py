@@ -9,7 +9,6 @@ those factors.
 
 from __future__ import annotations
 
-import time as _time
 from typing import Sequence
 
 import numpy as np
@@ -21,7 +20,7 @@ from mbd3d.errors import ModelError, NotFullyDrivenError
 from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented, solve_augmented_lagrangian
 from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
-from mbd3d.results import Results, run_keeping_results
+from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
 __all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "inverse_dynamics",
            "check_times"]
@@ -123,15 +122,9 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
            progress) -> Results:
     t = check_times(times)
     _require_fully_driven(model, analysis)
-    n, m = model.n_coordinates, model.n_constraints
-    Q, Qd, Qdd = (np.empty((len(t), n)) for _ in range(3))
-    Lam = np.empty((len(t), m)) if with_forces else None
-    charts = None if model.charts0 is None else np.empty((len(t),) + model.charts0.shape)
-    start = _time.perf_counter()
-    done = 0
+    out = ResultsBuffer(model, analysis, t, {"wall_time": 0.0}, with_lam=with_forces)
 
     def loop() -> None:
-        nonlocal done
         q = model.q0 if q_guess is None else q_guess
         chart = model.charts0
         for k, tk in enumerate(t):
@@ -139,7 +132,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 # second-order Taylor predictor: Newton-Raphson then needs one or two iterations
                 # and stays on the branch of the previous time point
                 h = tk - t[k - 1]
-                q = Q[k - 1] + h * Qd[k - 1] + 0.5 * h * h * Qdd[k - 1]
+                q = out.q[k - 1] + h * out.qd[k - 1] + 0.5 * h * h * out.qdd[k - 1]
             # keep orientation coordinates away from their singularity (spatial bodies)
             q, _, chart, _ = model.body_type.reset_charts(q, None, chart)
             q = solve_position(model, q, tk, tol=tol, charts=chart)
@@ -152,24 +145,16 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
             qd = lu.solve(constraints.velocity_rhs(model, tk, fr))
             fr = constraints.frames(model, q, qd, chart)
             qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
+            lam = None
             if with_forces:
                 # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
                 rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
-                Lam[k] = lu.solve(rhs, transpose=True)
-            Q[k], Qd[k], Qdd[k] = q, qd, qdd
-            if charts is not None:
-                charts[k] = chart
-            done = k + 1
-            watch.tick(tk, done)
+                lam = lu.solve(rhs, transpose=True)
+            out.store(q, qd, qdd, lam, chart)
+            watch.tick(tk, out.done)
 
-    def partial(status: str, message: str) -> Results:
-        return Results(model, analysis, t[:done], Q[:done], Qd[:done], Qdd[:done],
-                       None if Lam is None else Lam[:done], status=status, message=message,
-                       stats={"wall_time": _time.perf_counter() - start},
-                       charts=None if charts is None else charts[:done])
-
-    watch = Watch(observers, progress, model, t, analysis, partial)
-    return run_keeping_results(loop, partial, watch)
+    watch = Watch(observers, progress, model, t, analysis, out.partial)
+    return run_keeping_results(loop, out.partial, watch)
 
 
 def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,

@@ -17,7 +17,8 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 __all__ = ["SingularMatrix", "Factorization", "dependent_rows", "augmented_matrix",
            "solve_augmented", "solve_model_augmented",
-           "AugmentedPattern", "PenaltyPattern", "PatternedFactorization", "penalty_scale", "penalty_matrix", "solve_augmented_lagrangian"]
+           "AugmentedPattern", "PenaltyPattern", "PatternedFactorization", "penalty_scale",
+           "penalty_matrix", "solve_augmented_lagrangian"]
 
 #: relative size of the smallest LU pivot below which a matrix counts as singular
 PIVOT_TOLERANCE = 1e-12
@@ -100,100 +101,66 @@ def augmented_matrix(M, Cq):
     return np.block([[M, Cq.T], [Cq, np.zeros((m, m))]])
 
 
-class AugmentedPattern:
-    """Where the mass blocks and the Jacobian values go in ``[M Cq^T; Cq 0]``, fixed per model."""
+class _FixedPattern:
+    """Entries of a matrix whose sparsity is fixed when the model is built.
 
-    def __init__(self, model):
-        nb, nc, n, m = model.n_bodies, model.n_coords_per_body, model.n_coordinates, model.n_constraints
-        base = np.arange(nb)[:, None, None] * nc
-        block_rows = np.broadcast_to(base + np.arange(nc)[None, :, None], (nb, nc, nc)).ravel()
-        block_cols = np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel()
-        jr, jc = model._jac_rows, model._jac_cols
-        self.rows = np.concatenate([block_rows, n + jr, jc])
-        self.cols = np.concatenate([block_cols, jc, n + jr])
-        self.size = n + m
-        self.sparse = model.sparse
-        if self.sparse:
-            # A symmetric reverse Cuthill-McKee permutation, computed once: the matrix is then
-            # assembled already permuted to a small bandwidth (a chain's is banded) and SuperLU
-            # factors it in natural order, instead of recomputing a column ordering per solve.
-            structure = sp.csr_matrix((np.ones(len(self.rows)), (self.rows, self.cols)),
-                                      shape=(self.size, self.size))
-            self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
-            inverse = np.empty_like(self.perm)
-            inverse[self.perm] = np.arange(self.size)
-            prow, pcol = inverse[self.rows], inverse[self.cols]
-            self.order = np.lexsort((prow, pcol))  # column-major for CSC
-            self.indices = prow[self.order]
-            counts = np.bincount(pcol, minlength=self.size)
-            self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
-
-
-class PenaltyPattern:
-    """Where the mass blocks and the products of Jacobian values go in ``a M + p Cq^T Cq``,
-    fixed per model, so that the iteration matrix of the implicit integrator is filled by one
-    ``bincount`` instead of sparse matrix products.
-
-    ``Cq^T Cq`` couples the coordinates of every pair of Jacobian entries in one row: with the
-    entries sorted by row (CSR order) those pairs are enumerated once, here.
+    When sparse, a symmetric reverse Cuthill-McKee permutation is computed once: the matrix is
+    then assembled already permuted to a small bandwidth (a chain's is banded) and SuperLU
+    factors it in natural order, instead of recomputing a column ordering per solve.
     """
 
-    def __init__(self, model):
-        nb, nc, n = model.n_bodies, model.n_coords_per_body, model.n_coordinates
-        base = np.arange(nb)[:, None, None] * nc
-        block_rows = np.broadcast_to(base + np.arange(nc)[None, :, None], (nb, nc, nc)).ravel()
-        block_cols = np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel()
-        rows, cols, indptr = model._jac_rows, model._jac_cols, model._jac_indptr
-        per_row = np.diff(indptr)[rows]  # entries in the row of each entry
-        self.first = np.repeat(np.arange(len(rows)), per_row)
-        start = np.repeat(np.cumsum(per_row) - per_row, per_row)
-        self.second = indptr[rows[self.first]] + np.arange(len(self.first)) - start
-        all_rows = np.concatenate([block_rows, cols[self.first]])
-        all_cols = np.concatenate([block_cols, cols[self.second]])
-        linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
-        self.n_blocks = len(block_rows)
-        self.size = n
-        self.sparse = model.sparse
-        self.rows, self.cols = linear // n, linear % n
-        if self.sparse:
-            # a symmetric reverse Cuthill-McKee order, once: SuperLU then factors a banded
-            # matrix in natural order (see AugmentedPattern)
-            structure = sp.csr_matrix((np.ones(len(linear)), (self.rows, self.cols)),
-                                      shape=(n, n))
-            self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
-            inverse = np.empty_like(self.perm)
-            inverse[self.perm] = np.arange(n)
-            prow, pcol = inverse[self.rows], inverse[self.cols]
-            self.order = np.lexsort((prow, pcol))
-            self.indices = prow[self.order]
-            counts = np.bincount(pcol, minlength=n)
-            self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+    rows: np.ndarray
+    cols: np.ndarray
 
-    def values(self, mass_factor: float, blocks: np.ndarray, penalty: float,
-               jac_data: np.ndarray) -> np.ndarray:
-        """Entries of ``mass_factor M + penalty Cq^T Cq`` in the pattern's order."""
-        weights = np.concatenate([mass_factor * blocks.ravel(),
-                                  penalty * jac_data[self.first] * jac_data[self.second]])
-        return np.bincount(self.target, weights=weights, minlength=len(self.rows))
+    @staticmethod
+    def mass_block_entries(model) -> tuple[np.ndarray, np.ndarray]:
+        """Row and column indices of the per-body mass blocks, in ``blocks.ravel()`` order."""
+        nb, nc = model.n_bodies, model.n_coords_per_body
+        base = np.arange(nb)[:, None, None] * nc
+        return (np.broadcast_to(base + np.arange(nc)[None, :, None], (nb, nc, nc)).ravel(),
+                np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel())
+
+    def _lay_out(self, rows: np.ndarray, cols: np.ndarray, size: int, sparse: bool) -> None:
+        self.rows, self.cols, self.size, self.sparse = rows, cols, size, sparse
+        if not sparse:
+            return
+        structure = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
+        self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
+        inverse = np.empty_like(self.perm)
+        inverse[self.perm] = np.arange(size)
+        prow, pcol = inverse[rows], inverse[cols]
+        self.order = np.lexsort((prow, pcol))  # column-major for CSC
+        self.indices = prow[self.order]
+        counts = np.bincount(pcol, minlength=size)
+        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
 
     def matrix(self, values: np.ndarray, extra=None):
-        """The matrix (dense, or CSC in the permuted order) with ``extra`` (n, n) added."""
+        """The matrix from its entries (dense, or CSC in the permuted order), plus ``extra``
+        (n, n) in the original order."""
         if self.sparse:
             A = sp.csc_matrix((values[self.order], self.indices, self.indptr),
                               shape=(self.size, self.size))
             if extra is not None:
-                extra = sp.csr_matrix(extra)[self.perm][:, self.perm]
-                A = sp.csc_matrix(A + extra)
+                A = sp.csc_matrix(A + sp.csr_matrix(extra)[self.perm][:, self.perm])
             return A
         A = np.zeros((self.size, self.size))
         A[self.rows, self.cols] = values
         return A if extra is None else A + extra
 
+    def factor(self, A) -> "PatternedFactorization":
+        """LU factors of a matrix from :meth:`matrix`.
+
+        Raises
+        ------
+        SingularMatrix
+        """
+        return PatternedFactorization(self, A)
+
 
 class PatternedFactorization:
-    """LU factors of a matrix built by :class:`PenaltyPattern`, solving in the original order."""
+    """LU factors of a matrix built by a fixed pattern, solving in the original order."""
 
-    def __init__(self, pattern: PenaltyPattern, A):
+    def __init__(self, pattern: _FixedPattern, A):
         self.pattern = pattern
         self.lu = Factorization(A, ordering="NATURAL") if pattern.sparse else Factorization(A)
 
@@ -203,6 +170,47 @@ class PatternedFactorization:
         x = np.empty_like(b)
         x[self.pattern.perm] = self.lu.solve(b[self.pattern.perm])
         return x
+
+
+class AugmentedPattern(_FixedPattern):
+    """Where the mass blocks and the Jacobian values go in ``[M Cq^T; Cq 0]``, fixed per model."""
+
+    def __init__(self, model):
+        n, m = model.n_coordinates, model.n_constraints
+        block_rows, block_cols = self.mass_block_entries(model)
+        jr, jc = model._jac_rows, model._jac_cols
+        self._lay_out(np.concatenate([block_rows, n + jr, jc]),
+                      np.concatenate([block_cols, jc, n + jr]), n + m, model.sparse)
+
+
+class PenaltyPattern(_FixedPattern):
+    """Where the mass blocks and the products of Jacobian values go in ``a M + p Cq^T Cq``,
+    fixed per model, so that the iteration matrix of the implicit integrator is filled by one
+    ``bincount`` instead of sparse matrix products.
+
+    ``Cq^T Cq`` couples the coordinates of every pair of Jacobian entries in one row: with the
+    entries sorted by row (CSR order) those pairs are enumerated once, here.
+    """
+
+    def __init__(self, model):
+        n = model.n_coordinates
+        block_rows, block_cols = self.mass_block_entries(model)
+        rows, cols, indptr = model._jac_rows, model._jac_cols, model._jac_indptr
+        per_row = np.diff(indptr)[rows]  # entries in the row of each entry
+        self.first = np.repeat(np.arange(len(rows)), per_row)
+        start = np.repeat(np.cumsum(per_row) - per_row, per_row)
+        self.second = indptr[rows[self.first]] + np.arange(len(self.first)) - start
+        all_rows = np.concatenate([block_rows, cols[self.first]])
+        all_cols = np.concatenate([block_cols, cols[self.second]])
+        linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
+        self._lay_out(linear // n, linear % n, n, model.sparse)
+
+    def values(self, mass_factor: float, blocks: np.ndarray, penalty: float,
+               jac_data: np.ndarray) -> np.ndarray:
+        """Entries of ``mass_factor M + penalty Cq^T Cq`` in the pattern's order."""
+        weights = np.concatenate([mass_factor * blocks.ravel(),
+                                  penalty * jac_data[self.first] * jac_data[self.second]])
+        return np.bincount(self.target, weights=weights, minlength=len(self.rows))
 
 
 def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: np.ndarray
@@ -218,15 +226,7 @@ def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: 
     """
     pattern = model._augmented_pattern
     values = np.concatenate([blocks.ravel(), jac_data, jac_data])
-    if pattern.sparse:
-        K = sp.csc_matrix((values[pattern.order], pattern.indices, pattern.indptr),
-                          shape=(pattern.size, pattern.size))
-        x = np.empty(pattern.size)
-        x[pattern.perm] = Factorization(K, ordering="NATURAL").solve(rhs[pattern.perm])
-        return x
-    K = np.zeros((pattern.size, pattern.size))
-    K[pattern.rows, pattern.cols] = values
-    return Factorization(K).solve(rhs)
+    return pattern.factor(pattern.matrix(values)).solve(rhs)
 
 
 def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -243,16 +243,14 @@ def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndar
     return sol[:n], sol[n:]
 
 
-def penalty_scale(A, Cq) -> float:
-    """Penalty [units of ``A`` per squared unit of ``Cq``] that weighs the constraints like
-    ``A``: mean diagonal of ``A`` over the mean squared row norm of ``Cq``."""
-    diag_A = A.diagonal() if sp.issparse(A) else np.diag(A)
-    rows = (np.asarray(Cq.multiply(Cq).sum(axis=1)).ravel() if sp.issparse(Cq)
-            else np.einsum("ij,ij->i", Cq, Cq))
-    rows = rows[rows > 0]
+def penalty_scale(mass_diagonal: np.ndarray, row_squared_norms: np.ndarray) -> float:
+    """Penalty [units of the mass matrix per squared unit of ``Cq``] that weighs the
+    constraints like the masses: mean ``|M_ii|`` over the mean squared row norm of ``Cq``
+    (rows without entries left out)."""
+    rows = row_squared_norms[row_squared_norms > 0]
     if not rows.size:
         return 1.0
-    return float(np.mean(np.abs(diag_A))) / float(np.mean(rows))
+    return float(np.mean(np.abs(mass_diagonal))) / float(np.mean(rows))
 
 
 def penalty_matrix(A, Cq, penalty: float):
@@ -290,7 +288,9 @@ def solve_augmented_lagrangian(A, Cq, b: np.ndarray, c: np.ndarray, *, relative_
         If ``A + p Cq^T Cq`` is singular (``A`` is not positive definite on the null space of
         ``Cq``: a body without mass that nothing constrains).
     """
-    p = relative_penalty * penalty_scale(A, Cq)
+    rows = (np.asarray(Cq.multiply(Cq).sum(axis=1)).ravel() if sp.issparse(Cq)
+            else np.einsum("ij,ij->i", Cq, Cq))
+    p = relative_penalty * penalty_scale(A.diagonal() if sp.issparse(A) else np.diag(A), rows)
     lu = Factorization(penalty_matrix(A, Cq, p))
     lam = np.zeros(Cq.shape[0]) if lam is None else np.array(lam, dtype=float)
     CqT = Cq.T

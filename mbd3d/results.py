@@ -26,7 +26,8 @@ from mbd3d.body import Body
 from mbd3d.errors import MBDError, ModelError
 from mbd3d.rotations import continuous_quaternions, to_quaternion
 
-__all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "JointHistory", "format_table"]
+__all__ = ["Results", "ResultsBuffer", "BodyHistory", "PointHistory", "Reaction", "JointHistory",
+           "format_table"]
 
 
 @dataclass(frozen=True)
@@ -408,6 +409,44 @@ class Results:
         def write(f):
             np.savez_compressed(f, **arrays)
         _atomic_write(path, write, text=False)
+
+
+class ResultsBuffer:
+    """Histories an analysis fills time point by time point, preallocated for all ``t``.
+
+    :meth:`partial` builds the :class:`Results` of the points stored so far, as the analysis
+    hands them to observers while it runs and keeps them when it fails.
+    """
+
+    def __init__(self, model, analysis: str, t: np.ndarray, stats: dict,
+                 with_lam: bool = True):
+        import time
+        self._clock = time.perf_counter
+        self._start = self._clock()
+        self.model, self.analysis, self.t, self.stats = model, analysis, t, stats
+        k, n = len(t), model.n_coordinates
+        self.q, self.qd, self.qdd = (np.empty((k, n)) for _ in range(3))
+        self.lam = np.empty((k, model.n_constraints)) if with_lam else None
+        self.charts = None if model.charts0 is None else np.empty((k,) + model.charts0.shape)
+        self.done = 0
+
+    def store(self, q, qd, qdd, lam=None, chart=None) -> None:
+        """The next time point's state (``chart``: its reference rotations, spatial models)."""
+        k = self.done
+        self.q[k], self.qd[k], self.qdd[k] = q, qd, qdd
+        if self.lam is not None:
+            self.lam[k] = lam
+        if self.charts is not None:
+            self.charts[k] = chart
+        self.done = k + 1
+
+    def partial(self, status: str, message: str) -> Results:
+        self.stats["wall_time"] = self._clock() - self._start
+        k = self.done
+        return Results(self.model, self.analysis, self.t[:k], self.q[:k], self.qd[:k],
+                       self.qdd[:k], None if self.lam is None else self.lam[:k], status=status,
+                       message=message, stats=self.stats,
+                       charts=None if self.charts is None else self.charts[:k])
 
 
 def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"],
