@@ -7,8 +7,9 @@ against the body kinematics, so the same classes serve every body type that supp
 - :class:`Prismatic`: slider along an axis.
 - :class:`Fixed`: weld (also to the ground).
 - :class:`Distance`: massless rigid link between two points.
+- :class:`PointOnLine`: a point on a line (spatial), the pin in a slot (planar).
 - Spatial only: :class:`Spherical`, :class:`Universal`, :class:`Cylindrical`, :class:`Planar`,
-  :class:`PointOnLine`, :class:`PointOnPlane`.
+  :class:`PointOnPlane`.
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 

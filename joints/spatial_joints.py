@@ -1,18 +1,19 @@
-"""Joints that exist only in space: spherical, universal, cylindrical, planar, point-on-line,
-point-on-plane. Each is a composition of the same primitives as the planar joints."""
+"""Joints of spatial models: spherical, universal, cylindrical, planar, point-on-line (also the
+planar pin in a slot), point-on-plane. Each is a composition of the same primitives as the
+planar joints."""
 
 from __future__ import annotations
 
 from typing import Any
 
-
+import numpy as np
 
 from mbd3d.body import Body
 from mbd3d.element import PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.model import BuildContext
 
-from joints.base import Axes, Joint, perpendicular_rows, require_spatial
+from joints.base import Axes, Joint, perpendicular, perpendicular_rows, require_spatial
 
 
 class Spherical(Joint):
@@ -95,15 +96,31 @@ class Planar(_AxisJoint):
 
 
 class PointOnLine(_AxisJoint):
-    """The point of body j stays on the line of body i through its point along ``axis``
-    (``normal_f``, ``normal_g``); rotations are free. 2 rows."""
+    """The point of body j stays on the line of body i through its point along ``axis``;
+    rotations are free. Spatial: rows ``normal_f``, ``normal_g`` (2 rows). Planar: the pin in a
+    slot, row ``normal`` (1 row; body j also slides along and turns freely).
+
+    Reaction on body j: force [N] normal to the line, in joint axes (x along the line).
+    """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
-        require_spatial(ctx, self.name)
         u_i, u_j = self.points(ctx)
+        if ctx.dim == 2:
+            h_i = ctx.to_local_vector(self.body_i,
+                                      ctx.direction(self.axis, f"joint '{self.name}': axis"))
+            return [PrimitiveSpec("dot2", self.body_i, self.body_j,
+                                  {"v_i": perpendicular(h_i), "u_i": u_i, "u_j": u_j},
+                                  ("normal",))]
         f, g, _ = Axes(ctx, self, self.axis).i
         return [PrimitiveSpec("dot2", self.body_i, self.body_j, {"v_i": v, "u_i": u_i, "u_j": u_j},
                               (label,)) for v, label in ((f, "normal_f"), (g, "normal_g"))]
+
+    def reaction_frame(self, ctx: BuildContext):
+        if ctx.dim == 3:
+            return super().reaction_frame(ctx)
+        u_i, u_j = self.points(ctx)
+        h_i = ctx.to_local_vector(self.body_i, ctx.direction(self.axis, f"joint '{self.name}': axis"))
+        return u_i, u_j, np.column_stack([h_i, perpendicular(h_i)])
 
 
 class PointOnPlane(_AxisJoint):

@@ -13,7 +13,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d import constraints
-from joints import Distance, Fixed, Prismatic, Revolute, RotationDriver
+from joints import Distance, Fixed, PointOnLine, Prismatic, Revolute, RotationDriver
 
 
 def random_model(seed: int):
@@ -32,6 +32,8 @@ def random_model(seed: int):
                    length=1.3))
     b.add(Fixed("weld", b.ground, b0, point_i=rng.normal(size=2), point_j=rng.normal(size=2)))
     b.add(RotationDriver("drive", b0, b1, motion=mb.Constant(0.4)))
+    b.add(PointOnLine("slot", b1, b0, axis=rng.normal(size=2), point_i=rng.normal(size=2),
+                      point_j=rng.normal(size=2)))
     model = b.build()
     q = model.q0 + 0.3 * rng.normal(size=model.n_coordinates)
     qd = rng.normal(size=model.n_coordinates)
