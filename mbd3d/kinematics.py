@@ -17,7 +17,8 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.errors import ModelError, NotFullyDrivenError
-from mbd3d.linalg import Factorization, SingularMatrix, solve_augmented, solve_augmented_lagrangian
+from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
+                          solve_augmented_lagrangian)
 from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
@@ -46,10 +47,6 @@ def _require_fully_driven(model, what: str) -> None:
             f"{m} constraint equations: {n - m} degree(s) of freedom are not driven. Add "
             f"{n - m} driver(s) (RotationDriver, TranslationDriver, CoordinateDriver) or use "
             "mbd3d.forward_dynamics.")
-    if m > n:
-        raise NotFullyDrivenError(
-            f"{what}: '{model.name}' has {m} constraint equations for {n} coordinates; "
-            f"{m - n} are redundant or conflicting (see mbd3d.mobility).")
 
 
 def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[float] | None = None,
@@ -110,6 +107,17 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
     """Accelerations of a fully driven mechanism: ``Cq qdd = Qd``."""
     _require_fully_driven(model, "solve_acceleration")
     fr = constraints.frames(model, q, qd, charts)
+    if model.n_constraints > model.n_coordinates:
+        # redundant rows (see kinematic_analysis): the consistent solution, by the augmented
+        # Lagrangian
+        Cq = constraints.jacobian(model, t, q, fr)
+        qdd, _, used = solve_augmented_lagrangian(
+            mass_matrix(model, fr), Cq, np.zeros(model.n_coordinates),
+            constraints.acceleration_rhs(model, t, q, qd, fr),
+            max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+        if used < MAX_AUGMENTED_LAGRANGIAN:
+            return qdd
+        raise singular_error(model, Cq, t, f"acceleration analysis of '{model.name}'")
     try:
         return Factorization(constraints.jacobian(model, t, q, fr)).solve(
             constraints.acceleration_rhs(model, t, q, qd, fr))
@@ -118,11 +126,70 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                              f"acceleration analysis of '{model.name}'") from None
 
 
+def _redundant_rows(model, t: float, q: np.ndarray, chart, analysis: str) -> bool:
+    """Whether a mechanism with more constraint equations than coordinates is still fully
+    driven (its rows span every coordinate, the surplus redundant): True, or an error that says
+    how many degrees of freedom the redundancy leaves undriven."""
+    Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
+                              sparse=False)
+    rank, groups = dependent_rows(Cq)
+    n = model.n_coordinates
+    if rank < n:
+        rows = "; ".join(", ".join(model.row_labels[r] for r in g) for g in groups)
+        raise NotFullyDrivenError(
+            f"{analysis} needs a fully driven mechanism: '{model.name}' has "
+            f"{model.n_constraints} constraint equations for {n} coordinates, but only {rank} "
+            f"are independent (dependent rows: {rows}), so {n - rank} degree(s) of freedom are "
+            "not driven. Add drivers, or use mbd3d.forward_dynamics (see mbd3d.mobility).")
+    driver_rows = np.zeros(model.n_constraints, dtype=bool)
+    drivers = [e.name for e in model.joints if e.is_driver]
+    for name in drivers:
+        driver_rows[model.rows_of(name)] = True
+    joint_rank = dependent_rows(Cq[~driver_rows])[0] if np.any(~driver_rows) else 0
+    driver_rank = dependent_rows(Cq[driver_rows])[0] if np.any(driver_rows) else 0
+    if joint_rank + driver_rank > rank:
+        raise NotFullyDrivenError(
+            f"{analysis} of '{model.name}': the drivers ({', '.join(drivers)}) depend on the "
+            f"joints' rows. The joints alone leave {n - joint_rank} degree(s) of freedom for "
+            f"{driver_rank} driven motion(s): the drivers ask for a motion the joints forbid "
+            "(a rigid loop, or a driver of a coordinate the joints already fix). See "
+            "mbd3d.mobility of the model without its drivers.")
+    return True
+
+
+def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, analysis: str):
+    """``qd``, ``qdd`` and the minimum-norm ``lam`` where the rows of ``Cq`` depend on each
+    other but span every coordinate. The augmented Lagrangian finds the unique rates from the
+    consistent rows; its multipliers have no component in the null space of ``Cq^T``."""
+    fr = constraints.frames(model, q, charts=chart)
+    Cq = constraints.jacobian(model, t, q, fr)
+    M = mass_matrix(model, fr)
+    n = model.n_coordinates
+    qd, _, used = solve_augmented_lagrangian(M, Cq, np.zeros(n), constraints.velocity_rhs(model, t, fr),
+                                             max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+    if used < MAX_AUGMENTED_LAGRANGIAN:
+        fr = constraints.frames(model, q, qd, chart)
+        forces = generalized_forces(model, t, fr) if with_forces else np.zeros(n)
+        qdd, lam, used = solve_augmented_lagrangian(
+            M, Cq, forces, constraints.acceleration_rhs(model, t, q, qd, fr),
+            max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+        if used < MAX_AUGMENTED_LAGRANGIAN:
+            return qd, qdd, lam if with_forces else None
+    # the rows are inconsistent: the mechanism locks up here
+    raise singular_error(model, Cq, float(t), f"{analysis} of '{model.name}'")
+
+
 def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
            progress) -> Results:
     t = check_times(times)
     _require_fully_driven(model, analysis)
-    out = ResultsBuffer(model, analysis, t, {"wall_time": 0.0}, with_lam=with_forces)
+    # more equations than coordinates: redundant rows if they still fix every coordinate
+    # (checked on the assembled first point), solved then by the augmented Lagrangian
+    surplus = model.n_constraints > model.n_coordinates
+    stats = {"wall_time": 0.0}
+    if surplus:
+        stats["singular_outputs"] = []
+    out = ResultsBuffer(model, analysis, t, stats, with_lam=with_forces)
 
     def loop() -> None:
         q = model.q0 if q_guess is None else q_guess
@@ -135,7 +202,15 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 q = out.q[k - 1] + h * out.qd[k - 1] + 0.5 * h * h * out.qdd[k - 1]
             # keep orientation coordinates away from their singularity (spatial bodies)
             q, _, chart, _ = model.body_type.reset_charts(q, None, chart)
-            q = solve_position(model, q, tk, tol=tol, charts=chart)
+            q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)
+            if surplus:
+                if k == 0:
+                    _redundant_rows(model, tk, q, chart, analysis)
+                qd, qdd, lam = _redundant_rates(model, tk, q, chart, with_forces, analysis)
+                stats["singular_outputs"].append(float(tk))
+                out.store(q, qd, qdd, lam, chart)
+                watch.tick(tk, out.done)
+                continue
             fr = constraints.frames(model, q, charts=chart)
             Cq = constraints.jacobian(model, tk, q, fr)
             try:
@@ -165,7 +240,10 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
     Parameters
     ----------
     model : Model
-        Must be fully driven (as many constraint equations as coordinates).
+        Must be fully driven: its constraint rows fix every coordinate. More equations than
+        coordinates are accepted when the surplus is redundant (a planar four-bar built of
+        four spatial revolutes); they are then solved by the augmented Lagrangian, and inverse
+        dynamics reports the minimum-norm multipliers (``Results.reactions_unique`` is False).
     times : (k,) array_like
         Strictly increasing times [s].
     q_guess : (n,) array_like, optional
@@ -186,7 +264,7 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
     Raises
     ------
     NotFullyDrivenError
-        The mechanism has undriven degrees of freedom (or redundant constraints).
+        The mechanism has undriven degrees of freedom (also when redundant rows leave some).
     AssemblyError, SingularJacobianError
         At a time point that cannot be solved (e.g. a lock-up); ``.results`` holds what was
         computed before it.

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
+import scipy.linalg as la
 
 from mbd3d import constraints
 from mbd3d.linalg import dependent_rows
@@ -30,6 +31,12 @@ class MobilityReport:
         ``n_constraints - rank``: constraint equations that depend on others.
     dependent : list of list of str
         For each dependency, the row labels ("joint.component") involved.
+    free_coordinates : list of str
+        ``dof`` coordinates ("body.coordinate") that can be chosen independent: driving these
+        (or giving them as ``hold`` to :func:`mbd3d.solve_position`) fixes the mechanism. Found
+        by a column-pivoted QR of ``Cq`` (coordinate partitioning); the choice is not unique.
+    free_directions : ndarray (n_coordinates, dof)
+        Orthonormal basis of the velocities the constraints allow (null space of ``Cq``).
     """
 
     model: str
@@ -41,6 +48,8 @@ class MobilityReport:
     dof: int
     redundant: int
     dependent: list = field(default_factory=list)
+    free_coordinates: list = field(default_factory=list)
+    free_directions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def fully_driven(self) -> bool:
@@ -66,6 +75,8 @@ class MobilityReport:
             f"  Gruebler n_d = n - m   {self.gruebler}",
             f"  rank of Cq             {self.rank}",
             f"  degrees of freedom     {self.dof}",
+            *([f"  free coordinates       {', '.join(self.free_coordinates)}"]
+              if self.free_coordinates else []),
             f"  => {self.message}",
         ])
 
@@ -89,5 +100,14 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
         rank, groups = 0, []
     redundant = m - rank
     dependent = [[model.row_labels[r] for r in g] for g in groups] if redundant else []
-    return MobilityReport(model.name, model.n_bodies, n, m, n - m, rank, n - rank, redundant,
-                          dependent)
+    dof = n - rank
+    if m:
+        # the columns QR pivots first span the rows' range; the others are free to choose
+        _, _, pivots = la.qr(Cq, mode="economic", pivoting=True)
+        free = sorted(pivots[rank:])
+        _, _, Vt = la.svd(Cq)
+        directions = Vt[rank:].T
+    else:
+        free, directions = range(n), np.eye(n)
+    return MobilityReport(model.name, model.n_bodies, n, m, n - m, rank, dof, redundant,
+                          dependent, [model.coordinate_labels[k] for k in free], directions)

@@ -88,6 +88,27 @@ def test_mobility_of_a_fully_driven_and_a_free_mechanism():
     assert "4 degree(s) of freedom" in str(free)
 
 
+@pytest.mark.parametrize("build", [lambda: pendulum_chain(4), lambda: slider_crank(crank_speed=None)])
+def test_free_coordinates_and_directions_complete_the_jacobian(build):
+    """Holding the reported free coordinates leaves a square regular system (they can be
+    driven), and the free directions are orthonormal velocities the constraints allow."""
+    from mbd3d import constraints
+    model = build()
+    report = mb.mobility(model)
+    Cq = constraints.jacobian(model, 0.0, model.q0, sparse=False)
+    free = [model.coordinate_index(label) for label in report.free_coordinates]
+    assert len(free) == report.dof > 0
+    held = np.eye(model.n_coordinates)[free]
+    square = np.vstack([Cq, held])
+    assert square.shape[0] == square.shape[1]
+    assert np.linalg.cond(square) < 1e6
+    D = report.free_directions
+    assert D.shape == (model.n_coordinates, report.dof)
+    np.testing.assert_allclose(D.T @ D, np.eye(report.dof), atol=1e-12)
+    assert np.max(np.abs(Cq @ D)) < 1e-12
+    assert "free coordinates" in str(report)
+
+
 def test_mobility_finds_the_redundancy_of_a_double_parallelogram():
     # three parallel cranks and one coupler: Gruebler says 0, the linkage moves (1 DOF)
     b = mb.ModelBuilder(dim=2)

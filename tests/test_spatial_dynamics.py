@@ -13,7 +13,10 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
-from mbd3d.mechanisms import pendulum_chain, slider_crank, slider_crank_positions
+from mbd3d import constraints
+from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.mechanisms import (pendulum_chain, slider_crank, slider_crank_positions,
+                              spatial_four_bar)
 from joints import Prismatic, Revolute, Spherical, Universal
 
 G = 9.81
@@ -216,10 +219,11 @@ def test_torque_in_body_axes_turns_with_the_body():
     np.testing.assert_allclose(rotor.rotation[:, :, 2], np.tile(A0[:, 2], (11, 1)), atol=1e-9)
 
 
-def spatial_four_bar_in_plane(planar: mb.Results, driven: bool, torque: float = 0.0) -> mb.Model:
+def spatial_four_bar_in_plane(planar: mb.Results, driven: bool, torque: float = 0.0,
+                              revolutes_only: bool = False) -> mb.Model:
     """The four-bar of mbd3d.mechanisms.four_bar rebuilt with spatial bodies, hinges along z and
-    a universal and a ball joint on the coupler (four spatial revolutes would be redundant);
-    the drawing is read from the planar results at t = 0."""
+    a universal and a ball joint on the coupler, or (``revolutes_only``) four revolutes: then
+    3 of the 21 equations are redundant. The drawing is read from the planar results at t = 0."""
     from joints import RotationDriver
     planar_model = planar.model
     o2, o4 = np.zeros(2), np.array([0.30, 0.0])
@@ -235,9 +239,13 @@ def spatial_four_bar_in_plane(planar: mb.Results, driven: bool, torque: float = 
             orientation=Rotation.from_rotvec([0.0, 0.0, planar.body(body.name).angle[0]]).as_matrix())
     coupler_dir = np.r_[(b_point - a) / np.linalg.norm(b_point - a), 0.0]
     o2_pin = b.add(Revolute("O2", b.ground, bodies["crank"], at=(*o2, 0.0), axis=z))
-    b.add(Universal("A", bodies["crank"], bodies["coupler"], at=(*a, 0.0), axis_i=z,
-                    axis_j=np.cross(coupler_dir, z)))
-    b.add(Spherical("B", bodies["coupler"], bodies["rocker"], at=(*b_point, 0.0)))
+    if revolutes_only:
+        b.add(Revolute("A", bodies["crank"], bodies["coupler"], at=(*a, 0.0), axis=z))
+        b.add(Revolute("B", bodies["coupler"], bodies["rocker"], at=(*b_point, 0.0), axis=z))
+    else:
+        b.add(Universal("A", bodies["crank"], bodies["coupler"], at=(*a, 0.0), axis_i=z,
+                        axis_j=np.cross(coupler_dir, z)))
+        b.add(Spherical("B", bodies["coupler"], bodies["rocker"], at=(*b_point, 0.0)))
     b.add(Revolute("O4", b.ground, bodies["rocker"], at=(*o4, 0.0), axis=z))
     if driven:
         b.add(RotationDriver("motor", o2_pin, motion=mb.Ramp(math.radians(60.0), 2 * math.pi)))
@@ -260,6 +268,62 @@ def test_planar_restricted_four_bar_reproduces_the_planar_model():
                                atol=1e-9)
     np.testing.assert_allclose(spatial.joint("O4").reaction(on="rocker").force[:, :2],
                                planar.joint("O4").reaction(on="rocker").force, atol=1e-9)
+
+
+def test_four_revolute_four_bar_is_redundant_and_still_analysed():
+    """A planar four-bar of four spatial revolutes: Gruebler -2 (21 equations, 18 coordinates)
+    but one driven degree of freedom. Kinematics and inverse dynamics run on the redundant
+    rows and reproduce the planar model; the in-plane reactions and the motor torque are
+    unique and equal the planar ones, the out-of-plane ones are the minimum-norm share."""
+    from mbd3d.mechanisms import four_bar
+    planar = mb.inverse_dynamics(four_bar(crank_speed=2 * math.pi), np.linspace(0.0, 1.0, 25))
+    model = spatial_four_bar_in_plane(planar, driven=True, revolutes_only=True)
+    report = mb.mobility(model)
+    assert (report.gruebler, report.rank, report.dof, report.redundant) == (-3, 18, 0, 3)
+    spatial = mb.inverse_dynamics(model, planar.t)
+    assert not spatial.reactions_unique and spatial.status == "complete"
+    for name in ("crank", "coupler", "rocker"):
+        rot = spatial.body(name).rotation
+        np.testing.assert_allclose(np.unwrap(np.arctan2(rot[:, 1, 0], rot[:, 0, 0])),
+                                   planar.body(name).angle, atol=1e-10)
+        np.testing.assert_allclose(spatial.body(name).position[:, :2],
+                                   planar.body(name).position, atol=1e-12)
+        np.testing.assert_allclose(spatial.body(name).angular_velocity[:, 2],
+                                   planar.body(name).angular_velocity, atol=1e-9)
+        np.testing.assert_allclose(spatial.body(name).acceleration[:, :2],
+                                   planar.body(name).acceleration, atol=1e-8)
+    np.testing.assert_allclose(spatial.driver("motor").effort, planar.driver("motor").effort,
+                               atol=1e-8)
+    for joint in ("O2", "A", "B", "O4"):
+        np.testing.assert_allclose(spatial.joint(joint).reaction(on=joint_body(joint)).force[:, :2],
+                                   planar.joint(joint).reaction(on=joint_body(joint)).force,
+                                   atol=1e-8)
+    # the multipliers balance the equations of motion and carry nothing along the three left
+    # null vectors of Cq (the statically indeterminate out-of-plane share)
+    for k in (0, 7, 19):
+        q, qd = spatial.q[k], spatial.qd[k]
+        fr = constraints.frames(model, q, qd, spatial.charts[k])
+        Cq = constraints.jacobian(model, spatial.t[k], q, fr, sparse=False)
+        residual = (mass_matrix(model, fr) @ spatial.qdd[k] + Cq.T @ spatial.lam[k]
+                    - generalized_forces(model, spatial.t[k], fr))
+        assert np.max(np.abs(residual)) < 1e-8
+        U, singular, _ = np.linalg.svd(Cq)
+        null = U[:, np.sum(singular > 1e-9 * singular[0]):]
+        assert null.shape[1] == 3
+        assert np.max(np.abs(null.T @ spatial.lam[k])) < 1e-8 * np.max(np.abs(spatial.lam[k]))
+
+
+def test_four_revolute_loop_with_skew_axes_is_not_driven_by_one_motor():
+    """Four revolutes with skew crank and rocker hinges (not a Bennett linkage): the joints
+    alone make the loop rigid, so a motor on it conflicts with them, and kinematic analysis
+    says so instead of failing at the velocity solve."""
+    model = spatial_four_bar(all_revolute=True, crank_speed=2 * math.pi)
+    with pytest.raises(mb.NotFullyDrivenError, match="joints alone leave 0 degree"):
+        mb.kinematic_analysis(model, [0.0, 0.1])
+
+
+def joint_body(joint: str) -> str:
+    return {"O2": "crank", "A": "coupler", "B": "rocker", "O4": "rocker"}[joint]
 
 
 def test_planar_restricted_four_bar_forward_dynamics():
