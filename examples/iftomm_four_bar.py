@@ -62,6 +62,9 @@ def main(bars: int = 40, duration: float = 20.0, step: float = 1e-3, rrd: str | 
     print(f"B0 at {duration:g} s: ({b0[-1, 0]:.6f}, {b0[-1, 1]:.6f}) m; energy drift "
           f"{np.max(np.abs(energy - energy[0])):.2e} J; largest |C| "
           f"{res.position_residual.max():.1e} m")
+    passages = res.singular_passages
+    print(f"{len(passages)} singular positions passed, e.g. "
+          + "; ".join(str(p) for p in passages[:2]))
     if bars == 40:
         reference = np.loadtxt(REFERENCE, comments="#")
         reference = reference[reference[:, 0] <= duration + 1e-9]

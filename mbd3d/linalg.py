@@ -53,6 +53,12 @@ class Factorization:
         if pivots.size and (not np.all(np.isfinite(pivots))
                             or pivots.min() <= PIVOT_TOLERANCE * pivots.max()):
             raise SingularMatrix("smallest pivot below tolerance")
+        self._pivots = pivots
+
+    @property
+    def log_abs_determinant(self) -> float:
+        """``log |det A|`` from the pivots (the factor L has a unit diagonal)."""
+        return float(np.sum(np.log(self._pivots)))
 
     def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
         if self.sparse:

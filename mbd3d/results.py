@@ -356,6 +356,13 @@ class Results:
         return not self.stats.get("singular_outputs")
 
     @property
+    def singular_passages(self) -> list:
+        """Singular positions the motion passed (generalized-alpha only; the explicit methods
+        stop at one): a list of :class:`mbd3d.passages.SingularPassage`, each with the
+        ``time`` [s] and the ``joints`` whose rows (nearly) depend on each other there."""
+        return list(self.stats.get("singular_passages", []))
+
+    @property
     def kinetic_energy(self) -> np.ndarray:
         """Kinetic energy [J] at every time point."""
         return self._compute_energies()[0]

@@ -12,7 +12,9 @@ from scipy.integrate import solve_ivp
 
 import mbd3d as mb
 from joints import Prismatic, Revolute
-from mbd3d.mechanisms import pendulum_chain, spatial_chain
+from mbd3d.mechanisms import pendulum_chain, slider_crank, spatial_chain
+from test_examples import load
+from test_published_problems import four_bar_oscillator
 
 G = 9.81
 
@@ -104,3 +106,58 @@ def test_bad_integrator_options_are_named():
         mb.forward_dynamics(model, t, method="RK45", step=1e-3)
     with pytest.raises(mb.ModelError, match="generalized-alpha"):
         mb.forward_dynamics(model, t, method="Euler")
+
+
+def crossing_times(t: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Times where ``values`` changes sign, by linear interpolation."""
+    k = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))
+    return t[k] - values[k] * (t[k + 1] - t[k]) / (values[k + 1] - values[k])
+
+
+def test_singular_passages_of_the_four_bars_are_reported_at_the_flat_positions():
+    """IFToMM A02, N = 2: every time the cranks lie flat (sin phi = 0 in the separately
+    derived one-DOF equation) the integration reports a passage, within a step, naming the
+    joints of the chain."""
+    t = np.linspace(0.0, 6.0, 61)
+    res = mb.forward_dynamics(load("iftomm_four_bar").build(2), t, method="generalized-alpha",
+                              step=1e-3)
+    fine = np.linspace(0.0, 6.0, 60001)
+    flat = crossing_times(fine, four_bar_oscillator(2, fine)[:, 1])
+    passages = res.singular_passages
+    assert len(flat) >= 6 and len(passages) == len(flat)
+    np.testing.assert_allclose([p.time for p in passages], flat, atol=1.5e-3)
+    assert all({"O0", "B0"} <= set(p.joints) and p.depth > 15 for p in passages)
+    assert "t = " in str(passages[0])
+    # the explicit methods report none: they stop at the first one
+    assert mb.forward_dynamics(load("iftomm_four_bar").build(2), t[:5]).singular_passages == []
+
+
+def isosceles_slider_crank() -> tuple[mb.Model, np.ndarray]:
+    """Crank and rod of equal length, turning freely at 2 pi rad/s without gravity: where the
+    crank is vertical the slider reaches the pivot and the rod folds onto the crank, a
+    bifurcation of the constraint manifold."""
+    model = slider_crank(crank_length=0.2, rod_length=0.2, crank_angle=0.3, crank_speed=None,
+                         gravity=0.0)
+    guess = np.zeros(model.n_coordinates)
+    guess[model.coordinate_index("crank.theta")] = 2 * math.pi
+    return model, mb.solve_velocity(model, model.q0, 0.0, qd_guess=guess, hold=["crank.theta"])
+
+
+def test_isosceles_slider_crank_passes_its_bifurcation_conserving_energy():
+    """No force does work, so the kinetic energy is constant; through two passages of the
+    singular position its error falls at second order with the step, and the passages are
+    reported where the slider crosses the pivot."""
+    model, qd0 = isosceles_slider_crank()
+    t = np.linspace(0.0, 1.6, 801)
+    errors = []
+    for step in (1e-3, 5e-4):
+        res = mb.forward_dynamics(model, t, qd0=qd0, method="generalized-alpha", step=step)
+        energy = res.kinetic_energy
+        errors.append(np.max(np.abs(energy - energy[0])) / energy[0])
+    assert errors[1] < 2e-4 and 3.5 < errors[0] / errors[1] < 4.5
+    assert np.max(res.position_residual) < 1e-10
+    slider_x = res.body("slider").position[:, 0]
+    crossings = crossing_times(res.t, slider_x)
+    assert len(crossings) == 2
+    np.testing.assert_allclose([p.time for p in res.singular_passages], crossings, atol=1e-3)
+    assert all(set(p.joints) == {"O", "A", "B", "rail"} for p in res.singular_passages)
