@@ -77,6 +77,16 @@ class _CompiledForces(ABC):
         """Potential energy stored in the elements [J] (zero for non-conservative ones)."""
         return 0.0
 
+    #: whether :meth:`tangent` is implemented (else implicit integrators difference
+    #: :meth:`apply` over the elements' bodies)
+    analytic_tangent = False
+
+    def tangent(self, model: "Model", t: float, fr: Any, velocity_weight: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``-dQ/dq - velocity_weight dQ/dqd`` as COO triplets ``(rows, cols, values)`` over
+        the padded coordinates ``(n_bodies + 1) * n_coords`` (ground block last)."""
+        raise NotImplementedError
+
 
 class _Value:
     """A force value given as a constant, ``f(t)`` or ``f(t, state)``, evaluated uniformly."""
@@ -144,6 +154,7 @@ class PointForce(ForceElement):
 
 class _PointForces(_CompiledForces):
     def __init__(self, elements: list[PointForce], ctx: "BuildContext"):
+        self.elements = elements
         dim = ctx.dim
         self.items = []
         for e in elements:
@@ -195,6 +206,7 @@ class Torque(ForceElement):
 
 class _Torques(_CompiledForces):
     def __init__(self, elements: list[Torque], ctx: "BuildContext"):
+        self.elements = elements
         size = None if ctx.dim == 2 else 3
         self.items = [(e, _Value(e.torque, f"torque '{e.name}'", size)) for e in elements]
         self.shape = () if ctx.dim == 2 else (3,)
@@ -338,6 +350,34 @@ class _SpringDampers(_SpringGroup):
     def potential(self, model, fr) -> float:
         _, length = self._length(model, fr)
         return float(0.5 * np.sum(self.k * (length - self.l0) ** 2))
+
+    analytic_tangent = True
+
+    def tangent(self, model, t, fr, velocity_weight):
+        """With ``d = p_j - p_i = l e`` and ``G = [-J_i, J_j]`` (``J`` the point Jacobians):
+        ``G^T H G``, ``H = (k + w c) e e^T + (T / l)(I - e e^T)``: the spring and damper along
+        the line and the turning of the line under tension ``T``. Left out: the change of the
+        point Jacobians with the rotations (``dJ^T/dq f``) and of the damper rate with the
+        positions, both modest terms a modified Newton iteration absorbs."""
+        bt = model.body_type
+        bi, bj = self._indices(model)
+        d, length = self._length(model, fr)
+        e = d / length[:, None]
+        d_dot = bt.point_velocity(fr, bj, self.u_j) - bt.point_velocity(fr, bi, self.u_i)
+        tension = (self.k * (length - self.l0) + self.c * np.einsum("kd,kd->k", e, d_dot)
+                   + self._actuation(t))
+        along = np.einsum("kd,ke->kde", e, e)
+        H = ((self.k + velocity_weight * self.c)[:, None, None] * along
+             + (tension / length)[:, None, None] * (np.eye(e.shape[1]) - along))
+        G = np.concatenate([-bt.point_jacobian(fr, bi, self.u_i),
+                            bt.point_jacobian(fr, bj, self.u_j)], axis=2)
+        blocks = np.einsum("kdm,kde,ken->kmn", G, H, G)
+        nc = model.n_coords_per_body
+        index = np.concatenate([bi[:, None] * nc + np.arange(nc), bj[:, None] * nc + np.arange(nc)],
+                               axis=1)
+        rows = np.broadcast_to(index[:, :, None], blocks.shape)
+        cols = np.broadcast_to(index[:, None, :], blocks.shape)
+        return rows.ravel(), cols.ravel(), blocks.ravel()
 
 
 class RotationalSpringDamper(ForceElement):

@@ -139,30 +139,50 @@ def rows_dependent(model, t: float, q: np.ndarray, charts=None) -> bool:
 
 
 def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
-    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` by forward differences, or
-    None when only gravity acts (then the applied forces do not depend on the state, apart
-    from the spatial bodies' quadratic velocity terms that modified Newton absorbs)."""
+    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements, or None
+    when there are none (gravity does not depend on the state; the spatial bodies' quadratic
+    velocity terms are left to the modified Newton iteration). Groups with an analytic tangent
+    (spring-dampers) give it directly; the others are differenced forward, only over the
+    coordinates of the bodies they act on."""
     if not model.force_groups:
         return None
-    n = model.n_coordinates
-    f0 = generalized_forces(model, t, constraints.frames(model, q, qd, charts))
-    T = np.empty((n, n))
-    for j in range(n):
-        for vector, weight in ((q, 1.0), (qd, gamma_prime)):
-            h = 1.5e-8 * max(1.0, abs(vector[j]))
-            shifted = vector.copy()
-            shifted[j] += h
-            args = (shifted, qd) if vector is q else (q, shifted)
-            f = generalized_forces(model, t, constraints.frames(model, *args, charts))
-            column = -(f - f0) / h * weight
-            T[:, j] = column if vector is q else T[:, j] + column
-    return sp.csr_matrix(T) if model.sparse else T
+    n, nc, nb = model.n_coordinates, model.n_coords_per_body, model.n_bodies
+    fr = constraints.frames(model, q, qd, charts)
+    rows, cols, values = [], [], []
+    for group in model.force_groups:
+        if group.analytic_tangent:
+            r, c, v = group.tangent(model, t, fr, gamma_prime)
+            keep = (r < n) & (c < n)  # the ground block (last) is not a coordinate
+            rows.append(r[keep]), cols.append(c[keep]), values.append(v[keep])
+    differenced = [g for g in model.force_groups if not g.analytic_tangent]
+    if differenced:
+        def forces(*state):
+            Q = np.zeros((nb + 1, nc))
+            for group in differenced:
+                group.apply(model, t, constraints.frames(model, *state, charts), Q)
+            return Q[:nb].ravel()
+        bodies = sorted({int(model.padded_index(body)) for group in differenced
+                         for element in group.elements for _, body in element.bodies()
+                         if not body.is_ground})
+        f0 = forces(q, qd)
+        for j in (b * nc + k for b in bodies for k in range(nc)):
+            for vector, weight in ((q, 1.0), (qd, gamma_prime)):
+                h = 1.5e-8 * max(1.0, abs(vector[j]))
+                shifted = vector.copy()
+                shifted[j] += h
+                column = -(forces(*((shifted, qd) if vector is q else (q, shifted))) - f0) / h
+                nonzero = np.flatnonzero(column)
+                rows.append(nonzero), cols.append(np.full(len(nonzero), j))
+                values.append(weight * column[nonzero])
+    T = sp.coo_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+    return T.tocsr() if model.sparse else T.toarray()
 
 
 class _IterationMatrix:
     """Factors of ``beta' M + gamma' D + K + p Cq^T Cq`` at the start of a step."""
 
-    def __init__(self, model, t, q, qd, charts, beta_prime, gamma_prime, relative_penalty):
+    def __init__(self, model, t, q, qd, charts, beta_prime, relative_penalty, tangent):
         fr = constraints.frames(model, q, qd, charts)
         _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
         blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
@@ -173,7 +193,6 @@ class _IterationMatrix:
         self.penalty = relative_penalty * beta_prime * penalty_scale(
             np.einsum("kii->ki", blocks), row_norms)
         values = pattern.values(beta_prime, blocks, self.penalty, jac_data)
-        tangent = _force_tangent(model, t, q, qd, charts, gamma_prime)
         self.lu = pattern.factor(pattern.matrix(values, tangent))
         # the conditioning of Cq in the metric of M, free of the step (see mbd3d.passages)
         self.indicator = (self.lu.lu.log_abs_determinant - model.n_coordinates * np.log(beta_prime)
@@ -261,8 +280,10 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
             # factors passed the convergence test as a tangential force error (a velocity
             # oscillation of 1e-2 rad/s on a slider-crank at h = 1e-3, 200 times the method's
             # own error)
-            S = _IterationMatrix(model, tt, q, qd, chart, beta_prime, gamma_prime,
-                                 relative_penalty)
+            if iteration == 0:
+                # the applied forces' tangent varies slowly: once per step is enough
+                tangent = _force_tangent(model, tt, q, qd, chart, gamma_prime)
+            S = _IterationMatrix(model, tt, q, qd, chart, beta_prime, relative_penalty, tangent)
             stats["factorizations"] += 1
             fr = constraints.frames(model, q, qd, chart)
             C, jac_data, _ = constraints.evaluate(model, tt, fr)

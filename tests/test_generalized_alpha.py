@@ -161,3 +161,39 @@ def test_isosceles_slider_crank_passes_its_bifurcation_conserving_energy():
     assert len(crossings) == 2
     np.testing.assert_allclose([p.time for p in res.singular_passages], crossings, atol=1e-3)
     assert all(set(p.joints) == {"O", "A", "B", "rail"} for p in res.singular_passages)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_spring_damper_tangent_equals_finite_differences_at_free_length(dim):
+    """The iteration matrix's analytic spring-damper tangent against central differences of
+    the generalized forces, for turned bodies at rest with the spring at its free length (where
+    the terms the tangent leaves out vanish); the damper part is exact at any state."""
+    from mbd3d import constraints
+    from mbd3d.equations import generalized_forces
+    from mbd3d.implicit import _force_tangent
+    from mbd3d.rotations import axis_angle
+    rng = np.random.default_rng(7)
+    b = mb.ModelBuilder(dim=dim)
+    pose = {"angle": 0.7} if dim == 2 else {"orientation": axis_angle(rng.normal(size=3), 0.9)}
+    other = {"angle": -0.4} if dim == 2 else {"orientation": axis_angle(rng.normal(size=3), 1.3)}
+    one = b.add_body("one", mass=1.0, inertia=0.1 if dim == 2 else (0.1, 0.2, 0.3),
+                     position=rng.normal(size=dim), **pose)
+    two = b.add_body("two", mass=2.0, inertia=0.2 if dim == 2 else (0.3, 0.2, 0.1),
+                     position=rng.normal(size=dim), **other)
+    b.add(mb.SpringDamper("spring", one, two, point_i=rng.normal(size=dim),
+                          point_j=rng.normal(size=dim), stiffness=300.0, damping=7.0))
+    b.add(mb.SpringDamper("anchor", b.ground, two, point_i=rng.normal(size=dim),
+                          point_j=rng.normal(size=dim), stiffness=50.0, damping=2.0))
+    model = b.build()
+    q, qd = model.q0, np.zeros(model.n_coordinates)
+    weight = 40.0
+    analytic = _force_tangent(model, 0.0, q, qd, model.charts0, weight)
+    analytic = analytic.toarray() if hasattr(analytic, "toarray") else analytic
+    numeric = np.empty_like(analytic)
+    for j in range(model.n_coordinates):
+        e = np.zeros_like(q)
+        e[j] = 1e-6
+        Q = [generalized_forces(model, 0.0, constraints.frames(model, *state, model.charts0))
+             for state in ((q + e, qd), (q - e, qd), (q, qd + e), (q, qd - e))]
+        numeric[:, j] = -(Q[0] - Q[1]) / 2e-6 - weight * (Q[2] - Q[3]) / 2e-6
+    np.testing.assert_allclose(analytic, numeric, atol=1e-6 * np.max(np.abs(numeric)))
