@@ -40,6 +40,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mbd3d import constraints
+from mbd3d.checks import finite_scalar
 from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.linalg import (SingularMatrix, penalty_scale, solve_augmented_lagrangian,
@@ -217,8 +218,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
     if step is None:
         raise ModelError("method='generalized-alpha' needs a fixed step [s], e.g. step=1e-3 "
                          "(the error of this second-order method scales with step^2)")
-    if not (np.isfinite(step) and step > 0):
-        raise ModelError(f"step must be a positive time [s], got {step!r}")
+    step = finite_scalar(step, "step (the fixed time step of generalized-alpha) [s]",
+                         positive=True)
     n = model.n_coordinates
     projection_tol = constraint_tol * 1e-3
     stats = {"method": "generalized-alpha", "rho_inf": rho_inf, "steps": 0,
@@ -283,7 +284,16 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
             if iteration == 0:
                 # the applied forces' tangent varies slowly: once per step is enough
                 tangent = _force_tangent(model, tt, q, qd, chart, gamma_prime)
-            S = _IterationMatrix(model, tt, q, qd, chart, beta_prime, relative_penalty, tangent)
+            try:
+                S = _IterationMatrix(model, tt, q, qd, chart, beta_prime, relative_penalty,
+                                     tangent)
+            except SingularMatrix:
+                raise IntegrationError(
+                    f"forward dynamics of '{model.name}': the generalized-alpha iteration "
+                    f"matrix is numerically singular at t = {tt:.6g} s. Its pivots span the "
+                    "penalty ratio times the spread of the bodies' masses and inertias: check "
+                    "for bodies many orders of magnitude lighter than the others (or give "
+                    "them mass).", time=tt) from None
             stats["factorizations"] += 1
             fr = constraints.frames(model, q, qd, chart)
             C, jac_data, _ = constraints.evaluate(model, tt, fr)

@@ -29,7 +29,10 @@ __all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "invers
 
 def check_times(times: Sequence[float]) -> np.ndarray:
     """A 1-D, finite, strictly increasing array of times [s]."""
-    t = np.atleast_1d(np.asarray(times, dtype=float))
+    try:
+        t = np.atleast_1d(np.asarray(times, dtype=float))
+    except (TypeError, ValueError):
+        raise ModelError(f"times must be a 1-D sequence of numbers [s], got {times!r}") from None
     if t.ndim != 1 or t.size == 0:
         raise ModelError(f"times must be a non-empty 1-D sequence of times [s], got shape {t.shape}")
     if not np.all(np.isfinite(t)):

@@ -37,7 +37,7 @@ class Factorization:
     "NATURAL" for a matrix already permuted to a small bandwidth.
     """
 
-    def __init__(self, A, ordering: str = "COLAMD"):
+    def __init__(self, A, ordering: str = "COLAMD", pivot_tolerance: float = PIVOT_TOLERANCE):
         self.sparse = sp.issparse(A)
         if self.sparse:
             try:
@@ -51,7 +51,7 @@ class Factorization:
                 self._lu = la.lu_factor(A, check_finite=False)
             pivots = np.abs(np.diag(self._lu[0]))
         if pivots.size and (not np.all(np.isfinite(pivots))
-                            or pivots.min() <= PIVOT_TOLERANCE * pivots.max()):
+                            or pivots.min() <= pivot_tolerance * pivots.max()):
             raise SingularMatrix("smallest pivot below tolerance")
         self._pivots = pivots
 
@@ -115,6 +115,9 @@ class _FixedPattern:
     factors it in natural order, instead of recomputing a column ordering per solve.
     """
 
+    #: smallest pivot, relative to the largest, of a regular matrix of this pattern
+    pivot_tolerance = PIVOT_TOLERANCE
+
     rows: np.ndarray
     cols: np.ndarray
 
@@ -168,7 +171,8 @@ class PatternedFactorization:
 
     def __init__(self, pattern: _FixedPattern, A):
         self.pattern = pattern
-        self.lu = Factorization(A, ordering="NATURAL") if pattern.sparse else Factorization(A)
+        self.lu = Factorization(A, ordering="NATURAL" if pattern.sparse else "COLAMD",
+                                pivot_tolerance=pattern.pivot_tolerance)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         if not self.pattern.sparse:
@@ -196,7 +200,13 @@ class PenaltyPattern(_FixedPattern):
 
     ``Cq^T Cq`` couples the coordinates of every pair of Jacobian entries in one row: with the
     entries sorted by row (CSR order) those pairs are enumerated once, here.
+
+    The matrix is symmetric positive definite (positive masses), and its pivots span the
+    penalty ratio times the spread of the bodies' masses and inertias by design: only pivots
+    at the rounding level mean singular.
     """
+
+    pivot_tolerance = 64 * np.finfo(float).eps
 
     def __init__(self, model):
         n = model.n_coordinates

@@ -19,6 +19,19 @@ def validation_data() -> pathlib.Path:
     return VALIDATION_DATA
 
 
+try:
+    from hypothesis import HealthCheck, settings
+    # property-based tests: a short default run, thousands of examples on demand with
+    # HYPOTHESIS_PROFILE=thorough
+    settings.register_profile("default", max_examples=40, deadline=None,
+                              suppress_health_check=[HealthCheck.too_slow])
+    settings.register_profile("thorough", max_examples=2000, deadline=None,
+                              suppress_health_check=[HealthCheck.too_slow])
+    settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
+except ImportError:  # the test extra installs it; without it the fuzz tests are skipped
+    pass
+
+
 def pytest_configure(config):
     # tests never open a window
     os.environ.setdefault("MPLBACKEND", "Agg")
