@@ -113,6 +113,14 @@ def test_random_mechanisms_integrate_implicitly_or_refuse(spec):
 BAD_NUMBERS = [-1.0, 0.0, float("nan"), float("inf"), "heavy", None, [1.0, 2.0]]
 
 
+def not_a_vector(bad, dim: int):
+    """``bad`` made into something that is no point of a ``dim``-dimensional model: a list
+    gets a component too many, None (which means "the default") becomes NaNs."""
+    if isinstance(bad, list):
+        return [1.0] * (dim + 1)
+    return (float("nan"),) * dim if bad is None else bad
+
+
 @given(st.sampled_from(["mass", "inertia", "position", "point", "axis", "name", "times",
                         "step", "length"]),
        st.sampled_from(BAD_NUMBERS), st.sampled_from([2, 3]))
@@ -135,11 +143,12 @@ def test_broken_input_is_refused_naming_the_culprit(field, bad, dim):
             body = b.add_body("crank", mass=1.0, inertia=1.0 if dim == 2 else (1, 1, 1),
                               position=zero)
             if field == "point":
-                point = (float("nan"),) * dim if bad is None else bad  # None: the default
-                b.add(Revolute("pivot", b.ground, body, point_i=point, point_j=zero, **spatial))
+                b.add(Revolute("pivot", b.ground, body, point_i=not_a_vector(bad, dim),
+                               point_j=zero, **spatial))
                 b.build()
             elif field == "axis":
-                b.add(Prismatic("pivot", b.ground, body, axis=(0.0,) * dim if bad is None else bad,
+                b.add(Prismatic("pivot", b.ground, body,
+                                axis=(0.0,) * dim if bad is None else not_a_vector(bad, dim),
                                 at=zero))
                 b.build()
             elif field == "name":
