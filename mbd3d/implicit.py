@@ -22,14 +22,15 @@ with the iteration matrix ``beta' M + gamma' D + K + p Cq^T Cq`` (``D``, ``K`` t
 applied forces, by finite differences when the model has force elements). That matrix stays
 positive definite where ``Cq`` loses rank, so the method passes singular configurations (the
 IFToMM N-four-bar) and handles redundant constraints (Bricard's mechanism) without special
-cases, and its sparsity is that of the mechanism (banded for a chain). After each step the
+cases, and its sparsity is that of the mechanism (banded for a chain). The reported
 velocities are projected onto ``Cq qd = -Ct`` with the same factors (mass-orthogonal), so
 position and velocity drift stay at the Newton tolerance however long the run.
 
 The iteration matrix is factored at every Newton iterate (two per step are typical): its
 penalty part outweighs the mass matrix by the penalty ratio and must follow the configuration,
-or the large constraint forces leak into the free directions. The spectral radius at infinity ``rho_inf`` (1: no numerical
-damping; 0: asymptotic annihilation) sets the coefficients; the method is second order.
+or the large constraint forces leak into the free directions. The spectral radius at infinity
+``rho_inf`` (1: no numerical damping; 0: asymptotic annihilation) sets the coefficients; the
+method is second order.
 """
 
 from __future__ import annotations
@@ -142,7 +143,7 @@ def rows_dependent(model, t: float, q: np.ndarray, charts=None) -> bool:
 def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
     """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements, or None
     when there are none (gravity does not depend on the state; the spatial bodies' quadratic
-    velocity terms are left to the modified Newton iteration). Groups with an analytic tangent
+    velocity terms are left out of the iteration matrix, which only slows convergence). Groups with an analytic tangent
     (spring-dampers) give it directly; the others are differenced forward, only over the
     coordinates of the bodies they act on."""
     if not model.force_groups:
@@ -175,6 +176,8 @@ def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma
                 nonzero = np.flatnonzero(column)
                 rows.append(nonzero), cols.append(np.full(len(nonzero), j))
                 values.append(weight * column[nonzero])
+    if not values:
+        return None  # elements acting on the ground only
     T = sp.coo_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(n, n))
     return T.tocsr() if model.sparse else T.toarray()

@@ -129,10 +129,10 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                              f"acceleration analysis of '{model.name}'") from None
 
 
-def _redundant_rows(model, t: float, q: np.ndarray, chart, analysis: str) -> bool:
-    """Whether a mechanism with more constraint equations than coordinates is still fully
-    driven (its rows span every coordinate, the surplus redundant): True, or an error that says
-    how many degrees of freedom the redundancy leaves undriven."""
+def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysis: str) -> None:
+    """A mechanism with more constraint equations than coordinates must still be fully driven
+    (its rows span every coordinate, the surplus redundant) with drivers independent of the
+    joints; else a :class:`NotFullyDrivenError` that says which it is not."""
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
                               sparse=False)
     rank, groups = dependent_rows(Cq)
@@ -157,7 +157,6 @@ def _redundant_rows(model, t: float, q: np.ndarray, chart, analysis: str) -> boo
             f"{driver_rank} driven motion(s): the drivers ask for a motion the joints forbid "
             "(a rigid loop, or a driver of a coordinate the joints already fix). See "
             "mbd3d.mobility of the model without its drivers.")
-    return True
 
 
 def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, analysis: str):
@@ -168,7 +167,8 @@ def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, a
     Cq = constraints.jacobian(model, t, q, fr)
     M = mass_matrix(model, fr)
     n = model.n_coordinates
-    qd, _, used = solve_augmented_lagrangian(M, Cq, np.zeros(n), constraints.velocity_rhs(model, t, fr),
+    qd, _, used = solve_augmented_lagrangian(M, Cq, np.zeros(n),
+                                             constraints.velocity_rhs(model, t, fr),
                                              max_iterations=MAX_AUGMENTED_LAGRANGIAN)
     if used < MAX_AUGMENTED_LAGRANGIAN:
         fr = constraints.frames(model, q, qd, chart)
@@ -208,7 +208,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
             q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)
             if surplus:
                 if k == 0:
-                    _redundant_rows(model, tk, q, chart, analysis)
+                    _require_redundant_but_driven(model, tk, q, chart, analysis)
                 qd, qdd, lam = _redundant_rates(model, tk, q, chart, with_forces, analysis)
                 stats["singular_outputs"].append(float(tk))
                 out.store(q, qd, qdd, lam, chart)
