@@ -14,7 +14,7 @@ Source: IFToMM / MBS benchmark library, problem A01 (M. Gonzalez et al., Univ. o
 
 Recorded to iftomm_pendulum.rrd: rerun iftomm_pendulum.rrd
 
-Run: python examples/iftomm_pendulum.py [--duration 2000] [--rtol 1e-10] [--rrd FILE] [--show]
+Run: python examples/iftomm_pendulum.py [--duration 2000] [--rtol 1e-12] [--rrd FILE] [--show]
 (a few minutes)
 """
 
@@ -33,7 +33,7 @@ REFERENCE = (pathlib.Path(__file__).resolve().parent.parent.parent / "shared" /
              "validation-data" / "iftomm_A01_simple_pendulum_P1.txt")
 
 
-def main(duration: float = 2000.0, rtol: float = 1e-10, rrd: str | None = None,
+def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,
          show: bool = False) -> mb.Results:
     reference = np.loadtxt(REFERENCE, skiprows=1)
     reference = reference[reference[:, 0] <= duration + 1e-9]
@@ -58,7 +58,7 @@ def main(duration: float = 2000.0, rtol: float = 1e-10, rrd: str | None = None,
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=2000.0, help="simulated time [s]")
-    parser.add_argument("--rtol", type=float, default=1e-10,
+    parser.add_argument("--rtol", type=float, default=1e-12,
                         help="DOP853 relative tolerance (the phase error accumulates over the "
                              "845 swings)")
     parser.add_argument("--rrd", default="iftomm_pendulum.rrd",
