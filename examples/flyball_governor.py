@@ -36,6 +36,8 @@ from viewer import record
 SPIN = 2 * np.pi                 # initial speed of the shaft [rad/s]
 ALPHA = np.radians(30.0)         # arms below the horizontal at t = 0
 STIFFNESS, DAMPING, FREE_LENGTH = 8e5, 4e4, 0.5
+ROD, BALL = 0.3, 5.0             # masses of an arm's rod and of its ball [kg]
+ARM_CENTRE = (ROD * 0.5 + BALL * 1.0) / (ROD + BALL)  # arm's centre of mass from the hinge [m]
 
 
 def prism(mass: float, length: float, side: float) -> np.ndarray:
@@ -63,11 +65,9 @@ def build(rigid_couplers: bool = False) -> mb.Model:
     b.add(Prismatic("sleeve guide", shaft, sleeve, axis=(0.0, 0.0, 1.0)))
     # each arm: the rod (0.3 kg) and its ball (a 5 kg point mass at the rod's end) as one body,
     # its centre of mass and inertia by the parallel-axis theorem (body x axis along the rod)
-    rod, ball = 0.3, 5.0
-    mass = rod + ball
-    centre = (rod * 0.5 + ball * 1.0) / mass          # from the hinge [m]
-    inertia = prism(rod, 1.0, 0.01) + np.array(
-        [0.0, 1.0, 1.0] * np.array(rod * (0.5 - centre)**2 + ball * (1.0 - centre)**2))
+    mass, centre = ROD + BALL, ARM_CENTRE
+    inertia = prism(ROD, 1.0, 0.01) + np.array(
+        [0.0, 1.0, 1.0] * np.array(ROD * (0.5 - centre)**2 + BALL * (1.0 - centre)**2))
     for side, sign in (("right", 1.0), ("left", -1.0)):
         hinge = np.array([0.05 * sign, 0.0, 1.0])
         direction = np.array([np.cos(ALPHA) * sign, 0.0, -np.sin(ALPHA)])
@@ -88,8 +88,7 @@ def build(rigid_couplers: bool = False) -> mb.Model:
 
 def spring_points(sign: float) -> tuple[np.ndarray, np.ndarray]:
     """A spring's ends in the frames of the sleeve and of its arm (the rod's mid-point) [m]."""
-    centre = (0.3 * 0.5 + 5.0 * 1.0) / 5.3
-    return np.array([0.05 * sign, 0.0, 0.0]), np.array([0.5 - centre, 0.0, 0.0])
+    return np.array([0.05 * sign, 0.0, 0.0]), np.array([0.5 - ARM_CENTRE, 0.0, 0.0])
 
 
 def angular_momentum_z(res: mb.Results) -> np.ndarray:

@@ -113,14 +113,11 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
     if model.n_constraints > model.n_coordinates:
         # redundant rows (see kinematic_analysis): the consistent solution, by the augmented
         # Lagrangian
-        Cq = constraints.jacobian(model, t, q, fr)
-        qdd, _, used = solve_augmented_lagrangian(
-            mass_matrix(model, fr), Cq, np.zeros(model.n_coordinates),
-            constraints.acceleration_rhs(model, t, q, qd, fr),
-            max_iterations=MAX_AUGMENTED_LAGRANGIAN)
-        if used < MAX_AUGMENTED_LAGRANGIAN:
-            return qdd
-        raise singular_error(model, Cq, t, f"acceleration analysis of '{model.name}'")
+        return _solve_redundant(model, t, mass_matrix(model, fr),
+                                constraints.jacobian(model, t, q, fr),
+                                np.zeros(model.n_coordinates),
+                                constraints.acceleration_rhs(model, t, q, qd, fr),
+                                f"acceleration analysis of '{model.name}'")[0]
     try:
         return Factorization(constraints.jacobian(model, t, q, fr)).solve(
             constraints.acceleration_rhs(model, t, q, qd, fr))
@@ -159,27 +156,31 @@ def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysi
             "mbd3d.mobility of the model without its drivers.")
 
 
+def _solve_redundant(model, t: float, M, Cq, b: np.ndarray, c: np.ndarray, what: str):
+    """``[M Cq^T; Cq 0] [x; lam] = [b; c]`` with dependent rows of ``Cq`` that span every
+    coordinate, by the augmented Lagrangian: the unique ``x`` and the minimum-norm ``lam``;
+    a :class:`SingularJacobianError` when the rows are inconsistent (a lock-up)."""
+    x, lam, used = solve_augmented_lagrangian(M, Cq, b, c, max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+    if used == MAX_AUGMENTED_LAGRANGIAN:
+        raise singular_error(model, Cq, float(t), what)
+    return x, lam
+
+
 def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, analysis: str):
     """``qd``, ``qdd`` and the minimum-norm ``lam`` where the rows of ``Cq`` depend on each
-    other but span every coordinate. The augmented Lagrangian finds the unique rates from the
-    consistent rows; its multipliers have no component in the null space of ``Cq^T``."""
+    other but span every coordinate."""
     fr = constraints.frames(model, q, charts=chart)
     Cq = constraints.jacobian(model, t, q, fr)
     M = mass_matrix(model, fr)
     n = model.n_coordinates
-    qd, _, used = solve_augmented_lagrangian(M, Cq, np.zeros(n),
-                                             constraints.velocity_rhs(model, t, fr),
-                                             max_iterations=MAX_AUGMENTED_LAGRANGIAN)
-    if used < MAX_AUGMENTED_LAGRANGIAN:
-        fr = constraints.frames(model, q, qd, chart)
-        forces = generalized_forces(model, t, fr) if with_forces else np.zeros(n)
-        qdd, lam, used = solve_augmented_lagrangian(
-            M, Cq, forces, constraints.acceleration_rhs(model, t, q, qd, fr),
-            max_iterations=MAX_AUGMENTED_LAGRANGIAN)
-        if used < MAX_AUGMENTED_LAGRANGIAN:
-            return qd, qdd, lam if with_forces else None
-    # the rows are inconsistent: the mechanism locks up here
-    raise singular_error(model, Cq, float(t), f"{analysis} of '{model.name}'")
+    what = f"{analysis} of '{model.name}'"
+    qd, _ = _solve_redundant(model, t, M, Cq, np.zeros(n), constraints.velocity_rhs(model, t, fr),
+                             what)
+    fr = constraints.frames(model, q, qd, chart)
+    forces = generalized_forces(model, t, fr) if with_forces else np.zeros(n)
+    qdd, lam = _solve_redundant(model, t, M, Cq, forces,
+                                constraints.acceleration_rhs(model, t, q, qd, fr), what)
+    return qd, qdd, lam if with_forces else None
 
 
 def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
