@@ -197,9 +197,9 @@ class _IterationMatrix:
         self.penalty = relative_penalty * beta_prime * penalty_scale(
             np.einsum("kii->ki", blocks), row_norms)
         values = pattern.values(beta_prime, blocks, self.penalty, jac_data)
-        self.lu = pattern.factor(pattern.matrix(values, tangent))
+        self.lu = pattern.factor(values, tangent)
         # the conditioning of Cq in the metric of M, free of the step (see mbd3d.passages)
-        self.indicator = (self.lu.lu.log_abs_determinant - model.n_coordinates * np.log(beta_prime)
+        self.indicator = (self.lu.log_abs_determinant - model.n_coordinates * np.log(beta_prime)
                           - float(np.sum(np.linalg.slogdet(blocks)[1])))
 
 

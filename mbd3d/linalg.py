@@ -1,23 +1,24 @@
 """Linear solves of the solvers, with diagnostics that name joints when a matrix is singular.
 
-Dense LAPACK (``getrf``) for small systems, SuperLU for large sparse ones; the choice is the
-model's (``model.sparse``). A matrix is treated as singular when a pivot of its LU factors falls
-below ``PIVOT_TOLERANCE`` times the largest one: the solution would then be dominated by rounding.
+Dense LAPACK (``getrf``) for small systems; for large ones (``model.sparse``) banded LAPACK
+(``gbtrf``) after a bandwidth-reducing permutation, or SuperLU when the bandwidth is large.
+A matrix is treated as singular when a pivot of its LU factors falls below
+``PIVOT_TOLERANCE`` times the largest one: the solution would then be dominated by rounding.
 """
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import scipy.linalg as la
+from scipy.linalg.lapack import dgbtrf as _gbtrf, dgbtrs as _gbtrs, dgetrf as _getrf, \
+    dgetrs as _getrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-__all__ = ["SingularMatrix", "Factorization", "dependent_rows", "augmented_matrix",
-           "solve_augmented", "solve_model_augmented",
-           "AugmentedPattern", "PenaltyPattern", "PatternedFactorization", "penalty_scale",
+__all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
+           "augmented_matrix", "solve_augmented", "solve_model_augmented",
+           "factor_model_augmented", "AugmentedPattern", "PenaltyPattern", "penalty_scale",
            "penalty_matrix", "solve_augmented_lagrangian"]
 
 #: relative size of the smallest LU pivot below which a matrix counts as singular
@@ -34,7 +35,9 @@ class Factorization:
     """LU factors of a square matrix, dense or sparse, reusable for several right-hand sides.
 
     ``ordering`` is SuperLU's column ordering for sparse matrices: its default "COLAMD", or
-    "NATURAL" for a matrix already permuted to a small bandwidth.
+    "NATURAL" for a matrix already permuted to a small bandwidth. Dense matrices go straight
+    to LAPACK's ``getrf``/``getrs`` (the wrappers' input checks cost more than the solve at the
+    sizes of a mechanism).
     """
 
     def __init__(self, A, ordering: str = "COLAMD", pivot_tolerance: float = PIVOT_TOLERANCE):
@@ -46,14 +49,9 @@ class Factorization:
                 raise SingularMatrix(str(exc)) from None
             pivots = np.abs(self._lu.U.diagonal())
         else:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", la.LinAlgWarning)
-                self._lu = la.lu_factor(A, check_finite=False)
-            pivots = np.abs(np.diag(self._lu[0]))
-        if pivots.size and (not np.all(np.isfinite(pivots))
-                            or pivots.min() <= pivot_tolerance * pivots.max()):
-            raise SingularMatrix("smallest pivot below tolerance")
-        self._pivots = pivots
+            self._lu, self._piv, _ = _getrf(np.array(A, dtype=float, order="F"), overwrite_a=1)
+            pivots = np.abs(np.diagonal(self._lu))
+        self._pivots = _check_pivots(pivots, pivot_tolerance)
 
     @property
     def log_abs_determinant(self) -> float:
@@ -63,7 +61,38 @@ class Factorization:
     def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
         if self.sparse:
             return self._lu.solve(b, trans="T" if transpose else "N")
-        return la.lu_solve(self._lu, b, trans=1 if transpose else 0, check_finite=False)
+        return _getrs(self._lu, self._piv, b, trans=1 if transpose else 0)[0]
+
+
+class BandedFactorization:
+    """LU factors (LAPACK ``gbtrf``, partial pivoting) of a matrix stored in LAPACK's band
+    layout: ``ab[kl + ku + i - j, j] = A[i, j]`` with ``kl`` rows of room for fill-in on top.
+
+    The cost is ``O(size kl (kl + ku))``: linear in the size for a matrix whose bandwidth
+    does not grow with it (a chain ordered by reverse Cuthill-McKee).
+    """
+
+    sparse = False
+
+    def __init__(self, ab: np.ndarray, kl: int, ku: int,
+                 pivot_tolerance: float = PIVOT_TOLERANCE):
+        self.kl, self.ku = kl, ku
+        self._lu, self._piv, info = _gbtrf(ab, kl, ku, overwrite_ab=1)
+        if info < 0:
+            raise ValueError(f"gbtrf: argument {-info} is invalid")
+        self._pivots = _check_pivots(np.abs(self._lu[kl + ku]), pivot_tolerance)
+
+    log_abs_determinant = Factorization.log_abs_determinant
+
+    def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
+        return _gbtrs(self._lu, self.kl, self.ku, b, self._piv, trans=1 if transpose else 0)[0]
+
+
+def _check_pivots(pivots: np.ndarray, pivot_tolerance: float) -> np.ndarray:
+    if pivots.size and (not np.all(np.isfinite(pivots))
+                        or pivots.min() <= pivot_tolerance * pivots.max()):
+        raise SingularMatrix("smallest pivot below tolerance")
+    return pivots
 
 
 def dependent_rows(Cq, relative_tolerance: float = 1e-9) -> tuple[int, list[np.ndarray]]:
@@ -107,12 +136,23 @@ def augmented_matrix(M, Cq):
     return np.block([[M, Cq.T], [Cq, np.zeros((m, m))]])
 
 
+#: banded LU is used for a sparse pattern when ``kl (kl + ku)``, its work per unknown, is at
+#: most this: a chain's augmented matrix has ``kl, ku`` of 5 to 12 whatever its length, where
+#: SuperLU's ordering and bookkeeping per call cost several times the arithmetic
+BANDED_WORK_LIMIT = 4096
+
+
 class _FixedPattern:
     """Entries of a matrix whose sparsity is fixed when the model is built.
 
-    When sparse, a symmetric reverse Cuthill-McKee permutation is computed once: the matrix is
-    then assembled already permuted to a small bandwidth (a chain's is banded) and SuperLU
-    factors it in natural order, instead of recomputing a column ordering per solve.
+    Three layouts, chosen once per model:
+
+    - dense (``model.sparse`` False): LAPACK ``getrf`` on the full matrix;
+    - banded: the rows and columns are permuted once by a symmetric reverse Cuthill-McKee
+      ordering, and when that leaves a small bandwidth (a chain, a mechanism with a few
+      loops) the entries are scattered straight into LAPACK's band storage and factored by
+      ``gbtrf``, at a cost linear in the size with no symbolic analysis per call;
+    - sparse: otherwise, the permuted matrix in CSC form factored by SuperLU in natural order.
     """
 
     #: smallest pivot, relative to the largest, of a regular matrix of this pattern
@@ -130,55 +170,109 @@ class _FixedPattern:
                 np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel())
 
     def _lay_out(self, rows: np.ndarray, cols: np.ndarray, size: int, sparse: bool) -> None:
-        self.rows, self.cols, self.size, self.sparse = rows, cols, size, sparse
+        self.rows, self.cols, self.size = rows, cols, size
         if not sparse:
+            self.layout = "dense"
+            self.flat = rows + cols * size  # Fortran order, as LAPACK takes it
             return
         structure = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
         self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
         inverse = np.empty_like(self.perm)
         inverse[self.perm] = np.arange(size)
+        self.inverse = inverse
         prow, pcol = inverse[rows], inverse[cols]
+        kl = int(np.max(prow - pcol, initial=0))
+        ku = int(np.max(pcol - prow, initial=0))
+        if kl * (kl + ku) <= BANDED_WORK_LIMIT:
+            self.layout = "banded"
+            self.kl, self.ku = kl, ku
+            self.band_rows = 2 * kl + ku + 1
+            self.flat = (kl + ku + prow - pcol) + pcol * self.band_rows
+            return
+        self.layout = "sparse"
         self.order = np.lexsort((prow, pcol))  # column-major for CSC
-        self.indices = prow[self.order]
+        self.indices = prow[self.order].astype(np.int32)
         counts = np.bincount(pcol, minlength=size)
-        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+        self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+
+    @property
+    def sparse(self) -> bool:
+        return self.layout != "dense"
 
     def matrix(self, values: np.ndarray, extra=None):
         """The matrix from its entries (dense, or CSC in the permuted order), plus ``extra``
         (n, n) in the original order."""
-        if self.sparse:
-            A = sp.csc_matrix((values[self.order], self.indices, self.indptr),
-                              shape=(self.size, self.size))
-            if extra is not None:
-                A = sp.csc_matrix(A + sp.csr_matrix(extra)[self.perm][:, self.perm])
-            return A
-        A = np.zeros((self.size, self.size))
-        A[self.rows, self.cols] = values
-        return A if extra is None else A + extra
+        if self.layout == "dense":
+            A = self._scatter(values, self.size)
+            return A if extra is None else A + extra
+        prow, pcol = self.inverse[self.rows], self.inverse[self.cols]
+        A = sp.csc_matrix((values, (prow, pcol)), shape=(self.size, self.size))
+        if extra is not None:
+            A = sp.csc_matrix(A + sp.csr_matrix(extra)[self.perm][:, self.perm])
+        return A
 
-    def factor(self, A) -> "PatternedFactorization":
-        """LU factors of a matrix from :meth:`matrix`.
+    def factor(self, values: np.ndarray, extra=None):
+        """LU factors of the matrix with entries ``values`` (in the pattern's order) plus
+        ``extra`` ((n, n), dense or sparse, in the original order; entries outside the band
+        send the matrix to SuperLU).
+
+        Returns
+        -------
+        Factorization or BandedFactorization, wrapped to solve in the original order.
 
         Raises
         ------
         SingularMatrix
         """
-        return PatternedFactorization(self, A)
+        if self.layout == "dense":
+            A = self._scatter(values, self.size)
+            if extra is not None:
+                A += extra.toarray() if sp.issparse(extra) else extra
+            return Factorization(A, pivot_tolerance=self.pivot_tolerance)
+        if self.layout == "banded":
+            ab = self._scatter(values, self.band_rows)
+            if extra is not None and not self._add_to_band(ab, extra):
+                return _Permuted(self, Factorization(self.matrix(values, extra), "NATURAL",
+                                                     self.pivot_tolerance))
+            return _Permuted(self, BandedFactorization(ab, self.kl, self.ku,
+                                                        self.pivot_tolerance))
+        A = sp.csc_matrix((values[self.order], self.indices, self.indptr),
+                          shape=(self.size, self.size))
+        if extra is not None:
+            A = sp.csc_matrix(A + sp.csr_matrix(extra)[self.perm][:, self.perm])
+        return _Permuted(self, Factorization(A, "NATURAL", self.pivot_tolerance))
+
+    def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:
+        """(n_rows, size) array in Fortran order (as LAPACK takes it) holding ``values`` at
+        the pattern's flat positions, zero elsewhere."""
+        buffer = np.zeros(n_rows * self.size)
+        buffer[self.flat] = values
+        return buffer.reshape((n_rows, self.size), order="F")
+
+    def _add_to_band(self, ab: np.ndarray, extra) -> bool:
+        """Add ``extra`` into band storage; False (nothing added) if it reaches outside."""
+        extra = sp.coo_matrix(extra)
+        prow, pcol = self.inverse[extra.row], self.inverse[extra.col]
+        offset = prow - pcol
+        if np.any(offset > self.kl) or np.any(-offset > self.ku):
+            return False
+        np.add.at(ab, (self.kl + self.ku + offset, pcol), extra.data)
+        return True
 
 
-class PatternedFactorization:
-    """LU factors of a matrix built by a fixed pattern, solving in the original order."""
+class _Permuted:
+    """Factors of a permuted matrix, solving in the original order."""
 
-    def __init__(self, pattern: _FixedPattern, A):
-        self.pattern = pattern
-        self.lu = Factorization(A, ordering="NATURAL" if pattern.sparse else "COLAMD",
-                                pivot_tolerance=pattern.pivot_tolerance)
+    def __init__(self, pattern: _FixedPattern, lu):
+        self.perm, self.lu = pattern.perm, lu
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        if not self.pattern.sparse:
-            return self.lu.solve(b)
+    @property
+    def log_abs_determinant(self) -> float:
+        return self.lu.log_abs_determinant
+
+    def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
         x = np.empty_like(b)
-        x[self.pattern.perm] = self.lu.solve(b[self.pattern.perm])
+        x[self.perm] = self.lu.solve(b[self.perm], transpose)
         return x
 
 
@@ -233,16 +327,26 @@ def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: 
                           ) -> np.ndarray:
     """Solve ``[M Cq^T; Cq 0] x = rhs`` from per-body mass blocks and Jacobian values.
 
-    The matrix is filled into the pattern fixed at build: dense below the model's size
-    threshold, otherwise sparse, permuted to a small bandwidth and factored by SuperLU.
+    The matrix is filled into the pattern fixed at build (see :class:`_FixedPattern`): dense
+    below the model's size threshold, otherwise permuted to a small bandwidth and factored in
+    band storage by LAPACK, or by SuperLU when the bandwidth is large.
 
     Raises
     ------
     SingularMatrix
     """
-    pattern = model._augmented_pattern
-    values = np.concatenate([blocks.ravel(), jac_data, jac_data])
-    return pattern.factor(pattern.matrix(values)).solve(rhs)
+    return factor_model_augmented(model, blocks, jac_data).solve(rhs)
+
+
+def factor_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray):
+    """Factors of ``[M Cq^T; Cq 0]`` from per-body mass blocks and Jacobian values, to solve
+    several right-hand sides (see :func:`solve_model_augmented`).
+
+    Raises
+    ------
+    SingularMatrix
+    """
+    return model._augmented_pattern.factor(np.concatenate([blocks.ravel(), jac_data, jac_data]))
 
 
 def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

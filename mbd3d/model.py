@@ -27,10 +27,11 @@ from mbd3d.primitives import PRIMITIVES
 
 __all__ = ["ModelBuilder", "Model", "BuildContext"]
 
-#: systems with more unknowns than this (coordinates + constraints) use sparse linear algebra:
-#: one augmented solve of a planar chain costs the same dense and sparse at about 150-200
-#: unknowns on the 2-core reference machine (benchmarks/planar_chain.py --crossover)
-SPARSE_THRESHOLD = 180
+#: systems with more unknowns than this (coordinates + constraints) use sparse linear algebra
+#: (banded LAPACK, or SuperLU when the bandwidth is large; see mbd3d.linalg): one augmented
+#: solve of a planar or spatial chain costs the same dense and banded at 36 to 50 unknowns on
+#: the 2-core reference machine (benchmarks/planar_chain.py --crossover)
+SPARSE_THRESHOLD = 48
 
 
 def _body_type(dim: int) -> BodyType:

@@ -1,0 +1,103 @@
+"""The three layouts of the augmented and iteration matrices (dense, banded, SuperLU) solve the
+same equations: checked by the residual of the equations themselves and against each other."""
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d import constraints, linalg
+from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.mechanisms import pendulum_chain, spatial_chain
+
+
+def _build(factory, n_links, layout, monkeypatch):
+    """The chain with its linear algebra forced to ``layout``."""
+    with monkeypatch.context() as patch:
+        if layout == "sparse":
+            patch.setattr(linalg, "BANDED_WORK_LIMIT", -1)
+        model = factory(n_links, sparse=layout != "dense")
+    assert model._augmented_pattern.layout == layout
+    return model
+
+
+@pytest.mark.parametrize("factory, n_links", [(pendulum_chain, 30), (spatial_chain, 12)])
+def test_every_layout_solves_the_augmented_equations(factory, n_links, monkeypatch):
+    rng = np.random.default_rng(7)
+    models = {layout: _build(factory, n_links, layout, monkeypatch)
+              for layout in ("dense", "banded", "sparse")}
+    model = models["dense"]
+    q = mb.solve_position(model, model.q0 + 0.05 * rng.normal(size=model.n_coordinates))
+    qd = mb.solve_velocity(model, q, qd_guess=rng.normal(size=model.n_coordinates))
+    fr = constraints.frames(model, q, qd)
+    M = mass_matrix(model, fr)
+    M = M.toarray() if hasattr(M, "toarray") else M
+    Cq = constraints.jacobian(model, 0.0, q, fr, sparse=False)
+    Qe = generalized_forces(model, 0.0, fr)
+    Qd = constraints.acceleration_rhs(model, 0.0, q, qd, fr)
+    solutions = {}
+    for layout, each in models.items():
+        qdd, lam = mb.forward_accelerations(each, 0.0, q, qd)
+        scale = np.abs(Qe).max() + np.abs(M @ qdd).max()
+        assert np.abs(M @ qdd + Cq.T @ lam - Qe).max() < 1e-12 * scale, layout
+        assert np.abs(Cq @ qdd - Qd).max() < 1e-12 * (np.abs(Qd).max() + 1.0), layout
+        solutions[layout] = np.concatenate([qdd, lam])
+    for layout in ("banded", "sparse"):
+        np.testing.assert_allclose(solutions[layout], solutions["dense"], rtol=0,
+                                   atol=1e-10 * np.abs(solutions["dense"]).max())
+
+
+def test_banded_factors_give_the_determinant_and_refuse_singular_matrices():
+    rng = np.random.default_rng(3)
+    size, kl, ku = 40, 3, 2
+    A = np.zeros((size, size))
+    for offset in range(-kl, ku + 1):
+        A += np.diag(rng.normal(size=size - abs(offset)), offset)
+    ab = np.zeros((2 * kl + ku + 1, size), order="F")
+    for i, j in zip(*np.nonzero(A)):
+        ab[kl + ku + i - j, j] = A[i, j]
+    lu = linalg.BandedFactorization(ab.copy(order="F"), kl, ku)
+    b = rng.normal(size=size)
+    np.testing.assert_allclose(A @ lu.solve(b), b, atol=1e-10)
+    np.testing.assert_allclose(A.T @ lu.solve(b, transpose=True), b, atol=1e-10)
+    assert lu.log_abs_determinant == pytest.approx(np.linalg.slogdet(A)[1], rel=1e-12)
+    ab[kl + ku, :] = 0.0  # a zero diagonal in a lower triangular band...
+    ab[kl + ku + 1:, :] = 0.0
+    ab[:kl + ku, :] = 0.0
+    ab[kl + ku, 5] = 1.0
+    with pytest.raises(linalg.SingularMatrix):
+        linalg.BandedFactorization(ab, kl, ku)
+
+
+def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):
+    """A spring from the first link to the last couples coordinates far outside the chain's
+    band: the iteration matrix then goes to SuperLU, and the motion equals the dense run's."""
+    from joints import Revolute
+
+    def chain(sparse):
+        b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+        previous = first = b.ground
+        for k in range(25):
+            body = b.add_body(f"link{k + 1}", mass=1.0, inertia=1 / 12,
+                              position=(k + 0.5, 0.0))
+            b.add(Revolute(f"pin{k + 1}", previous, body,
+                              point_i=(0.0, 0.0) if k == 0 else (0.5, 0.0),
+                              point_j=(-0.5, 0.0)))
+            previous = body
+            first = first if k else body
+        b.add(mb.SpringDamper("tie", first, previous, point_i=(0.0, 0.0), point_j=(0.0, 0.0),
+                           stiffness=50.0, damping=2.0, free_length=20.0))
+        return b.build(sparse=sparse)
+
+    outcomes = []
+    add_to_band = linalg._FixedPattern._add_to_band
+    monkeypatch.setattr(linalg._FixedPattern, "_add_to_band",
+                        lambda self, ab, extra: outcomes.append(add_to_band(self, ab, extra))
+                        or outcomes[-1])
+    runs = [mb.forward_dynamics(chain(sparse), np.linspace(0.0, 0.05, 6),
+                                method="generalized-alpha", step=5e-3)
+            for sparse in (False, True)]
+    assert runs[1].model._penalty_pattern.layout == "banded"
+    assert outcomes and not any(outcomes)  # every tangent fell outside the band
+    np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
+                               atol=1e-8 * np.abs(runs[0].lam).max())
