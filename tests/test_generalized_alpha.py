@@ -106,6 +106,9 @@ def test_bad_integrator_options_are_named():
         mb.forward_dynamics(model, t, method="RK45", step=1e-3)
     with pytest.raises(mb.ModelError, match="generalized-alpha"):
         mb.forward_dynamics(model, t, method="Euler")
+    for multistep in ("BDF", "LSODA"):
+        with pytest.raises(mb.ModelError, match=f"{multistep} is a multistep method.*restarts"):
+            mb.forward_dynamics(model, t, method=multistep)
 
 
 def crossing_times(t: np.ndarray, values: np.ndarray) -> np.ndarray:
