@@ -1,96 +1,188 @@
-"""Cost of the planar solvers on an N-link pendulum chain.
+"""Cost of the solvers on an N-link planar pendulum chain, and the same chain in Exudyn and MuJoCo.
 
-For N = 10, 100, 1000 links (horizontal at rest, falling under gravity) it prints medians over
-repeated runs of: one constraint Jacobian evaluation, one augmented solve (accelerations and
-multipliers from [M Cq^T; Cq 0], including the evaluation of everything in it), and one
-simulated second with RK45 at rtol 1e-6, as totals, per integrator step and per body.
+For N = 1, 10, 100, 1000, 10000 links (1 m, 1 kg bars pinned end to end, horizontal at rest,
+falling under gravity) it prints medians of one constraint Jacobian evaluation, one augmented
+solve (accelerations and multipliers from [M Cq^T; Cq 0], including the evaluation of
+everything in it), and a forward-dynamics run with RK45 at rtol 1e-6 (one simulated second up
+to 1000 links, 0.02 s above): per step, per step and body, and the fitted exponent of the
+costs in N from 100 links up.
 
-Run: python benchmarks/planar_chain.py [--sizes 10 100 1000] [--crossover]
+With --peers (needs ``pip install -e ".[peers]"``) it then finds, for each engine, the
+cheapest setting that gets the tip of the last link at t = 1 s right to 1e-6 m (against
+DOP853 at rtol 1e-12, itself checked against MuJoCo's finest run) and prints the wall times
+and the ratios mbd3d / peer.
+
+Run: python benchmarks/planar_chain.py [--sizes 1 10 100 1000 10000] [--peers] [--peer-links 100]
 """
 
 from __future__ import annotations
 
 import argparse
-import platform
-import time
+import pathlib
+import sys
+from typing import Callable
 
 import numpy as np
 
-import mbd3d as mb
-from mbd3d import constraints
-from mbd3d.mechanisms import pendulum_chain
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+import mbd3d as mb  # noqa: E402
+import peers  # noqa: E402
+from mbd3d import constraints  # noqa: E402
+from mbd3d.mechanisms import pendulum_chain  # noqa: E402
+from measure import cheapest, fitted_exponent, machine, median_time  # noqa: E402
+
+#: accuracy of the tip position at which the engines are compared [m]
+TOLERANCE = 1e-6
 
 
-def median_time(fn, repeat: int) -> float:
-    """Median wall time of ``fn()`` over ``repeat`` runs [s]."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+def no_initial_rates(model) -> None:
+    """The planar chain starts at rest."""
+    return None
 
 
-def measure(n_links: int, simulate: bool = True, sparse: bool | None = None,
-            factory=pendulum_chain) -> dict:
+def measure(n_links: int, factory=pendulum_chain, rates: Callable = no_initial_rates,
+            simulate: bool = True, sparse: bool | None = None) -> dict:
+    """Costs of one chain size (see the module docstring)."""
     model = factory(n_links, sparse=sparse)
-    q, qd = model.q0.copy(), np.zeros(model.n_coordinates)
-    repeat = 30 if n_links <= 100 else 10
+    q = model.q0.copy()
+    qd = np.zeros(model.n_coordinates) if rates(model) is None else rates(model)
+    repeat = 30 if n_links <= 100 else 10 if n_links <= 1000 else 3
     row = {
         "N": n_links,
-        "solver": "sparse" if model.sparse else "dense",
+        "solver": model._augmented_pattern.layout,
         "jacobian_ms": 1e3 * median_time(lambda: constraints.jacobian(model, 0.0, q), repeat),
-        "solve_ms": 1e3 * median_time(lambda: mb.forward_accelerations(model, 0.0, q, qd), repeat),
+        "solve_ms": 1e3 * median_time(lambda: mb.forward_accelerations(model, 0.0, q, qd),
+                                      repeat),
     }
     if simulate:
-        runs = [mb.forward_dynamics(model, [0.0, 1.0], rtol=1e-6, atol=1e-8) for _ in range(3)]
+        span = 1.0 if n_links <= 1000 else 0.02
+        runs = [mb.forward_dynamics(model, [0.0, span], qd0=rates(model), rtol=1e-6, atol=1e-8)
+                for _ in range(3 if n_links <= 1000 else 1)]
         wall = float(np.median([r.stats["wall_time"] for r in runs]))
         steps = runs[0].stats["steps"]
-        row.update(second_s=wall, steps=steps, step_ms=1e3 * wall / steps,
+        row.update(span=span, run_s=wall, steps=steps, step_ms=1e3 * wall / steps,
                    step_us_per_body=1e6 * wall / steps / n_links)
     return row
 
 
-def report(title: str, factory, sizes, simulate: bool) -> list[dict]:
+def report(title: str, factory, sizes, simulate: bool,
+           rates: Callable = no_initial_rates) -> list[dict]:
     """Measure chains of the given sizes built by ``factory`` and print the table."""
-    print(f"{title}, {platform.processor() or platform.machine()}, "
-          f"Python {platform.python_version()}, NumPy {np.__version__}")
-    rows = [measure(n, simulate, factory=factory) for n in sizes]
-    print(mb.format_table({
+    print(f"{title}; {machine()}")
+    rows = [measure(n, factory, rates, simulate) for n in sizes]
+    table = {
         "N": [r["N"] for r in rows],
         "Jacobian [ms]": [r["jacobian_ms"] for r in rows],
         "augmented solve [ms]": [r["solve_ms"] for r in rows],
         "solve per body [us]": [1e3 * r["solve_ms"] / r["N"] for r in rows],
-        **({"1 s simulated [s]": [r["second_s"] for r in rows],
-            "steps": [r["steps"] for r in rows],
-            "per step [ms]": [r["step_ms"] for r in rows],
-            "per step per body [us]": [r["step_us_per_body"] for r in rows]} if simulate else {}),
-    }, precision=4))
-    print("(medians; 'augmented solve' includes evaluating M, Cq, Qe and Qd; solver: "
-          + ", ".join(f"N={r['N']} {r['solver']}" for r in rows) + ")")
+    }
+    if simulate:
+        table.update({"simulated [s]": [r["span"] for r in rows],
+                      "wall [s]": [r["run_s"] for r in rows],
+                      "steps": [r["steps"] for r in rows],
+                      "per step [ms]": [r["step_ms"] for r in rows],
+                      "per step per body [us]": [r["step_us_per_body"] for r in rows]})
+    print(mb.format_table(table, precision=4))
+    print("(medians; 'augmented solve' includes evaluating M, Cq, Qe and Qd; RK45 at rtol 1e-6; "
+          "linear algebra: " + ", ".join(f"N={r['N']} {r['solver']}" for r in rows) + ")")
+    large = [r for r in rows if r["N"] >= 100]
+    if len(large) >= 2:
+        sizes_large = [r["N"] for r in large]
+        exponents = {"augmented solve": fitted_exponent(sizes_large, [r["solve_ms"] for r in large])}
+        if simulate:
+            exponents["integrator step"] = fitted_exponent(sizes_large,
+                                                           [r["step_ms"] for r in large])
+        print(f"cost ~ N^p from N = {sizes_large[0]} to {sizes_large[-1]}: " + ", ".join(
+            f"{name} p = {p:.2f}" for name, p in exponents.items()))
     return rows
 
 
-def main(sizes=(10, 100, 1000), simulate: bool = True) -> list[dict]:
-    return report("planar N-link chain", pendulum_chain, sizes, simulate)
+def compare_with_peers(n_links: int, factory=pendulum_chain, spatial: bool = False,
+                       spin: float = 0.0, rates: Callable = no_initial_rates) -> list[dict]:
+    """Wall time of each engine's cheapest setting that gets the tip at t = 1 s to
+    ``TOLERANCE`` (see the module docstring); prints the table and returns its rows."""
+    model = factory(n_links)
+    tip_point = (0.5, 0.0, 0.0) if spatial else (0.5, 0.0)
+
+    def ours(method: str, rtol: float):
+        def run():
+            res = mb.forward_dynamics(model, [0.0, 1.0], qd0=rates(model), method=method,
+                                      rtol=rtol, atol=rtol * 1e-2)
+            return res.point(f"link{n_links}", tip_point).position[-1], res.stats["wall_time"]
+        return run
+
+    reference = ours("DOP853", 1e-12)()[0]
+
+    def error(tip):
+        return float(np.max(np.abs(np.asarray(tip) - reference)))
+
+    engines = {f"mbd3d {method}": [(f"rtol {rtol:g}", ours(method, rtol))
+                                    for rtol in 10.0 ** -np.arange(3, 11)]
+               for method in ("DOP853", "RK45")}
+    steps = 2.0 ** -np.arange(0, 10)
+    if peers.available("exudyn"):
+        engines["Exudyn generalized-alpha"] = [
+            (f"h {h:g}", lambda h=h: peers.exudyn_chain(n_links, h, 1.0, spatial, spin))
+            for h in 4e-3 * steps]
+    if peers.available("mujoco"):
+        engines["MuJoCo RK4"] = [
+            (f"h {h:g}", lambda h=h: peers.mujoco_chain(n_links, h, 1.0, spatial, spin))
+            for h in 2e-2 * steps]
+        check = error(peers.mujoco_chain(n_links, 1e-4, 1.0, spatial, spin)[0])
+        print(f"reference check: MuJoCo (RK4, h = 1e-4) differs from the mbd3d reference "
+              f"(DOP853, rtol 1e-12) by {check:.1e} m at the tip")
+    if len(engines) == 2:
+        print("no peers installed: pip install -e '.[peers]' for Exudyn and MuJoCo")
+    rows = []
+    for engine, settings in engines.items():
+        found = cheapest(settings, error, TOLERANCE)
+        if found is None:
+            print(f"{engine}: no setting tried reaches {TOLERANCE:g} m")
+            continue
+        label, err, wall = found
+        rows.append({"engine": engine, "setting": label, "error": err, "wall": wall})
+    best = min((r["wall"] for r in rows if r["engine"].startswith("mbd3d")), default=np.nan)
+    print(mb.format_table({
+        "engine": [r["engine"] for r in rows],
+        "cheapest setting": [r["setting"] for r in rows],
+        "tip error [m]": [r["error"] for r in rows],
+        "wall [s]": [r["wall"] for r in rows],
+        "mbd3d best / this": [best / r["wall"] for r in rows],
+    }, precision=3))
+    print(f"({n_links} links, tip at t = 1 s to {TOLERANCE:g} m; medians of 3 runs; target: "
+          "mbd3d / peer <= 1.0)")
+    return rows
 
 
-def crossover(sizes=(5, 10, 20, 30, 40, 60)) -> None:
-    """Dense vs sparse augmented solve around the threshold (mbd3d.model.SPARSE_THRESHOLD)."""
-    dense = [measure(n, False, sparse=False)["solve_ms"] for n in sizes]
-    sparse = [measure(n, False, sparse=True)["solve_ms"] for n in sizes]
-    print(mb.format_table({"N": sizes, "unknowns n+m": [5 * n for n in sizes],
-                           "dense [ms]": dense, "sparse [ms]": sparse, "sparse/dense": np.divide(sparse, dense)}))
+def crossover(sizes=(2, 4, 8, 12, 16, 24)) -> None:
+    """Dense vs banded augmented solve around the threshold (mbd3d.model.SPARSE_THRESHOLD)."""
+    dense = [measure(n, simulate=False, sparse=False)["solve_ms"] for n in sizes]
+    banded = [measure(n, simulate=False, sparse=True)["solve_ms"] for n in sizes]
+    print(mb.format_table({"N": list(sizes), "unknowns n+m": [5 * n for n in sizes],
+                           "dense [ms]": dense, "banded [ms]": banded,
+                           "banded/dense": [s / d for s, d in zip(banded, dense)]}, precision=5))
+
+
+def main(sizes=(1, 10, 100, 1000, 10000), simulate: bool = True, compare: bool = False,
+         peer_links: int = 100) -> list[dict]:
+    rows = report("planar N-link chain", pendulum_chain, sizes, simulate)
+    if compare:
+        compare_with_peers(peer_links)
+    return rows
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 1000])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[1, 10, 100, 1000, 10000])
     parser.add_argument("--no-simulation", action="store_true")
+    parser.add_argument("--peers", action="store_true",
+                        help="compare with Exudyn and MuJoCo at equal accuracy")
+    parser.add_argument("--peer-links", type=int, default=100)
     parser.add_argument("--crossover", action="store_true",
-                        help="compare dense and sparse solves around the size threshold")
+                        help="compare dense and banded solves around the size threshold")
     args = parser.parse_args()
     if args.crossover:
         crossover()
     else:
-        main(tuple(args.sizes), not args.no_simulation)
+        main(tuple(args.sizes), not args.no_simulation, args.peers, args.peer_links)

@@ -26,7 +26,7 @@ from mbd3d.mechanisms import pendulum_chain, spatial_chain
 from viewer import Recorder, record
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from planar_chain import median_time  # noqa: E402  (the shared timer)
+from measure import median_time  # noqa: E402  (the shared timer)
 
 
 def main(points: int = 10_000, links: int = 10, repeat: int = 3) -> list[dict]:

@@ -4,11 +4,19 @@ from __future__ import annotations
 
 import importlib.util
 import pathlib
+import sys
 
 BENCHMARKS = pathlib.Path(__file__).resolve().parent.parent / "benchmarks"
 
 
 import pytest
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 @pytest.mark.parametrize("name", ["planar_chain", "spatial_chain"])
@@ -17,9 +25,31 @@ def test_chain_benchmark_runs(name, capsys, monkeypatch):
     spec = importlib.util.spec_from_file_location(name, BENCHMARKS / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    rows = module.main(sizes=(2,), simulate=True)
-    assert rows[0]["N"] == 2 and rows[0]["steps"] > 0
+    rows = module.main(sizes=(1, 2), simulate=True)
+    assert [r["N"] for r in rows] == [1, 2] and rows[0]["steps"] > 0
     assert "augmented solve" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name", ["planar_chain", "spatial_chain"])
+def test_chain_comparison_runs_without_peers(name, capsys, monkeypatch):
+    """The comparison at its smallest: the two mbd3d integrators, peers hidden."""
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    module = _load(name)
+    monkeypatch.setattr(sys.modules["peers"], "available", lambda name: False)
+    rows = module.main(sizes=(1,), simulate=False, compare=True, peer_links=1)
+    out = capsys.readouterr().out
+    assert "no peers installed" in out and "mbd3d DOP853" in out
+    assert rows[0]["N"] == 1
+
+
+def test_slider_crank_study_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    module = _load("slider_crank")
+    monkeypatch.setattr(module, "DURATION", 0.05)
+    rows = module.main(quick=True, repeat=1)
+    assert {r["method"] for r in rows} == set(module.STUDY)
+    assert all(r["error"] < 1e-2 for r in rows)  # every integrator near the reference
+    assert "angle error" in capsys.readouterr().out
 
 
 def test_viewer_logging_benchmark_runs(capsys, monkeypatch):

@@ -1,0 +1,121 @@
+"""Work-precision study of every integrator on the free slider-crank, and Exudyn at equal accuracy.
+
+The model is ``mbd3d.mechanisms.slider_crank(crank_speed=None)`` (Nikravesh's data, no
+driver) under gravity, started at a crank angle of 65 degrees turning at 30 rad/s: in 2 s the
+crank makes about 14 turns. The reported quantity is the crank angle at t = 2 s; its
+reference comes from DOP853 at rtol 1e-13 (and the study shows every integrator converging to
+it). For each integrator and setting the script prints the error and the wall time (median of
+3 runs). With --peers (``pip install -e ".[peers]"``) it finds the cheapest Exudyn step
+(its generalized-alpha) and the cheapest mbd3d setting that get the angle to 1e-6 rad and
+prints the ratio of their wall times (target: mbd3d / Exudyn <= 0.05).
+
+Run: python benchmarks/slider_crank.py [--peers] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import sys
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+import mbd3d as mb  # noqa: E402
+import peers  # noqa: E402
+from mbd3d.mechanisms import slider_crank  # noqa: E402
+from measure import cheapest, machine  # noqa: E402
+
+#: crank rate at t = 0 [rad/s], duration [s], and the accuracy of the comparison [rad]
+CRANK_RATE, DURATION, TOLERANCE = 30.0, 2.0, 1e-6
+
+#: the settings of the study, cheapest first
+STUDY = {
+    "RK45": [{"rtol": r} for r in (1e-5, 1e-7, 1e-9)],
+    "DOP853": [{"rtol": r} for r in (1e-5, 1e-7, 1e-9, 1e-11)],
+    "RK23": [{"rtol": r} for r in (1e-5, 1e-7)],
+    "Radau": [{"rtol": 1e-5}],
+    "generalized-alpha": [{"step": h} for h in (1e-3, 2.5e-4, 6.25e-5)],
+}
+
+
+def initial_state(model) -> tuple[np.ndarray, np.ndarray]:
+    """Assembled positions at 65 degrees and the rates with the crank at ``CRANK_RATE``."""
+    q = mb.solve_position(model)
+    guess = np.zeros(model.n_coordinates)
+    guess[model.coordinate_index("crank.theta")] = CRANK_RATE
+    return q, mb.solve_velocity(model, q, qd_guess=guess, hold=["crank.theta"])
+
+
+def run(model, q0, qd0, method: str, options: dict) -> tuple[float, float]:
+    """Crank angle at ``DURATION`` [rad] and the wall time [s] of one integration."""
+    tolerances = {"rtol": options["rtol"], "atol": options["rtol"] * 1e-2} if "rtol" in options \
+        else {"step": options["step"]}
+    res = mb.forward_dynamics(model, [0.0, DURATION], q0=q0, qd0=qd0, method=method,
+                              **tolerances)
+    return float(res.body("crank").angle[-1]), res.stats["wall_time"]
+
+
+def main(compare: bool = False, quick: bool = False, repeat: int = 3) -> list[dict]:
+    model = slider_crank(crank_speed=None)
+    q0, qd0 = initial_state(model)
+    reference = run(model, q0, qd0, "DOP853", {"rtol": 1e-13})[0]
+    print(f"free slider-crank, crank angle at t = {DURATION:g} s (reference {reference:.12f} rad"
+          f" from DOP853 at rtol 1e-13); {machine()}")
+    study = {m: s[:1] for m, s in STUDY.items()} if quick else STUDY
+    rows = []
+    for method, settings in study.items():
+        for options in settings:
+            walls, angle = [], None
+            setting = ", ".join(f"{k} {v:g}" for k, v in options.items())
+            try:
+                for _ in range(repeat):
+                    angle, wall = run(model, q0, qd0, method, options)
+                    walls.append(wall)
+            except mb.MBDError as exc:  # reported, as a user would meet it
+                print(f"{method}, {setting}: failed: {exc}")
+                continue
+            rows.append({"method": method, "setting": setting,
+                         "error": abs(angle - reference), "wall": float(np.median(walls))})
+    print(mb.format_table({"integrator": [r["method"] for r in rows],
+                           "setting": [r["setting"] for r in rows],
+                           "angle error [rad]": [r["error"] for r in rows],
+                           "wall [s]": [r["wall"] for r in rows]}, precision=3))
+    print(f"(medians of {repeat} runs; explicit methods at atol = rtol / 100)")
+    if compare:
+        compare_with_exudyn(model, q0, qd0, reference)
+    return rows
+
+
+def compare_with_exudyn(model, q0, qd0, reference: float) -> None:
+    """Cheapest mbd3d and Exudyn settings within ``TOLERANCE`` of the reference angle."""
+    if not peers.available("exudyn"):
+        print("Exudyn is not installed: pip install -e '.[peers]'")
+        return
+    ours = [(f"DOP853 rtol {r:g}", lambda r=r: run(model, q0, qd0, "DOP853", {"rtol": r}))
+            for r in 10.0 ** -np.arange(6, 13)]
+    theirs = [(f"h {h:.3g}", lambda h=h: peers.exudyn_slider_crank(
+        h, qd0, DURATION, math.radians(65.0))) for h in 1e-4 * 2.0 ** -np.arange(0, 7)]
+
+    def error(angle):
+        return abs(angle - reference)
+
+    found = {"mbd3d": cheapest(ours, error, TOLERANCE),
+             "Exudyn generalized-alpha": cheapest(theirs, error, TOLERANCE, repeat=1)}
+    for engine, result in found.items():
+        print(f"{engine}: " + ("no setting tried reaches the accuracy" if result is None else
+                               f"{result[0]}: error {result[1]:.2e} rad, {result[2]:.3g} s"))
+    if all(found.values()):
+        ratio = found["mbd3d"][2] / found["Exudyn generalized-alpha"][2]
+        print(f"mbd3d / Exudyn at {TOLERANCE:g} rad: {ratio:.3f} (target <= 0.05: "
+              f"{'met' if ratio <= 0.05 else 'missed'})")
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--peers", action="store_true", help="compare with Exudyn")
+    parser.add_argument("--quick", action="store_true", help="one setting per integrator")
+    args = parser.parse_args()
+    main(args.peers, args.quick)
