@@ -181,32 +181,26 @@ class _FixedPattern:
         inverse[self.perm] = np.arange(size)
         self.inverse = inverse
         prow, pcol = inverse[rows], inverse[cols]
-        kl = int(np.max(prow - pcol, initial=0))
-        ku = int(np.max(pcol - prow, initial=0))
-        if kl * (kl + ku) <= BANDED_WORK_LIMIT:
-            self.layout = "banded"
-            self.kl, self.ku = kl, ku
-            self.band_rows = 2 * kl + ku + 1
-            self.flat = (kl + ku + prow - pcol) + pcol * self.band_rows
-            return
-        self.layout = "sparse"
-        self.order = np.lexsort((prow, pcol))  # column-major for CSC
+        # CSC structure of the permuted matrix: SuperLU's input, also for a banded pattern
+        # whose matrix gets entries outside the band (see factor)
+        self.order = np.lexsort((prow, pcol))
         self.indices = prow[self.order].astype(np.int32)
         counts = np.bincount(pcol, minlength=size)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+        kl = int(np.max(prow - pcol, initial=0))
+        ku = int(np.max(pcol - prow, initial=0))
+        if kl * (kl + ku) > BANDED_WORK_LIMIT:
+            self.layout = "sparse"
+            return
+        self.layout = "banded"
+        self.kl, self.ku = kl, ku
+        self.band_rows = 2 * kl + ku + 1
+        self.flat = (kl + ku + prow - pcol) + pcol * self.band_rows
 
-    @property
-    def sparse(self) -> bool:
-        return self.layout != "dense"
-
-    def matrix(self, values: np.ndarray, extra=None):
-        """The matrix from its entries (dense, or CSC in the permuted order), plus ``extra``
-        (n, n) in the original order."""
-        if self.layout == "dense":
-            A = self._scatter(values, self.size)
-            return A if extra is None else A + extra
-        prow, pcol = self.inverse[self.rows], self.inverse[self.cols]
-        A = sp.csc_matrix((values, (prow, pcol)), shape=(self.size, self.size))
+    def _permuted_csc(self, values: np.ndarray, extra=None) -> sp.csc_matrix:
+        """The permuted matrix in CSC form, plus ``extra`` (n, n) in the original order."""
+        A = sp.csc_matrix((values[self.order], self.indices, self.indptr),
+                          shape=(self.size, self.size))
         if extra is not None:
             A = sp.csc_matrix(A + sp.csr_matrix(extra)[self.perm][:, self.perm])
         return A
@@ -231,16 +225,11 @@ class _FixedPattern:
             return Factorization(A, pivot_tolerance=self.pivot_tolerance)
         if self.layout == "banded":
             ab = self._scatter(values, self.band_rows)
-            if extra is not None and not self._add_to_band(ab, extra):
-                return _Permuted(self, Factorization(self.matrix(values, extra), "NATURAL",
-                                                     self.pivot_tolerance))
-            return _Permuted(self, BandedFactorization(ab, self.kl, self.ku,
-                                                        self.pivot_tolerance))
-        A = sp.csc_matrix((values[self.order], self.indices, self.indptr),
-                          shape=(self.size, self.size))
-        if extra is not None:
-            A = sp.csc_matrix(A + sp.csr_matrix(extra)[self.perm][:, self.perm])
-        return _Permuted(self, Factorization(A, "NATURAL", self.pivot_tolerance))
+            if extra is None or self._add_to_band(ab, extra):
+                return _Permuted(self, BandedFactorization(ab, self.kl, self.ku,
+                                                            self.pivot_tolerance))
+        return _Permuted(self, Factorization(self._permuted_csc(values, extra), "NATURAL",
+                                             self.pivot_tolerance))
 
     def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:
         """(n_rows, size) array in Fortran order (as LAPACK takes it) holding ``values`` at
