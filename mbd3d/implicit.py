@@ -183,21 +183,24 @@ def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma
     return T.tocsr() if model.sparse else T.toarray()
 
 
-class _IterationMatrix:
-    """Factors of ``beta' M + gamma' D + K + p Cq^T Cq`` at the start of a step."""
+def _penalty(model, blocks: np.ndarray, jac_data: np.ndarray, beta_prime: float,
+             relative_penalty: float) -> float:
+    """The penalty ``p`` of the augmented Lagrangian: ``relative_penalty`` times the mass term
+    ``beta' M`` per squared unit of ``Cq``, so that the ratio means the same for any model (see
+    linalg.penalty_scale)."""
+    row_norms = np.bincount(model._jac_rows, weights=jac_data * jac_data,
+                            minlength=model.n_constraints)
+    return relative_penalty * beta_prime * penalty_scale(np.einsum("kii->ki", blocks), row_norms)
 
-    def __init__(self, model, t, q, qd, charts, beta_prime, relative_penalty, tangent):
-        fr = constraints.frames(model, q, qd, charts)
-        _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
-        blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-        pattern = model._penalty_pattern
-        # so that the ratio means the same for any model (see linalg.penalty_scale)
-        row_norms = np.bincount(model._jac_rows, weights=jac_data * jac_data,
-                                minlength=model.n_constraints)
-        self.penalty = relative_penalty * beta_prime * penalty_scale(
-            np.einsum("kii->ki", blocks), row_norms)
-        values = pattern.values(beta_prime, blocks, self.penalty, jac_data)
-        self.lu = pattern.factor(values, tangent)
+
+class _IterationMatrix:
+    """Factors of ``beta' M + gamma' D + K + p Cq^T Cq`` at one Newton iterate, from the mass
+    blocks and Jacobian values the iteration has evaluated there."""
+
+    def __init__(self, model, blocks, jac_data, beta_prime, penalty, tangent):
+        self.penalty = penalty
+        values = model._penalty_pattern.values(beta_prime, blocks, penalty, jac_data)
+        self.lu = model._penalty_pattern.factor(values, tangent)
         # the conditioning of Cq in the metric of M, free of the step (see mbd3d.passages)
         self.indicator = (self.lu.log_abs_determinant - model.n_coordinates * np.log(beta_prime)
                           - float(np.sum(np.linalg.slogdet(blocks)[1])))
@@ -277,19 +280,32 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         for iteration in range(max_newton_iterations):
             qdd = beta_prime * (q - q_hat)
             qd = qd_hat + gamma_prime * (q - q_hat)
+            if iteration == 0:
+                # the applied forces' tangent varies slowly: once per step is enough
+                tangent = _force_tangent(model, tt, q, qd, chart, gamma_prime)
+            fr = constraints.frames(model, q, qd, chart)
+            C, jac_data, _ = constraints.evaluate(model, tt, fr)
+            blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+            penalty = _penalty(model, blocks, jac_data, beta_prime, relative_penalty)
+            Mqdd = np.einsum("kij,kj->ki", blocks, qdd.reshape(blocks.shape[:2])).ravel()
+            if iteration:
+                lam = lam + penalty * C  # method of multipliers, C at the new iterate
+            lam_effective = lam + penalty * C
+            r = (Mqdd + constraints.jacobian_transpose_times(model, jac_data, lam_effective)
+                 - generalized_forces(model, tt, fr))
             # factors at every iterate (full Newton): the constraint force p C Cq^T is
             # normal to the free directions only at the configuration where Cq is
             # evaluated, and it is large (p is the penalty ratio times the mass term); with
             # factors kept from the predictor, its part along the free directions of the old
             # factors passed the convergence test as a tangential force error (a velocity
             # oscillation of 1e-2 rad/s on a slider-crank at h = 1e-3, 200 times the method's
-            # own error)
-            if iteration == 0:
-                # the applied forces' tangent varies slowly: once per step is enough
-                tangent = _force_tangent(model, tt, q, qd, chart, gamma_prime)
+            # own error). The geometric stiffness d(Cq^T lam)/dq is left out (Gauss-Newton on
+            # the penalty term, as in ALI3-P): tried, with lam or lam + p C, it made the
+            # free slider-crank at h = 5e-4 reject thousands of steps where it rejects none
+            # without it (p C is far larger than lam between iterates, so neither is the
+            # curvature the next iterate sees)
             try:
-                S = _IterationMatrix(model, tt, q, qd, chart, beta_prime, relative_penalty,
-                                     tangent)
+                S = _IterationMatrix(model, blocks, jac_data, beta_prime, penalty, tangent)
             except SingularMatrix:
                 raise IntegrationError(
                     f"forward dynamics of '{model.name}': the generalized-alpha iteration "
@@ -298,15 +314,6 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                     "for bodies many orders of magnitude lighter than the others (or give "
                     "them mass).", time=tt) from None
             stats["factorizations"] += 1
-            fr = constraints.frames(model, q, qd, chart)
-            C, jac_data, _ = constraints.evaluate(model, tt, fr)
-            blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-            Mqdd = np.einsum("kij,kj->ki", blocks, qdd.reshape(blocks.shape[:2])).ravel()
-            if iteration:
-                lam = lam + S.penalty * C  # method of multipliers, C at the new iterate
-            lam_effective = lam + S.penalty * C
-            r = (Mqdd + constraints.jacobian_transpose_times(model, jac_data, lam_effective)
-                 - generalized_forces(model, tt, fr))
             dq = -S.lu.solve(r)
             if not np.all(np.isfinite(dq)):
                 return None
@@ -367,7 +374,11 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
             if not np.all(np.isfinite(q)) or not np.all(np.isfinite(qd)):
                 raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
                                        f"non-finite at t = {tt:.6g} s", time=tt)
-            h = min(step, max_step)  # back to the nominal step after a recovery
+            # back to the nominal step after a recovery, doubling: jumping straight back
+            # from a quarter step, the free slider-crank at h = 1e-3 (crank at 80 rad/s)
+            # cycled between rejection and return with the predictor's error growing every
+            # cycle, to 1e18 m at t = 0.113 s, where no step converged any more
+            h = min(step, max_step, 2.0 * h)
             if tt >= target - 1e-12 * max(1.0, abs(target)):
                 tt = target
                 # the reported velocities are projected onto Cq qd = -Ct; the recursion keeps
