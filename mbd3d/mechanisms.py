@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from mbd3d.errors import ModelError
 from mbd3d.forces import Torque
 from mbd3d.model import Model, ModelBuilder
 from mbd3d.motion import Motion, Ramp
@@ -57,6 +58,14 @@ def slider_crank(*, crank_length: float = 0.12, rod_length: float = 0.26,
     from joints import Prismatic, Revolute, RotationDriver
 
     L1, L2 = crank_length, rod_length
+    if not (L1 > 0 and L2 > 0):
+        raise ModelError(f"slider_crank: crank_length and rod_length must be positive [m], got "
+                         f"{L1!r} and {L2!r}")
+    if abs(L1 * math.sin(crank_angle)) > L2:
+        raise ModelError(f"slider_crank: a rod of {L2:g} m cannot reach the slider's line from "
+                         f"the crank pin, {abs(L1 * math.sin(crank_angle)):.4g} m away at the "
+                         f"crank angle {math.degrees(crank_angle):.4g} deg; give a longer rod "
+                         "or another crank_angle")
     a, rod_angle, b_point = slider_crank_positions(crank_angle, L1, L2)
     b = ModelBuilder(dim=2, gravity=(0.0, -gravity), name="slider-crank")
     crank = b.add_body("crank", mass=crank_mass, inertia=crank_inertia, position=a / 2,
