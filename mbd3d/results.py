@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 import tempfile
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any, BinaryIO, Callable, Sequence
 
 import numpy as np
 
@@ -401,8 +401,9 @@ class Results:
             np.savetxt(f, data, delimiter=",", header=header, comments="", fmt="%.17g")
         _atomic_write(path, write, text=True)
 
-    def to_npz(self, path: str | os.PathLike) -> None:
-        """Write the arrays and their labels to a compressed NumPy ``.npz`` file."""
+    def to_npz(self, path: str | os.PathLike | BinaryIO) -> None:
+        """Write the arrays and their labels to a compressed NumPy ``.npz`` file (a path,
+        written atomically, or an open binary file)."""
         arrays = dict(t=self.t, q=self.q, qd=self.qd, qdd=self.qdd,
                       coordinate_labels=np.array(self.model.coordinate_labels),
                       row_labels=np.array(self.model.row_labels),
@@ -415,7 +416,10 @@ class Results:
 
         def write(f):
             np.savez_compressed(f, **arrays)
-        _atomic_write(path, write, text=False)
+        if hasattr(path, "write"):
+            write(path)
+        else:
+            _atomic_write(path, write, text=False)
 
 
 class ResultsBuffer:

@@ -61,3 +61,10 @@ def test_viewer_logging_benchmark_runs(capsys, monkeypatch):
     assert [r["model"] for r in rows] == ["planar", "spatial"]
     assert all(r["slowdown"] > 0 and r["file_mb"] > 0 for r in rows)
     assert "slow-down" in capsys.readouterr().out
+
+
+def test_sweep_speedup_benchmark_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    medians = _load("sweep_speedup").main(points=2, repeat=1, n_points=11)
+    assert set(medians) == {"serial", "1 worker", "2 workers"}
+    assert "speed-up 2 workers / 1 worker" in capsys.readouterr().out

@@ -91,3 +91,21 @@ def test_mesh_bodies_example(capsys, tmp_path):
     assert arm.mass == pytest.approx(m, rel=1e-12)
     assert arm.inertia[2, 2] == pytest.approx(m * (0.04**2 + 0.40**2) / 12, rel=1e-12)
     assert recorded_steps(tmp_path / "mesh.rrd", "disc") == 221
+
+
+def test_sweep_slider_crank_example(capsys, tmp_path):
+    rrd = tmp_path / "sweep.rrd"
+    table = load("sweep_slider_crank").main(speeds=np.array([5.0, 10.0]),
+                                            rods=np.array([0.1, 0.3]), n_points=31,
+                                            folder=str(tmp_path / "runs"), rrd=str(rrd),
+                                            backend="serial")
+    out = capsys.readouterr().out
+    assert "fastest slider" in out and f"rerun {rrd}" in out
+    # the 0.1 m rod is shorter than the 0.12 m crank: it locks before a full turn
+    assert [row["status"] for row in table] == ["failed", "ok", "failed", "ok"]
+    assert {"/maps/peak_slider_speed", "/maps/peak_torque"} <= entity_paths(rrd)
+    # crank at 10 rad/s, 0.3 m rod: the slider speed's closed form over the same samples
+    theta = 10.0 * np.linspace(0.0, 2 * math.pi / 5.0, 31)
+    s, c = np.sin(theta), np.cos(theta)
+    v = 10.0 * (-0.12 * s - 0.12**2 * s * c / np.sqrt(0.3**2 - 0.12**2 * s * s))
+    assert table.rows[3]["peak slider speed [m/s]"] == pytest.approx(np.max(np.abs(v)), rel=1e-9)

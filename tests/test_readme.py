@@ -44,3 +44,16 @@ def test_first_two_commands_are_install_and_test():
     commands = re.search(r"```bash\n(.*?)```", text, re.S).group(1).strip().splitlines()
     assert commands[0] == "python -m pip install . && python examples/slider_crank.py"
     assert commands[1] == 'python -m pip install ".[test]" && python -m pytest'
+
+
+def test_sweep_snippet_runs_on_a_local_cluster(tmp_path, monkeypatch, capsys):
+    text = README.read_text()
+    section = text.split("## Parameter sweeps", 1)[1]
+    block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    namespace = {"__name__": "__main__"}
+    exec(compile(block, "README sweep snippet", "exec"), namespace)
+    table = namespace["table"]
+    assert [row["status"] for row in table] == ["failed", "ok", "failed", "ok"]
+    assert (tmp_path / "sweep_results" / "table.csv").exists()
+    assert "SweepTable(4 runs, 2 failed)" in capsys.readouterr().out

@@ -1,0 +1,524 @@
+"""Parameter sweeps and Monte Carlo studies, on a Dask cluster or on this machine.
+
+A sweep runs one analysis on many variants of a model: ``factory(**params)`` builds each
+variant, an :class:`Analysis` runs on it, and ``metrics`` (name -> function of the
+:class:`~mbd3d.Results`) reduce each run to the numbers kept. :func:`sweep` returns a
+:class:`SweepTable`, one row per run: parameters, metrics, status, error message, wall time.
+
+Where it runs: on a Dask cluster given as a ``distributed.Client`` or a scheduler address,
+otherwise on a ``LocalCluster`` of worker processes on the loopback interface
+(``pip install "mbd3d[distributed]"``); without Dask, serially in this process.
+
+Nothing is lost: each run's outcome is written to ``folder/runs/<key>.json`` (and its full
+results to ``<key>.npz`` with ``keep_results``) as soon as it finishes, and
+``folder/table.csv`` is rewritten atomically as the sweep goes. Run the same sweep again on the
+same folder and it skips the points already done: an interrupted sweep resumes where it
+stopped. A run that fails (a model that does not assemble, a singular position) is recorded
+with its error and does not stop the others; a worker process that dies is replaced by Dask and
+its run done again.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import itertools
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from mbd3d.errors import MBDError
+from mbd3d.results import Results, _atomic_write, format_table
+
+__all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable"]
+
+_ANALYSES = ("kinematic", "inverse dynamics", "forward dynamics")
+#: seconds between rewrites of table.csv while a sweep runs (each run's own file is immediate)
+TABLE_INTERVAL = 1.0
+_DASK_HINT = ('to run sweeps in parallel processes or on a cluster, install Dask: '
+              'pip install "mbd3d[distributed]"')
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """The analysis a sweep runs on every model: one of ``"kinematic"``, ``"inverse
+    dynamics"``, ``"forward dynamics"``, over the times ``t`` [s], with the keyword ``options``
+    of :func:`mbd3d.kinematic_analysis`, :func:`mbd3d.inverse_dynamics` or
+    :func:`mbd3d.forward_dynamics` (e.g. ``method="DOP853", rtol=1e-9``)."""
+
+    kind: str
+    t: Sequence[float]
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.kind not in _ANALYSES:
+            raise MBDError(f"Analysis: unknown kind {self.kind!r}; use one of "
+                           f"{', '.join(repr(k) for k in _ANALYSES)}")
+        t = np.asarray(self.t, dtype=float)
+        if t.ndim != 1 or len(t) < 2 or not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise MBDError("Analysis: t must be at least two finite, increasing times [s], got "
+                           f"{self.t!r}")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "options", dict(self.options))
+
+    def __call__(self, model) -> Results:
+        import mbd3d as mb
+        run = {"kinematic": mb.kinematic_analysis, "inverse dynamics": mb.inverse_dynamics,
+               "forward dynamics": mb.forward_dynamics}[self.kind]
+        return run(model, self.t, **{**self.options, "progress": False})
+
+
+def grid(**axes: Iterable) -> list[dict]:
+    """Every combination of the values given per parameter (the last one varies fastest).
+
+    >>> grid(speed=[1.0, 2.0], rod=[0.3, 0.4])
+    [{'speed': 1.0, 'rod': 0.3}, {'speed': 1.0, 'rod': 0.4}, {'speed': 2.0, 'rod': 0.3}, {'speed': 2.0, 'rod': 0.4}]
+    >>> grid(speed=np.array([1.0, 2.0]), mode="fast")
+    [{'speed': 1.0, 'mode': 'fast'}, {'speed': 2.0, 'mode': 'fast'}]
+    """
+    names = list(axes)
+    values = []
+    for name in names:
+        given = axes[name]
+        if isinstance(given, (str, bytes)) or np.ndim(given) == 0:
+            given = [given]  # one value: the parameter is held fixed
+        axis = [_plain(v) for v in given]
+        if not axis:
+            raise MBDError(f"grid: parameter '{name}' needs a non-empty sequence of values, got "
+                           f"{axes[name]!r}")
+        values.append(axis)
+    return [dict(zip(names, combination)) for combination in itertools.product(*values)]
+
+
+def monte_carlo(n: int, seed: int, **distributions: Any) -> list[dict]:
+    """``n`` random samples of the parameters, reproducible from ``seed``.
+
+    Each parameter is a ``(low, high)`` pair (uniform), a SciPy frozen distribution
+    (``scipy.stats.norm(0.26, 0.001)``), or a function of a ``numpy.random.Generator``
+    returning one value. Parameters are drawn in the order given, sample after sample.
+
+    >>> samples = monte_carlo(3, seed=1, rod=(0.25, 0.27))
+    >>> len(samples), all(0.25 <= s["rod"] <= 0.27 for s in samples)
+    (3, True)
+    """
+    if not (isinstance(n, (int, np.integer)) and n > 0):
+        raise MBDError(f"monte_carlo: n must be a positive number of samples, got {n!r}")
+    rng = np.random.default_rng(seed)
+    draws = {}
+    for name, spec in distributions.items():
+        if hasattr(spec, "rvs"):
+            draws[name] = lambda spec=spec: float(spec.rvs(random_state=rng))
+        elif callable(spec):
+            draws[name] = lambda spec=spec: spec(rng)
+        elif (isinstance(spec, (tuple, list)) and len(spec) == 2
+              and all(np.isfinite(float(v)) for v in spec) and spec[0] < spec[1]):
+            draws[name] = lambda spec=spec: float(rng.uniform(spec[0], spec[1]))
+        else:
+            raise MBDError(f"monte_carlo: parameter '{name}' must be a (low, high) pair with "
+                           "low < high, a scipy.stats frozen distribution or a function of a "
+                           f"numpy Generator, got {spec!r}")
+    samples = []
+    for _ in range(n):
+        samples.append({name: _plain(draw()) for name, draw in draws.items()})
+    return samples
+
+
+def _plain(value: Any) -> Any:
+    """NumPy scalars as Python numbers, so parameters serialize to JSON."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
+def _key(params: Mapping[str, Any]) -> str:
+    """A name for a run, the same for the same parameters in any session."""
+    text = json.dumps(params, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def _run_one(factory: Callable[..., Any], analysis: Callable[[Any], Results],
+             metrics: Mapping[str, Callable[[Results], Any]], params: dict, keep: bool) -> dict:
+    """Build, analyse and measure one point (runs on a worker). Never raises: an error is
+    returned in the record with the stage it happened in."""
+    start = time.perf_counter()
+    record = {"params": params, "metrics": {}, "status": "ok", "error": "", "npz": None}
+    stage = "building the model"
+    try:
+        model = factory(**params)
+        stage = "the analysis"
+        results = analysis(model)
+        if results.status == "interrupted":
+            raise KeyboardInterrupt  # Ctrl-C during a serial sweep: stop, do not record
+        if results.status != "complete":
+            raise MBDError(f"analysis {results.status}: {results.message}")
+        for name, metric in metrics.items():
+            stage = f"metric '{name}'"
+            value = _plain(metric(results))
+            if isinstance(value, (float, int)) and not isinstance(value, bool):
+                value = float(value)
+            json.dumps(value)  # a metric must be a number, a string or a list of them
+            record["metrics"][name] = value
+        if keep:
+            buffer = io.BytesIO()
+            results.to_npz(buffer)
+            record["npz"] = buffer.getvalue()
+    except Exception as exc:  # recorded, never stops the sweep
+        record["status"] = "failed"
+        record["error"] = f"{stage}: {type(exc).__name__}: {exc}"
+        record["metrics"] = {}
+    record["wall_time"] = time.perf_counter() - start
+    return record
+
+
+class SweepTable:
+    """The outcome of a sweep: one row per run (``dict`` with ``key``, the parameters, the
+    metrics, ``status`` ("ok" or "failed"), ``error`` and ``wall_time`` [s]).
+
+    Attributes
+    ----------
+    rows : list of dict
+        In the order of the points given.
+    parameters, metrics : list of str
+        Column names.
+    folder : str
+        Where the runs are stored.
+    summary : dict
+        ``runs``, ``ok``, ``failed``, ``skipped`` (done before, resumed), ``wall_time`` [s]
+        of this session, ``run_time`` [s] (sum over the runs of this session), ``speedup``
+        (their ratio), ``workers``, ``interrupted``.
+    """
+
+    def __init__(self, rows: list[dict], parameters: list[str], metrics: list[str], folder: str,
+                 summary: dict):
+        self.rows, self.parameters, self.metrics = rows, parameters, metrics
+        self.folder, self.summary = folder, summary
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __iter__(self):
+        return iter(self.rows)
+
+    def column(self, name: str) -> np.ndarray:
+        """One parameter or metric over the rows; NaN where a run failed (numbers), or an
+        object array (text)."""
+        if name not in self.parameters + self.metrics + ["wall_time", "status", "error", "key"]:
+            raise MBDError(f"sweep table has no column '{name}'; columns: "
+                           f"{', '.join(self.columns)}")
+        values = [row.get(name) for row in self.rows]
+        try:
+            return np.array([np.nan if v is None else v for v in values], dtype=float)
+        except (TypeError, ValueError):
+            return np.array(values, dtype=object)
+
+    @property
+    def columns(self) -> list[str]:
+        return ["key", *self.parameters, *self.metrics, "status", "error", "wall_time"]
+
+    @property
+    def failed(self) -> list[dict]:
+        """The rows whose run failed, with their parameters and error messages."""
+        return [row for row in self.rows if row["status"] != "ok"]
+
+    def results(self, row: Mapping[str, Any]) -> dict[str, np.ndarray]:
+        """The full results of a run swept with ``keep_results=True``: the arrays of
+        :meth:`mbd3d.Results.to_npz` (``t``, ``q``, ``qd``, ``qdd``, ``lam``, labels)."""
+        path = os.path.join(self.folder, "runs", f"{row['key']}.npz")
+        if row["status"] != "ok":
+            raise MBDError(f"run {row['key']} ({_describe(row, self)}) failed, so it has no "
+                           f"results: {row['error']}")
+        if not os.path.exists(path):
+            raise MBDError(f"no full results for run {row['key']} ({_describe(row, self)}): "
+                           "sweep with keep_results=True to keep them")
+        with np.load(path) as data:
+            return {name: data[name] for name in data.files}
+
+    def to_csv(self, path: str | os.PathLike) -> None:
+        """Write the table (one row per run) to a CSV file, atomically."""
+        def write(f):
+            writer = csv.writer(f, lineterminator="\n")
+            writer.writerow(self.columns)
+            for row in self.rows:
+                writer.writerow(["" if row.get(c) is None else _cell(row.get(c))
+                                 for c in self.columns])
+        _atomic_write(path, write, text=True)
+
+    def __repr__(self) -> str:
+        shown = [c for c in self.columns if c not in ("key", "error")]
+        table = format_table({c: [_text(row.get(c)) for row in self.rows] for c in shown},
+                             rows=20)
+        return f"SweepTable({len(self)} runs, {len(self.failed)} failed)\n{table}"
+
+
+def _cell(value: Any) -> Any:
+    return repr(value) if isinstance(value, float) else (
+        json.dumps(value) if isinstance(value, (list, dict)) else value)
+
+
+def _text(value: Any) -> Any:
+    if value is None:
+        return "-"
+    return value if isinstance(value, (int, float)) and not isinstance(value, bool) else str(value)
+
+
+def _describe(row: Mapping[str, Any], table: SweepTable) -> str:
+    return ", ".join(f"{name}={row.get(name)!r}" for name in table.parameters)
+
+
+def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],
+          analysis: Callable[[Any], Results], metrics: Mapping[str, Callable[[Results], Any]],
+          folder: str | os.PathLike, *, keep_results: bool = False, client: Any = None,
+          workers: int | None = None, backend: str = "auto", retry_failed: bool = False,
+          progress: bool = True) -> SweepTable:
+    """Run ``analysis`` on ``factory(**point)`` for every point and keep ``metrics``.
+
+    Parameters
+    ----------
+    factory : callable
+        ``factory(**params) -> Model``. It runs on the workers: define it at module level (a
+        script's own functions are shipped by Dask).
+    points : sequence of dict
+        Parameter values per run (:func:`grid`, :func:`monte_carlo`, or your own list);
+        numbers, strings or booleans, so that each run can be named and stored.
+    analysis : Analysis or callable
+        ``analysis(model) -> Results``, e.g. ``Analysis("forward dynamics", t, method="DOP853")``.
+    metrics : dict
+        Name -> ``function(results)`` returning a number (or a string, or a list).
+    folder : path
+        Where each run's outcome and the table are written; created if missing. Points found
+        there from an earlier sweep are not run again (their stored rows are returned).
+    keep_results : bool
+        Also store each run's full results (``runs/<key>.npz``, see :meth:`SweepTable.results`).
+    client : distributed.Client or str, optional
+        A Dask client, or a scheduler address ("tcp://host:8786"), to run on that cluster.
+    workers : int, optional
+        Worker processes of the local cluster (default: the machine's cores, at most the
+        number of runs).
+    backend : {"auto", "dask", "serial"}
+        "auto": Dask if installed (the given client, else a local cluster), serial otherwise;
+        "serial": in this process, one run after the other (debugging, small sweeps).
+    retry_failed : bool
+        Run again the points recorded as failed in ``folder``.
+    progress : bool
+        Show the progress in the terminal (stderr) and print a summary at the end.
+
+    Returns
+    -------
+    SweepTable
+        One row per point. If the sweep is interrupted (Ctrl-C), the rows done so far, with
+        ``summary["interrupted"]`` set; run it again to finish.
+    """
+    if backend not in ("auto", "dask", "serial"):
+        raise MBDError(f"sweep: backend must be 'auto', 'dask' or 'serial', got {backend!r}")
+    if not callable(factory):
+        raise MBDError(f"sweep: factory must be a function params -> model, got {factory!r}")
+    if not callable(analysis):
+        raise MBDError(f"sweep: analysis must be an Analysis or a function model -> Results, "
+                       f"got {analysis!r}")
+    for name, metric in metrics.items():
+        if not callable(metric):
+            raise MBDError(f"sweep: metric '{name}' must be a function of the results, got "
+                           f"{metric!r}")
+    points = [{name: _plain(v) for name, v in dict(p).items()} for p in points]
+    if not points:
+        raise MBDError("sweep: no points to run (give a grid or a list of parameter dicts)")
+    parameters = list(dict.fromkeys(name for p in points for name in p))
+    for index, point in enumerate(points):
+        for name, value in point.items():
+            if not isinstance(value, (int, float, str, bool)) or (
+                    isinstance(value, float) and not math.isfinite(value)):
+                raise MBDError(f"sweep: point {index}, parameter '{name}' = {value!r}: "
+                               "parameters must be finite numbers, strings or booleans")
+    keys = [_key(p) for p in points]
+    if len(set(keys)) != len(keys):
+        raise MBDError("sweep: the same parameters appear more than once among the points")
+
+    folder = os.fspath(folder)
+    runs_folder = os.path.join(folder, "runs")
+    os.makedirs(runs_folder, exist_ok=True)
+    records = _load_records(runs_folder, set(keys))
+    if retry_failed:
+        records = {k: r for k, r in records.items() if r["status"] == "ok"}
+    todo = [(k, p) for k, p in zip(keys, points) if k not in records]
+    skipped = len(points) - len(todo)
+
+    metric_names = list(metrics)
+    summary = {"runs": len(points), "ok": 0, "failed": 0, "skipped": skipped,
+               "wall_time": 0.0, "run_time": 0.0, "speedup": float("nan"), "workers": 1,
+               "interrupted": False}
+
+    def table() -> SweepTable:
+        rows = []
+        for key, point in zip(keys, points):
+            record = records.get(key)
+            if record is not None:
+                rows.append({"key": key, **point, **record["metrics"], "status": record["status"],
+                             "error": record["error"], "wall_time": record["wall_time"]})
+        return SweepTable(rows, parameters, metric_names, folder, summary)
+
+    start = time.perf_counter()
+    display = _Progress(len(todo), skipped, progress)
+    last_table = [0.0]
+
+    def finished(key: str, record: dict) -> None:
+        npz = record.pop("npz", None)
+        if npz is not None:
+            _atomic_write(os.path.join(runs_folder, f"{key}.npz"), lambda f: f.write(npz),
+                          text=False)
+        record["key"] = key
+        _atomic_write(os.path.join(runs_folder, f"{key}.json"),
+                      lambda f: json.dump(record, f, indent=1), text=True)
+        records[key] = record
+        summary["ok" if record["status"] == "ok" else "failed"] += 1
+        summary["run_time"] += record["wall_time"]
+        display.update(record)
+        now = time.perf_counter()
+        if now - last_table[0] >= TABLE_INTERVAL:
+            table().to_csv(os.path.join(folder, "table.csv"))
+            last_table[0] = now
+
+    use_dask = backend == "dask" or (backend == "auto" and (client is not None
+                                                            or _dask_available()))
+    if backend == "dask" and not _dask_available():
+        raise MBDError(f"sweep: backend 'dask' asked for, but Dask is not installed; {_DASK_HINT}")
+    try:
+        if not todo:
+            pass
+        elif use_dask:
+            summary["workers"] = _run_on_dask(todo, factory, analysis, metrics, keep_results,
+                                              client, workers, finished)
+        else:
+            if backend == "auto" and progress:
+                print(f"sweep: running serially in this process; {_DASK_HINT}", file=sys.stderr)
+            for key, point in todo:
+                finished(key, _run_one(factory, analysis, metrics, point, keep_results))
+    except KeyboardInterrupt:
+        summary["interrupted"] = True
+    finally:
+        summary["wall_time"] = time.perf_counter() - start
+        if summary["wall_time"] > 0 and summary["run_time"] > 0:
+            summary["speedup"] = summary["run_time"] / summary["wall_time"]
+        result = table()
+        result.to_csv(os.path.join(folder, "table.csv"))
+        display.close(summary)
+    return result
+
+
+def _dask_available() -> bool:
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finished) -> int:
+    """Submit every point, hand each record to ``finished`` as it arrives; returns the number
+    of workers. A local cluster (loopback, one thread per worker process) is started when no
+    client is given and closed at the end."""
+    from distributed import Client, LocalCluster, as_completed
+
+    own = []
+    try:
+        if client is None:
+            n = workers or os.cpu_count() or 1
+            cluster = LocalCluster(n_workers=max(1, min(n, len(todo))), threads_per_worker=1,
+                                   processes=True, host="127.0.0.1", dashboard_address=None)
+            own.append(cluster)
+            client = Client(cluster)
+            own.append(client)
+        elif isinstance(client, str):
+            client = Client(client)
+            own.append(client)
+        futures = {}
+        for key, point in todo:
+            # pure=False: the same point is computed again when asked again (after a failure)
+            future = client.submit(_run_one, factory, analysis, metrics, point, keep,
+                                   pure=False, key=f"mbd3d-sweep-{key}-{time.time_ns()}")
+            futures[future] = (key, point)
+        n_workers = len(client.scheduler_info().get("workers", {})) or 1
+        try:
+            for future in as_completed(futures):
+                key, point = futures[future]
+                try:
+                    record = future.result()
+                except Exception as exc:  # the task could not run (e.g. its worker kept dying)
+                    record = {"params": point, "metrics": {}, "status": "failed",
+                              "error": f"could not be run on the cluster: "
+                                       f"{type(exc).__name__}: {exc}", "wall_time": 0.0}
+                finished(key, record)
+        except KeyboardInterrupt:
+            client.cancel(list(futures))
+            raise
+        return n_workers
+    finally:
+        for resource in reversed(own):
+            resource.close()
+
+
+def _load_records(runs_folder: str, wanted: set) -> dict:
+    """The stored outcomes of earlier runs of the points ``wanted`` (by key)."""
+    records = {}
+    for name in os.listdir(runs_folder):
+        key, ext = os.path.splitext(name)
+        if ext != ".json" or key not in wanted:
+            continue
+        try:
+            with open(os.path.join(runs_folder, name)) as f:
+                record = json.load(f)
+        except (OSError, ValueError):
+            continue  # unreadable: the point is run again
+        if not isinstance(record, dict) or not {"status", "metrics", "error",
+                                                "wall_time"} <= set(record):
+            continue
+        records[key] = record
+    return records
+
+
+class _Progress:
+    """One line in the terminal: runs done, failed, elapsed and remaining time."""
+
+    def __init__(self, total: int, skipped: int, enabled: bool):
+        self.total, self.skipped, self.enabled = total, skipped, enabled
+        self.done = self.failed = 0
+        self.start = time.perf_counter()
+        self.tty = enabled and sys.stderr.isatty()
+        self.last_line = 0.0
+        if enabled and skipped:
+            print(f"sweep: {skipped} points done earlier (skipped), {total} to run",
+                  file=sys.stderr)
+
+    def update(self, record: dict) -> None:
+        self.done += 1
+        self.failed += record["status"] != "ok"
+        if not self.enabled:
+            return
+        elapsed = time.perf_counter() - self.start
+        remaining = elapsed / self.done * (self.total - self.done)
+        line = (f"sweep: {self.done}/{self.total} runs, {self.failed} failed, "
+                f"{elapsed:.1f} s elapsed, about {remaining:.0f} s to go")
+        if self.tty:
+            print("\r" + line, end="", file=sys.stderr, flush=True)
+        elif elapsed - self.last_line >= 10.0 or self.done == self.total:
+            print(line, file=sys.stderr)
+            self.last_line = elapsed
+
+    def close(self, summary: dict) -> None:
+        if not self.enabled:
+            return
+        if self.tty and self.done:
+            print(file=sys.stderr)
+        state = "interrupted: run it again to finish; " if summary["interrupted"] else ""
+        timing = ""
+        if summary["run_time"] > 0:
+            timing = (f"; {summary['wall_time']:.1f} s on {summary['workers']} worker(s), runs "
+                      f"{summary['run_time']:.1f} s in total (speed-up "
+                      f"{summary['speedup']:.2f})")
+        print(f"sweep: {state}{summary['ok']} ok, {summary['failed']} failed, "
+              f"{summary['skipped']} done earlier, of {summary['runs']} points{timing}",
+              file=sys.stderr)

@@ -1,0 +1,165 @@
+"""Parameter sweeps (mbd3d.sweeps): a LocalCluster of two worker processes on loopback gives
+the serial run's table; a killed worker, an interrupted sweep and failing runs lose nothing;
+the metrics agree with the slider-crank's closed form."""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import signal
+
+import numpy as np
+import pytest
+
+from mbd3d.errors import MBDError
+from mbd3d.mechanisms import slider_crank
+from mbd3d.sweeps import Analysis, grid, monte_carlo, sweep
+
+distributed = pytest.importorskip("distributed")
+
+CRANK = 0.12
+T = np.linspace(0.0, 0.5, 51)
+ANALYSIS = Analysis("inverse dynamics", T)
+#: rods of 0.1 m cannot reach the slider line from the crank pin at 65 degrees: those fail
+POINTS = grid(speed=[5.0, 20.0], rod=[0.1, 0.26, 0.4])
+
+
+def factory(speed: float, rod: float, kill_marker: str = ""):
+    if kill_marker and not os.path.exists(kill_marker):
+        # the first attempt dies with its worker process, as an out-of-memory kill would
+        open(kill_marker, "w").close()
+        os.kill(os.getpid(), signal.SIGKILL)
+    return slider_crank(crank_length=CRANK, rod_length=rod, crank_speed=speed)
+
+
+def peak_slider_speed(results) -> float:
+    return float(np.max(np.abs(results.body("slider").velocity[:, 0])))
+
+
+def peak_torque(results) -> float:
+    return float(np.max(np.abs(results.driver("motor").effort)))
+
+
+METRICS = {"peak_speed": peak_slider_speed, "peak_torque": peak_torque}
+
+
+def closed_form_peak_speed(speed: float, rod: float) -> float:
+    """Slider x = r cos(th) + sqrt(l^2 - r^2 sin^2(th)), differentiated by hand, over T."""
+    theta = math.radians(65.0) + speed * T
+    s, c = np.sin(theta), np.cos(theta)
+    root = np.sqrt(rod * rod - CRANK * CRANK * s * s)
+    return float(np.max(np.abs(speed * (-CRANK * s - CRANK * CRANK * s * c / root))))
+
+
+@pytest.fixture(scope="module")
+def serial_table(tmp_path_factory):
+    return sweep(factory, POINTS, ANALYSIS, METRICS, tmp_path_factory.mktemp("serial"),
+                 backend="serial", progress=False)
+
+
+def test_serial_metrics_match_the_closed_form_and_failures_name_their_point(serial_table):
+    rows = {(row["speed"], row["rod"]): row for row in serial_table}
+    for (speed, rod), row in rows.items():
+        if rod < 0.11:
+            assert row["status"] == "failed"
+            assert "rod of 0.1 m cannot reach" in row["error"]
+            assert row["error"].startswith("building the model")
+        else:
+            assert row["status"] == "ok", row["error"]
+            assert row["peak_speed"] == pytest.approx(closed_form_peak_speed(speed, rod),
+                                                      rel=1e-9)
+    assert serial_table.summary["failed"] == 2 and serial_table.summary["ok"] == 4
+    assert np.isnan(serial_table.column("peak_torque")[0])
+    with pytest.raises(MBDError, match="rod=0.1.*failed"):
+        serial_table.results(serial_table.failed[0])
+
+
+def test_local_cluster_of_two_workers_gives_the_serial_table(serial_table, tmp_path):
+    table = sweep(factory, POINTS, ANALYSIS, METRICS, tmp_path, workers=2, progress=False)
+    assert table.summary["workers"] == 2
+    for parallel, serial in zip(table, serial_table):
+        assert {k: v for k, v in parallel.items() if k != "wall_time"} == \
+               {k: v for k, v in serial.items() if k != "wall_time"}
+    # the table on disk holds the same rows
+    with open(tmp_path / "table.csv") as f:
+        stored = list(csv.DictReader(f))
+    assert [row["key"] for row in stored] == [row["key"] for row in table]
+    assert float(stored[1]["peak_speed"]) == table.rows[1]["peak_speed"]
+
+
+def test_a_killed_worker_loses_no_result(serial_table, tmp_path):
+    marker = str(tmp_path / "killed-once")
+    points = [{**p, "kill_marker": marker if i == 1 else ""} for i, p in enumerate(POINTS)]
+    table = sweep(factory, points, ANALYSIS, METRICS, tmp_path / "sweep", workers=2,
+                  progress=False)
+    assert os.path.exists(marker)  # a worker did die
+    assert [row["status"] for row in table] == [row["status"] for row in serial_table]
+    assert table.column("peak_torque") == pytest.approx(serial_table.column("peak_torque"),
+                                                        nan_ok=True)
+
+
+def test_interrupted_sweep_resumes_with_only_the_missing_points(tmp_path):
+    calls = []
+
+    def counting_factory(speed, rod):
+        calls.append((speed, rod))
+        if len(calls) == 4 and interrupt:
+            raise KeyboardInterrupt  # Ctrl-C while the fourth model is built
+        return factory(speed, rod)
+
+    interrupt = True
+    first = sweep(counting_factory, POINTS, ANALYSIS, METRICS, tmp_path, backend="serial",
+                  progress=False)
+    assert first.summary["interrupted"] and len(first) == 3
+    with open(tmp_path / "table.csv") as f:
+        assert len(list(csv.DictReader(f))) == 3  # a valid table of what was done
+    interrupt, calls[:] = False, []
+    second = sweep(counting_factory, POINTS, ANALYSIS, METRICS, tmp_path, backend="serial",
+                   progress=False)
+    assert calls == [(p["speed"], p["rod"]) for p in POINTS[3:]]
+    assert second.summary["skipped"] == 3 and len(second) == len(POINTS)
+    assert not second.summary["interrupted"]
+    # failed points are finished too; retry_failed runs them again
+    calls[:] = []
+    sweep(counting_factory, POINTS, ANALYSIS, METRICS, tmp_path, backend="serial",
+          retry_failed=True, progress=False)
+    assert sorted(calls) == sorted((p["speed"], p["rod"]) for p in POINTS if p["rod"] < 0.11)
+
+
+def test_full_results_are_kept_on_request(tmp_path):
+    table = sweep(factory, POINTS[1:2], ANALYSIS, METRICS, tmp_path, keep_results=True,
+                  backend="serial", progress=False)
+    arrays = table.results(table.rows[0])
+    assert arrays["q"].shape == (len(T), 9)
+    assert np.array_equal(arrays["t"], T)
+
+
+def test_without_dask_it_runs_serially_and_says_how_to_get_more(monkeypatch, tmp_path, capsys):
+    import mbd3d.sweeps as sweeps
+    monkeypatch.setattr(sweeps, "_dask_available", lambda: False)
+    table = sweep(factory, POINTS[1:2], ANALYSIS, METRICS, tmp_path)
+    assert table.rows[0]["status"] == "ok"
+    assert 'pip install "mbd3d[distributed]"' in capsys.readouterr().err
+    with pytest.raises(MBDError, match="Dask is not installed"):
+        sweep(factory, POINTS[1:2], ANALYSIS, METRICS, tmp_path, backend="dask")
+
+
+def test_bad_sweep_input_is_named(tmp_path):
+    with pytest.raises(MBDError, match="parameter 'rod' = nan"):
+        sweep(factory, [{"speed": 1.0, "rod": float("nan")}], ANALYSIS, METRICS, tmp_path)
+    with pytest.raises(MBDError, match="metric 'peak' must be a function"):
+        sweep(factory, POINTS, ANALYSIS, {"peak": 3.0}, tmp_path)
+    with pytest.raises(MBDError, match="unknown kind 'dynamics'"):
+        Analysis("dynamics", T)
+    with pytest.raises(MBDError, match="parameter 'rod' must be"):
+        monte_carlo(3, seed=0, rod=(0.3, 0.2))
+
+
+def test_monte_carlo_samples_are_reproducible_from_the_seed():
+    from scipy.stats import norm
+    a = monte_carlo(50, seed=7, rod=(0.25, 0.27), speed=norm(10.0, 0.5))
+    b = monte_carlo(50, seed=7, rod=(0.25, 0.27), speed=norm(10.0, 0.5))
+    assert a == b and a != monte_carlo(50, seed=8, rod=(0.25, 0.27), speed=norm(10.0, 0.5))
+    speeds = np.array([s["speed"] for s in a])
+    assert abs(speeds.mean() - 10.0) < 4 * 0.5 / math.sqrt(50)
