@@ -207,7 +207,7 @@ class SweepTable:
     def column(self, name: str) -> np.ndarray:
         """One parameter or metric over the rows; NaN where a run failed (numbers), or an
         object array (text)."""
-        if name not in self.parameters + self.metrics + ["wall_time", "status", "error", "key"]:
+        if name not in self.columns:
             raise MBDError(f"sweep table has no column '{name}'; columns: "
                            f"{', '.join(self.columns)}")
         values = [row.get(name) for row in self.rows]
@@ -256,8 +256,8 @@ class SweepTable:
 
 
 def _cell(value: Any) -> Any:
-    return repr(value) if isinstance(value, float) else (
-        json.dumps(value) if isinstance(value, (list, dict)) else value)
+    # str() of a float is already its shortest round-tripping form
+    return json.dumps(value) if isinstance(value, (list, dict)) else value
 
 
 def _text(value: Any) -> Any:
@@ -387,12 +387,10 @@ def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],
     if backend == "dask" and not _dask_available():
         raise MBDError(f"sweep: backend 'dask' asked for, but Dask is not installed; {_DASK_HINT}")
     try:
-        if not todo:
-            pass
-        elif use_dask:
+        if todo and use_dask:
             summary["workers"] = _run_on_dask(todo, factory, analysis, metrics, keep_results,
                                               client, workers, finished)
-        else:
+        elif todo:
             if backend == "auto" and progress:
                 print(f"sweep: running serially in this process; {_DASK_HINT}", file=sys.stderr)
             for key, point in todo:
@@ -439,7 +437,7 @@ def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finish
         for key, point in todo:
             # pure=False: the same point is computed again when asked again (after a failure)
             future = client.submit(_run_one, factory, analysis, metrics, point, keep,
-                                   pure=False, key=f"mbd3d-sweep-{key}-{time.time_ns()}")
+                                   pure=False)
             futures[future] = (key, point)
         n_workers = len(client.scheduler_info().get("workers", {})) or 1
         try:

@@ -15,6 +15,7 @@ import pytest
 from mbd3d.errors import MBDError
 from mbd3d.mechanisms import slider_crank
 from mbd3d.sweeps import Analysis, grid, monte_carlo, sweep
+from slider_crank_oracle import SliderCrankOracle
 
 distributed = pytest.importorskip("distributed")
 
@@ -45,11 +46,10 @@ METRICS = {"peak_speed": peak_slider_speed, "peak_torque": peak_torque}
 
 
 def closed_form_peak_speed(speed: float, rod: float) -> float:
-    """Slider x = r cos(th) + sqrt(l^2 - r^2 sin^2(th)), differentiated by hand, over T."""
-    theta = math.radians(65.0) + speed * T
-    s, c = np.sin(theta), np.cos(theta)
-    root = np.sqrt(rod * rod - CRANK * CRANK * s * s)
-    return float(np.max(np.abs(speed * (-CRANK * s - CRANK * CRANK * s * c / root))))
+    """The largest slider speed over T from the closed-form geometry (dx/dphi * phi')."""
+    dx_dphi, _ = SliderCrankOracle(r=CRANK, l=rod).slider_x_derivatives(
+        math.radians(65.0) + speed * T)
+    return float(np.max(np.abs(speed * dx_dphi)))
 
 
 @pytest.fixture(scope="module")
