@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Body", "BodyType", "Frames"]
+__all__ = ["Body", "BodyType", "Frames", "Vectors", "rotate_rows"]
 
 
 class Body:
@@ -81,6 +81,55 @@ class Frames:
         self.__dict__.update(arrays)
 
 
+#: rows above which :func:`rotate_rows` uses einsum: np.matvec's cost per row (tens of ns for
+#: 2x2 and 3x3 matrices) outgrows einsum's larger fixed cost beyond a few dozen rows
+_EINSUM_ROWS = 32
+
+
+def rotate_rows(A: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``A[k] @ v[k]`` for every row k: (k, d, d) with (k, d) -> (k, d)."""
+    if len(v) > _EINSUM_ROWS:
+        return np.einsum("kij,kj->ki", A, v)
+    return np.matvec(A, v)
+
+
+class Vectors:
+    """Body-fixed vectors of many bodies in one state: ``s = A v`` in global components and what
+    the constraint primitives need of them, one row per vector.
+
+    Attributes
+    ----------
+    s : ndarray (k, dim)
+        Global components of the vectors [m for points' offsets].
+    J : ndarray (k, dim, n_rot)
+        ``ds/dq`` with respect to the rotation coordinates of each vector's body (the last
+        ``n_rot = n_coords - dim`` coordinates): ``d(R + s)/dq = [I, J]`` for a point.
+    v : ndarray (k, dim) or None
+        ``ds/dt`` [per s]; None when no velocities were given.
+    a : ndarray (k, dim) or None
+        Velocity-dependent part of ``d2s/dt2`` (the part not multiplying ``qdd``) [per s^2].
+    """
+
+    __slots__ = ("s", "J", "v", "a")
+
+    def __init__(self, s: np.ndarray, J: np.ndarray, v: np.ndarray | None = None,
+                 a: np.ndarray | None = None):
+        self.s, self.J, self.v, self.a = s, J, v, a
+
+    def part(self, rows: slice) -> "Vectors":
+        """The vectors of ``rows`` (views, no copies)."""
+        return Vectors(self.s[rows], self.J[rows], None if self.v is None else self.v[rows],
+                       None if self.a is None else self.a[rows])
+
+    def combine(self, x: np.ndarray, other: "Vectors", y: np.ndarray) -> "Vectors":
+        """``x self + y other`` row by row, for coefficients ``x``, ``y`` (k,): every part is
+        linear in ``v`` (vectors of the same bodies)."""
+        x2, y2 = x[:, None], y[:, None]
+        return Vectors(x2 * self.s + y2 * other.s, x2[:, :, None] * self.J + y2[:, :, None] * other.J,
+                       None if self.v is None else x2 * self.v + y2 * other.v,
+                       None if self.a is None else x2 * self.a + y2 * other.a)
+
+
 class BodyType(ABC):
     """Kinematics of one kind of rigid body, evaluated for many bodies at once.
 
@@ -131,6 +180,13 @@ class BodyType(ABC):
                charts: np.ndarray | None = None) -> Frames:
         """Per-body quantities for coordinates ``Q`` (n_bodies + 1, n_coords), ground row last,
         relative to the bodies' ``charts`` (reference rotations; ignored by planar bodies)."""
+
+    @abstractmethod
+    def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
+                ) -> Vectors:
+        """Everything the constraint primitives need of body-frame vectors ``v`` (k, dim) of
+        bodies ``idx``, in one batched evaluation (see :class:`Vectors`); ``velocities`` asks
+        for ``ds/dt`` and the acceleration term too (needs velocities in ``fr``)."""
 
     @abstractmethod
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -77,8 +77,12 @@ def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = T
     C = np.empty(m) if value else None
     Qd = np.empty(m) if gamma else None
     parts = []
+    table = (bt.vectors(fr, model._vector_bodies, model._vector_local, gamma)
+             if len(model._vector_bodies) else None)
     for g in model.groups:
-        c, J, gam = g.cls.evaluate(bt, fr, g.bi, g.bj, _params(g, t), value, jacobian, gamma)
+        vectors = {name: table.part(rows) for name, rows in g.vector_rows.items()}
+        c, J, gam = g.cls.evaluate(bt, fr, g.bi, g.bj, _params(g, t), value, jacobian, gamma,
+                                   vectors)
         rows = slice(g.offset, g.offset + g.n_rows)
         if value:
             C[rows] = c.ravel()

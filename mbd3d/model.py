@@ -441,6 +441,7 @@ class Model:
                     driver_names.append(name)
                 offset += r
         self.n_constraints = offset
+        self._lay_out_vectors()
         self.row_labels = labels
         self.row_element = np.array(row_element, dtype=np.intp)
         self.c0 = np.array(c0)
@@ -462,6 +463,25 @@ class Model:
         for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0,
                     *(() if self.charts0 is None else (self.charts0,))):
             arr.setflags(write=False)
+
+    # -- the body-fixed vectors of all primitives --------------------------------------------------
+    def _lay_out_vectors(self) -> None:
+        """Stack the body-frame vectors of every primitive instance into one table, evaluated
+        by one batched call per state (:meth:`BodyType.vectors`); each group keeps the rows
+        of each of its vectors."""
+        bodies, local = [], []
+        start = 0
+        for g in self.groups:
+            g.vector_rows = {}
+            for name, side, key in g.cls.vectors:
+                bodies.append(g.bi if side == "i" else g.bj)
+                local.append(np.reshape(g.params[key], (g.count, self.dim)))
+                g.vector_rows[name] = slice(start, start + g.count)
+                start += g.count
+        self._vector_bodies = (np.concatenate(bodies) if bodies else np.zeros(0, dtype=np.intp))
+        self._vector_local = (np.concatenate(local) if local else np.zeros((0, self.dim)))
+        self._vector_bodies.setflags(write=False)
+        self._vector_local.setflags(write=False)
 
     # -- Jacobian sparsity pattern ---------------------------------------------------------------
     def _build_jacobian_pattern(self) -> None:

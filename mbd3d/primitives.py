@@ -14,42 +14,57 @@ Each primitive class provides, for ``k`` instances with body indices ``bi``, ``b
 stacked parameters ``p`` (a dict of arrays with leading dimension k):
 
 - ``rows(dim)``: rows per instance;
-- ``evaluate(bt, fr, bi, bj, p, value, jacobian, gamma)`` returning the requested parts
+- ``vectors``: the body-frame vectors it needs, as ``(name, body "i" or "j", parameter)``;
+- ``evaluate(bt, fr, bi, bj, p, value, jacobian, gamma, vectors)`` returning the requested parts
   ``(c (k, r), dc/dq (k, r, 2, n_coords), gamma (k, r))``, ``None`` for the others. The Jacobian
   holds the derivatives with respect to body i (``[:, :, 0]``) and body j (``[:, :, 1]``);
   ``gamma`` needs velocities in ``fr``.
 
-Rotated vectors ``s = A v`` are computed once per call and shared by the three parts.
+``vectors`` maps each name to a :class:`mbd3d.body.Vectors` (``s = A v``, its Jacobian,
+velocity and acceleration term). A model evaluates the vectors of all its primitives in one
+batched call per state and hands each group its rows, so that the NumPy calls per evaluation
+do not grow with the number of primitive types; called without them, a primitive evaluates
+its own.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from mbd3d.body import Vectors
+
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation"]
+           "RelativeAngle", "Rotation", "own_vectors"]
+
+_dot = np.vecdot
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("kd,kd->k", a, b)
+def own_vectors(cls, bt, fr, bi: np.ndarray, bj: np.ndarray, p: dict, velocities: bool
+                ) -> dict[str, Vectors]:
+    """The vectors of ``cls.vectors`` for these instances, in one batched evaluation (what a
+    model does for all its primitives at once)."""
+    if not cls.vectors:
+        return {}
+    k = len(bi)
+    idx = np.concatenate([bi if side == "i" else bj for _, side, _ in cls.vectors])
+    v = np.concatenate([np.broadcast_to(p[key], (k, bt.dim)) for _, _, key in cls.vectors])
+    table = bt.vectors(fr, idx, v, velocities)
+    return {name: table.part(slice(n * k, (n + 1) * k))
+            for n, (name, _, _) in enumerate(cls.vectors)}
 
 
-def _relative_velocity(bt, fr, bi, bj, si: np.ndarray, sj: np.ndarray) -> np.ndarray:
-    """Time derivative of ``d = r_j - r_i`` for body points with rotated offsets ``si``, ``sj``."""
-    return fr.Rd[bj] + bt.velocity_of(fr, bj, sj) - fr.Rd[bi] - bt.velocity_of(fr, bi, si)
+def _jacobian(k: int, rows: int, bt) -> np.ndarray:
+    return np.zeros((k, rows, 2, bt.n_coords))
 
 
-def _pair(Ji: np.ndarray, Jj: np.ndarray) -> np.ndarray:
-    """Jacobians of one row with respect to bodies i and j, (k, n) each -> (k, 1, 2, n)."""
-    J = np.empty((Ji.shape[0], 1, 2, Ji.shape[1]))
-    J[:, 0, 0] = Ji
-    J[:, 0, 1] = Jj
-    return J
+def _relative_velocity(fr, bi, bj, si: Vectors, sj: Vectors) -> np.ndarray:
+    """Time derivative of ``d = r_j - r_i`` between body points ``si``, ``sj``."""
+    return (fr.Rd[bj] - fr.Rd[bi]) + (sj.v - si.v)
 
 
-def _aJ(a: np.ndarray, J: np.ndarray) -> np.ndarray:
-    """``a^T J`` per instance: (k, d) with (k, d, n) -> (k, n)."""
-    return np.matmul(a[:, None, :], J)[:, 0, :]
+def _relative_position(fr, bi, bj, si: Vectors, sj: Vectors) -> np.ndarray:
+    """``d = r_j - r_i`` between body points ``si``, ``sj``."""
+    return (fr.R[bj] - fr.R[bi]) + (sj.s - si.s)
 
 
 class PointCoincidence:
@@ -61,24 +76,28 @@ class PointCoincidence:
 
     kind = "point"
     params = ("u_i", "u_j")
+    vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
 
     @staticmethod
     def rows(dim: int) -> int:
         return dim
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
-        si, sj = bt.rotate(fr, bi, p["u_i"]), bt.rotate(fr, bj, p["u_j"])
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
+        vec = vectors or own_vectors(PointCoincidence, bt, fr, bi, bj, p, gamma)
+        si, sj = vec["si"], vec["sj"]
+        dim = bt.dim
         c = J = g = None
         if value:
-            c = fr.R[bi] + si - fr.R[bj] - sj
+            c = -_relative_position(fr, bi, bj, si, sj)
         if jacobian:
-            J = np.empty((len(bi), si.shape[1], 2, bt.n_coords))
-            J[:, :, 0] = bt.jacobian_of(fr, bi, si, True)
-            J[:, :, 1] = bt.jacobian_of(fr, bj, sj, True)
-            J[:, :, 1] *= -1.0
+            J = _jacobian(len(bi), dim, bt)
+            J[:, :, 0, :dim] = _EYE[dim]
+            J[:, :, 1, :dim] = -_EYE[dim]
+            J[:, :, 0, dim:] = si.J
+            np.negative(sj.J, out=J[:, :, 1, dim:])
         if gamma:
-            g = bt.acceleration_term_of(fr, bj, sj) - bt.acceleration_term_of(fr, bi, si)
+            g = sj.a - si.a
         return c, J, g
 
 
@@ -91,25 +110,31 @@ class Dot1:
 
     kind = "dot1"
     params = ("v_i", "v_j")
+    vectors = (("ai", "i", "v_i"), ("aj", "j", "v_j"))
 
     @staticmethod
     def rows(dim: int) -> int:
         return 1
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
-        ai, aj = bt.rotate(fr, bi, p["v_i"]), bt.rotate(fr, bj, p["v_j"])
-        c = J = g = None
-        if value:
-            c = _dot(ai, aj)[:, None]
-        if jacobian:
-            J = _pair(_aJ(aj, bt.jacobian_of(fr, bi, ai, False)),
-                      _aJ(ai, bt.jacobian_of(fr, bj, aj, False)))
-        if gamma:
-            g = -(_dot(aj, bt.acceleration_term_of(fr, bi, ai))
-                  + _dot(ai, bt.acceleration_term_of(fr, bj, aj))
-                  + 2.0 * _dot(bt.velocity_of(fr, bi, ai), bt.velocity_of(fr, bj, aj)))[:, None]
-        return c, J, g
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
+        vec = vectors or own_vectors(Dot1, bt, fr, bi, bj, p, gamma)
+        return _dot1(bt, vec["ai"], vec["aj"], value, jacobian, gamma)
+
+
+def _dot1(bt, ai: Vectors, aj: Vectors, value: bool, jacobian: bool, gamma: bool):
+    """``a_i . a_j``, its Jacobian and ``gamma`` for vectors of bodies i and j."""
+    c = J = g = None
+    if value:
+        c = _dot(ai.s, aj.s)[:, None]
+    if jacobian:
+        dim = bt.dim
+        J = _jacobian(len(ai.s), 1, bt)
+        J[:, 0, 0, dim:] = np.vecmat(aj.s, ai.J)
+        J[:, 0, 1, dim:] = np.vecmat(ai.s, aj.J)
+    if gamma:
+        g = -(_dot(aj.s, ai.a) + _dot(ai.s, aj.a) + 2.0 * _dot(ai.v, aj.v))[:, None]
+    return c, J, g
 
 
 class Dot2:
@@ -120,29 +145,30 @@ class Dot2:
 
     kind = "dot2"
     params = ("v_i", "u_i", "u_j")
+    vectors = (("ai", "i", "v_i"), ("si", "i", "u_i"), ("sj", "j", "u_j"))
 
     @staticmethod
     def rows(dim: int) -> int:
         return 1
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
-        ai = bt.rotate(fr, bi, p["v_i"])
-        si, sj = bt.rotate(fr, bi, p["u_i"]), bt.rotate(fr, bj, p["u_j"])
-        d = fr.R[bj] + sj - fr.R[bi] - si
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
+        vec = vectors or own_vectors(Dot2, bt, fr, bi, bj, p, gamma)
+        ai, si, sj = vec["ai"], vec["si"], vec["sj"]
+        d = _relative_position(fr, bi, bj, si, sj)
         c = J = g = None
         if value:
-            c = _dot(ai, d)[:, None]
+            c = _dot(ai.s, d)[:, None]
         if jacobian:
-            Ji = _aJ(d, bt.jacobian_of(fr, bi, ai, False)) - _aJ(ai, bt.jacobian_of(fr, bi, si, True))
-            Jj = _aJ(ai, bt.jacobian_of(fr, bj, sj, True))
-            J = _pair(Ji, Jj)
+            dim = bt.dim
+            J = _jacobian(len(bi), 1, bt)
+            np.negative(ai.s, out=J[:, 0, 0, :dim])
+            J[:, 0, 0, dim:] = np.vecmat(d, ai.J) - np.vecmat(ai.s, si.J)
+            J[:, 0, 1, :dim] = ai.s
+            J[:, 0, 1, dim:] = np.vecmat(ai.s, sj.J)
         if gamma:
-            d_dot = _relative_velocity(bt, fr, bi, bj, si, sj)
-            g = -(_dot(d, bt.acceleration_term_of(fr, bi, ai))
-                  + 2.0 * _dot(bt.velocity_of(fr, bi, ai), d_dot)
-                  + _dot(ai, bt.acceleration_term_of(fr, bj, sj)
-                         - bt.acceleration_term_of(fr, bi, si)))[:, None]
+            d_dot = _relative_velocity(fr, bi, bj, si, sj)
+            g = -(_dot(d, ai.a) + 2.0 * _dot(ai.v, d_dot) + _dot(ai.s, sj.a - si.a))[:, None]
         return c, J, g
 
 
@@ -154,15 +180,17 @@ class Distance:
 
     kind = "distance"
     params = ("u_i", "u_j")
+    vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
 
     @staticmethod
     def rows(dim: int) -> int:
         return 1
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
-        si, sj = bt.rotate(fr, bi, p["u_i"]), bt.rotate(fr, bj, p["u_j"])
-        d = fr.R[bj] + sj - fr.R[bi] - si
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
+        vec = vectors or own_vectors(Distance, bt, fr, bi, bj, p, gamma)
+        si, sj = vec["si"], vec["sj"]
+        d = _relative_position(fr, bi, bj, si, sj)
         # a zero length is refused when the model is built; the floor only avoids 0/0 in an
         # iterate that passes through coincidence
         length = np.maximum(np.sqrt(_dot(d, d)), 1e-300)
@@ -171,13 +199,16 @@ class Distance:
         if value:
             c = length[:, None]
         if jacobian:
-            J = _pair(-_aJ(e, bt.jacobian_of(fr, bi, si, True)),
-                      _aJ(e, bt.jacobian_of(fr, bj, sj, True)))
+            dim = bt.dim
+            J = _jacobian(len(bi), 1, bt)
+            np.negative(e, out=J[:, 0, 0, :dim])
+            np.negative(np.vecmat(e, si.J), out=J[:, 0, 0, dim:])
+            J[:, 0, 1, :dim] = e
+            J[:, 0, 1, dim:] = np.vecmat(e, sj.J)
         if gamma:
-            d_dot = _relative_velocity(bt, fr, bi, bj, si, sj)
+            d_dot = _relative_velocity(fr, bi, bj, si, sj)
             e_dd = _dot(e, d_dot)
-            g = -(_dot(e, bt.acceleration_term_of(fr, bj, sj) - bt.acceleration_term_of(fr, bi, si))
-                  + (_dot(d_dot, d_dot) - e_dd * e_dd) / length)[:, None]
+            g = -(_dot(e, sj.a - si.a) + (_dot(d_dot, d_dot) - e_dd * e_dd) / length)[:, None]
         return c, J, g
 
 
@@ -186,19 +217,20 @@ class Coordinate:
 
     kind = "coordinate"
     params = ("coordinate",)
+    vectors = ()
 
     @staticmethod
     def rows(dim: int) -> int:
         return 1
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
         k = len(bj)
         c = J = g = None
         if value:
             c = fr.Q[bj, p["coordinate"]][:, None]
         if jacobian:
-            J = np.zeros((k, 1, 2, bt.n_coords))
+            J = _jacobian(k, 1, bt)
             J[np.arange(k), 0, 1, p["coordinate"]] = 1.0
         if gamma:
             g = np.zeros((k, 1))
@@ -210,13 +242,14 @@ class RelativeAngle:
 
     kind = "angle"
     params = ()
+    vectors = ()
 
     @staticmethod
     def rows(dim: int) -> int:
         return 1
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
         c = J = g = None
         if value:
             c = bt.relative_angle(fr, bi, bj)[:, None]
@@ -240,11 +273,13 @@ class Rotation:
     ``(f, f', f'')`` per instance. With ``u = A_i (g cos(phi) - f sin(phi))`` and
     ``w = A_i (f cos(phi) + g sin(phi))``: ``-C_t = (f_j . w) phi'`` and
     ``Qd = gamma_dot1(u, f_j) + 2 phi' (f_j . (omega_i x w) + w . (omega_j x f_j))
-    + (f_j . u) phi'^2 + (f_j . w) phi''``.
+    + (f_j . u) phi'^2 + (f_j . w) phi''``. ``u`` and ``w`` and everything derived from them
+    are linear in ``f_i`` and ``g_i``, so they are combined from those two vectors' parts.
     """
 
     kind = "rotation"
     params = ("f_i", "g_i", "f_j")
+    vectors = (("fi", "i", "f_i"), ("gi", "i", "g_i"), ("fj", "j", "f_j"))
     time_dependent = True
 
     @staticmethod
@@ -252,34 +287,35 @@ class Rotation:
         return 1
 
     @staticmethod
-    def _vectors(p):
+    def _turned(p, vec) -> tuple[Vectors, Vectors]:
+        """``u`` and ``w`` of the class docstring, from the parts of ``f_i`` and ``g_i``."""
         c, s = np.cos(p["phi"][:, 0]), np.sin(p["phi"][:, 0])
-        u_bar = p["g_i"] * c[:, None] - p["f_i"] * s[:, None]
-        w_bar = p["f_i"] * c[:, None] + p["g_i"] * s[:, None]
-        return u_bar, w_bar
+        fi, gi = vec["fi"], vec["gi"]
+        return gi.combine(c, fi, -s), fi.combine(c, gi, s)
 
     @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False):
-        u_bar, w_bar = Rotation._vectors(p)
-        c, J, g = Dot1.evaluate(bt, fr, bi, bj, {"v_i": u_bar, "v_j": p["f_j"]}, value,
-                                jacobian, gamma)
+    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
+        vec = vectors or own_vectors(Rotation, bt, fr, bi, bj, p, gamma)
+        u, w = Rotation._turned(p, vec)
+        f_j = vec["fj"]
+        c, J, g = _dot1(bt, u, f_j, value, jacobian, gamma)
         if gamma:
             rate, accel = p["phi"][:, 1], p["phi"][:, 2]
-            u = bt.rotate(fr, bi, u_bar)
-            w = bt.rotate(fr, bi, w_bar)
-            f_j = bt.rotate(fr, bj, p["f_j"])
-            mixed = _dot(f_j, bt.velocity_of(fr, bi, w)) + _dot(w, bt.velocity_of(fr, bj, f_j))
-            g = g + (2.0 * rate * mixed + _dot(f_j, u) * rate * rate
-                     + _dot(f_j, w) * accel)[:, None]
+            mixed = _dot(f_j.s, w.v) + _dot(w.s, f_j.v)
+            g = g + (2.0 * rate * mixed + _dot(f_j.s, u.s) * rate * rate
+                     + _dot(f_j.s, w.s) * accel)[:, None]
         return c, J, g
 
     @staticmethod
     def rate(bt, fr, bi, bj, p) -> np.ndarray:
         """``-C_t``, shape (k, 1)."""
-        _, w_bar = Rotation._vectors(p)
-        w = bt.rotate(fr, bi, w_bar)
-        return (_dot(bt.rotate(fr, bj, p["f_j"]), w) * p["phi"][:, 1])[:, None]
+        vec = own_vectors(Rotation, bt, fr, bi, bj, p, False)
+        _, w = Rotation._turned(p, vec)
+        return (_dot(vec["fj"].s, w.s) * p["phi"][:, 1])[:, None]
 
+
+#: translation part of a point's Jacobian, by dimension
+_EYE = {2: np.eye(2), 3: np.eye(3)}
 
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation)}

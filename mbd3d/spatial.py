@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from mbd3d import rotations as rot
-from mbd3d.body import BodyType, Frames
+from mbd3d.body import BodyType, Frames, Vectors, rotate_rows
 from mbd3d.checks import finite_vector
 from mbd3d.errors import ModelError
 
@@ -103,8 +103,19 @@ class SpatialBody(BodyType):
         return Frames(Q=Q, A=A, R=Q[:, :3], g=g, Gbar=Gb, AG=AG, Qd=Qd, Rd=Qd[:, :3],
                       omega=omega, omega_bar=omega_bar, kappa=kappa)
 
+    def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
+                ) -> Vectors:
+        s = rotate_rows(fr.A[idx], v)
+        # column c of ds/dg is -s x (A G_bar)[:, c] = (A G_bar)[:, c] x s
+        J = np.swapaxes(_cross(np.swapaxes(fr.AG[idx], 1, 2), s[:, None, :]), 1, 2)
+        if not velocities:
+            return Vectors(s, J)
+        w = fr.omega[idx]
+        w_s = _cross(w, s)
+        return Vectors(s, J, w_s, _cross(w, w_s) - fr.kappa[idx, None] * w_s)
+
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return np.matmul(fr.A[idx], v[:, :, None])[:, :, 0]
+        return rotate_rows(fr.A[idx], v)
 
     def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
                     ) -> np.ndarray:

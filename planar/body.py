@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.body import BodyType, Frames
+from mbd3d.body import BodyType, Frames, Vectors, rotate_rows
 from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
@@ -71,8 +71,17 @@ class PlanarBody(BodyType):
             return Frames(Q=Q, A=A, R=Q[:, :2])
         return Frames(Q=Q, A=A, R=Q[:, :2], Qd=Qd, Rd=Qd[:, :2], omega=Qd[:, 2])
 
+    def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
+                ) -> Vectors:
+        s = rotate_rows(fr.A[idx], v)
+        s_perp = _perp(s)
+        if not velocities:
+            return Vectors(s, s_perp[:, :, None])
+        w = fr.omega[idx, None]
+        return Vectors(s, s_perp[:, :, None], w * s_perp, -(w * w) * s)
+
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return np.matmul(fr.A[idx], v[:, :, None])[:, :, 0]
+        return rotate_rows(fr.A[idx], v)
 
     def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
                     ) -> np.ndarray:
