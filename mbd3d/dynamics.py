@@ -27,7 +27,7 @@ from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, solve_velocity
 from mbd3d.linalg import SingularMatrix, factor_model_augmented
-from mbd3d.position import solve_position
+from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
@@ -134,6 +134,34 @@ def _difference_jacobian(rhs, n_y: int):
             J[:, j] = (rhs(t, y_step) - f0) / h
         return J
     return jac
+
+
+#: smallest singular value of ``Cq``, relative to its largest, below which a collapsed step
+#: of an explicit integrator is put down to a singular position: the index-1 accelerations
+#: grow without bound there, and the steps shrink until they underflow
+NEARLY_SINGULAR = 1e-4
+#: largest Jacobian (rows x columns) whose singular values are computed to explain a failure
+_LARGEST_SVD = 4_000_000
+
+
+def _step_failure(model, method: str, t: float, q: np.ndarray, charts, message: str
+                  ) -> Exception:
+    """The error for an explicit integrator that cannot take a step: a
+    :class:`SingularJacobianError` naming the joints when the mechanism is at (or next to) a
+    singular position, which is where the steps of an index-1 method collapse, otherwise an
+    :class:`IntegrationError`."""
+    what = f"forward dynamics of '{model.name}'"
+    if (np.all(np.isfinite(q)) and model.n_constraints
+            and model.n_constraints * model.n_coordinates <= _LARGEST_SVD):
+        Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts),
+                                  sparse=False)
+        s = np.linalg.svd(Cq, compute_uv=False)
+        if s[-1] <= NEARLY_SINGULAR * s[0]:
+            return singular_error(model, Cq, t, f"{what} ({method} could not take a step: "
+                                                f"{message})")
+    return IntegrationError(
+        f"{what}: the {method} integrator failed at t = {t:.6g} s: {message}. Try a smaller "
+        "max_step, looser tolerances or method='generalized-alpha' for stiff models.", time=t)
 
 
 def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
@@ -270,10 +298,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         while out.done < k_max:
             message = solver.step()
             if solver.status == "failed":
-                raise IntegrationError(
-                    f"forward dynamics of '{model.name}': the {method} integrator failed at "
-                    f"t = {solver.t:.6g} s: {message}. Try a smaller max_step, looser tolerances "
-                    "or an implicit method (Radau, BDF) for stiff models.", time=float(solver.t))
+                raise _step_failure(model, method, float(solver.t), solver.y[:n], chart, message)
             stats["steps"] += 1
             if not np.all(np.isfinite(solver.y)):
                 raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
