@@ -172,9 +172,9 @@ class BodyType(ABC):
         return q, qd, charts, False
 
     # -- kinematics ------------------------------------------------------------------------------
-    # The primitives work with ``s = A v``, the global components of a body-fixed vector, computed
-    # once per vector; every other kinematic quantity of a point or vector is a cheap function of
-    # ``s`` and per-body data.
+    # The primitives work with ``s = A v``, the global components of a body-fixed vector, and
+    # what follows from it and per-body data (:meth:`vectors`): the formulas of a body type are
+    # written once there, for all the vectors of a model at once.
     @abstractmethod
     def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
                charts: np.ndarray | None = None) -> Frames:
@@ -188,22 +188,9 @@ class BodyType(ABC):
         bodies ``idx``, in one batched evaluation (see :class:`Vectors`); ``velocities`` asks
         for ``ds/dt`` and the acceleration term too (needs velocities in ``fr``)."""
 
-    @abstractmethod
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``s = A v``: global components of body-frame vectors ``v`` (k, dim)."""
-
-    @abstractmethod
-    def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
-                    ) -> np.ndarray:
-        """``d(R + s)/dq`` (translation=True, a point) or ``ds/dq`` (a vector); (k, dim, n_coords)."""
-
-    @abstractmethod
-    def velocity_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        """``ds/dt = omega x s`` [per s] (needs velocities in ``fr``)."""
-
-    @abstractmethod
-    def acceleration_term_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        """Velocity-dependent part of ``d2s/dt2`` (the part not multiplying ``qdd``)."""
+        return rotate_rows(fr.A[idx], v)
 
     # conveniences for forces and results, built on the methods above
     def point(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -212,15 +199,18 @@ class BodyType(ABC):
 
     def point_jacobian(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
         """``d(R + A u)/dq``, shape (k, dim, n_coords)."""
-        return self.jacobian_of(fr, idx, self.rotate(fr, idx, u), True)
+        J = np.zeros((len(u), self.dim, self.n_coords))
+        J[:, :, :self.dim] = np.eye(self.dim)
+        J[:, :, self.dim:] = self.vectors(fr, idx, u).J
+        return J
 
     def point_velocity(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """Global velocity of body points [m/s]."""
-        return fr.Rd[idx] + self.velocity_of(fr, idx, self.rotate(fr, idx, u))
+        """Global velocity of body points [m/s] (needs velocities in ``fr``)."""
+        return fr.Rd[idx] + self.vectors(fr, idx, u, velocities=True).v
 
     def point_acceleration_term(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Velocity-dependent part of the acceleration of body points [m/s^2]."""
-        return self.acceleration_term_of(fr, idx, self.rotate(fr, idx, u))
+        return self.vectors(fr, idx, u, velocities=True).a
 
     def vector(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Global components ``A v`` of body-fixed vectors ``v``."""

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from mbd3d import rotations as rot
-from mbd3d.body import BodyType, Frames, Vectors, rotate_rows
+from mbd3d.body import BodyType, Frames, Vectors
 from mbd3d.checks import finite_vector
 from mbd3d.errors import ModelError
 
@@ -105,7 +105,7 @@ class SpatialBody(BodyType):
 
     def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
                 ) -> Vectors:
-        s = rotate_rows(fr.A[idx], v)
+        s = self.rotate(fr, idx, v)
         # column c of ds/dg is -s x (A G_bar)[:, c] = (A G_bar)[:, c] x s
         J = np.swapaxes(_cross(np.swapaxes(fr.AG[idx], 1, 2), s[:, None, :]), 1, 2)
         if not velocities:
@@ -113,25 +113,6 @@ class SpatialBody(BodyType):
         w = fr.omega[idx]
         w_s = _cross(w, s)
         return Vectors(s, J, w_s, _cross(w, w_s) - fr.kappa[idx, None] * w_s)
-
-    def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return rotate_rows(fr.A[idx], v)
-
-    def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
-                    ) -> np.ndarray:
-        J = np.zeros((len(s), 3, 6))
-        if translation:
-            J[:, 0, 0] = J[:, 1, 1] = J[:, 2, 2] = 1.0
-        J[:, :, 3:] = -np.matmul(rot.skew(s), fr.AG[idx])
-        return J
-
-    def velocity_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        return _cross(fr.omega[idx], s)
-
-    def acceleration_term_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        w = fr.omega[idx]
-        w_s = _cross(w, s)
-        return _cross(w, w_s) - fr.kappa[idx, None] * w_s
 
     def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return _cross(a, b)

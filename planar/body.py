@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.body import BodyType, Frames, Vectors, rotate_rows
+from mbd3d.body import BodyType, Frames, Vectors
 from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
@@ -73,32 +73,12 @@ class PlanarBody(BodyType):
 
     def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
                 ) -> Vectors:
-        s = rotate_rows(fr.A[idx], v)
+        s = self.rotate(fr, idx, v)
         s_perp = _perp(s)
         if not velocities:
             return Vectors(s, s_perp[:, :, None])
         w = fr.omega[idx, None]
         return Vectors(s, s_perp[:, :, None], w * s_perp, -(w * w) * s)
-
-    def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return rotate_rows(fr.A[idx], v)
-
-    def jacobian_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray, translation: bool
-                    ) -> np.ndarray:
-        J = np.zeros((len(s), 2, 3))
-        if translation:
-            J[:, 0, 0] = 1.0
-            J[:, 1, 1] = 1.0
-        J[:, 0, 2] = -s[:, 1]
-        J[:, 1, 2] = s[:, 0]
-        return J
-
-    def velocity_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        return fr.omega[idx, None] * _perp(s)
-
-    def acceleration_term_of(self, fr: Frames, idx: np.ndarray, s: np.ndarray) -> np.ndarray:
-        w = fr.omega[idx, None]
-        return -(w * w) * s
 
     def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
