@@ -89,9 +89,11 @@ class BandedFactorization:
 
 
 def _check_pivots(pivots: np.ndarray, pivot_tolerance: float) -> np.ndarray:
-    if pivots.size and (not np.all(np.isfinite(pivots))
-                        or pivots.min() <= pivot_tolerance * pivots.max()):
-        raise SingularMatrix("smallest pivot below tolerance")
+    if pivots.size:
+        # a NaN pivot makes both comparisons false, an infinite one fails the first
+        smallest, largest = pivots.min(), pivots.max()
+        if not (largest < np.inf and smallest > pivot_tolerance * largest):
+            raise SingularMatrix("smallest pivot below tolerance")
     return pivots
 
 
