@@ -38,9 +38,9 @@ def spinning(model) -> np.ndarray:
 
 
 def main(sizes=(1, 10, 100, 1000, 10000), simulate: bool = True, compare: bool = False,
-         peer_links: int = 100) -> list[dict]:
+         peer_links: int = 100, method: str = "DOP853") -> list[dict]:
     rows = report("spatial N-link chain (ball joints, spinning)", spatial_chain, sizes,
-                  simulate, spinning)
+                  simulate, spinning, method)
     if compare:
         compare_with_peers(peer_links, spatial_chain, spatial=True, spin=SPIN, rates=spinning)
     return rows
@@ -53,5 +53,6 @@ if __name__ == "__main__":
     parser.add_argument("--peers", action="store_true",
                         help="compare with Exudyn and MuJoCo at equal accuracy")
     parser.add_argument("--peer-links", type=int, default=100)
+    parser.add_argument("--method", default="DOP853", help="integrator of the simulated runs")
     args = parser.parse_args()
-    main(tuple(args.sizes), not args.no_simulation, args.peers, args.peer_links)
+    main(tuple(args.sizes), not args.no_simulation, args.peers, args.peer_links, args.method)
