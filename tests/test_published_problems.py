@@ -10,6 +10,7 @@ from scipy.integrate import simpson, solve_ivp
 import mbd3d as mb
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.mechanisms import pendulum_chain
 from test_examples import load
 
 
@@ -223,3 +224,31 @@ def test_iftomm_a05_flyball_governor_conserves_momentum_and_moves_as_its_rigid_t
     assert np.max(np.abs(sleeve - rigid.body("sleeve").position[:, 2])) < 5e-4
     assert np.max(res.position_residual) < 1e-9
     assert "angular momentum about the shaft" in capsys.readouterr().out
+
+
+
+def test_a_collapsed_explicit_step_is_put_down_to_a_singular_position_only_where_there_is_one():
+    """Two 1 m links pinned to the ground at x = 0 and x = 2 lie straight: the x rows of the
+    three pins depend on each other (a locked chain), so an explicit step that cannot be
+    taken there is reported as a singular position with its joints; for a simple pendulum,
+    whose Jacobian is regular, the failure stays an IntegrationError."""
+    from joints import Revolute
+    from mbd3d.dynamics import _step_failure
+
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    first = b.add_body("first", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))
+    second = b.add_body("second", mass=1.0, inertia=1.0 / 12, position=(1.5, 0.0))
+    b.add(Revolute("O", b.ground, first, at=(0.0, 0.0)))
+    b.add(Revolute("A", first, second, at=(1.0, 0.0)))
+    b.add(Revolute("B", second, b.ground, at=(2.0, 0.0)))
+    locked = b.build()
+    error = _step_failure(locked, "RK45", 0.25, locked.q0, locked.charts0, "step too small")
+    assert isinstance(error, mb.SingularJacobianError)
+    assert set(error.joints) == {"O", "A", "B"} and error.time == 0.25
+    assert "generalized-alpha" in str(error)
+
+    pendulum = pendulum_chain(1)
+    error = _step_failure(pendulum, "RK45", 0.25, pendulum.q0, pendulum.charts0, "step too small")
+    assert isinstance(error, mb.IntegrationError)
+    assert not isinstance(error, mb.SingularJacobianError)
+    assert "step too small" in str(error) and error.time == 0.25
