@@ -23,7 +23,7 @@ from mbd3d.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.linalg import AugmentedPattern, PenaltyPattern
 from mbd3d.motion import Motion
-from mbd3d.primitives import PRIMITIVES
+from mbd3d.primitives import PRIMITIVES, stack_vectors
 
 __all__ = ["ModelBuilder", "Model", "BuildContext"]
 
@@ -469,17 +469,17 @@ class Model:
         """Stack the body-frame vectors of every primitive instance into one table, evaluated
         by one batched call per state (:meth:`BodyType.vectors`); each group keeps the rows
         of each of its vectors."""
-        bodies, local = [], []
+        bodies, local = [np.zeros(0, dtype=np.intp)], [np.zeros((0, self.dim))]
         start = 0
         for g in self.groups:
-            g.vector_rows = {}
-            for name, side, key in g.cls.vectors:
-                bodies.append(g.bi if side == "i" else g.bj)
-                local.append(np.reshape(g.params[key], (g.count, self.dim)))
-                g.vector_rows[name] = slice(start, start + g.count)
-                start += g.count
-        self._vector_bodies = (np.concatenate(bodies) if bodies else np.zeros(0, dtype=np.intp))
-        self._vector_local = (np.concatenate(local) if local else np.zeros((0, self.dim)))
+            idx, vectors, rows = stack_vectors(g.cls, g.bi, g.bj, g.params, self.dim)
+            bodies.append(idx)
+            local.append(vectors)
+            g.vector_rows = {name: slice(start + r.start, start + r.stop)
+                             for name, r in rows.items()}
+            start += len(idx)
+        self._vector_bodies = np.concatenate(bodies)
+        self._vector_local = np.concatenate(local)
         self._vector_bodies.setflags(write=False)
         self._vector_local.setflags(write=False)
 

@@ -34,9 +34,23 @@ import numpy as np
 from mbd3d.body import Vectors
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation", "own_vectors"]
+           "RelativeAngle", "Rotation", "own_vectors", "stack_vectors"]
 
 _dot = np.vecdot
+
+
+def stack_vectors(cls, bi: np.ndarray, bj: np.ndarray, p: dict, dim: int
+                  ) -> tuple[np.ndarray, np.ndarray, dict[str, slice]]:
+    """The body-frame vectors of ``cls.vectors`` for ``k`` instances, stacked one vector name
+    after the other: body indices (k * n_vectors,), vectors (k * n_vectors, dim), and the rows
+    of each name."""
+    k = len(bi)
+    if not cls.vectors:
+        return np.zeros(0, dtype=np.intp), np.zeros((0, dim)), {}
+    idx = np.concatenate([bi if side == "i" else bj for _, side, _ in cls.vectors])
+    local = np.concatenate([np.broadcast_to(p[key], (k, dim)) for _, _, key in cls.vectors])
+    rows = {name: slice(n * k, (n + 1) * k) for n, (name, _, _) in enumerate(cls.vectors)}
+    return idx, local, rows
 
 
 def own_vectors(cls, bt, fr, bi: np.ndarray, bj: np.ndarray, p: dict, velocities: bool
@@ -45,12 +59,9 @@ def own_vectors(cls, bt, fr, bi: np.ndarray, bj: np.ndarray, p: dict, velocities
     model does for all its primitives at once)."""
     if not cls.vectors:
         return {}
-    k = len(bi)
-    idx = np.concatenate([bi if side == "i" else bj for _, side, _ in cls.vectors])
-    v = np.concatenate([np.broadcast_to(p[key], (k, bt.dim)) for _, _, key in cls.vectors])
-    table = bt.vectors(fr, idx, v, velocities)
-    return {name: table.part(slice(n * k, (n + 1) * k))
-            for n, (name, _, _) in enumerate(cls.vectors)}
+    idx, local, rows = stack_vectors(cls, bi, bj, p, bt.dim)
+    table = bt.vectors(fr, idx, local, velocities)
+    return {name: table.part(r) for name, r in rows.items()}
 
 
 def _jacobian(k: int, rows: int, bt) -> np.ndarray:
