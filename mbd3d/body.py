@@ -145,6 +145,8 @@ class BodyType(ABC):
     coordinate_names: tuple[str, ...]
     #: short name used in messages ("planar", "spatial")
     name: str
+    #: whether the mass matrix is constant, so that the quadratic velocity vector vanishes
+    constant_mass: bool = False
 
     # -- model data ------------------------------------------------------------------------------
     @abstractmethod
@@ -190,12 +192,14 @@ class BodyType(ABC):
 
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``s = A v``: global components of body-frame vectors ``v`` (k, dim)."""
-        return rotate_rows(fr.A[idx], v)
+        # take(axis=0) gathers rows of stacked arrays for a quarter of what fancy indexing
+        # costs, from a few rows (0.25 against 1 us) to 20,000 (63 against 277 us)
+        return rotate_rows(fr.A.take(idx, axis=0), v)
 
     # conveniences for forces and results, built on the methods above
     def point(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Global position ``R + A u`` [m] of body points ``u`` (body frame)."""
-        return fr.R[idx] + self.rotate(fr, idx, u)
+        return fr.R.take(idx, axis=0) + self.rotate(fr, idx, u)
 
     def point_jacobian(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
         """``d(R + A u)/dq``, shape (k, dim, n_coords)."""
@@ -206,7 +210,7 @@ class BodyType(ABC):
 
     def point_velocity(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Global velocity of body points [m/s] (needs velocities in ``fr``)."""
-        return fr.Rd[idx] + self.vectors(fr, idx, u, velocities=True).v
+        return fr.Rd.take(idx, axis=0) + self.vectors(fr, idx, u, velocities=True).v
 
     def point_acceleration_term(self, fr: Frames, idx: np.ndarray, u: np.ndarray) -> np.ndarray:
         """Velocity-dependent part of the acceleration of body points [m/s^2]."""
@@ -227,7 +231,8 @@ class BodyType(ABC):
 
     @abstractmethod
     def quadratic_velocity(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-        """Per-body quadratic velocity vectors ``Qv``, shape (n_bodies, n_coords)."""
+        """Per-body quadratic velocity vectors ``Qv``, shape (n_bodies, n_coords) (zero, and
+        not asked for, when ``constant_mass``)."""
 
     @abstractmethod
     def torque_generalized(self, fr: Frames, idx: np.ndarray, torque: np.ndarray) -> np.ndarray:

@@ -25,13 +25,10 @@ def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
     ``charts`` (spatial models): the reference rotations ``q`` is relative to, (n_bodies + 1,
     3, 3); default the model's initial charts, which ``model.q0`` is relative to.
     """
-    nb, nc = model.n_bodies, model.n_coords_per_body
-    Q = np.zeros((nb + 1, nc))
-    Q[:nb] = np.reshape(q, (nb, nc))
-    Qd = None
-    if qd is not None:
-        Qd = np.zeros((nb + 1, nc))
-        Qd[:nb] = np.reshape(qd, (nb, nc))
+    shape, ground = (model.n_bodies + 1, model.n_coords_per_body), model._ground_row
+    # one concatenation per array: this runs at every right-hand side of an integration
+    Q = np.concatenate((q, ground)).reshape(shape)
+    Qd = None if qd is None else np.concatenate((qd, ground)).reshape(shape)
     return model.body_type.frames(Q, Qd, model.charts0 if charts is None else charts)
 
 

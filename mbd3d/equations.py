@@ -27,10 +27,10 @@ def mass_matrix(model, fr: Frames, sparse: bool | None = None):
 
 def generalized_forces(model, t: float, fr: Frames) -> np.ndarray:
     """``Qe + Qv``: gravity, force elements and the quadratic velocity vector, shape (n,)."""
-    nb, nc = model.n_bodies, model.n_coords_per_body
-    Q = np.zeros((nb + 1, nc))
-    Q[:nb, :model.dim] += model.mass[:, None] * model.gravity[None, :]
-    Q[:nb] += model.body_type.quadratic_velocity(fr, model.mass, model.inertia)
+    nb = model.n_bodies
+    Q = model._weight.copy()
+    if not model.body_type.constant_mass:
+        Q[:nb] += model.body_type.quadratic_velocity(fr, model.mass, model.inertia)
     for group in model.force_groups:
         group.apply(model, t, fr, Q)
     return Q[:nb].ravel()

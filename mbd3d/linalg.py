@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as la
-from scipy.linalg.lapack import dgbtrf as _gbtrf, dgbtrs as _gbtrs, dgetrf as _getrf, \
-    dgetrs as _getrs
+from scipy.linalg.lapack import dgbtrf as _gbtrf, dgbtrs as _gbtrs, dgesv as _gesv, \
+    dgetrf as _getrf, dgetrs as _getrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -37,10 +37,12 @@ class Factorization:
     ``ordering`` is SuperLU's column ordering for sparse matrices: its default "COLAMD", or
     "NATURAL" for a matrix already permuted to a small bandwidth. Dense matrices go straight
     to LAPACK's ``getrf``/``getrs`` (the wrappers' input checks cost more than the solve at the
-    sizes of a mechanism).
+    sizes of a mechanism). With ``overwrite`` a dense ``A`` that is already a Fortran-ordered
+    float array is factored in place (the caller's buffer becomes the factors).
     """
 
-    def __init__(self, A, ordering: str = "COLAMD", pivot_tolerance: float = PIVOT_TOLERANCE):
+    def __init__(self, A, ordering: str = "COLAMD", pivot_tolerance: float = PIVOT_TOLERANCE,
+                 overwrite: bool = False):
         self.sparse = sp.issparse(A)
         if self.sparse:
             try:
@@ -49,7 +51,9 @@ class Factorization:
                 raise SingularMatrix(str(exc)) from None
             pivots = np.abs(self._lu.U.diagonal())
         else:
-            self._lu, self._piv, _ = _getrf(np.array(A, dtype=float, order="F"), overwrite_a=1)
+            # ``overwrite``: A is a Fortran-ordered float buffer the caller gives up
+            A = A if overwrite else np.array(A, dtype=float, order="F")
+            self._lu, self._piv, _ = _getrf(A, overwrite_a=1)
             pivots = np.abs(np.diagonal(self._lu))
         self._pivots = _check_pivots(pivots, pivot_tolerance)
 
@@ -224,7 +228,8 @@ class _FixedPattern:
             A = self._scatter(values, self.size)
             if extra is not None:
                 A += extra.toarray() if sp.issparse(extra) else extra
-            return Factorization(A, pivot_tolerance=self.pivot_tolerance)
+            return Factorization(A, pivot_tolerance=self.pivot_tolerance,
+                                 overwrite=True)
         if self.layout == "banded":
             ab = self._scatter(values, self.band_rows)
             if extra is None or self._add_to_band(ab, extra):
@@ -232,6 +237,20 @@ class _FixedPattern:
                                                             self.pivot_tolerance))
         return _Permuted(self, Factorization(self._permuted_csc(values, extra), "NATURAL",
                                              self.pivot_tolerance))
+
+    def solve(self, values: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Solve ``A x = b`` once for the matrix with entries ``values`` (what :meth:`factor`
+        then ``solve`` give, in one LAPACK call for a dense matrix: ``gesv``).
+
+        Raises
+        ------
+        SingularMatrix
+        """
+        if self.layout != "dense":
+            return self.factor(values).solve(b)
+        lu, _, x, _ = _gesv(self._scatter(values, self.size), b, overwrite_a=1)
+        _check_pivots(np.abs(np.diagonal(lu)), self.pivot_tolerance)
+        return x
 
     def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:
         """(n_rows, size) array in Fortran order (as LAPACK takes it) holding ``values`` at
@@ -326,7 +345,7 @@ def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: 
     ------
     SingularMatrix
     """
-    return factor_model_augmented(model, blocks, jac_data).solve(rhs)
+    return model._augmented_pattern.solve(_augmented_values(blocks, jac_data), rhs)
 
 
 def factor_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray):
@@ -337,7 +356,12 @@ def factor_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray):
     ------
     SingularMatrix
     """
-    return model._augmented_pattern.factor(np.concatenate([blocks.ravel(), jac_data, jac_data]))
+    return model._augmented_pattern.factor(_augmented_values(blocks, jac_data))
+
+
+def _augmented_values(blocks: np.ndarray, jac_data: np.ndarray) -> np.ndarray:
+    """The entries of ``[M Cq^T; Cq 0]`` in the order of :class:`AugmentedPattern`."""
+    return np.concatenate([blocks.ravel(), jac_data, jac_data])
 
 
 def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

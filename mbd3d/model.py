@@ -388,6 +388,10 @@ class Model:
         self.mass = np.array([b.mass for b in self.bodies])
         self.inertia = np.array([b.inertia for b in self.bodies])
         self.charts0 = ctx.charts
+        # generalized forces of gravity, constant: (n_bodies + 1, n_coords), ground row zero
+        self._weight = np.zeros((nb + 1, nc))
+        self._weight[:nb, :self.dim] = self.mass[:, None] * self.gravity[None, :]
+        self._ground_row = np.zeros(nc)  # the ground's coordinates, appended to q by frames
         self._body_by_name = {b.name: b for b in self.bodies}
         self._joint_by_name = {e.name: (i, e) for i, e in enumerate(self.joints)}
         self._force_by_name = {f.name: f for f in self.forces}
@@ -461,6 +465,7 @@ class Model:
         from mbd3d.forces import compile_forces
         self.force_groups = compile_forces(self.forces, ctx)
         for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0,
+                    self._ground_row, self._weight,
                     *(() if self.charts0 is None else (self.charts0,))):
             arr.setflags(write=False)
 

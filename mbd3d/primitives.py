@@ -70,12 +70,12 @@ def _jacobian(k: int, rows: int, bt) -> np.ndarray:
 
 def _relative_velocity(fr, bi, bj, si: Vectors, sj: Vectors) -> np.ndarray:
     """Time derivative of ``d = r_j - r_i`` between body points ``si``, ``sj``."""
-    return (fr.Rd[bj] - fr.Rd[bi]) + (sj.v - si.v)
+    return (fr.Rd.take(bj, axis=0) - fr.Rd.take(bi, axis=0)) + (sj.v - si.v)
 
 
 def _relative_position(fr, bi, bj, si: Vectors, sj: Vectors) -> np.ndarray:
     """``d = r_j - r_i`` between body points ``si``, ``sj``."""
-    return (fr.R[bj] - fr.R[bi]) + (sj.s - si.s)
+    return (fr.R.take(bj, axis=0) - fr.R.take(bi, axis=0)) + (sj.s - si.s)
 
 
 class PointCoincidence:
@@ -141,8 +141,8 @@ def _dot1(bt, ai: Vectors, aj: Vectors, value: bool, jacobian: bool, gamma: bool
     if jacobian:
         dim = bt.dim
         J = _jacobian(len(ai.s), 1, bt)
-        J[:, 0, 0, dim:] = np.vecmat(aj.s, ai.J)
-        J[:, 0, 1, dim:] = np.vecmat(ai.s, aj.J)
+        np.vecmat(aj.s, ai.J, out=J[:, 0, 0, dim:])
+        np.vecmat(ai.s, aj.J, out=J[:, 0, 1, dim:])
     if gamma:
         g = -(_dot(aj.s, ai.a) + _dot(ai.s, aj.a) + 2.0 * _dot(ai.v, aj.v))[:, None]
     return c, J, g
@@ -174,9 +174,9 @@ class Dot2:
             dim = bt.dim
             J = _jacobian(len(bi), 1, bt)
             np.negative(ai.s, out=J[:, 0, 0, :dim])
-            J[:, 0, 0, dim:] = np.vecmat(d, ai.J) - np.vecmat(ai.s, si.J)
+            np.subtract(np.vecmat(d, ai.J), np.vecmat(ai.s, si.J), out=J[:, 0, 0, dim:])
             J[:, 0, 1, :dim] = ai.s
-            J[:, 0, 1, dim:] = np.vecmat(ai.s, sj.J)
+            np.vecmat(ai.s, sj.J, out=J[:, 0, 1, dim:])
         if gamma:
             d_dot = _relative_velocity(fr, bi, bj, si, sj)
             g = -(_dot(d, ai.a) + 2.0 * _dot(ai.v, d_dot) + _dot(ai.s, sj.a - si.a))[:, None]
@@ -215,7 +215,7 @@ class Distance:
             np.negative(e, out=J[:, 0, 0, :dim])
             np.negative(np.vecmat(e, si.J), out=J[:, 0, 0, dim:])
             J[:, 0, 1, :dim] = e
-            J[:, 0, 1, dim:] = np.vecmat(e, sj.J)
+            np.vecmat(e, sj.J, out=J[:, 0, 1, dim:])
         if gamma:
             d_dot = _relative_velocity(fr, bi, bj, si, sj)
             e_dd = _dot(e, d_dot)

@@ -107,12 +107,12 @@ class SpatialBody(BodyType):
                 ) -> Vectors:
         s = self.rotate(fr, idx, v)
         # column c of ds/dg is -s x (A G_bar)[:, c] = (A G_bar)[:, c] x s
-        J = np.swapaxes(_cross(np.swapaxes(fr.AG[idx], 1, 2), s[:, None, :]), 1, 2)
+        J = np.swapaxes(_cross(np.swapaxes(fr.AG.take(idx, axis=0), 1, 2), s[:, None, :]), 1, 2)
         if not velocities:
             return Vectors(s, J)
-        w = fr.omega[idx]
+        w = fr.omega.take(idx, axis=0)
         w_s = _cross(w, s)
-        return Vectors(s, J, w_s, _cross(w, w_s) - fr.kappa[idx, None] * w_s)
+        return Vectors(s, J, w_s, _cross(w, w_s) - fr.kappa[idx][:, None] * w_s)
 
     def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return _cross(a, b)

@@ -36,6 +36,7 @@ class PlanarBody(BodyType):
     n_coords = 3
     coordinate_names = ("x", "y", "theta")
     name = "planar"
+    constant_mass = True
 
     def check_inertia(self, inertia: Any, body: str) -> float:
         value = finite_scalar(inertia, f"body '{body}': inertia")
@@ -77,7 +78,7 @@ class PlanarBody(BodyType):
         s_perp = _perp(s)
         if not velocities:
             return Vectors(s, s_perp[:, :, None])
-        w = fr.omega[idx, None]
+        w = fr.omega[idx][:, None]
         return Vectors(s, s_perp[:, :, None], w * s_perp, -(w * w) * s)
 
     def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
