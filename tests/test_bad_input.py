@@ -200,3 +200,26 @@ def test_errors_are_library_errors():
     assert issubclass(mb.ModelError, mb.MBDError) and issubclass(mb.ModelError, ValueError)
     assert issubclass(mb.SingularJacobianError, mb.AnalysisError)
     assert issubclass(mb.AssemblyError, mb.MBDError)
+
+
+@pytest.mark.parametrize("where, value", [("q", np.nan), ("qd", np.inf), ("qd", -np.inf)])
+def test_a_non_finite_state_is_reported_with_the_time(where, value):
+    """forward_accelerations refuses a diverged state by name, whichever entry is bad."""
+    model = pendulum_chain(2)
+    state = {"q": mb.solve_position(model), "qd": np.zeros(model.n_coordinates)}
+    state[where][4] = value
+    with pytest.raises(mb.IntegrationError, match="not finite at t = 0.25 s"):
+        mb.forward_accelerations(model, 0.25, state["q"], state["qd"])
+
+
+def test_a_huge_but_finite_state_is_not_called_diverged():
+    """A free body far out falls at g: the finiteness test must not mistake entries whose
+    squares overflow for infinite ones."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    b.add_body("stone", mass=2.0, inertia=0.5, position=(0.0, 0.0))
+    model = b.build()
+    q = np.array([1e200, -1e200, 3.0])
+    qd = np.array([1e180, 0.0, 1e170])
+    qdd, lam = mb.forward_accelerations(model, 0.0, q, qd)
+    np.testing.assert_array_equal(qdd, [0.0, -9.81, 0.0])
+    assert lam.size == 0
