@@ -54,7 +54,7 @@ class Factorization:
             # ``overwrite``: A is a Fortran-ordered float buffer the caller gives up
             A = A if overwrite else np.array(A, dtype=float, order="F")
             self._lu, self._piv, _ = _getrf(A, overwrite_a=1)
-            pivots = np.abs(np.diagonal(self._lu))
+            pivots = np.abs(self._lu.diagonal())
         self._pivots = _check_pivots(pivots, pivot_tolerance)
 
     @property
@@ -94,8 +94,10 @@ class BandedFactorization:
 
 def _check_pivots(pivots: np.ndarray, pivot_tolerance: float) -> np.ndarray:
     if pivots.size:
-        # a NaN pivot makes both comparisons false, an infinite one fails the first
-        smallest, largest = pivots.min(), pivots.max()
+        # a NaN pivot makes both comparisons false, an infinite one fails the first; the
+        # ufuncs' reduce directly, without the Python wrappers of ndarray.min and max (this
+        # runs at every right-hand side)
+        smallest, largest = np.minimum.reduce(pivots), np.maximum.reduce(pivots)
         if not (largest < np.inf and smallest > pivot_tolerance * largest):
             raise SingularMatrix("smallest pivot below tolerance")
     return pivots
@@ -249,7 +251,7 @@ class _FixedPattern:
         if self.layout != "dense":
             return self.factor(values).solve(b)
         lu, _, x, _ = _gesv(self._scatter(values, self.size), b, overwrite_a=1)
-        _check_pivots(np.abs(np.diagonal(lu)), self.pivot_tolerance)
+        _check_pivots(np.abs(lu.diagonal()), self.pivot_tolerance)
         return x
 
     def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:

@@ -104,7 +104,7 @@ class PointCoincidence:
         if jacobian:
             J = _jacobian(len(bi), dim, bt)
             J[:, :, 0, :dim] = _EYE[dim]
-            J[:, :, 1, :dim] = -_EYE[dim]
+            J[:, :, 1, :dim] = _MINUS_EYE[dim]
             J[:, :, 0, dim:] = si.J
             np.negative(sj.J, out=J[:, :, 1, dim:])
         if gamma:
@@ -327,6 +327,7 @@ class Rotation:
 
 #: translation part of a point's Jacobian, by dimension
 _EYE = {2: np.eye(2), 3: np.eye(3)}
+_MINUS_EYE = {dim: -eye for dim, eye in _EYE.items()}
 
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation)}

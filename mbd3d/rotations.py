@@ -44,7 +44,7 @@ def from_rodrigues(g: np.ndarray) -> np.ndarray:
     element-wise, with no batched 3x3 products, since it runs for every body and state.
     """
     g = np.asarray(g, dtype=float)
-    s = np.einsum("...i,...i->...", g, g)
+    s = np.vecdot(g, g)
     A = 2.0 * (g[..., :, None] * g[..., None, :] + skew(g))
     diagonal = np.einsum("...ii->...i", A)
     diagonal += (1.0 - s)[..., None]
@@ -134,7 +134,7 @@ def axis_angle(axis: Any, angle: float) -> np.ndarray:
 def g_bar(g: np.ndarray) -> np.ndarray:
     """``G_bar(g) = 2 / (1 + s) (I - g~)``: body angular velocity ``omega_bar = G_bar g_dot``."""
     g = np.asarray(g, dtype=float)
-    s = np.einsum("...i,...i->...", g, g)
+    s = np.vecdot(g, g)
     return (2.0 / (1.0 + s))[..., None, None] * (np.eye(3) - skew(g))
 
 
@@ -146,7 +146,7 @@ def g_bar_inverse(g: np.ndarray) -> np.ndarray:
 
 def compose_rodrigues(ga: np.ndarray, gb: np.ndarray) -> np.ndarray:
     """``g_ab`` with ``A(ga) A(gb) = A(g_ab)`` (rodrigues.md 1.6; undefined at a half turn)."""
-    return (ga + gb + np.cross(ga, gb)) / (1.0 - np.einsum("...i,...i->...", ga, gb))[..., None]
+    return (ga + gb + np.cross(ga, gb)) / (1.0 - np.vecdot(ga, gb))[..., None]
 
 
 def as_rotation_matrix(orientation: Any, what: str) -> np.ndarray:

@@ -99,7 +99,7 @@ class SpatialBody(BodyType):
         g_dot = Qd[:, 3:6]
         omega_bar = np.matmul(Gb, g_dot[:, :, None])[:, :, 0]
         omega = np.matmul(A, omega_bar[:, :, None])[:, :, 0]
-        kappa = 2.0 * np.einsum("ki,ki->k", g, g_dot) / (1.0 + np.einsum("ki,ki->k", g, g))
+        kappa = 2.0 * np.vecdot(g, g_dot) / (1.0 + np.vecdot(g, g))
         return Frames(Q=Q, A=A, R=Q[:, :3], g=g, Gbar=Gb, AG=AG, Qd=Qd, Rd=Qd[:, :3],
                       omega=omega, omega_bar=omega_bar, kappa=kappa)
 
@@ -107,7 +107,7 @@ class SpatialBody(BodyType):
                 ) -> Vectors:
         s = self.rotate(fr, idx, v)
         # column c of ds/dg is -s x (A G_bar)[:, c] = (A G_bar)[:, c] x s
-        J = np.swapaxes(_cross(np.swapaxes(fr.AG.take(idx, axis=0), 1, 2), s[:, None, :]), 1, 2)
+        J = _cross(fr.AG.take(idx, axis=0).swapaxes(1, 2), s[:, None, :]).swapaxes(1, 2)
         if not velocities:
             return Vectors(s, J)
         w = fr.omega.take(idx, axis=0)
@@ -122,7 +122,7 @@ class SpatialBody(BodyType):
         blocks = np.zeros((nb, 6, 6))
         blocks[:, 0, 0] = blocks[:, 1, 1] = blocks[:, 2, 2] = mass
         Gb = fr.Gbar[:nb]
-        blocks[:, 3:, 3:] = np.swapaxes(Gb, 1, 2) @ inertia @ Gb
+        blocks[:, 3:, 3:] = Gb.swapaxes(1, 2) @ inertia @ Gb
         return blocks
 
     def quadratic_velocity(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
@@ -131,7 +131,7 @@ class SpatialBody(BodyType):
         Jw = np.matmul(inertia, w[:, :, None])[:, :, 0]
         torque = -_cross(w, Jw) + fr.kappa[:nb, None] * Jw
         out = np.zeros((nb, 6))
-        out[:, 3:] = np.matmul(np.swapaxes(fr.Gbar[:nb], 1, 2), torque[:, :, None])[:, :, 0]
+        out[:, 3:] = np.matmul(fr.Gbar[:nb].swapaxes(1, 2), torque[:, :, None])[:, :, 0]
         return out
 
     def torque_generalized(self, fr: Frames, idx: np.ndarray, torque: np.ndarray) -> np.ndarray:
