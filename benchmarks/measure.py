@@ -1,12 +1,13 @@
-"""What the benchmark scripts share: timing, the fitted cost exponent, the machine line, and the
-search for the cheapest setting of an integrator that reaches a given accuracy."""
+"""What the benchmark scripts share: timing, the fitted cost exponent, the machine line, the
+search for the cheapest setting of an integrator that reaches a given accuracy, and the
+interleaved timing of the settings found for several engines."""
 
 from __future__ import annotations
 
 import os
 import platform
 import time
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Sequence
 
 import numpy as np
 import scipy
@@ -37,21 +38,35 @@ def machine() -> str:
 
 
 def cheapest(settings: Iterable[tuple[str, Callable[[], tuple[object, float]]]],
-             error: Callable[[object], float], tolerance: float, repeat: int = 3
-             ) -> tuple[str, float, float] | None:
+             error: Callable[[object], float], tolerance: float
+             ) -> tuple[str, float, Callable[[], tuple[object, float]]] | None:
     """The first of ``settings`` (ordered cheapest first) whose answer is within ``tolerance``.
 
-    Each setting is ``(label, run)``, ``run()`` returning ``(answer, wall time [s])``; the one
-    found is run ``repeat`` times more and its median wall time reported.
+    Each setting is ``(label, run)``, ``run()`` returning ``(answer, wall time [s])``.
 
     Returns
     -------
-    (label, error, median wall time [s]), or None when no setting is accurate enough.
+    (label, error, run) of the setting found, or None when none is accurate enough. Time the
+    settings found for several engines with :func:`interleaved_medians`.
     """
     for label, run in settings:
         answer, _ = run()
         err = error(answer)
         if err <= tolerance:
-            walls = [run()[1] for _ in range(repeat)]
-            return label, err, float(np.median(walls))
+            return label, err, run
     return None
+
+
+def interleaved_medians(runs: Sequence[Callable[[], tuple[object, float]]], repeat: int = 3
+                        ) -> list[float]:
+    """Median wall time [s] of each of ``runs`` over ``repeat`` rounds that run them in turn.
+
+    The wall times of this machine drift by tens of per cent within minutes (other tenants);
+    taking the engines in turn, round after round, exposes each to the same drift, so that
+    their ratio holds where separately measured times would not.
+    """
+    walls = [[] for _ in runs]
+    for _ in range(repeat):
+        for k, run in enumerate(runs):
+            walls[k].append(run()[1])
+    return [float(np.median(w)) for w in walls]
