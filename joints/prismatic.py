@@ -16,9 +16,11 @@ from joints.base import Axes, Joint, perpendicular, perpendicular_rows
 class Prismatic(Joint):
     """A slider: body j translates along an axis of body i, without relative rotation.
 
-    Planar form (Haug's translational joint): with ``h`` the axis and ``n`` its normal on body i,
-    ``n_i . h_j = 0`` (row ``rotation``) and ``n_i . (r_Pj - r_Pi) = 0`` (row ``normal``: point
-    P of body j stays on the line of body i). Spatial form: the axes stay aligned (``axis_f``,
+    Planar form (Haug's and Nikravesh's translational joint): the relative angle stays that of
+    the drawing, ``theta_j - theta_i = theta_j0 - theta_i0`` (row ``rotation``: linear in q, so
+    its Jacobian row is constant and it adds nothing to ``Qd``), and with ``n`` the normal of the
+    axis on body i, ``n_i . (r_Pj - r_Pi) = 0`` (row ``normal``: point P of body j stays on the
+    line of body i). Spatial form: the axes stay aligned (``axis_f``,
     ``axis_g``), P stays on the line (``normal_f``, ``normal_g``, dot-2) and body j does not turn
     about the axis (``twist``): 5 rows.
 
@@ -51,10 +53,10 @@ class Prismatic(Joint):
         u_i, u_j, h_i, h_j = self.geometry(ctx)
         bi, bj = self.body_i, self.body_j
         if ctx.dim == 2:
-            n_i = perpendicular(h_i)
-            return [PrimitiveSpec("dot1", bi, bj, {"v_i": n_i, "v_j": h_j}, ("rotation",)),
-                    PrimitiveSpec("dot2", bi, bj, {"v_i": n_i, "u_i": u_i, "u_j": u_j},
-                                  ("normal",))]
+            angle = ctx.initial_coordinate(bj, 2) - ctx.initial_coordinate(bi, 2)
+            return [PrimitiveSpec("angle", bi, bj, {}, ("rotation",), c0=angle),
+                    PrimitiveSpec("dot2", bi, bj, {"v_i": perpendicular(h_i), "u_i": u_i,
+                                                   "u_j": u_j}, ("normal",))]
         axes = Axes(ctx, self, self.axis)
         f, g, _ = axes.i
         return [*perpendicular_rows(self, axes),
