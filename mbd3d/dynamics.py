@@ -167,7 +167,7 @@ def _step_failure(model, method: str, t: float, q: np.ndarray, charts, message: 
 def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
     fr = constraints.frames(model, q, charts=charts)
     C, jac_data, _ = constraints.evaluate(model, t, fr)
-    v = constraints.jacobian_matrix(model, jac_data) @ qd - constraints.velocity_rhs(model, t, fr)
+    v = constraints.jacobian_times(model, jac_data, qd) - constraints.velocity_rhs(model, t, fr)
     return float(np.max(np.abs(C), initial=0.0)), float(np.max(np.abs(v), initial=0.0))
 
 

@@ -18,7 +18,7 @@ from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.errors import ModelError, NotFullyDrivenError
 from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
-                          solve_augmented_lagrangian)
+                          solve_augmented_lagrangian, solve_model_augmented)
 from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
@@ -70,15 +70,27 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
     """
     q = np.asarray(q, dtype=float)
     fr = constraints.frames(model, q, charts=charts)
-    Cq = constraints.jacobian(model, t, q, fr)
+    jac_data = constraints.evaluate(model, t, fr, value=False)[1]
     nu = constraints.velocity_rhs(model, t, fr)
     n, m = model.n_coordinates, model.n_constraints
     held = hold_indices(model, hold)
     guess = np.asarray(model.qd0 if qd_guess is None else qd_guess, dtype=float).reshape(-1)
     if guess.size != n or not np.all(np.isfinite(guess)):
         raise ModelError(f"qd_guess must be {n} finite numbers")
+    regular = not redundant
+    if regular and not len(held) and m < n:
+        # the common case (a projection during a simulation): the model's augmented matrix,
+        # whose pattern and band ordering are fixed at build
+        blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+        weighted_guess = np.matvec(blocks, guess.reshape(blocks.shape[:2])).ravel()
+        try:
+            return solve_model_augmented(model, blocks, jac_data,
+                                         np.concatenate([weighted_guess, nu]))[:n]
+        except SingularMatrix:
+            regular = False
+    Cq = constraints.jacobian_matrix(model, jac_data)
     try:
-        if redundant:
+        if not regular:
             raise SingularMatrix("dependent rows")
         if m == n and not len(held):
             return Factorization(Cq).solve(nu)

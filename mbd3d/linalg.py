@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as la
-from scipy.linalg.lapack import dgbtrf as _gbtrf, dgbtrs as _gbtrs, dgesv as _gesv, \
-    dgetrf as _getrf, dgetrs as _getrs
+from scipy.linalg.lapack import dgbsv as _gbsv, dgbtrf as _gbtrf, dgbtrs as _gbtrs, \
+    dgesv as _gesv, dgetrf as _getrf, dgetrs as _getrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -241,18 +241,26 @@ class _FixedPattern:
                                              self.pivot_tolerance))
 
     def solve(self, values: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Solve ``A x = b`` once for the matrix with entries ``values`` (what :meth:`factor`
-        then ``solve`` give, in one LAPACK call for a dense matrix: ``gesv``).
+        """Solve ``A x = b`` once for the matrix with entries ``values``: what :meth:`factor`
+        then ``solve`` give, in one LAPACK call (``gesv``, or ``gbsv`` in band storage).
 
         Raises
         ------
         SingularMatrix
         """
-        if self.layout != "dense":
-            return self.factor(values).solve(b)
-        lu, _, x, _ = _gesv(self._scatter(values, self.size), b, overwrite_a=1)
-        _check_pivots(np.abs(lu.diagonal()), self.pivot_tolerance)
-        return x
+        if self.layout == "dense":
+            lu, _, x, _ = _gesv(self._scatter(values, self.size), b, overwrite_a=1)
+            _check_pivots(np.abs(lu.diagonal()), self.pivot_tolerance)
+            return x
+        if self.layout == "banded":
+            kl, ku = self.kl, self.ku
+            lu, _, y, _ = _gbsv(kl, ku, self._scatter(values, self.band_rows), b[self.perm],
+                                overwrite_ab=1)
+            _check_pivots(np.abs(lu[kl + ku]), self.pivot_tolerance)
+            x = np.empty_like(y)
+            x[self.perm] = y
+            return x
+        return self.factor(values).solve(b)
 
     def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:
         """(n_rows, size) array in Fortran order (as LAPACK takes it) holding ``values`` at
