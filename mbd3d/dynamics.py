@@ -76,7 +76,8 @@ def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
 
 
 def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
-                                    charts: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+                                    charts: np.ndarray, evaluated: tuple | None = None
+                                    ) -> tuple[np.ndarray, np.ndarray] | None:
     """The mass-weighted projection of :func:`project_state` for a state that has drifted
     only slightly (a step of the explicit integrators), from one factorization.
 
@@ -86,11 +87,11 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
     magnitude, where :func:`project_state` would refactor at every Newton iterate and again
     for the velocities. ``None`` when the iterations do not settle (the caller then falls
     back to :func:`project_state`, which reports singular positions by name).
+    ``evaluated``: ``(fr, C, jac_data)`` at ``q`` when the caller has them (the drift check).
     """
     n = model.n_coordinates
     zeros = np.zeros(n)
-    fr = constraints.frames(model, q, charts=charts)
-    C, jac_data, _ = constraints.evaluate(model, t, fr)
+    fr, C, jac_data = evaluated or _constraints_at(model, t, q, charts)
     try:
         lu = factor_model_augmented(
             model, model.body_type.mass_blocks(fr, model.mass, model.inertia), jac_data)
@@ -100,8 +101,7 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
         if np.max(np.abs(C), initial=0.0) <= tol:
             break
         q = q + lu.solve(np.concatenate([zeros, -C]))[:n]
-        fr = constraints.frames(model, q, charts=charts)
-        C, jac_data, _ = constraints.evaluate(model, t, fr)
+        fr, C, jac_data = _constraints_at(model, t, q, charts)
     else:
         return None
     nu = constraints.velocity_rhs(model, t, fr)
@@ -164,11 +164,20 @@ def _step_failure(model, method: str, t: float, q: np.ndarray, charts, message: 
         "max_step, looser tolerances or method='generalized-alpha' for stiff models.", time=t)
 
 
-def _residuals(model, t, q, qd, charts) -> tuple[float, float]:
+def _constraints_at(model, t, q, charts) -> tuple:
+    """``(frames, C, Jacobian values)`` at positions ``q``."""
     fr = constraints.frames(model, q, charts=charts)
     C, jac_data, _ = constraints.evaluate(model, t, fr)
+    return fr, C, jac_data
+
+
+def _drift(model, t, q, qd, charts) -> tuple[float, tuple]:
+    """Largest position or velocity constraint residual, and what was evaluated for it
+    (``(frames, C, Jacobian values)``, which a projection from ``q`` starts from)."""
+    evaluated = fr, C, jac_data = _constraints_at(model, t, q, charts)
     v = constraints.jacobian_times(model, jac_data, qd) - constraints.velocity_rhs(model, t, fr)
-    return float(np.max(np.abs(C), initial=0.0)), float(np.max(np.abs(v), initial=0.0))
+    return max(float(np.max(np.abs(C), initial=0.0)),
+               float(np.max(np.abs(v), initial=0.0))), evaluated
 
 
 def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None = None,
@@ -314,12 +323,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             if solver.status == "finished" or out.done >= k_max:
                 break
             q, qd = solver.y[:n], solver.y[n:]
-            drift = max(_residuals(model, solver.t, q, qd, chart))
+            drift, evaluated = _drift(model, solver.t, q, qd, chart)
             stats["max_drift"] = max(stats["max_drift"], drift)
             restart = drift > constraint_tol
             if restart:
                 projected = None if redundant else _project_with_one_factorization(
-                    model, solver.t, q, qd, projection_tol, chart)
+                    model, solver.t, q, qd, projection_tol, chart, evaluated)
                 q, qd = projected or project_state(model, solver.t, q, qd, projection_tol,
                                                    chart, redundant)
                 stats["projections"] += 1

@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from mbd3d.body import Frames
+from mbd3d.body import Frames, rotate_rows
 from mbd3d.constraints import frames
 
-__all__ = ["mass_matrix", "generalized_forces", "kinetic_energy", "potential_energy"]
+__all__ = ["mass_matrix", "mass_times", "generalized_forces", "kinetic_energy",
+           "potential_energy"]
 
 
 def mass_matrix(model, fr: Frames, sparse: bool | None = None):
@@ -23,6 +24,12 @@ def mass_matrix(model, fr: Frames, sparse: bool | None = None):
     idx = np.arange(nb)[:, None] * nc + np.arange(nc)[None, :]
     M[idx[:, :, None], idx[:, None, :]] = blocks
     return M
+
+
+def mass_times(blocks: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``M x`` (n,) from the per-body mass blocks (n_bodies, n_coords, n_coords), without
+    assembling ``M``."""
+    return rotate_rows(blocks, x.reshape(blocks.shape[:2])).ravel()
 
 
 def generalized_forces(model, t: float, fr: Frames) -> np.ndarray:

@@ -42,7 +42,7 @@ import scipy.sparse as sp
 
 from mbd3d import constraints
 from mbd3d.checks import finite_scalar
-from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.linalg import (SingularMatrix, penalty_scale, solve_augmented_lagrangian,
                           solve_model_augmented)
@@ -287,7 +287,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
             C, jac_data, _ = constraints.evaluate(model, tt, fr)
             blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
             penalty = _penalty(model, blocks, jac_data, beta_prime, relative_penalty)
-            Mqdd = np.einsum("kij,kj->ki", blocks, qdd.reshape(blocks.shape[:2])).ravel()
+            Mqdd = mass_times(blocks, qdd)
             if iteration:
                 lam = lam + penalty * C  # method of multipliers, C at the new iterate
             lam_effective = lam + penalty * C

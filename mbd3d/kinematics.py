@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mbd3d import constraints
-from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.errors import ModelError, NotFullyDrivenError
 from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
                           solve_augmented_lagrangian, solve_model_augmented)
@@ -82,10 +82,9 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
         # the common case (a projection during a simulation): the model's augmented matrix,
         # whose pattern and band ordering are fixed at build
         blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-        weighted_guess = np.matvec(blocks, guess.reshape(blocks.shape[:2])).ravel()
         try:
             return solve_model_augmented(model, blocks, jac_data,
-                                         np.concatenate([weighted_guess, nu]))[:n]
+                                         np.concatenate([mass_times(blocks, guess), nu]))[:n]
         except SingularMatrix:
             regular = False
     Cq = constraints.jacobian_matrix(model, jac_data)

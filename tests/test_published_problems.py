@@ -226,7 +226,6 @@ def test_iftomm_a05_flyball_governor_conserves_momentum_and_moves_as_its_rigid_t
     assert "angular momentum about the shaft" in capsys.readouterr().out
 
 
-
 def test_a_collapsed_explicit_step_is_put_down_to_a_singular_position_only_where_there_is_one():
     """Two 1 m links pinned to the ground at x = 0 and x = 2 lie straight: the x rows of the
     three pins depend on each other (a locked chain), so an explicit step that cannot be
