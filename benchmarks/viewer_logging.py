@@ -23,7 +23,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import pendulum_chain, spatial_chain
-from viewer import Recorder, record
+from mbd3d.viewer import Recorder, record
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from measure import median_time  # noqa: E402  (the shared timer)

@@ -22,8 +22,8 @@ import argparse
 import numpy as np
 
 import mbd3d as mb
-from joints import Revolute
-from viewer import record
+from mbd3d.joints import Revolute
+from mbd3d.viewer import record
 
 #: Test Set reference at t = 0.03 s: beta, Theta, gamma, Phi, delta, Omega, epsilon [rad]
 REFERENCE = np.array([0.1581077119629904e+2, -0.1575637105984298e+2, 0.4082224013073101e-1,

@@ -27,9 +27,9 @@ import argparse
 import numpy as np
 
 import mbd3d as mb
-from joints import Revolute
+from mbd3d.joints import Revolute
 from mbd3d.mechanisms import frame_along
-from viewer import record
+from mbd3d.viewer import record
 
 #: the loop's corners P1..P6 and hinge axes; rod k joins P_k and P_(k+1), the ground P6 and P1
 CORNERS = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1]], float)

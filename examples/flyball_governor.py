@@ -30,8 +30,8 @@ import argparse
 import numpy as np
 
 import mbd3d as mb
-from joints import Distance, Prismatic, Revolute
-from viewer import record
+from mbd3d.joints import Distance, Prismatic, Revolute
+from mbd3d.viewer import record
 
 SPIN = 2 * np.pi                 # initial speed of the shaft [rad/s]
 ALPHA = np.radians(30.0)         # arms below the horizontal at t = 0

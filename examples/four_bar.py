@@ -19,7 +19,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import four_bar
-from viewer import record
+from mbd3d.viewer import record
 
 
 def main(n_points: int = 241, rrd: str | None = None, show: bool = False) -> mb.Results:

@@ -24,8 +24,8 @@ import argparse
 import numpy as np
 
 import mbd3d as mb
-from joints import PointOnLine, Revolute
-from viewer import record
+from mbd3d.joints import PointOnLine, Revolute
+from mbd3d.viewer import record
 
 A = 0.5  # crank length, pivot to crank pin [m]
 

@@ -28,8 +28,8 @@ import pathlib
 import numpy as np
 
 import mbd3d as mb
-from joints import Revolute
-from viewer import record
+from mbd3d.joints import Revolute
+from mbd3d.viewer import record
 
 REFERENCE = (pathlib.Path(__file__).resolve().parent.parent.parent / "shared" /
              "validation-data" / "iftomm_A02_n_four_bar_B0.txt")

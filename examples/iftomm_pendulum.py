@@ -26,8 +26,8 @@ import pathlib
 import numpy as np
 
 import mbd3d as mb
-from joints import Distance
-from viewer import record
+from mbd3d.joints import Distance
+from mbd3d.viewer import record
 
 REFERENCE = (pathlib.Path(__file__).resolve().parent.parent.parent / "shared" /
              "validation-data" / "iftomm_A01_simple_pendulum_P1.txt")

@@ -23,8 +23,8 @@ import numpy as np
 import trimesh
 
 import mbd3d as mb
-from joints import Fixed, Revolute
-from viewer import record
+from mbd3d.joints import Fixed, Revolute
+from mbd3d.viewer import record
 
 STEEL = 7850.0  # kg/m^3
 

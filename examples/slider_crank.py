@@ -26,7 +26,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import slider_crank
-from viewer import record
+from mbd3d.viewer import record
 
 
 def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,

@@ -18,7 +18,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import spatial_four_bar
-from viewer import record
+from mbd3d.viewer import record
 
 
 def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:

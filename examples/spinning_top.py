@@ -21,8 +21,8 @@ import trimesh
 
 import mbd3d as mb
 from mbd3d import rotations
-from joints import Spherical
-from viewer import record
+from mbd3d.joints import Spherical
+from mbd3d.viewer import record
 
 
 def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,

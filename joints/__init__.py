@@ -13,12 +13,12 @@ against the body kinematics, so the same classes serve every body type that supp
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 
-from joints.distance import Distance
-from joints.drivers import CoordinateDriver, RotationDriver, TranslationDriver
-from joints.fixed import Fixed
-from joints.prismatic import Prismatic
-from joints.revolute import Revolute
-from joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
+from mbd3d.joints.distance import Distance
+from mbd3d.joints.drivers import CoordinateDriver, RotationDriver, TranslationDriver
+from mbd3d.joints.fixed import Fixed
+from mbd3d.joints.prismatic import Prismatic
+from mbd3d.joints.revolute import Revolute
+from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
                                    Universal)
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",

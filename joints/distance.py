@@ -12,7 +12,7 @@ from mbd3d.errors import ModelError
 from mbd3d.forces import resolve_point
 from mbd3d.model import BuildContext
 
-from joints.base import Joint
+from mbd3d.joints.base import Joint
 
 
 class Distance(Joint):

@@ -17,9 +17,9 @@ from mbd3d.errors import ModelError
 from mbd3d.model import BuildContext
 from mbd3d.motion import Motion, as_motion
 
-from joints.base import Axes
-from joints.prismatic import Prismatic
-from joints.revolute import Revolute
+from mbd3d.joints.base import Axes
+from mbd3d.joints.prismatic import Prismatic
+from mbd3d.joints.revolute import Revolute
 
 
 class CoordinateDriver(ConstraintElement):

@@ -7,7 +7,7 @@ import numpy as np
 from mbd3d.element import PrimitiveSpec
 from mbd3d.model import BuildContext
 
-from joints.base import Axes, Joint, perpendicular_rows
+from mbd3d.joints.base import Axes, Joint, perpendicular_rows
 
 
 class Fixed(Joint):

@@ -10,7 +10,7 @@ from mbd3d.body import Body
 from mbd3d.element import PrimitiveSpec
 from mbd3d.model import BuildContext
 
-from joints.base import Axes, Joint, perpendicular, perpendicular_rows
+from mbd3d.joints.base import Axes, Joint, perpendicular, perpendicular_rows
 
 
 class Prismatic(Joint):

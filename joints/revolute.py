@@ -8,7 +8,7 @@ from mbd3d.body import Body
 from mbd3d.element import PrimitiveSpec
 from mbd3d.model import BuildContext
 
-from joints.base import Axes, Joint, perpendicular_rows
+from mbd3d.joints.base import Axes, Joint, perpendicular_rows
 
 
 class Revolute(Joint):
@@ -38,7 +38,7 @@ class Revolute(Joint):
     Examples
     --------
     >>> import mbd3d as mb
-    >>> from joints import Revolute
+    >>> from mbd3d.joints import Revolute
     >>> b = mb.ModelBuilder(dim=2)
     >>> crank = b.add_body("crank", mass=1.0, inertia=0.01, position=(0.05, 0.0))
     >>> pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))

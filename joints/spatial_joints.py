@@ -13,7 +13,7 @@ from mbd3d.element import PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.model import BuildContext
 
-from joints.base import Axes, Joint, perpendicular, perpendicular_rows, require_spatial
+from mbd3d.joints.base import Axes, Joint, perpendicular, perpendicular_rows, require_spatial
 
 
 class Spherical(Joint):

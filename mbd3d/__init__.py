@@ -1,11 +1,11 @@
 """mbd3d: kinematic and dynamic analysis of planar and spatial mechanisms in absolute coordinates.
 
-Build a model with :class:`ModelBuilder` (bodies here, joints and drivers from the ``joints``
-package, forces from here), then run an analysis; every analysis returns a :class:`Results`.
+Build a model with :class:`ModelBuilder` (bodies here, joints and drivers from
+:mod:`mbd3d.joints`, forces from here), then run an analysis; every analysis returns a :class:`Results`.
 
 >>> import numpy as np
 >>> import mbd3d as mb
->>> from joints import Revolute, RotationDriver
+>>> from mbd3d.joints import Revolute, RotationDriver
 >>> b = mb.ModelBuilder(dim=2)
 >>> crank = b.add_body("crank", mass=1.0, inertia=0.01, position=(0.05, 0.0))
 >>> pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
@@ -15,7 +15,11 @@ package, forces from here), then run an analysis; every analysis returns a :clas
 6.283185
 """
 
-from mbd3d import rotations
+from mbd3d._checkout import map_siblings as _map_siblings
+
+_map_siblings(__path__[0])
+
+from mbd3d import rotations  # noqa: E402 (the sub-packages are found from here on)
 from mbd3d.body import Body
 from mbd3d.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
 from mbd3d.equations import kinetic_energy, potential_energy

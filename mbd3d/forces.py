@@ -430,7 +430,7 @@ class _RotationalSprings(_SpringGroup):
         super().__init__(elements, ctx)
         self.planar = ctx.dim == 2
         if not self.planar:
-            from joints.drivers import hinge_directions
+            from mbd3d.joints.drivers import hinge_directions
             vectors = []
             for e in elements:
                 if e.joint is None:

@@ -55,7 +55,7 @@ def slider_crank(*, crank_length: float = 0.12, rod_length: float = 0.26,
     gravity : float
         [m/s^2] along -y.
     """
-    from joints import Prismatic, Revolute, RotationDriver
+    from mbd3d.joints import Prismatic, Revolute, RotationDriver
 
     L1, L2 = crank_length, rod_length
     if not (L1 > 0 and L2 > 0):
@@ -99,7 +99,7 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
     ``crank_torque`` [N m] (force element ``torque``). Assembled with the open configuration
     (B above the line O4-A).
     """
-    from joints import Revolute, RotationDriver
+    from mbd3d.joints import Revolute, RotationDriver
 
     a = crank_length * np.array([math.cos(crank_angle), math.sin(crank_angle)])
     o4 = np.array([ground_length, 0.0])
@@ -141,7 +141,7 @@ def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float =
 
     Bodies ``link1`` ... ``linkN``; revolutes ``pin1`` (ground) ... ``pinN``.
     """
-    from joints import Revolute
+    from mbd3d.joints import Revolute
 
     L, m = link_length, link_mass
     b = ModelBuilder(dim=2, gravity=(0.0, -gravity), name=f"{n_links}-link chain")
@@ -181,7 +181,7 @@ def spatial_slider_crank(*, crank_length: float = 0.10, rod_length: float = 0.30
     [rad/s] (None: none). Gravity along -z. Closed form of the slider position:
     ``x = r cos(phi) + sqrt(l^2 - e^2 - (d - r sin(phi))^2)``.
     """
-    from joints import Prismatic, Revolute, RotationDriver, Spherical, Universal
+    from mbd3d.joints import Prismatic, Revolute, RotationDriver, Spherical, Universal
 
     r, l, d, e = crank_length, rod_length, offset_y, offset_z
     a = r * np.array([math.cos(crank_angle), math.sin(crank_angle), 0.0])
@@ -220,7 +220,7 @@ def spatial_four_bar(*, all_revolute: bool = False, crank_speed: float | None = 
     revolutes only moves when its axes meet Bennett's conditions, so this one is rigid, and
     :func:`mbd3d.mobility` reports 0 degrees of freedom with 2 redundant rows.
     """
-    from joints import Revolute, RotationDriver, Spherical, Universal
+    from mbd3d.joints import Revolute, RotationDriver, Spherical, Universal
 
     o4 = np.array([0.25, 0.0, 0.1])
     a = np.array([0.08, 0.0, 0.0])
@@ -257,7 +257,7 @@ def spatial_chain(n_links: int, *, link_length: float = 1.0, link_mass: float = 
                   gravity: float = 9.81, sparse: bool | None = None) -> Model:
     """A chain of ``n_links`` uniform bars joined by ball joints, the first to the ground at the
     origin, laid along x; gravity along -z. Bodies ``link1`` ...; joints ``ball1`` ...."""
-    from joints import Spherical
+    from mbd3d.joints import Spherical
 
     L, m = link_length, link_mass
     builder = ModelBuilder(dim=3, gravity=(0.0, 0.0, -gravity), name=f"{n_links}-link spatial chain")

@@ -36,7 +36,7 @@ SPARSE_THRESHOLD = 48
 
 def _body_type(dim: int) -> BodyType:
     if dim == 2:
-        from planar.body import PlanarBody
+        from mbd3d.planar.body import PlanarBody
         return PlanarBody()
     if dim == 3:
         from mbd3d.spatial import SpatialBody
@@ -144,7 +144,7 @@ class ModelBuilder:
     Examples
     --------
     >>> import mbd3d as mb
-    >>> from joints import Revolute
+    >>> from mbd3d.joints import Revolute
     >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     >>> bar = b.add_body("bar", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))
     >>> _ = b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))

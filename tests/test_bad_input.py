@@ -10,7 +10,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d.mechanisms import pendulum_chain, slider_crank
-from joints import (CoordinateDriver, Distance, Prismatic, Revolute, RotationDriver,
+from mbd3d.joints import (CoordinateDriver, Distance, Prismatic, Revolute, RotationDriver,
                     TranslationDriver)
 
 

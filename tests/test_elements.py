@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbd3d as mb
-from joints import CoordinateDriver, Distance, Fixed, Prismatic, Revolute, TranslationDriver
+from mbd3d.joints import CoordinateDriver, Distance, Fixed, Prismatic, Revolute, TranslationDriver
 from mbd3d.mechanisms import slider_crank
 
 G = 9.81

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from slider_crank_oracle import SliderCrankOracle
-from viewer import entity_paths, read_component
+from mbd3d.viewer import entity_paths, read_component
 
 EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
 

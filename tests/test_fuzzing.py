@@ -22,7 +22,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import given, strategies as st  # noqa: E402
 
 import mbd3d as mb  # noqa: E402
-from joints import Prismatic, Revolute, Spherical  # noqa: E402
+from mbd3d.joints import Prismatic, Revolute, Spherical  # noqa: E402
 
 finite = st.floats(min_value=-3.0, max_value=3.0, allow_nan=False, allow_infinity=False)
 
@@ -152,7 +152,7 @@ def test_broken_input_is_refused_naming_the_culprit(field, bad, dim):
             elif field == "name":
                 b.add_body("crank", mass=1.0, inertia=1.0 if dim == 2 else (1, 1, 1), position=zero)
             elif field == "length":
-                from joints import Distance
+                from mbd3d.joints import Distance
                 b.add(Distance("pivot", b.ground, body, point_i=zero, point_j=zero, length=bad))
                 b.build()
             else:

@@ -71,7 +71,7 @@ def test_banded_factors_give_the_determinant_and_refuse_singular_matrices():
 def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):
     """A spring from the first link to the last couples coordinates far outside the chain's
     band: the iteration matrix then goes to SuperLU, and the motion equals the dense run's."""
-    from joints import Revolute
+    from mbd3d.joints import Revolute
 
     def chain(sparse):
         b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))

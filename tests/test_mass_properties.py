@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 import mbd3d as mb
-from joints import Revolute
+from mbd3d.joints import Revolute
 from mbd3d.mass_properties import mesh_properties
 
 

@@ -55,7 +55,7 @@ def test_spring_actuator_adds_tension():
     m = 2.0
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     mass = b.add_body("mass", mass=m, inertia=0.1, position=(0.0, -1.0))
-    from joints import Prismatic
+    from mbd3d.joints import Prismatic
     b.add(Prismatic("guide", b.ground, mass, axis=(0.0, 1.0)))
     b.add(mb.SpringDamper("jack", b.ground, mass, at_i=(0.0, 0.0), stiffness=100.0,
                           damping=1.0, actuator=lambda t: m * 9.81))

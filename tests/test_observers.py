@@ -52,7 +52,7 @@ def test_failing_force_keeps_results_and_tells_observers():
     log = Log()
     model_b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     bar = model_b.add_body("bar", mass=1.0, inertia=0.1, position=(0.5, 0.0))
-    from joints import Revolute
+    from mbd3d.joints import Revolute
     model_b.add(Revolute("pin", model_b.ground, bar, at=(0.0, 0.0)))
 
     def push(t):

@@ -38,7 +38,7 @@ def test_double_pendulum_matches_minimal_equations():
     L1, L2, m1, m2 = 1.0, 0.7, 1.5, 0.8
     I1, I2 = m1 * L1**2 / 12, m2 * L2**2 / 12
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
-    from joints import Revolute
+    from mbd3d.joints import Revolute
     th1, th2 = 0.3, -0.4
     p1 = 0.5 * L1 * np.array([math.cos(th1), math.sin(th1)])
     a = 2 * p1

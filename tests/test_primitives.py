@@ -13,7 +13,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d import constraints
-from joints import Distance, Fixed, PointOnLine, Prismatic, Revolute, RotationDriver
+from mbd3d.joints import Distance, Fixed, PointOnLine, Prismatic, Revolute, RotationDriver
 
 
 def random_model(seed: int):

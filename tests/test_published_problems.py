@@ -231,7 +231,7 @@ def test_a_collapsed_explicit_step_is_put_down_to_a_singular_position_only_where
     three pins depend on each other (a locked chain), so an explicit step that cannot be
     taken there is reported as a singular position with its joints; for a simple pendulum,
     whose Jacobian is regular, the failure stays an IntegrationError."""
-    from joints import Revolute
+    from mbd3d.joints import Revolute
     from mbd3d.dynamics import _step_failure
 
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
-from joints import Revolute
+from mbd3d.joints import Revolute
 from mbd3d.mechanisms import pendulum_chain, slider_crank
 
 

@@ -14,7 +14,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d.mechanisms import slider_crank, slider_crank_positions
-from joints import Prismatic, Revolute, RotationDriver
+from mbd3d.joints import Prismatic, Revolute, RotationDriver
 
 from slider_crank_oracle import SliderCrankOracle
 

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 import mbd3d as mb
 from mbd3d import constraints
 from mbd3d.mechanisms import slider_crank, slider_crank_positions
-from joints import CoordinateDriver, Prismatic, Revolute, RotationDriver, Spherical, Universal
+from mbd3d.joints import CoordinateDriver, Prismatic, Revolute, RotationDriver, Spherical, Universal
 
 
 def driven_pair(seed: int):
@@ -179,7 +179,7 @@ def test_all_revolute_spatial_four_bar_reports_its_redundancy():
 
 
 def test_translation_driver_and_joint_axes_reactions_in_space():
-    from joints import TranslationDriver
+    from mbd3d.joints import TranslationDriver
     m, g = 3.0, np.array([0.0, 0.0, -9.81])
     axis = np.array([2.0, -1.0, 2.0]) / 3.0
     b = mb.ModelBuilder(dim=3, gravity=g)

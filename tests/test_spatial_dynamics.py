@@ -17,7 +17,7 @@ from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
 from mbd3d.mechanisms import (pendulum_chain, slider_crank, slider_crank_positions,
                               spatial_four_bar)
-from joints import Prismatic, Revolute, Spherical, Universal
+from mbd3d.joints import Prismatic, Revolute, Spherical, Universal
 
 G = 9.81
 
@@ -224,7 +224,7 @@ def spatial_four_bar_in_plane(planar: mb.Results, driven: bool, torque: float = 
     """The four-bar of mbd3d.mechanisms.four_bar rebuilt with spatial bodies, hinges along z and
     a universal and a ball joint on the coupler, or (``revolutes_only``) four revolutes: then
     3 of the 21 equations are redundant. The drawing is read from the planar results at t = 0."""
-    from joints import RotationDriver
+    from mbd3d.joints import RotationDriver
     planar_model = planar.model
     o2, o4 = np.zeros(2), np.array([0.30, 0.0])
     a = planar.point("crank", (0.05, 0.0)).position[0]

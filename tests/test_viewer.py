@@ -21,8 +21,8 @@ from rerun.chunk import RrdReader
 
 import mbd3d as mb
 from mbd3d.mechanisms import pendulum_chain, slider_crank
-from joints import Spherical
-from viewer import Recorder, RecordingError, entity_paths, read_component, record, rerun_executable
+from mbd3d.joints import Spherical
+from mbd3d.viewer import Recorder, RecordingError, entity_paths, read_component, record, rerun_executable
 
 
 @pytest.fixture(autouse=True)
@@ -170,7 +170,7 @@ def test_live_recording_equals_the_recording_of_the_results(tmp_path):
 def test_a_run_that_fails_or_is_interrupted_leaves_a_valid_recording(tmp_path, error):
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     bar = b.add_body("bar", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))
-    from joints import Revolute
+    from mbd3d.joints import Revolute
     b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
     b.add(mb.PointForce("push", bar, raising_force(0.3, error)))
     path = tmp_path / "broken.rrd"

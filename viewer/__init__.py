@@ -2,7 +2,7 @@
 
 Usage::
 
-    from viewer import Recorder, record, show
+    from mbd3d.viewer import Recorder, record, show
     res = mb.forward_dynamics(model, t, observers=[Recorder("run.rrd")])   # live, to a file
     record(res, "again.rrd")                                               # finished results
     show("run.rrd")                                    # opens the viewer (needs a display)
@@ -12,9 +12,9 @@ reaction and effort arrows, point trails); the plots of the kinematic and force 
 energies and the constraint residuals are on the right.
 """
 
-from viewer.readback import entity_paths, read_component
-from viewer.recorder import Recorder, RecordingError, record, rerun_executable, show
-from viewer.scene import SIM_TIME, STEP
+from mbd3d.viewer.readback import entity_paths, read_component
+from mbd3d.viewer.recorder import Recorder, RecordingError, record, rerun_executable, show
+from mbd3d.viewer.scene import SIM_TIME, STEP
 
 __all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable", "entity_paths",
            "read_component", "SIM_TIME", "STEP"]

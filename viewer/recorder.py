@@ -35,7 +35,7 @@ import numpy as np
 from mbd3d.errors import MBDError, ModelError
 from mbd3d.observers import Observer
 from mbd3d.results import Results
-from viewer.scene import Scene, _rerun
+from mbd3d.viewer.scene import Scene, _rerun
 
 __all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable"]
 

@@ -12,12 +12,12 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from joints import CoordinateDriver, Prismatic, RotationDriver, TranslationDriver
+from mbd3d.joints import CoordinateDriver, Prismatic, RotationDriver, TranslationDriver
 from mbd3d.errors import ModelError
 from mbd3d.forces import SpringDamper
 from mbd3d.results import Results
 from mbd3d.mass_properties import load_mesh
-from viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
+from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
                            initial_points, model_size)
 
 __all__ = ["Scene", "SIM_TIME", "STEP"]

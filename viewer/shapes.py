@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from joints import Prismatic
+from mbd3d.joints import Prismatic
 from mbd3d.body import Body
 from mbd3d.forces import SpringDamper
 from mbd3d.model import Model
