@@ -7,8 +7,9 @@ relative angles; here it is built as a user would, from 7 rigid bodies, 10 revol
 spring to the ground and a torque, and the angles at t = 0.03 s are compared with the published
 reference (PSIDE at tolerance 1e-14).
 
-Data: ../shared/validation.md, section 2 (parameters 2.1, bodies and joint points 2.3, initial
-values 2.4, reference 2.5).
+Data: E. Hairer, G. Wanner, *Solving Ordinary Differential Equations II*, 2nd ed., Springer
+1996, section VII.7, and the Test Set for IVP Solvers (University of Bari), problem "andrews":
+parameters, joint points, consistent initial values and the reference solution at 0.03 s.
 
 Recorded to andrews_squeezer.rrd: rerun andrews_squeezer.rrd
 

@@ -13,7 +13,8 @@ No reference series exists; the check is conservation of mechanical energy (Exud
 MBS-BOS do the same), printed with the constraint residuals.
 
 Source: IFToMM / MBS benchmark library, problem A04 (M. Gonzalez et al., Univ. of A Coruna);
-geometry as in MBS-BOS and Exudyn, ../shared/validation.md, section 1.4.
+geometry as in MBS-BOS (the benchmarks in OpenSim, RehabEngGroup/MBSbenchmarksInOpenSim) and
+Exudyn's test model bricardMechanism.py.
 
 Recorded to bricard.rrd: rerun bricard.rrd
 

@@ -16,7 +16,8 @@ is conserved but for the millijoules the dampers take, and the governor moves as
 governor with rigid couplers (Distance links instead of the springs, integrated by DOP853)
 does, to the springs' compliance.
 
-Data: ../shared/validation.md, section 1.5 (MBS-BOS A05; the free-shaft variant).
+Data: IFToMM / MBS benchmark library, problem A05, as built in MBS-BOS (the benchmarks in
+OpenSim, RehabEngGroup/MBSbenchmarksInOpenSim, A05_FlyballGovernor); the free-shaft variant.
 
 Recorded to flyball_governor.rrd: rerun flyball_governor.rrd
 

@@ -5,14 +5,14 @@ N parallelogram four-bars share their cranks: N + 1 vertical cranks (1 m, 1 kg, 
 first crank's top B0 moving at 1 m/s along +x, gravity 9.81 m/s^2 along -y. Every time the
 cranks lie flat all bodies are on one line: the constraint Jacobian loses N ranks and the
 mechanism could leave its parallelogram branch. The benchmark asks for B0 over 20 s within
-1e-3 m of its ADAMS reference series (N = 40, in ../shared/validation-data/).
+1e-3 m of its ADAMS reference series (N = 40, in examples/data/).
 
 Integrated by the implicit index-3 generalized-alpha method (``method="generalized-alpha"``),
 whose Newton iteration matrix stays regular where the Jacobian loses rank; the explicit
 index-1 methods stop at the first flat position with a SingularJacobianError naming the joints.
 
 Source: IFToMM / MBS benchmark library, problem A02 (M. Gonzalez et al., Univ. of A Coruna);
-../shared/validation.md, section 1.2.
+the reference series and its source: examples/data/README.md.
 
 Recorded to iftomm_four_bar.rrd: rerun iftomm_four_bar.rrd
 
@@ -31,8 +31,8 @@ import mbd3d as mb
 from mbd3d.joints import Revolute
 from mbd3d.viewer import record
 
-REFERENCE = (pathlib.Path(__file__).resolve().parent.parent.parent / "shared" /
-             "validation-data" / "iftomm_A02_n_four_bar_B0.txt")
+#: the benchmark\'s reference series, with its source in data/README.md
+REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A02_n_four_bar_B0.txt"
 
 
 def build(bars: int) -> mb.Model:

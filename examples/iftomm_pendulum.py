@@ -3,14 +3,14 @@
 A 1 kg point mass on a massless 1 m link, pinned at the origin, released from rest with the
 link horizontal (x = -1 m, as the reference file starts), gravity 9.81 m/s^2 along -y. The
 benchmark asks for the mass's x and y every 0.5 s for 2000 s (about 845 swings) within 1e-3 m
-("high precision"); its reference series is in ../shared/validation-data/. The script prints the
+("high precision"); its reference series is in examples/data/. The script prints the
 largest error against it and the drift of the total energy (zero at the start).
 
 Built as a user would: the mass is a body whose inertia does not matter (the link holds it by
 its centre, so nothing turns it) and the link a Distance joint.
 
 Source: IFToMM / MBS benchmark library, problem A01 (M. Gonzalez et al., Univ. of A Coruna);
-../shared/validation.md, section 1.1.
+the reference series and its source: examples/data/README.md.
 
 Recorded to iftomm_pendulum.rrd: rerun iftomm_pendulum.rrd
 
@@ -29,8 +29,8 @@ import mbd3d as mb
 from mbd3d.joints import Distance
 from mbd3d.viewer import record
 
-REFERENCE = (pathlib.Path(__file__).resolve().parent.parent.parent / "shared" /
-             "validation-data" / "iftomm_A01_simple_pendulum_P1.txt")
+#: the benchmark\'s reference series, with its source in data/README.md
+REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A01_simple_pendulum_P1.txt"
 
 
 def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,

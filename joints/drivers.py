@@ -44,6 +44,11 @@ class CoordinateDriver(ConstraintElement):
         self.coordinate = coordinate
         self.motion = as_motion(motion, f"driver '{name}': motion")
 
+    @property
+    def effort_unit(self) -> str:
+        """Unit of the effort: a torque [N m] on an angle, a force [N] on a position."""
+        return "N m" if self.coordinate in ("theta", 2) else "N"
+
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         names = ctx.body_type.coordinate_names
         c = self.coordinate
@@ -88,6 +93,8 @@ class RotationDriver(ConstraintElement):
     """
 
     is_driver = True
+    #: the effort is the torque about the hinge
+    effort_unit = "N m"
 
     def __init__(self, name: str, joint: Revolute | Body, body_j: Body | None = None, *,
                  motion: Motion | float):
@@ -153,6 +160,8 @@ class TranslationDriver(ConstraintElement):
     """
 
     is_driver = True
+    #: the effort is the force along the slider
+    effort_unit = "N"
 
     def __init__(self, name: str, joint: Prismatic, *, motion: Motion | float):
         if not isinstance(joint, Prismatic):

@@ -1,6 +1,6 @@
 """What a constraint element (joint or driver) must tell the model builder.
 
-Joints live in the top-level ``joints`` package; they derive from :class:`ConstraintElement` and
+Joints live in :mod:`mbd3d.joints`; they derive from :class:`ConstraintElement` and
 describe themselves as a list of :class:`PrimitiveSpec` (see :mod:`mbd3d.primitives`).
 """
 
@@ -61,6 +61,8 @@ class ConstraintElement(ABC):
     body_j: Body
     #: drivers report an ``effort``; joints report reactions only
     is_driver: bool = False
+    #: drivers: the unit of the effort ("N m" for a torque, "N" for a force)
+    effort_unit: str = ""
 
     @abstractmethod
     def primitives(self, ctx: "BuildContext") -> list[PrimitiveSpec]:

@@ -6,7 +6,7 @@ functions below, ``c0`` a constant of the row (a distance, a relative angle of t
 :class:`mbd3d.body.BodyType` only, so the same code serves planar and spatial bodies.
 
 Conventions (Haug, *Computer-Aided Kinematics and Dynamics of Mechanical Systems*, 1989; verified
-in Rodrigues coordinates in ``shared/rodrigues.md`` section 4): bodies ``i`` and ``j``,
+in Rodrigues coordinates by ``tests/test_spatial_primitives.py``): bodies ``i`` and ``j``,
 ``d = r_j - r_i``, ``a = A v`` body vectors, and ``gamma = -(Cq qd)_q qd`` is the
 velocity-dependent right-hand side of the acceleration equation (drivers add ``f''`` separately).
 

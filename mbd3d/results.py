@@ -14,14 +14,14 @@ force [N] for a translation driver).
 
 from __future__ import annotations
 
+import csv
 import os
-import tempfile
 from dataclasses import dataclass
 from typing import Any, BinaryIO, Callable, Sequence
 
 import numpy as np
 
-from mbd3d import history
+from mbd3d import files, history
 from mbd3d.body import Body
 from mbd3d.errors import MBDError, ModelError
 from mbd3d.rotations import continuous_quaternions, to_quaternion
@@ -73,11 +73,32 @@ class BodyHistory:
 
 @dataclass(frozen=True)
 class PointHistory:
-    """Trajectory of a body point: global position [m], velocity [m/s], acceleration [m/s^2]."""
+    """Trajectory of a body point in global axes: ``position`` [m], ``velocity`` [m/s] and
+    ``acceleration`` [m/s^2], each (k, dim).
+
+    Indexing and NumPy see the positions, the common use: ``p[:, 0]`` is the x coordinate
+    over time and ``np.asarray(p)`` the (k, dim) positions.
+
+    >>> import numpy as np, mbd3d as mb
+    >>> from mbd3d.mechanisms import slider_crank
+    >>> res = mb.kinematic_analysis(slider_crank(crank_speed=1.0), np.linspace(0.0, 1.0, 3))
+    >>> tip = res.point("crank", (0.06, 0.0))
+    >>> np.array_equal(tip[:, 1], tip.position[:, 1]), len(tip), np.asarray(tip).shape
+    (True, 3, (3, 2))
+    """
 
     position: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
+
+    def __getitem__(self, index):
+        return self.position[index]
+
+    def __len__(self) -> int:
+        return len(self.position)
+
+    def __array__(self, dtype=None, copy=None):
+        return np.asarray(self.position, dtype=dtype)
 
 
 @dataclass(frozen=True)
@@ -107,7 +128,8 @@ class JointHistory:
 
     @property
     def effort(self) -> np.ndarray:
-        """Driver effort ``-lam`` [N m or N], (k,): what the actuator must supply."""
+        """Driver effort ``-lam``, (k,): the torque [N m] or force [N] the actuator must
+        supply in the direction of its coordinate (``element.effort_unit``)."""
         if not self.element.is_driver:
             raise ModelError(f"'{self.name}' is a joint, not a driver; it has reactions, not an "
                              "effort (use .reaction(on=...))")
@@ -251,7 +273,9 @@ class Results:
         return position, to_quaternion(A).reshape(k, nb, 4)
 
     def point(self, body: str, point: Sequence[float]) -> PointHistory:
-        """Trajectory of the point ``point`` [m] (body frame) of body ``body``."""
+        """Trajectory of the point ``point`` [m] (body frame) of body ``body``: its global
+        ``.position`` [m], ``.velocity`` [m/s] and ``.acceleration`` [m/s^2]; indexing the
+        history indexes the positions."""
         b = self.model.body(body)
         u = np.asarray(point, dtype=float).reshape(-1)
         if u.size != self.model.dim or not np.all(np.isfinite(u)):
@@ -373,37 +397,107 @@ class Results:
         return self._compute_energies()[1]
 
     # -- export ----------------------------------------------------------------------------------
-    def columns(self) -> dict[str, np.ndarray]:
-        """All time histories as named columns (the CSV layout).
+    def _export_columns(self) -> list[tuple[str, str, np.ndarray]]:
+        """``(name, unit, values)`` of every exported time history (see :meth:`columns`)."""
+        out: list[tuple[str, str, np.ndarray]] = []
+        planar = self.model.dim == 2
+        axes = "xy" if planar else "xyz"
+        for b in self.model.bodies:
+            h = self.body(b.name)
+            for label, unit, arr in (("", "m", h.position), ("v", "m/s", h.velocity),
+                                     ("a", "m/s^2", h.acceleration)):
+                out += [(f"{b.name}.{label}{c}", unit, arr[:, k]) for k, c in enumerate(axes)]
+            if planar:
+                out += [(f"{b.name}.angle", "rad", h.angle),
+                        (f"{b.name}.omega", "rad/s", h.angular_velocity),
+                        (f"{b.name}.alpha", "rad/s^2", h.angular_acceleration)]
+            else:
+                out += [(f"{b.name}.q{c}", "-", h.quaternion[:, k]) for k, c in enumerate("wxyz")]
+                out += [(f"{b.name}.omega_{c}", "rad/s", h.angular_velocity[:, k])
+                        for k, c in enumerate(axes)]
+                out += [(f"{b.name}.alpha_{c}", "rad/s^2", h.angular_acceleration[:, k])
+                        for k, c in enumerate(axes)]
+        if self.lam is None:
+            return out
+        for element in self.model.joints:
+            if element.is_driver:
+                out.append((f"{element.name}.effort", element.effort_unit, self.joint(
+                    element.name).effort))
+                continue
+            on = element.body_i if element.body_j.is_ground else element.body_j
+            r = self.joint(element.name).reaction(on=on)
+            out += [(f"{element.name}.F{c} on {on.name}", "N", r.force[:, k])
+                    for k, c in enumerate(axes)]
+            if planar:
+                out.append((f"{element.name}.M on {on.name}", "N m", r.moment))
+            else:
+                out += [(f"{element.name}.M{c} on {on.name}", "N m", r.moment[:, k])
+                        for k, c in enumerate(axes)]
+        return out
 
-        ``t``; ``body.c``, ``body.c_dot``, ``body.c_ddot`` for every coordinate; with
-        multipliers, ``joint.row.lam`` for every constraint row and ``driver.effort``.
+    def columns(self) -> dict[str, np.ndarray]:
+        """All time histories as named columns with their units, the layout of :meth:`to_csv`
+        and :meth:`to_pandas`.
+
+        ``t [s]``; for every body, the centre of mass ``body.x [m]``, its velocity
+        ``body.vx [m/s]`` and acceleration ``body.ax [m/s^2]`` (global axes), and the
+        orientation: planar ``body.angle [rad]``, ``body.omega [rad/s]``, ``body.alpha
+        [rad/s^2]``; spatial the unit quaternion ``body.qw`` ... ``body.qz`` (sign kept
+        continuous) and the angular velocity and acceleration in global axes. With multipliers
+        (dynamics), every driver's ``effort`` [N m or N] and every joint's reaction as the
+        printed tables show it: the force ``joint.Fx on body [N]`` and the moment ``joint.M on
+        body [N m]`` (about the joint's point) that the joint exerts on its moving body, global
+        axes. The raw coordinates and multipliers are in :meth:`to_npz`.
+
+        Examples
+        --------
+        >>> import numpy as np, mbd3d as mb
+        >>> from mbd3d.mechanisms import slider_crank
+        >>> res = mb.inverse_dynamics(slider_crank(crank_speed=1.0), np.linspace(0.0, 0.1, 3))
+        >>> [c for c in res.columns() if c.startswith(("slider.x", "O.F", "motor"))]
+        ['slider.x [m]', 'O.Fx on crank [N]', 'O.Fy on crank [N]', 'motor.effort [N m]']
         """
-        cols: dict[str, np.ndarray] = {"t": self.t}
-        labels = self.model.coordinate_labels
-        for suffix, arr in (("", self.q), ("_dot", self.qd), ("_ddot", self.qdd)):
-            for j, label in enumerate(labels):
-                cols[f"{label}{suffix}"] = arr[:, j]
-        if self.lam is not None:
-            for j, label in enumerate(self.model.row_labels):
-                cols[f"{label}.lam"] = self.lam[:, j]
-            for name, effort in self.efforts.items():
-                cols[f"{name}.effort"] = effort
+        cols: dict[str, np.ndarray] = {"t [s]": self.t}
+        for name, unit, values in self._export_columns():
+            cols[f"{name} [{unit}]"] = values
         return cols
 
-    def to_csv(self, path: str | os.PathLike) -> None:
-        """Write every time history to a CSV file (one row per time point, header of names)."""
+    def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
+        """Write :meth:`columns` to a CSV file: a header of names with units, then one row per
+        time point, every number to full double precision.
+
+        Names are quoted by the csv module where they hold commas, quotes or line breaks, so
+        any body or joint name reads back. The file is checked before it is written and written
+        atomically (see :mod:`mbd3d.files`). Returns the absolute path written.
+        """
         cols = self.columns()
         data = np.column_stack(list(cols.values())) if len(self.t) else np.zeros((0, len(cols)))
-        header = ",".join(cols)
 
         def write(f):
-            np.savetxt(f, data, delimiter=",", header=header, comments="", fmt="%.17g")
-        _atomic_write(path, write, text=True)
+            writer = csv.writer(f, lineterminator="\n")
+            writer.writerow(cols)
+            writer.writerows([repr(float(x)) for x in row] for row in data)
+        return files.atomic_write(path, write, text=True, overwrite=overwrite,
+                                  what="the CSV file")
 
-    def to_npz(self, path: str | os.PathLike | BinaryIO) -> None:
-        """Write the arrays and their labels to a compressed NumPy ``.npz`` file (a path,
-        written atomically, or an open binary file)."""
+    def to_pandas(self):
+        """The :meth:`columns` as a ``pandas.DataFrame`` indexed by time ``t [s]``.
+
+        Column names carry their units, as in the CSV; ``df.attrs["units"]`` maps each column
+        to its unit alone. Needs pandas (``pip install "mbd3d[pandas]"``).
+        """
+        pd = _import_pandas()
+        cols = self.columns()
+        t = cols.pop("t [s]")
+        df = pd.DataFrame(cols, index=pd.Index(t, name="t [s]"))
+        df.attrs["units"] = {label: label[label.rindex("[") + 1:-1] for label in df.columns}
+        df.attrs["analysis"], df.attrs["model"] = self.analysis, self.model.name
+        return df
+
+    def to_npz(self, path: str | os.PathLike | BinaryIO, overwrite: bool = True) -> str | None:
+        """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``) and their
+        labels to a compressed NumPy ``.npz`` file: a path (checked, then written atomically;
+        its absolute path is returned) or an open binary file."""
         arrays = dict(t=self.t, q=self.q, qd=self.qd, qdd=self.qdd,
                       coordinate_labels=np.array(self.model.coordinate_labels),
                       row_labels=np.array(self.model.row_labels),
@@ -418,8 +512,19 @@ class Results:
             np.savez_compressed(f, **arrays)
         if hasattr(path, "write"):
             write(path)
-        else:
-            _atomic_write(path, write, text=False)
+            return None
+        return files.atomic_write(path, write, text=False, overwrite=overwrite,
+                                  what="the NPZ file")
+
+
+def _import_pandas():
+    """pandas, or an error that says how to get it (it is an optional extra)."""
+    try:
+        import pandas  # noqa: PLC0415  (optional)
+    except ImportError:
+        raise MBDError('to_pandas needs pandas: pip install "mbd3d[pandas]" (or pip install '
+                       'pandas)') from None
+    return pandas
 
 
 class ResultsBuffer:
@@ -522,20 +627,3 @@ def format_table(columns: dict[str, Sequence[float]], precision: int = 5,
     for row in zip(*cells):
         lines.append("".join(c.rjust(w + 1) for c, w in zip(row, widths)))
     return "\n".join(line.rstrip() for line in lines)
-
-
-def _atomic_write(path: str | os.PathLike, write, text: bool) -> None:
-    """Write through a temporary file in the same folder, then rename: never a half file."""
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise MBDError(f"cannot write '{path}': folder '{folder}' does not exist")
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".mbd3d-", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w" if text else "wb") as f:
-            write(f)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise

@@ -1,7 +1,7 @@
 """Rotations: Rodrigues parameters, rotation matrices, unit quaternions, axis-angle.
 
-All rotation maths of mbd3d is here (formulas and their numerical verification:
-``shared/rodrigues.md``). Conventions:
+All rotation maths of mbd3d is here (Shabana, *Dynamics of Multibody Systems*, ch. 2;
+each formula is checked against finite differences and conservation laws by the tests). Conventions:
 
 - ``u = A u_bar``: ``A`` maps body components to global components (active rotation, right-hand
   rule); its columns are the body axes in global components.

@@ -1,7 +1,8 @@
 """The spatial rigid body: ``q = (R, g)``, ``R`` the centre of mass, ``g`` Rodrigues parameters.
 
-Every formula is from ``shared/rodrigues.md`` (numbers in brackets), where each was verified
-numerically. Each body keeps a reference rotation ``A0`` (its *chart*, part of the state, not of
+Formulas after Shabana, *Dynamics of Multibody Systems*, ch. 2 (Rodrigues parameters); the
+numbers in brackets are those of the developers' formula sheet, where each was verified
+numerically (the tests check them against finite differences and conservation laws). Each body keeps a reference rotation ``A0`` (its *chart*, part of the state, not of
 the body): ``A = A0 A(g)`` [5.1]. With ``s = A v`` a body vector in global components:
 
 - ``d(A v)/dg = -s~ A G_bar`` [2.9, 4.1], ``d(R + s)/dq = [I3, -s~ A G_bar]``;

@@ -35,7 +35,8 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from mbd3d.errors import MBDError
-from mbd3d.results import Results, _atomic_write, format_table
+from mbd3d.files import atomic_write
+from mbd3d.results import Results, _import_pandas, format_table
 
 __all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable"]
 
@@ -78,10 +79,15 @@ class Analysis:
 def grid(**axes: Iterable) -> list[dict]:
     """Every combination of the values given per parameter (the last one varies fastest).
 
+    Floats are kept to 15 significant digits, so that ``np.linspace(0.1, 0.5, 9)`` gives
+    0.15, as written, where its binary value prints as 0.15000000000000002.
+
     >>> grid(speed=[1.0, 2.0], rod=[0.3, 0.4])
     [{'speed': 1.0, 'rod': 0.3}, {'speed': 1.0, 'rod': 0.4}, {'speed': 2.0, 'rod': 0.3}, {'speed': 2.0, 'rod': 0.4}]
     >>> grid(speed=np.array([1.0, 2.0]), mode="fast")
     [{'speed': 1.0, 'mode': 'fast'}, {'speed': 2.0, 'mode': 'fast'}]
+    >>> grid(rod=np.linspace(0.1, 0.2, 3))
+    [{'rod': 0.1}, {'rod': 0.15}, {'rod': 0.2}]
     """
     names = list(axes)
     values = []
@@ -89,7 +95,7 @@ def grid(**axes: Iterable) -> list[dict]:
         given = axes[name]
         if isinstance(given, (str, bytes)) or np.ndim(given) == 0:
             given = [given]  # one value: the parameter is held fixed
-        axis = [_plain(v) for v in given]
+        axis = [_as_given(v) for v in given]
         if not axis:
             raise MBDError(f"grid: parameter '{name}' needs a non-empty sequence of values, got "
                            f"{axes[name]!r}")
@@ -133,6 +139,16 @@ def monte_carlo(n: int, seed: int, **distributions: Any) -> list[dict]:
 def _plain(value: Any) -> Any:
     """NumPy scalars as Python numbers, so parameters serialize to JSON."""
     return value.item() if isinstance(value, np.generic) else value
+
+
+def _as_given(value: Any) -> Any:
+    """A grid value as the user means it: floats rounded to 15 significant digits, which
+    drops the representation error of ``linspace`` and ``arange`` (0.15000000000000002 is
+    0.15) and never changes a number written with 15 digits or fewer."""
+    value = _plain(value)
+    if isinstance(value, float) and math.isfinite(value):
+        return float(f"{value:.15g}")
+    return value
 
 
 def _key(params: Mapping[str, Any]) -> str:
@@ -238,6 +254,14 @@ class SweepTable:
         with np.load(path) as data:
             return {name: data[name] for name in data.files}
 
+    def to_pandas(self):
+        """The table as a ``pandas.DataFrame``, one row per run, columns as :attr:`columns`
+        (metric names carry the units their authors gave them). Needs pandas
+        (``pip install "mbd3d[pandas]"``)."""
+        pd = _import_pandas()
+        return pd.DataFrame([{c: row.get(c) for c in self.columns} for row in self.rows],
+                            columns=self.columns)
+
     def to_csv(self, path: str | os.PathLike) -> None:
         """Write the table (one row per run) to a CSV file, atomically."""
         def write(f):
@@ -246,7 +270,7 @@ class SweepTable:
             for row in self.rows:
                 writer.writerow(["" if row.get(c) is None else _cell(row.get(c))
                                  for c in self.columns])
-        _atomic_write(path, write, text=True)
+        atomic_write(path, write, text=True)
 
     def __repr__(self) -> str:
         shown = [c for c in self.columns if c not in ("key", "error")]
@@ -368,10 +392,10 @@ def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],
     def finished(key: str, record: dict) -> None:
         npz = record.pop("npz", None)
         if npz is not None:
-            _atomic_write(os.path.join(runs_folder, f"{key}.npz"), lambda f: f.write(npz),
+            atomic_write(os.path.join(runs_folder, f"{key}.npz"), lambda f: f.write(npz),
                           text=False)
         record["key"] = key
-        _atomic_write(os.path.join(runs_folder, f"{key}.json"),
+        atomic_write(os.path.join(runs_folder, f"{key}.json"),
                       lambda f: json.dump(record, f, indent=1), text=True)
         records[key] = record
         summary["ok" if record["status"] == "ok" else "failed"] += 1

@@ -8,14 +8,12 @@ import pathlib
 import pytest
 
 REPO = pathlib.Path(__file__).resolve().parent.parent
-VALIDATION_DATA = REPO.parent / "shared" / "validation-data"
+VALIDATION_DATA = REPO / "examples" / "data"
 
 
 @pytest.fixture
 def validation_data() -> pathlib.Path:
-    """Folder of the published reference series (../shared/validation-data), or skip."""
-    if not VALIDATION_DATA.is_dir():
-        pytest.skip(f"reference data folder {VALIDATION_DATA} is not present beside the clone")
+    """Folder of the published reference series (examples/data/, sources in its README)."""
     return VALIDATION_DATA
 
 

@@ -1,5 +1,5 @@
 """Published benchmark problems, built with the public API as the examples do, against the
-published reference numbers (sources in each test and in ../shared/validation.md)."""
+published reference numbers (sources in each test and in the examples' docstrings)."""
 
 from __future__ import annotations
 
@@ -62,7 +62,7 @@ def test_haug_slider_crank_reproduces_every_published_sundials_row(capsys, tmp_p
     unit = 1e-4 * 10.0 ** np.floor(np.log10(np.abs(published[:, 1:])))
     assert np.all(np.abs(qxp - published[:, 1:]) <= 0.5 * unit + 1e-5)
     # rows recomputed independently in the three minimal coordinates (DOP853, rtol 1e-12,
-    # ../shared/validation.md section 3.1): the agreement is far tighter than the print
+    # in the minimal-coordinate equations of the SUNDIALS example): the agreement is far tighter than the print
     for t, *expected in [(2.0, 0.5790388121, 1.3803352720, -0.2771440957),
                          (4.0, -1.2064316477, 1.0623426557, 0.4860931634),
                          (6.0, -1.1079974931, 1.1175594839, 0.4638596339),
@@ -94,7 +94,7 @@ def test_iftomm_a01_pendulum_follows_the_reference_series(capsys, validation_dat
 def four_bar_oscillator(bars: int, t: np.ndarray) -> np.ndarray:
     """B0 = (cos phi, sin phi) on the parallelogram branch, where all cranks share the angle
     phi and the couplers translate: ((N+1)/3 + N) phi'' = -((N+1)/2 + N) g cos(phi),
-    phi(0) = pi/2, phi'(0) = -1 rad/s (derived in ../shared/validation.md, section 1.2)."""
+    phi(0) = pi/2, phi'(0) = -1 rad/s (the parallelogram branch: every crank at one angle)."""
     inertia, moment = (bars + 1) / 3 + bars, (bars + 1) / 2 + bars
     sol = solve_ivp(lambda _, y: [y[1], -moment * 9.81 * np.cos(y[0]) / inertia],
                     (t[0], t[-1]), [np.pi / 2, -1.0], t_eval=t, method="DOP853", rtol=1e-12,

@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import csv
 import math
+import os
+import stat
 
 import numpy as np
 import pytest
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
-from mbd3d.mechanisms import pendulum_chain, slider_crank
+from mbd3d.mechanisms import pendulum_chain, slider_crank, spatial_slider_crank
 
 
 @pytest.fixture(scope="module")
@@ -18,16 +21,103 @@ def inverse():
     return mb.inverse_dynamics(model, np.linspace(0.0, 0.5, 6))
 
 
-def test_csv_export_reads_back(inverse, tmp_path):
+def test_csv_export_reads_back_with_units_and_the_printed_reactions(inverse, tmp_path):
     path = tmp_path / "slider.csv"
     inverse.to_csv(path)
-    data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
-    assert len(data) == 6
-    np.testing.assert_array_equal(data["t"], inverse.t)
-    np.testing.assert_array_equal(data["slider.x"], inverse.body("slider").position[:, 0])
-    np.testing.assert_array_equal(data["crank.theta_ddot"], inverse.qdd[:, 2])
-    np.testing.assert_array_equal(data["motor.effort"], inverse.driver("motor").effort)
-    np.testing.assert_array_equal(data["O.x.lam"], inverse.joint("O").lam[:, 0])
+    with open(path, newline="") as f:
+        header, *rows = list(csv.reader(f))
+    assert len(rows) == 6 and all(len(r) == len(header) for r in rows)
+    data = {name: np.array([float(r[k]) for r in rows]) for k, name in enumerate(header)}
+    np.testing.assert_array_equal(data["t [s]"], inverse.t)
+    np.testing.assert_array_equal(data["slider.x [m]"], inverse.body("slider").position[:, 0])
+    np.testing.assert_array_equal(data["crank.alpha [rad/s^2]"], inverse.qdd[:, 2])
+    np.testing.assert_array_equal(data["motor.effort [N m]"], inverse.driver("motor").effort)
+    # reactions as the example's force table prints them: on the named body, global axes
+    pin = inverse.joint("O").reaction(on="crank")
+    np.testing.assert_array_equal(data["O.Fx on crank [N]"], pin.force[:, 0])
+    np.testing.assert_array_equal(data["O.M on crank [N m]"], pin.moment)
+    rail = inverse.joint("rail").reaction(on="slider")
+    np.testing.assert_array_equal(data["rail.Fy on slider [N]"], rail.force[:, 1])
+    # the rail pushes the slider up, against gravity and the rod: the CSV says so with the
+    # sign of the printed table, not the multiplier's
+    assert np.all(data["rail.Fy on slider [N]"] * inverse.joint("rail").lam[:, 0] < 0)
+    assert not any(name.endswith(".lam") for name in header)
+    # NumPy reads it too
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(table[:, header.index("slider.vx [m/s]")],
+                                  inverse.body("slider").velocity[:, 0])
+
+
+def test_csv_names_with_commas_and_line_breaks_read_back(tmp_path):
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    arm = b.add_body("arm, left", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    b.add(Revolute("pin\nA", b.ground, arm, at=(0.0, 0.0)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 0.1, 4))
+    path = tmp_path / "odd names.csv"
+    res.to_csv(path)
+    with open(path, newline="") as f:
+        header, *rows = list(csv.reader(f))
+    assert "arm, left.x [m]" in header and "pin\nA.Fx on arm, left [N]" in header
+    assert len(rows) == 4 and all(len(r) == len(header) for r in rows)
+    k = header.index("arm, left.angle [rad]")
+    np.testing.assert_array_equal([float(r[k]) for r in rows], res.body("arm, left").angle)
+
+
+def test_spatial_csv_has_quaternions_not_chart_coordinates(tmp_path):
+    model = spatial_slider_crank()
+    res = mb.inverse_dynamics(model, np.linspace(0.0, 0.5, 5))
+    cols = res.columns()
+    assert not any(".g1" in c for c in cols)
+    np.testing.assert_array_equal(np.column_stack([cols[f"rod.q{c} [-]"] for c in "wxyz"]),
+                                  res.body("rod").quaternion)
+    np.testing.assert_array_equal(cols["rod.omega_z [rad/s]"], res.body("rod").angular_velocity[:, 2])
+
+
+def test_to_pandas_has_named_columns_with_units(inverse):
+    df = inverse.to_pandas()
+    assert df.index.name == "t [s]" and np.array_equal(df.index, inverse.t)
+    np.testing.assert_array_equal(df["motor.effort [N m]"], inverse.driver("motor").effort)
+    assert df.attrs["units"]["O.Fy on crank [N]"] == "N"
+    assert df.attrs["units"]["slider.ax [m/s^2]"] == "m/s^2"
+
+
+def test_point_history_indexes_its_positions(inverse):
+    tip = inverse.point("crank", (0.06, 0.0))
+    np.testing.assert_array_equal(tip[:, 0], tip.position[:, 0])
+    np.testing.assert_array_equal(np.asarray(tip), tip.position)
+    assert len(tip) == len(inverse.t)
+
+
+def test_exports_respect_the_umask_and_keep_an_existing_files_mode(inverse, tmp_path):
+    new = tmp_path / "new.csv"
+    old_umask = os.umask(0o022)
+    try:
+        inverse.to_csv(new)
+    finally:
+        os.umask(old_umask)
+    assert stat.S_IMODE(new.stat().st_mode) == 0o644
+    kept = tmp_path / "kept.npz"
+    kept.write_bytes(b"old")
+    kept.chmod(0o664)
+    inverse.to_npz(kept)
+    assert stat.S_IMODE(kept.stat().st_mode) == 0o664
+
+
+def test_a_write_protected_file_is_not_replaced(inverse, tmp_path):
+    protected = tmp_path / "protected.csv"
+    protected.write_text("keep me")
+    protected.chmod(0o444)
+    with pytest.raises(mb.MBDError, match="write-protected"):
+        inverse.to_csv(protected)
+    assert protected.read_text() == "keep me"
+
+
+def test_export_to_a_folder_or_into_a_file_names_the_target(inverse, tmp_path):
+    with pytest.raises(mb.MBDError, match=f"'{tmp_path}': it is a folder"):
+        inverse.to_csv(tmp_path)
+    (tmp_path / "plain").write_text("")
+    with pytest.raises(mb.MBDError, match="is a file, not a folder"):
+        inverse.to_npz(tmp_path / "plain" / "x.npz")
 
 
 def test_npz_export_reads_back(inverse, tmp_path):

@@ -2,7 +2,7 @@
 
 Oracles: the closed-form slider motion, a separately derived one-degree-of-freedom Lagrange
 equation (tests/slider_crank_oracle.py), the crank's Newton-Euler equations, energy, and the
-published Nikravesh-style example (shared/validation.md section 3.2).
+published Nikravesh-style example (Nikravesh, *Computer-Aided Analysis of Mechanical Systems*).
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def test_ground_pin_reaction_satisfies_newton_euler_of_crank(inverse):
 
 
 def test_published_nikravesh_example():
-    """Nikravesh-style slider-crank, shared/validation.md section 3.2: theta1 = 65 deg,
+    """Nikravesh-style slider-crank: theta1 = 65 deg,
     1.6 rad/s, horizontal force 50 N on the slider; reference torque 7.3809866111 N m (confirmed
     there two ways) and the reaction forces of the example's script."""
     a, psi, b_point = slider_crank_positions(PHI0, 0.12, 0.26)

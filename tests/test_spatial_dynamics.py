@@ -41,7 +41,7 @@ def euler_quaternion_reference(J, omega_bar0, A0, t):
 
 
 def test_dzhanibekov_flip_across_many_half_turns():
-    """Intermediate-axis spin (shared/validation.md 4.3): I = (1, 2, 3), omega_bar(0) =
+    """Intermediate-axis spin (the Dzhanibekov flip): I = (1, 2, 3), omega_bar(0) =
     (1e-3, 1, 0); omega_2 flips sign at T/4 = 14.3657 s."""
     J = np.diag([1.0, 2.0, 3.0])
     omega_bar0 = np.array([1e-3, 1.0, 0.0])
@@ -69,7 +69,7 @@ def test_dzhanibekov_flip_across_many_half_turns():
 
 
 def test_heavy_top_steady_precession():
-    """shared/validation.md 4.2 (cone of Kinon-Betsch): the symmetry axis keeps its nutation
+    """Cone of Kinon-Betsch: the symmetry axis keeps its nutation
     angle and precesses at omega_p when spun at omega_s = m g l/(C omega_p) + (A - C)/C
     omega_p cos(alpha0)."""
     m, J1, J3, l = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075

@@ -163,3 +163,19 @@ def test_monte_carlo_samples_are_reproducible_from_the_seed():
     assert a == b and a != monte_carlo(50, seed=8, rod=(0.25, 0.27), speed=norm(10.0, 0.5))
     speeds = np.array([s["speed"] for s in a])
     assert abs(speeds.mean() - 10.0) < 4 * 0.5 / math.sqrt(50)
+
+
+def test_table_reads_into_pandas_and_writes_parameters_as_given(serial_table, tmp_path):
+    df = serial_table.to_pandas()
+    assert list(df.columns) == serial_table.columns and len(df) == len(serial_table)
+    np.testing.assert_array_equal(df["peak_speed"].to_numpy(dtype=float),
+                                  serial_table.column("peak_speed"))
+    # linspace's 0.15000000000000002 is written as the 0.15 the user meant
+    rods = grid(rod=np.linspace(0.1, 0.2, 3))
+    path = tmp_path / "table.csv"
+    table = sweep(factory, [dict(p, speed=5.0) for p in rods], ANALYSIS, METRICS, tmp_path,
+                  backend="serial", progress=False)
+    table.to_csv(path)
+    with open(path, newline="") as f:
+        written = [row["rod"] for row in csv.DictReader(f)]
+    assert written == ["0.1", "0.15", "0.2"]

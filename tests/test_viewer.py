@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import math
 import os
+import signal
 import socket
+import sys
 import subprocess
 import time
 
@@ -292,3 +294,40 @@ def test_live_stream_reaches_a_rerun_server_on_loopback(tmp_path):
             server.wait(timeout=10)
         except subprocess.TimeoutExpired:
             server.kill()
+
+
+def test_spawned_viewer_receives_every_time_point(tmp_path, monkeypatch):
+    """Recorder(spawn=True) starts a viewer for the recording being written and streams to it.
+    The stand-in is Rerun's own binary listening where the spawned viewer would, saving what
+    it receives instead of drawing it (no window here)."""
+    from mbd3d.viewer import recorder
+
+    port, saved = free_port(), tmp_path / "spawned.rrd"
+    monkeypatch.setattr(recorder, "_viewer_command", lambda p: [
+        rerun_executable(), "--bind", "127.0.0.1", "--port", str(p), "--save", str(saved)])
+    monkeypatch.setenv("DISPLAY", ":99")  # what a desktop session has
+    monkeypatch.setenv("CI", "true")  # no analytics from the stand-in
+    live = Recorder(spawn=True, viewer_port=port, interval=0.0, announce=False)
+    try:
+        model = slider_crank(crank_speed=None, crank_torque=2.0)
+        res = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 26), observers=[live])
+        assert live.viewer_process is not None and live.viewer_process.poll() is None
+    finally:
+        if live.viewer_process is not None:
+            live.viewer_process.send_signal(signal.SIGINT)  # the stand-in closes its file
+            live.viewer_process.wait(timeout=20)
+    steps, translation = read_component(saved, "/world/bodies/slider", "Transform3D:translation")
+    assert len(steps) == len(res) == 26
+    np.testing.assert_allclose(translation[:, 0], lifted(res.body("slider").position), atol=2e-6)
+
+
+def test_spawn_without_a_display_fails_at_once_and_says_how_to_view_a_file(monkeypatch,
+                                                                          tmp_path):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    if not sys.platform.startswith("linux"):
+        pytest.skip("displays are named by X11 and Wayland variables on Linux only")
+    start = time.monotonic()
+    with pytest.raises(RecordingError, match="no display.*run: rerun FILE"):
+        Recorder(tmp_path / "run.rrd", spawn=True, viewer_port=free_port())
+    assert time.monotonic() - start < 2.0

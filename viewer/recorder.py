@@ -25,22 +25,32 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import socket
 import subprocess
 import sys
+import tempfile
+import time
 import uuid
 from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from mbd3d.errors import MBDError, ModelError
+from mbd3d import files
+from mbd3d.errors import ModelError
 from mbd3d.observers import Observer
 from mbd3d.results import Results
 from mbd3d.viewer.scene import Scene, _rerun
 
-__all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable"]
+__all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable",
+           "check_destination", "require_display", "spawn_viewer", "VIEWER_PORT"]
+
+#: the gRPC port a Rerun viewer listens on by default
+VIEWER_PORT = 9876
+#: how long a spawned viewer may take to start listening [s]
+_VIEWER_START_TIMEOUT = 30.0
 
 
-class RecordingError(MBDError, OSError):
+class RecordingError(files.OutputError):
     """A recording cannot be written or sent (path, viewer address)."""
 
 
@@ -52,21 +62,11 @@ def _application_id(model_name: str) -> str:
 
 def check_output_path(path: str | os.PathLike, overwrite: bool) -> str:
     """The absolute path of a new ``.rrd`` file, or a :class:`RecordingError` saying why it
-    cannot be written there."""
-    path = os.path.abspath(os.fspath(path))
-    folder = os.path.dirname(path)
-    if os.path.isdir(path):
-        raise RecordingError(f"cannot record to '{path}': it is a folder; give a file name "
-                             "ending in .rrd")
-    if not os.path.isdir(folder):
-        raise RecordingError(f"cannot record to '{path}': folder '{folder}' does not exist")
-    if os.path.exists(path) and not overwrite:
-        raise RecordingError(f"'{path}' already exists; pass overwrite=True to replace it, or "
-                             "choose another file name")
-    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
-        raise RecordingError(f"cannot record to '{path}': no permission to write there; choose "
-                             "a folder you can write to")
-    return path
+    cannot be written there (see :func:`mbd3d.files.check_output_path`)."""
+    try:
+        return files.check_output_path(path, overwrite, "the recording")
+    except files.OutputError as exc:
+        raise RecordingError(str(exc)) from None
 
 
 class Recorder(Observer):
@@ -80,7 +80,11 @@ class Recorder(Observer):
     save : str or path, optional
         Write an ``.rrd`` file there (open it with ``rerun FILE``).
     spawn : bool
-        Start a Rerun viewer on this machine and stream to it (needs a display).
+        Stream to a Rerun viewer on this machine: the one already listening on
+        ``viewer_port``, or a new viewer window started for this recording (needs a display;
+        without one the Recorder refuses at once and says how to view a file instead).
+    viewer_port : int
+        The gRPC port of the spawned viewer (default 9876, Rerun's own).
     connect : str, optional
         Stream to a running viewer or server at this gRPC address, e.g.
         ``"rerun+http://127.0.0.1:9876/proxy"`` (what ``rerun`` listens on by default).
@@ -111,7 +115,7 @@ class Recorder(Observer):
     """
 
     def __init__(self, save: str | os.PathLike | None = None, *, spawn: bool = False,
-                 connect: str | None = None, overwrite: bool = False,
+                 viewer_port: int = VIEWER_PORT, connect: str | None = None, overwrite: bool = False,
                  plots: Sequence[str] | None = None,
                  points: Mapping[str, tuple[str, Sequence[float]]] | None = None,
                  reactions: Sequence[str] | None = None,
@@ -121,7 +125,12 @@ class Recorder(Observer):
             raise RecordingError("a Recorder needs somewhere to send the recording: save= "
                                  "(an .rrd file), spawn=True (a viewer) or connect= (an address)")
         self.path = None if save is None else check_output_path(save, overwrite)
+        if spawn and not _listening(viewer_port):
+            require_display(self.path)  # now, not after the analysis has run
         self.spawn, self.connect, self.overwrite = bool(spawn), connect, overwrite
+        self.viewer_port = int(viewer_port)
+        #: the viewer process this Recorder started (None when it used a running one)
+        self.viewer_process: subprocess.Popen | None = None
         self.plots = None if plots is None else list(plots)
         self.points = dict(points or {})
         self.reactions = None if reactions is None else list(reactions)
@@ -174,12 +183,8 @@ class Recorder(Observer):
             check_output_path(self.path, self.overwrite)
             sinks.append(rr.FileSink(self.path))
         if self.spawn:
-            port = 9876
-            try:
-                rr.spawn(port=port, connect=False)
-            except Exception as exc:
-                raise RecordingError(f"could not start a Rerun viewer: {exc}") from exc
-            sinks.append(rr.GrpcSink(f"rerun+http://127.0.0.1:{port}/proxy"))
+            url, self.viewer_process = spawn_viewer(self.viewer_port, self.path)
+            sinks.append(rr.GrpcSink(url))
         if self.connect is not None:
             sinks.append(rr.GrpcSink(self.connect))
         try:
@@ -191,7 +196,7 @@ class Recorder(Observer):
     def _where(self) -> str:
         places = [] if self.path is None else [f"file '{self.path}'"]
         if self.spawn:
-            places.append("a spawned viewer")
+            places.append(f"the viewer on port {self.viewer_port}")
         if self.connect is not None:
             places.append(f"viewer at {self.connect}")
         return ", ".join(places)
@@ -274,15 +279,85 @@ def rerun_executable() -> str:
     return found
 
 
+def require_display(path: str | None = None) -> None:
+    """Raise a :class:`RecordingError` that says how to view a recording when this machine
+    has no display to open a viewer window on (Linux without X11 or Wayland)."""
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
+                                                 or os.environ.get("WAYLAND_DISPLAY")):
+        where = f"'{path}'" if path else "the recording (save it to a file with save=...)"
+        raise RecordingError(f"no display to open a viewer on; copy {where} to a machine "
+                             "with one and run: rerun FILE there")
+
+
+def check_destination(path: str | os.PathLike, overwrite: bool = True, show: bool = False
+                      ) -> str:
+    """Check before an analysis runs that its recording can be written to ``path`` and, with
+    ``show``, opened in a viewer here; returns the absolute path. Examples call this first so
+    that a wrong path fails at once instead of after the computing."""
+    path = check_output_path(path, overwrite)
+    if show:
+        require_display(path)
+    return path
+
+
+def _listening(port: int) -> bool:
+    """Whether something accepts connections on ``port`` of this machine."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
+        sock.settimeout(0.2)
+        return sock.connect_ex(("127.0.0.1", port)) == 0
+
+
+def _viewer_command(port: int) -> list[str]:
+    """The command line of a Rerun viewer window listening on ``port``."""
+    return [rerun_executable(), "--port", str(port)]
+
+
+def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None
+                 ) -> tuple[str, subprocess.Popen | None]:
+    """The gRPC address of a Rerun viewer on ``port``: the one already listening there, or a
+    new viewer window started now (its own process, which stays open after Python ends).
+
+    Returns ``(url, process)``, ``process`` None when a running viewer was used.
+
+    Raises
+    ------
+    RecordingError
+        Without a display, or when the viewer exits or does not listen within 30 s.
+    """
+    url = f"rerun+http://127.0.0.1:{port}/proxy"
+    if _listening(port):
+        return url, None
+    require_display(path)
+    # the viewer's messages go to a file, read only if it fails to start: a pipe nobody
+    # reads would block a viewer that keeps printing
+    log = tempfile.TemporaryFile()
+    try:
+        process = subprocess.Popen(_viewer_command(port), stdin=subprocess.DEVNULL,
+                                   stdout=log, stderr=log, start_new_session=True)
+    except OSError as exc:
+        raise RecordingError(f"could not start the Rerun viewer: {exc}") from exc
+    deadline = time.monotonic() + _VIEWER_START_TIMEOUT
+    while not _listening(port):
+        if process.poll() is not None:
+            log.seek(0)
+            detail = log.read().decode(errors="replace").strip()[-400:]
+            raise RecordingError(f"the Rerun viewer exited at once (exit status "
+                                 f"{process.returncode}): {detail or 'no message'}")
+        if time.monotonic() > deadline:
+            process.terminate()
+            raise RecordingError(f"the Rerun viewer did not listen on port {port} within "
+                                 f"{_VIEWER_START_TIMEOUT:.0f} s")
+        time.sleep(0.05)
+    log.close()  # the viewer keeps its own handle
+    return url, process
+
+
 def show(path: str | os.PathLike) -> subprocess.Popen:
     """Open an ``.rrd`` recording in the Rerun viewer (a separate process; needs a display)."""
     path = os.path.abspath(os.fspath(path))
     if not os.path.isfile(path):
         raise RecordingError(f"no recording at '{path}'")
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
-                                                 or os.environ.get("WAYLAND_DISPLAY")):
-        raise RecordingError(f"no display to open a viewer on; copy '{path}' to a machine with "
-                             "one and run: rerun FILE there")
+    require_display(path)
     return subprocess.Popen([rerun_executable(), path])
 
 
