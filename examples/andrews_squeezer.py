@@ -24,7 +24,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 #: Test Set reference at t = 0.03 s: beta, Theta, gamma, Phi, delta, Omega, epsilon [rad]
 REFERENCE = np.array([0.1581077119629904e+2, -0.1575637105984298e+2, 0.4082224013073101e-1,
@@ -75,6 +75,9 @@ def test_set_angles(res: mb.Results) -> np.ndarray:
 
 def main(n_points: int = 301, rtol: float = 1e-11, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 0.03, n_points)
@@ -91,7 +94,7 @@ def main(n_points: int = 301, rtol: float = 1e-11, rrd: str | None = None,
     work = 0.033 * (res.body("body1").angle - res.body("body1").angle[0])
     print(f"\nenergy balance: T + V - E0 - work of the motor = "
           f"{np.max(np.abs(energy - energy[0] - work)):.2e} J (of {work[-1]:.4f} J of work)")
-    print(f"{res.stats['steps']} steps, {res.stats['wall_time']:.1f} s")
+    print(f"{res.stats['steps']} steps, {res.stats['wall_time']:.1f} s of wall time")
     if rrd is not None:
         record(res, rrd, overwrite=True, show=show)
     return res

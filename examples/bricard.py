@@ -30,7 +30,7 @@ import numpy as np
 import mbd3d as mb
 from mbd3d.joints import Revolute
 from mbd3d.mechanisms import frame_along
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 #: the loop's corners P1..P6 and hinge axes; rod k joins P_k and P_(k+1), the ground P6 and P1
 CORNERS = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1]], float)
@@ -54,6 +54,9 @@ def build() -> mb.Model:
 
 def main(duration: float = 10.0, n_points: int = 1001, step: float = 1e-3,
          rrd: str | None = None, show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     times = np.linspace(0.0, duration, n_points)
@@ -64,7 +67,7 @@ def main(duration: float = 10.0, n_points: int = 1001, step: float = 1e-3,
                            "z P3 [m]": p3[:, 2], "energy [J]": energy}, rows=9))
     print(f"\n{res.stats['steps']} steps of {step:g} s, {res.stats['wall_time']:.1f} s of wall "
           f"time; energy drift {np.max(np.abs(energy - energy[0])):.2e} J; largest |C| "
-          f"{res.position_residual.max():.1e}; reactions unique: {res.reactions_unique}")
+          f"{res.position_residual.max():.1e} m; reactions unique: {res.reactions_unique}")
     if rrd is not None:
         record(res, rrd, overwrite=True, show=show)
     return res

@@ -32,7 +32,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Distance, Prismatic, Revolute
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 SPIN = 2 * np.pi                 # initial speed of the shaft [rad/s]
 ALPHA = np.radians(30.0)         # arms below the horizontal at t = 0
@@ -105,6 +105,9 @@ def angular_momentum_z(res: mb.Results) -> np.ndarray:
 
 def main(duration: float = 5.0, step: float = 1e-3, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, duration, int(round(duration / 0.01)) + 1)
@@ -115,15 +118,16 @@ def main(duration: float = 5.0, step: float = 1e-3, rrd: str | None = None,
     energy = res.kinetic_energy + res.potential_energy
     print(mb.format_table({"t [s]": t, "sleeve height [m]": sleeve,
                            "shaft speed [rad/s]": shaft_speed, "energy [J]": energy}, rows=11))
+    drift = np.max(np.abs(momentum - momentum[0]))
     print(f"\nangular momentum about the shaft: {momentum[0]:.6f} kg m^2/s, drift "
-          f"{np.max(np.abs(momentum - momentum[0])):.1e}")
+          f"{drift:.1e} kg m^2/s ({drift / abs(momentum[0]):.1e} of it)")
     print(f"energy: largest change {np.max(np.abs(energy - energy[0])):.1e} J of "
           f"{energy[0]:.2f} J")
     rigid = mb.forward_dynamics(build(rigid_couplers=True), t, method="DOP853", rtol=1e-10,
                                 atol=1e-12)
     print(f"sleeve height against the governor with rigid couplers: largest difference "
           f"{np.max(np.abs(sleeve - rigid.body('sleeve').position[:, 2])):.1e} m")
-    print(f"{res.stats['steps']} steps of {step:g} s, {res.stats['wall_time']:.1f} s")
+    print(f"{res.stats['steps']} steps of {step:g} s, {res.stats['wall_time']:.1f} s of wall time")
     if rrd is not None:
         record(res, rrd, overwrite=True, show=show)
     return res

@@ -19,10 +19,13 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import four_bar
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 
 def main(n_points: int = 241, rrd: str | None = None, show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     model = four_bar(crank_speed=2 * np.pi)
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 1.0, n_points)

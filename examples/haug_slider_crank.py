@@ -21,14 +21,20 @@ Run: python examples/haug_slider_crank.py [--rrd FILE] [--show]
 from __future__ import annotations
 
 import argparse
+import pathlib
 
 import numpy as np
+from scipy.integrate import simpson
 
 import mbd3d as mb
 from mbd3d.joints import PointOnLine, Revolute
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 A = 0.5  # crank length, pivot to crank pin [m]
+#: SUNDIALS' printed rows (t, q, x, p), with their source in data/README.md
+REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "sundials_idasSlCrank_dns.txt"
+#: the quadrature G SUNDIALS prints [J s] (IDAS at rtol 1e-6)
+G_IDAS = 3.3366160662934146
 
 
 def build() -> mb.Model:
@@ -57,16 +63,31 @@ def coordinates(res: mb.Results) -> np.ndarray:
 
 def main(duration: float = 10.0, rtol: float = 1e-11, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
-    t = np.linspace(0.0, duration, round(duration / 0.4) * 10 + 1)
+    # every 0.01 s: the SUNDIALS rows are every 40th point, and Simpson's rule on this grid
+    # gives G to 1e-10
+    t = np.linspace(0.0, duration, round(duration / 0.01) + 1)
     res = mb.forward_dynamics(model, t, method="DOP853", rtol=rtol, atol=1e-13)
-    qxp = coordinates(res)[::10]
-    print(mb.format_table({"t [s]": res.t[::10], "q [rad]": qxp[:, 0], "x [m]": qxp[:, 1],
-                           "p [rad]": qxp[:, 2]}, precision=5))
+    reference = np.loadtxt(REFERENCE)
+    reference = reference[reference[:, 0] <= duration + 1e-9]
+    qxp = coordinates(res)[::40]
+    error = np.abs(qxp - reference[:, 1:])
+    print("SUNDIALS' printed rows (IDAS, rtol 1e-6, 5 digits) beside mbd3d's (DOP853)")
+    print(mb.format_table({"t [s]": res.t[::40], "q [rad]": qxp[:, 0], "q IDAS": reference[:, 1],
+                           "x [m]": qxp[:, 1], "x IDAS": reference[:, 2],
+                           "p [rad]": qxp[:, 2], "p IDAS": reference[:, 3],
+                           "max |error|": error.max(axis=1)}, precision=6, rows=len(qxp)))
+    print(f"largest difference over the {len(qxp)} rows: {error.max():.1e} rad or m (the rows are "
+          "printed to 5 digits)")
     # G of the SUNDIALS example: the time integral of the kinetic energy [J s]
-    print(f"\nG = integral of T dt = {np.trapezoid(res.kinetic_energy, res.t):.8f} J s")
-    print(f"{res.stats['steps']} steps, {res.stats['wall_time']:.2f} s")
+    G = simpson(res.kinetic_energy, x=res.t)
+    print(f"\nG = integral of T dt = {G:.10f} J s (IDAS: {G_IDAS:.10f} at rtol 1e-6, "
+          f"{abs(G - G_IDAS):.1e} J s apart)")
+    print(f"{res.stats['steps']} steps, {res.stats['wall_time']:.2f} s of wall time")
     if rrd is not None:
         record(res, rrd, overwrite=True, show=show)
     return res

@@ -29,7 +29,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 #: the benchmark\'s reference series, with its source in data/README.md
 REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A02_n_four_bar_B0.txt"
@@ -53,6 +53,9 @@ def build(bars: int) -> mb.Model:
 
 def main(bars: int = 40, duration: float = 20.0, step: float = 1e-3, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     times = np.linspace(0.0, duration, int(round(duration / 0.05)) + 1)  # every 0.05 s
     res = mb.forward_dynamics(build(bars), times, method="generalized-alpha", step=step)
     b0 = res.point("crank0", (0.5, 0.0)).position  # the top of the first crank

@@ -27,7 +27,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Distance
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 #: the benchmark\'s reference series, with its source in data/README.md
 REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A01_simple_pendulum_P1.txt"
@@ -35,6 +35,9 @@ REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A01_simpl
 
 def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     reference = np.loadtxt(REFERENCE, skiprows=1)
     reference = reference[reference[:, 0] <= duration + 1e-9]
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="IFToMM A01 pendulum")

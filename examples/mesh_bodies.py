@@ -24,13 +24,16 @@ import trimesh
 
 import mbd3d as mb
 from mbd3d.joints import Fixed, Revolute
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 STEEL = 7850.0  # kg/m^3
 
 
 def main(periods: float = 3.0, n_points: int = 301, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     length, radius, theta0 = 0.40, 0.08, math.radians(5.0)
     arm_mesh = trimesh.creation.box(extents=(0.04, length, 0.02))      # along y, centred
     disc_mesh = trimesh.creation.cylinder(radius=radius, height=0.02, sections=64)  # axis z

@@ -25,13 +25,19 @@ import os
 import numpy as np
 
 import mbd3d as mb
+from mbd3d.files import check_output_folder
 from mbd3d.mechanisms import slider_crank
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 
 def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,
          csv_folder: str | None = None, rrd: str | None = None,
          show: bool = False) -> dict[str, mb.Results]:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
+    if csv_folder is not None:
+        check_output_folder(csv_folder, "the CSV files")
     # 1. kinematics: crank at constant speed from 65 degrees
     model = slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
     print(mb.mobility(model), "\n")

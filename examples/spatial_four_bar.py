@@ -18,10 +18,13 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import spatial_four_bar
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 
 def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     print(mb.mobility(spatial_four_bar(all_revolute=True, crank_speed=None)), "\n")
     model = spatial_four_bar(crank_speed=2 * np.pi)
     print(mb.mobility(model), "\n")

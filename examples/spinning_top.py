@@ -22,11 +22,14 @@ import trimesh
 import mbd3d as mb
 from mbd3d import rotations
 from mbd3d.joints import Spherical
-from mbd3d.viewer import record
+from mbd3d.viewer import check_destination, record
 
 
 def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,
          show: bool = False) -> mb.Results:
+    # a bad path, or --show without a display, fails now, not after the computing
+    if rrd is not None:
+        check_destination(rrd, show=show)
     m, J1, J3, l = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075  # cone, about its centre
     alpha, omega_p = math.radians(60.0), 10.0
     A, C = J1 + m * l * l, J3

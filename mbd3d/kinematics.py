@@ -18,7 +18,7 @@ from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.errors import ModelError, NotFullyDrivenError
 from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
-                          solve_augmented_lagrangian, solve_model_augmented)
+                          solve_augmented_lagrangian, solve_model_augmented, summarize)
 from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
@@ -146,11 +146,12 @@ def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysi
     rank, groups = dependent_rows(Cq)
     n = model.n_coordinates
     if rank < n:
-        rows = "; ".join(", ".join(model.row_labels[r] for r in g) for g in groups)
+        rows = "; ".join("{" + summarize([model.row_labels[r] for r in g], 8) + "}"
+                         for g in groups)
         raise NotFullyDrivenError(
             f"{analysis} needs a fully driven mechanism: '{model.name}' has "
             f"{model.n_constraints} constraint equations for {n} coordinates, but only {rank} "
-            f"are independent (dependent rows: {rows}), so {n - rank} degree(s) of freedom are "
+            f"are independent (rows that depend on each other: {rows}), so {n - rank} degree(s) of freedom are "
             "not driven. Add drivers, or use mbd3d.forward_dynamics (see mbd3d.mobility).")
     driver_rows = np.zeros(model.n_constraints, dtype=bool)
     drivers = [e.name for e in model.joints if e.is_driver]

@@ -8,6 +8,8 @@ A matrix is treated as singular when a pivot of its LU factors falls below
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 import scipy.linalg as la
 from scipy.linalg.lapack import dgbsv as _gbsv, dgbtrf as _gbtrf, dgbtrs as _gbtrs, \
@@ -17,7 +19,7 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
-           "augmented_matrix", "solve_augmented", "solve_model_augmented",
+           "ranked_rows", "summarize", "augmented_matrix", "solve_augmented", "solve_model_augmented",
            "factor_model_augmented", "AugmentedPattern", "PenaltyPattern", "penalty_scale",
            "penalty_matrix", "solve_augmented_lagrangian"]
 
@@ -104,18 +106,23 @@ def _check_pivots(pivots: np.ndarray, pivot_tolerance: float) -> np.ndarray:
 
 
 def dependent_rows(Cq, relative_tolerance: float = 1e-9) -> tuple[int, list[np.ndarray]]:
-    """Numerical rank of ``Cq`` and the groups of rows that depend on each other.
+    """Numerical rank of ``Cq`` and, for each redundant equation, a smallest set of rows that
+    depend on each other, most involved first.
 
-    Uses the SVD: each left singular vector whose singular value is below
-    ``relative_tolerance`` times the largest is a combination of rows that vanishes; the rows
-    with a significant weight in it are reported together. When ``Cq`` has full rank by that
-    tolerance, the rows of its smallest singular value are reported (nearly dependent).
+    The rank comes from the SVD: singular values below ``relative_tolerance`` times the
+    largest count as zero. A column-pivoted QR of ``Cq^T`` then picks ``rank`` independent
+    rows; every other row is a combination of those, and the rows of that combination with
+    it form its dependent set: a minimal one (no proper subset of it is dependent), so that a
+    closed loop reports the rows that close it, not every row a singular vector touches.
+    Rows are ordered by their weight in the combination. When ``Cq`` has full rank by that
+    tolerance, the rows of its smallest singular value are reported (nearly dependent, as at
+    a singular position), ordered by their weight in its left singular vector.
 
     Returns
     -------
     rank : int
     groups : list of ndarray of int
-        Row indices, one array per dependency.
+        Row indices, one array per dependency (per redundant equation when rank < rows).
     """
     A = Cq.toarray() if sp.issparse(Cq) else np.asarray(Cq)
     m = A.shape[0]
@@ -125,15 +132,41 @@ def dependent_rows(Cq, relative_tolerance: float = 1e-9) -> tuple[int, list[np.n
     s_full = np.zeros(m)
     s_full[:len(s)] = s
     top = s_full.max() if s_full.size else 0.0
-    small = np.flatnonzero(s_full <= relative_tolerance * top)
-    rank = m - len(small)
-    if len(small) == 0:
-        small = [int(np.argmin(s_full))]
+    rank = m - int(np.count_nonzero(s_full <= relative_tolerance * top))
+    if rank == m:
+        u = np.abs(U[:, int(np.argmin(s_full))])
+        rows = np.flatnonzero(u > 0.05 * u.max())
+        return rank, [rows[np.argsort(-u[rows], kind="stable")]]
+    _, _, order = la.qr(A.T, mode="economic", pivoting=True)
+    basis, others = order[:rank], order[rank:]
+    coefficients = la.lstsq(A[basis].T, A[others].T)[0]  # (rank, redundant)
     groups = []
-    for k in small:
-        u = np.abs(U[:, k])
-        groups.append(np.flatnonzero(u > 0.05 * u.max()))
+    for k, row in enumerate(others):
+        c = np.abs(coefficients[:, k])
+        used = np.flatnonzero(c > 1e-8 * max(1.0, c.max()))
+        weights = np.concatenate([[1.0], c[used]])
+        rows = np.concatenate([[row], basis[used]])
+        groups.append(rows[np.argsort(-weights, kind="stable")])
     return rank, groups
+
+
+def ranked_rows(groups, n_rows: int) -> np.ndarray:
+    """The rows of all ``groups`` below ``n_rows``, once each, in the groups' order (each
+    group lists its rows most involved first)."""
+    seen: dict[int, None] = {}
+    for group in groups:
+        for r in group:
+            if r < n_rows:
+                seen[int(r)] = None
+    return np.array(list(seen), dtype=int)
+
+
+def summarize(names: Sequence[str], limit: int = 6) -> str:
+    """``names`` for a message: the first ``limit`` and how many more."""
+    names = list(names)
+    if len(names) <= limit:
+        return ", ".join(names)
+    return f"{', '.join(names[:limit])} and {len(names) - limit} more"
 
 
 def augmented_matrix(M, Cq):

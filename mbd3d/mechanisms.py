@@ -226,7 +226,8 @@ def spatial_four_bar(*, all_revolute: bool = False, crank_speed: float | None = 
     a = np.array([0.08, 0.0, 0.0])
     b_point = o4 + np.array([0.0, 0.0, 0.2])  # rocker straight up in the drawing
     z, y = np.array([0.0, 0.0, 1.0]), np.array([0.0, 1.0, 0.0])
-    builder = ModelBuilder(dim=3, gravity=(0.0, 0.0, -gravity), name="spatial four-bar")
+    builder = ModelBuilder(dim=3, gravity=(0.0, 0.0, -gravity),
+                           name="spatial four-bar, " + ("4 revolutes" if all_revolute else "RSUR"))
 
     def add_bar(name: str, p: np.ndarray, q: np.ndarray):
         length = float(np.linalg.norm(q - p))

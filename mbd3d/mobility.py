@@ -9,7 +9,7 @@ import numpy as np
 import scipy.linalg as la
 
 from mbd3d import constraints
-from mbd3d.linalg import dependent_rows
+from mbd3d.linalg import dependent_rows, summarize
 
 __all__ = ["MobilityReport", "mobility"]
 
@@ -30,7 +30,8 @@ class MobilityReport:
     redundant : int
         ``n_constraints - rank``: constraint equations that depend on others.
     dependent : list of list of str
-        For each dependency, the row labels ("joint.component") involved.
+        For each redundant equation, a smallest set of rows ("joint.component") that depend
+        on each other, the most involved first.
     free_coordinates : list of str
         ``dof`` coordinates ("body.coordinate") that can be chosen independent: driving these
         (or giving them as ``hold`` to :func:`mbd3d.solve_position`) fixes the mechanism. Found
@@ -58,10 +59,10 @@ class MobilityReport:
     @property
     def message(self) -> str:
         if self.redundant:
-            rows = "; ".join(", ".join(group) for group in self.dependent)
+            sets = "; ".join("{" + summarize(group, 8) + "}" for group in self.dependent)
             return (f"{self.redundant} redundant constraint equation(s): the Gruebler count "
-                    f"({self.gruebler}) understates the mobility ({self.dof}). Dependent rows: "
-                    f"{rows}")
+                    f"({self.gruebler}) understates the mobility ({self.dof}). Rows that depend "
+                    f"on each other, one set per redundant equation: {sets}")
         if self.dof == 0:
             return "fully driven (kinematic analysis possible)"
         return f"{self.dof} degree(s) of freedom (forward dynamics, or add drivers)"

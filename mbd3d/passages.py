@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mbd3d import constraints
-from mbd3d.linalg import dependent_rows
+from mbd3d.linalg import dependent_rows, ranked_rows, summarize
 
 __all__ = ["SingularPassage", "PassageWatch"]
 
@@ -46,7 +46,8 @@ class SingularPassage:
     time : float
         [s], the step closest to the singular position.
     joints : tuple of str
-        Joints and drivers whose constraint rows (nearly) depend on each other there.
+        Joints and drivers whose constraint rows (nearly) depend on each other there, the
+        most involved first (printing a passage shows the first few and how many more).
     rows : tuple of str
         Those rows ("joint.component").
     depth : float
@@ -60,7 +61,7 @@ class SingularPassage:
     depth: float
 
     def __str__(self) -> str:
-        return f"t = {self.time:.6g} s: {', '.join(self.joints)}"
+        return f"t = {self.time:.6g} s: {summarize(self.joints)}"
 
 
 class PassageWatch:
@@ -107,7 +108,7 @@ class PassageWatch:
         fr = constraints.frames(model, episode["q"], charts=episode["charts"])
         Cq = constraints.jacobian(model, episode["t"], episode["q"], fr, sparse=False)
         _, groups = dependent_rows(Cq)
-        rows = np.unique(np.concatenate(groups)) if groups else np.zeros(0, dtype=int)
+        rows = ranked_rows(groups, model.n_constraints)
         self.passages.append(SingularPassage(
             float(episode["t"]), tuple(model.joints_of_rows(rows)),
             tuple(model.row_labels[r] for r in rows), float(episode["reference"] - episode["low"])))

@@ -18,8 +18,8 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import mass_matrix
 from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
-from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
-                          solve_augmented_lagrangian)
+from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, ranked_rows,
+                          solve_augmented, solve_augmented_lagrangian, summarize)
 
 #: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
 #: inconsistent (a lock-up), not redundant
@@ -45,16 +45,16 @@ def hold_indices(model, hold: Iterable[str | int] | None) -> np.ndarray:
 
 
 def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJacobianError:
-    """A :class:`SingularJacobianError` naming the joints whose rows depend on each other."""
+    """A :class:`SingularJacobianError` naming the joints whose rows depend on each other,
+    the most involved first (a long list is cut to its head and a count)."""
     rank, groups = dependent_rows(Cq)
-    rows = np.unique(np.concatenate(groups)) if groups else np.zeros(0, dtype=int)
-    rows = rows[rows < model.n_constraints]
+    rows = ranked_rows(groups, model.n_constraints)
     joints = model.joints_of_rows(rows)
-    labels = ", ".join(model.row_labels[r] for r in rows[:12])
     return SingularJacobianError(
         f"{what}: the constraint Jacobian is singular at t = {t:.6g} s (numerical rank {rank} of "
-        f"{model.n_constraints} rows). Dependent rows: {labels}; joints involved: "
-        f"{', '.join(joints)}. This is a lock-up or toggle position of the mechanism, or "
+        f"{model.n_constraints} rows). Dependent rows: "
+        f"{summarize([model.row_labels[r] for r in rows], 8)}; joints involved, most first: "
+        f"{summarize(joints)}. This is a lock-up or toggle position of the mechanism, or "
         "redundant constraints. Forward dynamics passes singular positions with "
         "method='generalized-alpha'.", joints=joints, time=t, results=results)
 
@@ -207,8 +207,8 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             f"position analysis of '{model.name}' is stuck at t = {t:.6g} s at a singular "
             f"configuration (max |C| per iteration: {trace}; largest residuals: {worst_rows}). "
             f"The mechanism cannot reach the position its drivers and joints ask for: it is at a "
-            f"lock-up or toggle position, or cannot be assembled. Joints involved: "
-            f"{', '.join(error.joints)}.", joints=error.joints, time=t)
+            f"lock-up or toggle position, or cannot be assembled. Joints involved, most first: "
+            f"{summarize(error.joints)}.", joints=error.joints, time=t)
     raise AssemblyError(
         f"position analysis of '{model.name}' did not converge at t = {t:.6g} s after "
         f"{max_iterations} Newton-Raphson iterations (max |C| per iteration: {trace}). "

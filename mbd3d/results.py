@@ -63,6 +63,17 @@ class BodyHistory:
         return continuous_quaternions(to_quaternion(self.rotation))
 
     @property
+    def orientation(self):
+        """Spatial bodies: the orientations as a numpy-quaternion array (k,) of
+        ``np.quaternion``, the same rotations as :attr:`quaternion`, for quaternion algebra:
+        ``a.conj() * b`` is the rotation from ``a`` to ``b``, ``quaternion.slerp`` and
+        ``quaternion.squad`` interpolate between output times, and
+        ``quaternion.as_rotation_vector`` gives rotation vectors [rad]."""
+        import quaternion  # noqa: PLC0415  (numpy-quaternion; imported when asked for)
+
+        return quaternion.from_float_array(self.quaternion)
+
+    @property
     def pose(self) -> np.ndarray:
         """(k, 3) ``(x, y, angle)`` for planar bodies; (k, 7) ``(x, y, z, w, qx, qy, qz)``
         for spatial ones."""

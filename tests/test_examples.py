@@ -104,7 +104,8 @@ def test_sweep_slider_crank_example(capsys, tmp_path):
     assert "fastest slider" in out and f"rerun {rrd}" in out
     # the 0.1 m rod is shorter than the 0.12 m crank: it locks before a full turn
     assert [row["status"] for row in table] == ["failed", "ok", "failed", "ok"]
-    assert {"/maps/peak_slider_speed", "/maps/peak_torque"} <= entity_paths(rrd)
+    assert {"/maps/peak_slider_speed", "/maps/peak_torque", "/maps/figure"} <= entity_paths(rrd)
+    assert (tmp_path / "sweep.png").stat().st_size > 10_000  # two maps with colour bars
     # crank at 10 rad/s, 0.3 m rod: the slider speed's closed form over the same samples
     dx_dphi, _ = SliderCrankOracle(r=0.12, l=0.3).slider_x_derivatives(
         10.0 * np.linspace(0.0, 2 * math.pi / 5.0, 31))

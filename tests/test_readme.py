@@ -6,13 +6,14 @@ import pathlib
 import re
 
 import numpy as np
+import pytest
 
 README = pathlib.Path(__file__).resolve().parent.parent / "README.md"
 
 
 def test_quick_start_runs(tmp_path, monkeypatch, capsys):
     text = README.read_text()
-    block = re.search(r"## Quick start\s+```python\n(.*?)```", text, re.S).group(1)
+    block = re.search(r"## Quick start.*?```python\n(.*?)```", text, re.S).group(1)
     monkeypatch.chdir(tmp_path)
     namespace: dict = {}
     exec(compile(block, "README quick start", "exec"), namespace)
@@ -57,3 +58,62 @@ def test_sweep_snippet_runs_on_a_local_cluster(tmp_path, monkeypatch, capsys):
     assert [row["status"] for row in table] == ["failed", "ok", "failed", "ok"]
     assert (tmp_path / "sweep_results" / "table.csv").exists()
     assert "SweepTable(4 runs, 2 failed)" in capsys.readouterr().out
+
+
+def viewer_blocks() -> list[str]:
+    section = README.read_text().split("## Viewer", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```python\n(.*?)```", section, re.S)
+
+
+@pytest.mark.filterwarnings("ignore:RRD file has no footer")  # a live stream saved by rerun
+def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
+    """The file snippet runs as printed; the display snippet runs as printed with Rerun's own
+    binary, saving instead of drawing, as the viewer it spawns and connects to, and the file
+    viewer replaced by a program that only checks its argument (no window here)."""
+    import signal
+    import socket
+    import subprocess
+
+    from rerun.chunk import RrdReader
+
+    from mbd3d.viewer import read_component, recorder, rerun_executable
+
+    first, second = viewer_blocks()
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(first, "README viewer snippet", "exec"), namespace)
+    for name in ("live.rrd", "run.rrd"):
+        steps, _ = read_component(tmp_path / name, "/world/bodies/slider", "Transform3D:translation")
+        assert len(steps) == 201
+
+    with socket.socket() as sock:
+        if sock.connect_ex(("127.0.0.1", recorder.VIEWER_PORT)) == 0:
+            pytest.skip(f"port {recorder.VIEWER_PORT} is taken: a viewer is running here")
+    received = tmp_path / "viewer received.rrd"
+    binary = rerun_executable()
+    monkeypatch.setattr(recorder, "_viewer_command", lambda port: [
+        binary, "--bind", "127.0.0.1", "--port", str(port), "--save", str(received)])
+    spawned = []
+    spawn = recorder.spawn_viewer
+    monkeypatch.setattr(recorder, "spawn_viewer",
+                        lambda *a: spawned.append(spawn(*a)) or spawned[-1])
+    monkeypatch.setattr(recorder, "rerun_executable", lambda: "test")  # `test FILE`: no window
+    monkeypatch.setenv("DISPLAY", ":99")
+    monkeypatch.setenv("CI", "true")
+    try:
+        exec(compile(second, "README display snippet", "exec"), namespace)
+    finally:
+        for _, process in spawned:
+            if process is not None:
+                process.send_signal(signal.SIGINT)
+                process.wait(timeout=20)
+    assert len(spawned) == 1 and spawned[0][1] is not None  # started once, then reused
+    # both runs reached it, each a recording of its own with every time point
+    reader = RrdReader(str(received))
+    stores = reader.recordings()
+    assert len(stores) == 2
+    for store in stores:
+        rows = sum(len(chunk.to_record_batch()) for chunk in reader.stream(store=store).to_chunks()
+                   if chunk.entity_path == "/world/bodies/slider" and not chunk.is_static)
+        assert rows == 201
+    assert isinstance(namespace["show"]("run.rrd"), subprocess.Popen)

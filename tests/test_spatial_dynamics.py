@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import quaternion
 import pytest
 import quaternion as npq
 from scipy.integrate import solve_ivp
@@ -66,6 +67,11 @@ def test_dzhanibekov_flip_across_many_half_turns():
     # the quaternion is reported continuously through every chart reset
     quat = body.quaternion
     assert np.min(np.einsum("ki,ki->k", quat[1:], quat[:-1])) > 0.5
+    # as numpy-quaternion objects: the rotation from the start to each time, by quaternion
+    # algebra, is the matrix product of the reference's rotations
+    relative = body.orientation[0].conj() * body.orientation
+    np.testing.assert_allclose(quaternion.as_rotation_matrix(relative),
+                               np.einsum("ji,kjl->kil", A_ref[0], A_ref), atol=1e-8)
 
 
 def test_heavy_top_steady_precession():
