@@ -85,4 +85,7 @@ if __name__ == "__main__":
     parser.add_argument("--rrd", default="iftomm_four_bar.rrd", help="the Rerun recording to write")
     parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
     args = parser.parse_args()
-    main(args.bars, args.duration, rrd=args.rrd, show=args.show)
+    try:
+        main(args.bars, args.duration, rrd=args.rrd, show=args.show)
+    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
+        raise SystemExit(f"error: {error}")

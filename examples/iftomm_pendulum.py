@@ -68,4 +68,7 @@ if __name__ == "__main__":
                         help="the Rerun recording to write")
     parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
     args = parser.parse_args()
-    main(args.duration, rtol=args.rtol, rrd=args.rrd, show=args.show)
+    try:
+        main(args.duration, rtol=args.rtol, rrd=args.rrd, show=args.show)
+    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
+        raise SystemExit(f"error: {error}")

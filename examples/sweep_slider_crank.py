@@ -135,4 +135,7 @@ if __name__ == "__main__":
     parser.add_argument("--rrd", default="sweep_slider_crank.rrd", help="recording of the maps")
     parser.add_argument("--workers", type=int, default=None, help="worker processes")
     args = parser.parse_args()
-    main(folder=args.folder, rrd=args.rrd, workers=args.workers)
+    try:
+        main(folder=args.folder, rrd=args.rrd, workers=args.workers)
+    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
+        raise SystemExit(f"error: {error}")

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import importlib.util
 import math
-import re
 import pathlib
+import re
+import sys
 
 import numpy as np
 import pytest
 
-from slider_crank_oracle import SliderCrankOracle
+import mbd3d as mb
 from mbd3d.viewer import entity_paths, read_component
+from slider_crank_oracle import SliderCrankOracle
 
 EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
 
@@ -111,3 +113,17 @@ def test_sweep_slider_crank_example(capsys, tmp_path):
         10.0 * np.linspace(0.0, 2 * math.pi / 5.0, 31))
     assert table.rows[3]["peak slider speed [m/s]"] == pytest.approx(
         np.max(np.abs(10.0 * dx_dphi)), rel=1e-9)
+
+
+def test_examples_refuse_a_bad_output_path_before_computing(tmp_path, capsys, monkeypatch):
+    example = load("slider_crank")
+    with pytest.raises(mb.MBDError, match="folder does not exist"):
+        example.main(n_points=5, csv_folder=str(tmp_path / "missing"), rrd=str(tmp_path / "a.rrd"))
+    assert capsys.readouterr().out == ""  # nothing was computed
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    if sys.platform.startswith("linux"):
+        with pytest.raises(mb.MBDError, match="no display"):
+            load("four_bar").main(n_points=5, rrd=str(tmp_path / "fb.rrd"), show=True)
+        assert capsys.readouterr().out == ""
