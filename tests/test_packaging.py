@@ -29,7 +29,8 @@ def test_nothing_in_the_repository_reads_the_developers_notes_beside_it():
     offenders = []
     for name in tracked:
         path = REPO / name
-        if path.suffix not in {".py", ".md", ".toml", ".txt", ""} or not path.is_file():
+        if (path.suffix not in {".py", ".md", ".toml", ".txt", ""} or not path.is_file()
+                or path == pathlib.Path(__file__).resolve()):  # this test names what it seeks
             continue
         text = path.read_text(errors="replace")
         if "../shared" in text or '/ "shared"' in text or "shared/validation" in text:
