@@ -14,6 +14,8 @@ __all__ = ["finite_scalar", "finite_vector"]
 
 def finite_scalar(value: Any, what: str, positive: bool = False) -> float:
     """``value`` as a finite float (positive if asked), else a :class:`ModelError` naming ``what``."""
+    if isinstance(value, (bool, np.bool_)):  # float(True) is 1.0: a flag is not a quantity
+        raise ModelError(f"{what} must be a number, got {value!r}")
     try:
         number = float(value)
     except (TypeError, ValueError):
@@ -27,6 +29,8 @@ def finite_scalar(value: Any, what: str, positive: bool = False) -> float:
 
 def finite_vector(value: Any, size: int, what: str) -> np.ndarray:
     """``value`` as a finite float array of ``size`` components, else a :class:`ModelError`."""
+    if np.asarray(value).dtype == bool:
+        raise ModelError(f"{what} must be {size} numbers, got {value!r}")
     try:
         arr = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):

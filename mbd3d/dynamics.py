@@ -17,6 +17,7 @@ same way, so every reported state satisfies the constraints.
 
 from __future__ import annotations
 
+from collections import deque
 from typing import Sequence
 
 import numpy as np
@@ -144,6 +145,27 @@ NEARLY_SINGULAR = 1e-4
 _LARGEST_SVD = 4_000_000
 
 
+#: an accepted step this many times shorter than the longest of the recent ones is a collapse,
+#: and the Jacobian's conditioning is checked there
+STEP_COLLAPSE = 1e-3
+#: accepted steps over which the longest recent step is taken
+_RECENT_STEPS = 50
+
+
+def _singular_here(model, t: float, q: np.ndarray, charts, what: str) -> Exception | None:
+    """A :class:`SingularJacobianError` naming the joints when the constraint Jacobian at
+    ``q`` is (nearly) singular, else None (also when the model is too large to tell)."""
+    if not (np.all(np.isfinite(q)) and model.n_constraints
+            and model.n_constraints * model.n_coordinates <= _LARGEST_SVD):
+        return None
+    Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts),
+                              sparse=False)
+    s = np.linalg.svd(Cq, compute_uv=False)
+    if s[-1] <= NEARLY_SINGULAR * s[0]:
+        return singular_error(model, Cq, t, what)
+    return None
+
+
 def _step_failure(model, method: str, t: float, q: np.ndarray, charts, message: str
                   ) -> Exception:
     """The error for an explicit integrator that cannot take a step: a
@@ -151,14 +173,10 @@ def _step_failure(model, method: str, t: float, q: np.ndarray, charts, message: 
     singular position, which is where the steps of an index-1 method collapse, otherwise an
     :class:`IntegrationError`."""
     what = f"forward dynamics of '{model.name}'"
-    if (np.all(np.isfinite(q)) and model.n_constraints
-            and model.n_constraints * model.n_coordinates <= _LARGEST_SVD):
-        Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts),
-                                  sparse=False)
-        s = np.linalg.svd(Cq, compute_uv=False)
-        if s[-1] <= NEARLY_SINGULAR * s[0]:
-            return singular_error(model, Cq, t, f"{what} ({method} could not take a step: "
-                                                f"{message})")
+    singular = _singular_here(model, t, q, charts,
+                              f"{what} ({method} could not take a step: {message})")
+    if singular is not None:
+        return singular
     return IntegrationError(
         f"{what}: the {method} integrator failed at t = {t:.6g} s: {message}. Try a smaller "
         "max_step, looser tolerances or method='generalized-alpha' for stiff models.", time=t)
@@ -304,6 +322,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         if method == "Radau":
             options["jac"] = _difference_jacobian(rhs, 2 * n)
         solver = solver_cls(rhs, t[0], np.concatenate([q, qd]), t[-1], **options)
+        recent: deque = deque(maxlen=_RECENT_STEPS)  # lengths of the last accepted steps [s]
         while out.done < k_max:
             message = solver.step()
             if solver.status == "failed":
@@ -312,6 +331,20 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             if not np.all(np.isfinite(solver.y)):
                 raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
                                        f"non-finite at t = {solver.t:.6g} s", time=float(solver.t))
+            if not redundant and solver.step_size is not None:
+                # The index-1 accelerations grow without bound at a singular position: the
+                # steps collapse there, and with luck in the rounding a pair steps over it onto
+                # another branch and goes on, a wrong motion that would end "complete". So a
+                # collapse is checked, and a singular Jacobian stops the run.
+                recent.append(solver.step_size)
+                if solver.step_size < STEP_COLLAPSE * max(recent):
+                    singular = _singular_here(
+                        model, float(solver.t), solver.y[:n], chart,
+                        f"forward dynamics of '{model.name}' ({method}: the steps collapsed "
+                        f"to {solver.step_size:.1e} s)")
+                    if singular is not None:
+                        raise singular
+                    recent.clear()  # a regular collapse (a sharp force): the new normal
             if t[out.done] <= solver.t:
                 dense = solver.dense_output()
                 while out.done < k_max and t[out.done] <= solver.t:

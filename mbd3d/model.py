@@ -300,6 +300,14 @@ class ModelBuilder:
             if element.body_i is element.body_j:
                 raise ModelError(f"joint '{element.name}' connects body '{element.body_i.name}' "
                                  "to itself; a joint needs two different bodies")
+            driven = getattr(element, "joint", None)
+            if driven is not None and not any(driven is e for e in constraint_elements):
+                # without the joint the driver alone would hold one coordinate, and the
+                # "driven" body would fall off its hinge or slider
+                raise ModelError(
+                    f"driver '{element.name}' drives joint '{driven.name}', which was never "
+                    f"added to this model; add that {type(driven).__name__} with builder.add() "
+                    "before build(), or drive a joint of this model")
             for spec in element.primitives(ctx):
                 specs.append((e_index, spec))
         force_elements = [e for e in self._elements if isinstance(e, ForceElement)]

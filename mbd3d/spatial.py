@@ -58,7 +58,8 @@ class SpatialBody(BodyType):
                              f"axes, or its 3 principal values, got {inertia!r}")
         if not np.all(np.isfinite(arr)):
             raise ModelError(f"{what} must be finite, got {inertia!r}")
-        if np.max(np.abs(arr - arr.T)) > 1e-12 * max(1.0, np.max(np.abs(arr))):
+        # relative to the tensor's size: a tensor of a 1 mm body is 1e-12 of one of 1 m
+        if np.max(np.abs(arr - arr.T)) > 1e-12 * np.max(np.abs(arr)):
             raise ModelError(f"{what} must be symmetric, got {inertia!r}")
         principal = np.linalg.eigvalsh(arr)
         if principal[0] <= 0.0:
