@@ -296,6 +296,20 @@ def test_live_stream_reaches_a_rerun_server_on_loopback(tmp_path):
             server.kill()
 
 
+def wait_for_rows(path, entity: str, rows: int, timeout: float = 30.0):
+    """The translations of ``entity`` once a server saving to ``path`` has written ``rows``
+    time points of it (or what it has after ``timeout`` seconds)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            steps, values = read_component(path, entity, "Transform3D:translation")
+        except (KeyError, OSError, RuntimeError, ValueError):
+            steps, values = np.zeros(0), np.zeros((0, 1, 3))
+        if len(steps) >= rows or time.monotonic() > deadline:
+            return steps, values
+        time.sleep(0.2)
+
+
 def test_spawned_viewer_receives_every_time_point(tmp_path, monkeypatch):
     """Recorder(spawn=True) starts a viewer for the recording being written and streams to it.
     The stand-in is Rerun's own binary listening where the spawned viewer would, saving what
@@ -312,11 +326,12 @@ def test_spawned_viewer_receives_every_time_point(tmp_path, monkeypatch):
         model = slider_crank(crank_speed=None, crank_torque=2.0)
         res = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 26), observers=[live])
         assert live.viewer_process is not None and live.viewer_process.poll() is None
+        # delivered to the viewer when the run ends; the stand-in writes it out in its time
+        steps, translation = wait_for_rows(saved, "/world/bodies/slider", 26)
     finally:
         if live.viewer_process is not None:
-            live.viewer_process.send_signal(signal.SIGINT)  # the stand-in closes its file
+            live.viewer_process.send_signal(signal.SIGINT)
             live.viewer_process.wait(timeout=20)
-    steps, translation = read_component(saved, "/world/bodies/slider", "Transform3D:translation")
     assert len(steps) == len(res) == 26
     np.testing.assert_allclose(translation[:, 0], lifted(res.body("slider").position), atol=2e-6)
 
