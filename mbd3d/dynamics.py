@@ -99,7 +99,7 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
     except SingularMatrix:
         return None
     for _ in range(_SIMPLIFIED_NEWTON_ITERATIONS):
-        if np.max(np.abs(C), initial=0.0) <= tol:
+        if np.max(np.abs(C) / model.row_scale, initial=0.0) <= tol:
             break
         q = q + lu.solve(np.concatenate([zeros, -C]))[:n]
         fr, C, jac_data = _constraints_at(model, t, q, charts)
@@ -108,7 +108,7 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
     nu = constraints.velocity_rhs(model, t, fr)
     for _ in range(_SIMPLIFIED_NEWTON_ITERATIONS):
         violation = constraints.jacobian_times(model, jac_data, qd) - nu
-        if np.max(np.abs(violation), initial=0.0) <= tol:
+        if np.max(np.abs(violation) / model.row_scale, initial=0.0) <= tol:
             return q, qd
         qd = qd - lu.solve(np.concatenate([zeros, violation]))[:n]
     return None
@@ -190,12 +190,13 @@ def _constraints_at(model, t, q, charts) -> tuple:
 
 
 def _drift(model, t, q, qd, charts) -> tuple[float, tuple]:
-    """Largest position or velocity constraint residual, and what was evaluated for it
+    """Largest position or velocity constraint residual, relative to the rows' scales (lengths
+    in units of the model's length, per second for velocities), and what was evaluated for it
     (``(frames, C, Jacobian values)``, which a projection from ``q`` starts from)."""
     evaluated = fr, C, jac_data = _constraints_at(model, t, q, charts)
     v = constraints.jacobian_times(model, jac_data, qd) - constraints.velocity_rhs(model, t, fr)
-    return max(float(np.max(np.abs(C), initial=0.0)),
-               float(np.max(np.abs(v), initial=0.0))), evaluated
+    return max(float(np.max(np.abs(C) / model.row_scale, initial=0.0)),
+               float(np.max(np.abs(v) / model.row_scale, initial=0.0))), evaluated
 
 
 def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None = None,
@@ -222,11 +223,15 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         models (stiff springs), long runs, redundant constraints and mechanisms that pass
         singular configurations; second order, so it needs small steps for many digits.
     rtol, atol : float
-        Integrator tolerances (relative; absolute in the units of ``q`` and ``qd``); not used
-        by "generalized-alpha", whose accuracy is set by ``step``.
+        Integrator tolerances: relative, and absolute in the model's units (positions in units
+        of ``model.length_scale``, angles in radians, rates per second), so that the same
+        tolerances give the same accuracy to a mechanism of any size. Not used by
+        "generalized-alpha", whose accuracy is set by ``step``.
     constraint_tol : float
-        Largest position [m, rad] and velocity [m/s, rad/s] constraint residual allowed at the
-        end of a step before the state is projected back. Reported states are projected too.
+        Largest position and velocity constraint residual allowed at the end of a step before
+        the state is projected back, relative like ``atol`` (length rows in units of the
+        model's length, per second for velocities; angle rows in rad, rad/s). Reported states
+        are projected too.
     max_step : float
         Largest step [s].
     step : float, optional
@@ -318,7 +323,10 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         # index-1 accelerations jump, and generalized-alpha is the method to use.
         record(q, qd)
         watch.tick(t[0], 0)
-        options = {"rtol": rtol, "atol": atol, "max_step": max_step}
+        # atol in the model's units: positions in units of its length, angles in radians,
+        # rates per second, so that a micrometre mechanism is integrated as accurately
+        options = {"rtol": rtol, "atol": atol * np.tile(model.coordinate_scale, 2),
+                   "max_step": max_step}
         if method == "Radau":
             options["jac"] = _difference_jacobian(rhs, 2 * n)
         solver = solver_cls(rhs, t[0], np.concatenate([q, qd]), t[-1], **options)

@@ -44,8 +44,8 @@ from mbd3d import constraints
 from mbd3d.checks import finite_scalar
 from mbd3d.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.errors import IntegrationError, ModelError
-from mbd3d.linalg import (SingularMatrix, penalty_scale, solve_augmented_lagrangian,
-                          solve_model_augmented)
+from mbd3d.linalg import (SingularMatrix, augmented_scaling, penalty_scale,
+                          solve_augmented_lagrangian, solve_model_augmented)
 from mbd3d.observers import Watch
 from mbd3d.passages import PassageWatch
 from mbd3d.kinematics import solve_velocity
@@ -120,7 +120,8 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
     M = mass_matrix(model, fr)
     Cq = constraints.jacobian_matrix(model, jac_data)
     try:
-        qdd, lam, _ = solve_augmented_lagrangian(M, Cq, Qe, gamma, lam=lam)
+        qdd, lam, _ = solve_augmented_lagrangian(M, Cq, Qe, gamma, lam=lam,
+                                                 scaling=augmented_scaling(model))
     except SingularMatrix:
         raise singular_error(model, Cq, t, f"forward dynamics of '{model.name}'") from None
     return qdd, lam, False
@@ -256,10 +257,11 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         C, jac_data, _ = constraints.evaluate(model, tt, fr)
         nu = constraints.velocity_rhs(model, tt, fr)
         violation = constraints.jacobian_times(model, jac_data, qd) - nu
-        stats["max_drift"] = max(stats["max_drift"], float(np.max(np.abs(C), initial=0.0)),
-                                 float(np.max(np.abs(violation), initial=0.0)))
+        stats["max_drift"] = max(stats["max_drift"],
+                                 float(np.max(np.abs(C) / model.row_scale, initial=0.0)),
+                                 float(np.max(np.abs(violation) / model.row_scale, initial=0.0)))
         for _ in range(8):
-            if np.max(np.abs(violation), initial=0.0) <= projection_tol:
+            if np.max(np.abs(violation) / model.row_scale, initial=0.0) <= projection_tol:
                 break
             qd = qd - lu.solve(penalty * constraints.jacobian_transpose_times(model, jac_data,
                                                                                violation))
@@ -319,14 +321,15 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 return None
             q = q + dq
             stats["newton_iterations"] += 1
-            size = float(np.max(np.abs(dq) / (1.0 + np.abs(q))))
+            # relative to the coordinates' scale (the model's length for positions)
+            size = float(np.max(np.abs(dq) / (model.coordinate_scale + np.abs(q))))
             rate = size / previous if iteration else np.inf
             # near a singular configuration the multipliers converge only linearly (rate
             # a / (a + p s^2) along a small singular value s): judge the remaining error
             # by the observed rate, as for any linearly convergent iteration
             remaining = size * rate / (1.0 - rate) if rate < 1.0 else np.inf
             if (min(size, remaining) <= newton_tol
-                    and np.max(np.abs(C), initial=0.0) <= projection_tol):
+                    and np.max(np.abs(C) / model.row_scale, initial=0.0) <= projection_tol):
                 qdd = beta_prime * (q - q_hat)
                 qd = qd_hat + gamma_prime * (q - q_hat)
                 a = shift + (1.0 - af) / (1.0 - am) * qdd

@@ -16,9 +16,10 @@ import scipy.sparse as sp
 
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix, mass_times
-from mbd3d.errors import ModelError, NotFullyDrivenError
-from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, solve_augmented,
-                          solve_augmented_lagrangian, solve_model_augmented, summarize)
+from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError
+from mbd3d.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
+                          jacobian_scaling, solve_augmented, solve_augmented_lagrangian,
+                          solve_model_augmented, summarize)
 from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
@@ -92,14 +93,14 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
         if not regular:
             raise SingularMatrix("dependent rows")
         if m == n and not len(held):
-            return Factorization(Cq).solve(nu)
+            return Factorization(Cq, scaling=jacobian_scaling(model)).solve(nu)
         if len(held):
             H = np.zeros((len(held), n))
             H[np.arange(len(held)), held] = 1.0
             Cq = sp.vstack([Cq, sp.csr_matrix(H)], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H])
             nu = np.concatenate([nu, guess[held]])
         M = mass_matrix(model, fr)
-        qd, _ = solve_augmented(M, Cq, M @ guess, nu)
+        qd, _ = solve_augmented(M, Cq, M @ guess, nu, augmented_scaling(model, held))
         return qd
     except SingularMatrix:
         pass
@@ -108,7 +109,8 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
     try:
         M = mass_matrix(model, fr)
         qd, _, iterations = solve_augmented_lagrangian(M, Cq, M @ guess, nu,
-                                                       max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+                                                       max_iterations=MAX_AUGMENTED_LAGRANGIAN,
+                                                       scaling=augmented_scaling(model, held))
         if iterations < MAX_AUGMENTED_LAGRANGIAN:
             return qd
     except SingularMatrix:
@@ -130,7 +132,8 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                                 constraints.acceleration_rhs(model, t, q, qd, fr),
                                 f"acceleration analysis of '{model.name}'")[0]
     try:
-        return Factorization(constraints.jacobian(model, t, q, fr)).solve(
+        return Factorization(constraints.jacobian(model, t, q, fr),
+                             scaling=jacobian_scaling(model)).solve(
             constraints.acceleration_rhs(model, t, q, qd, fr))
     except SingularMatrix:
         raise singular_error(model, constraints.jacobian(model, t, q, fr), t,
@@ -143,7 +146,7 @@ def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysi
     joints; else a :class:`NotFullyDrivenError` that says which it is not."""
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
                               sparse=False)
-    rank, groups = dependent_rows(Cq)
+    rank, groups = dependent_rows(Cq, scaling=jacobian_scaling(model))
     n = model.n_coordinates
     if rank < n:
         rows = "; ".join("{" + summarize([model.row_labels[r] for r in g], 8) + "}"
@@ -157,8 +160,13 @@ def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysi
     drivers = [e.name for e in model.joints if e.is_driver]
     for name in drivers:
         driver_rows[model.rows_of(name)] = True
-    joint_rank = dependent_rows(Cq[~driver_rows])[0] if np.any(~driver_rows) else 0
-    driver_rank = dependent_rows(Cq[driver_rows])[0] if np.any(driver_rows) else 0
+    rows, columns = jacobian_scaling(model)
+
+    def rank_of(selected):
+        if not np.any(selected):
+            return 0
+        return dependent_rows(Cq[selected], scaling=(rows[selected], columns))[0]
+    joint_rank, driver_rank = rank_of(~driver_rows), rank_of(driver_rows)
     if joint_rank + driver_rank > rank:
         raise NotFullyDrivenError(
             f"{analysis} of '{model.name}': the drivers ({', '.join(drivers)}) depend on the "
@@ -172,7 +180,8 @@ def _solve_redundant(model, t: float, M, Cq, b: np.ndarray, c: np.ndarray, what:
     """``[M Cq^T; Cq 0] [x; lam] = [b; c]`` with dependent rows of ``Cq`` that span every
     coordinate, by the augmented Lagrangian: the unique ``x`` and the minimum-norm ``lam``;
     a :class:`SingularJacobianError` when the rows are inconsistent (a lock-up)."""
-    x, lam, used = solve_augmented_lagrangian(M, Cq, b, c, max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+    x, lam, used = solve_augmented_lagrangian(M, Cq, b, c, max_iterations=MAX_AUGMENTED_LAGRANGIAN,
+                                              scaling=augmented_scaling(model))
     if used == MAX_AUGMENTED_LAGRANGIAN:
         raise singular_error(model, Cq, float(t), what)
     return x, lam
@@ -195,6 +204,32 @@ def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, a
     return qd, qdd, lam if with_forces else None
 
 
+#: a time point where the dimensionless Jacobian's reciprocal condition number falls below
+#: this fraction of its value at the first point is a singular position: its velocities would
+#: be 10^4 times more sensitive to the positions than at the start (relative to the start, so
+#: that a long chain, whose conditioning is modest everywhere, is not taken for singular)
+SINGULAR_CONDITIONING = 1e-4
+#: largest velocity residual accepted at a time point, relative to the velocities' own size
+VELOCITY_TOLERANCE = 1e-10
+
+
+def _check_velocities(model, Cq, qd: np.ndarray, nu: np.ndarray, t: float, what: str) -> None:
+    """Every accepted time point satisfies ``Cq qd = -Ct`` (rows over their scale, relative to
+    the size of the terms), else an AnalysisError: the last guard against reporting a state
+    that is not the mechanism's."""
+    # rows over their scale, against the largest term of any row (a row whose terms cancel
+    # has a residual at the rounding level of the others, not of its own)
+    terms = (abs(Cq) @ np.abs(qd) + np.abs(nu)) / model.row_scale
+    violation = np.abs(Cq @ qd - nu) / model.row_scale
+    size = float(np.max(terms, initial=0.0))
+    if not (np.all(np.isfinite(qd)) and np.all(violation <= VELOCITY_TOLERANCE * size)):
+        bad = int(np.argmax(violation))
+        raise AnalysisError(f"{what}: the velocities at t = {t:.6g} s do not satisfy the "
+                            f"constraints (row {model.row_labels[bad]}: relative residual "
+                            f"{violation[bad] / size:.1e}); the Jacobian is too "
+                            "ill-conditioned here to trust them", time=t)
+
+
 def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
            progress) -> Results:
     t = check_times(times)
@@ -210,6 +245,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
     def loop() -> None:
         q = model.q0 if q_guess is None else q_guess
         chart = model.charts0
+        reference = 1.0  # the Jacobian's conditioning at the first time point
         for k, tk in enumerate(t):
             if k > 0:
                 # second-order Taylor predictor: Newton-Raphson then needs one or two iterations
@@ -229,11 +265,22 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 continue
             fr = constraints.frames(model, q, charts=chart)
             Cq = constraints.jacobian(model, tk, q, fr)
+            what = f"{analysis} of '{model.name}'"
             try:
-                lu = Factorization(Cq)
+                lu = Factorization(Cq, scaling=jacobian_scaling(model))
             except SingularMatrix:
-                raise singular_error(model, Cq, float(tk), f"{analysis} of '{model.name}'") from None
-            qd = lu.solve(constraints.velocity_rhs(model, tk, fr))
+                raise singular_error(model, Cq, float(tk), what) from None
+            # A singular position (a dead centre of a driven slider, a toggle) has a finite
+            # position but unbounded velocities: stop there rather than report them
+            conditioning = lu.reciprocal_condition()
+            reference = conditioning if k == 0 else reference
+            if conditioning < SINGULAR_CONDITIONING * reference:
+                raise singular_error(model, Cq, float(tk), f"{what} (the velocities are "
+                                     f"unbounded here: the Jacobian's conditioning fell from "
+                                     f"{reference:.1e} at the start to {conditioning:.1e})")
+            nu = constraints.velocity_rhs(model, tk, fr)
+            qd = lu.solve(nu)
+            _check_velocities(model, Cq, qd, nu, float(tk), what)
             fr = constraints.frames(model, q, qd, chart)
             qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
             lam = None

@@ -4,6 +4,15 @@ Dense LAPACK (``getrf``) for small systems; for large ones (``model.sparse``) ba
 (``gbtrf``) after a bandwidth-reducing permutation, or SuperLU when the bandwidth is large.
 A matrix is treated as singular when a pivot of its LU factors falls below
 ``PIVOT_TOLERANCE`` times the largest one: the solution would then be dominated by rounding.
+
+Every matrix of a model is scaled before it is factored or its rank is taken, so that these
+tests mean the same whatever the units: a mechanism of micrometres and micrograms has Jacobian
+and mass entries that differ from a metre-sized one's by powers of ten, by column (positions
+against angles) and by row (length rows against angle rows). The factors come from the
+model's length and mass scales (``Model.row_scale``, ``Model.coordinate_scale``), rounded to
+powers of two so that scaling is exact. They are physical units, never the entries' own sizes:
+scaling a column by its largest entry would blow up a column that is small because the
+mechanism is at a singular position, and hide the singularity.
 """
 
 from __future__ import annotations
@@ -13,12 +22,13 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg as la
 from scipy.linalg.lapack import dgbsv as _gbsv, dgbtrf as _gbtrf, dgbtrs as _gbtrs, \
-    dgesv as _gesv, dgetrf as _getrf, dgetrs as _getrs
+    dgecon as _gecon, dgesv as _gesv, dgetrf as _getrf, dgetrs as _getrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
+           "jacobian_scaling", "augmented_scaling",
            "ranked_rows", "summarize", "augmented_matrix", "solve_augmented", "solve_model_augmented",
            "factor_model_augmented", "AugmentedPattern", "PenaltyPattern", "penalty_scale",
            "penalty_matrix", "solve_augmented_lagrangian"]
@@ -33,6 +43,11 @@ class SingularMatrix(Exception):
     """Internal: raised by :class:`Factorization`; the solvers turn it into a named error."""
 
 
+def _power_of_two(x: np.ndarray) -> np.ndarray:
+    """The powers of two nearest to ``x`` (> 0): scaling by them is exact."""
+    return np.exp2(np.round(np.log2(x)))
+
+
 class Factorization:
     """LU factors of a square matrix, dense or sparse, reusable for several right-hand sides.
 
@@ -41,11 +56,27 @@ class Factorization:
     to LAPACK's ``getrf``/``getrs`` (the wrappers' input checks cost more than the solve at the
     sizes of a mechanism). With ``overwrite`` a dense ``A`` that is already a Fortran-ordered
     float array is factored in place (the caller's buffer becomes the factors).
+
+    ``scaling``: ``(r, c)``, factors of the rows and columns (see :func:`jacobian_scaling`),
+    rounded to powers of two; ``diag(r) A diag(c)`` is factored, so that the pivot test does
+    not depend on the units of the rows and columns. Solves and the determinant are those of
+    ``A``.
     """
 
     def __init__(self, A, ordering: str = "COLAMD", pivot_tolerance: float = PIVOT_TOLERANCE,
-                 overwrite: bool = False):
+                 overwrite: bool = False, scaling: tuple | None = None):
         self.sparse = sp.issparse(A)
+        self._r = self._c = None
+        if scaling is not None:
+            self._r, self._c = (_power_of_two(np.asarray(f, dtype=float)) for f in scaling)
+            if self.sparse:
+                A = sp.diags(self._r) @ sp.csc_matrix(A) @ sp.diags(self._c)
+            else:
+                A = np.asfortranarray(self._r[:, None] * np.asarray(A, dtype=float)
+                                      * self._c[None, :])
+                overwrite = True
+        self._norm = (float(abs(sp.csc_matrix(A)).sum(axis=0).max()) if self.sparse
+                      else float(np.abs(A).sum(axis=0).max(initial=0.0)))  # 1-norm
         if self.sparse:
             try:
                 self._lu = spla.splu(sp.csc_matrix(A), permc_spec=ordering)
@@ -62,9 +93,35 @@ class Factorization:
     @property
     def log_abs_determinant(self) -> float:
         """``log |det A|`` from the pivots (the factor L has a unit diagonal)."""
-        return float(np.sum(np.log(self._pivots)))
+        log_det = float(np.sum(np.log(self._pivots)))
+        if self._r is not None:
+            log_det -= float(np.sum(np.log(self._r)) + np.sum(np.log(self._c)))
+        return log_det
 
     def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
+        if self._r is not None:
+            # A = R^-1 S C^-1 with S = R A C factored: A x = b is S (C^-1 x) = R b, and
+            # A^T y = b is S^T (R^-1 y) = C b
+            inner, outer = (self._c, self._r) if transpose else (self._r, self._c)
+            return outer * self._solve_scaled(inner * b, transpose)
+        return self._solve_scaled(b, transpose)
+
+    def reciprocal_condition(self) -> float:
+        """Estimate of ``1 / (|A|_1 |A^-1|_1)`` of the factored (scaled) matrix: 1 for an
+        orthogonal matrix, about the rounding error for a singular one (LAPACK ``gecon``;
+        Higham's estimator for sparse factors)."""
+        if self._norm == 0.0:
+            return 0.0
+        if self.sparse:
+            n = self._lu.shape[0]
+            inverse = spla.LinearOperator(
+                (n, n), matvec=lambda x: self._lu.solve(np.asarray(x, dtype=float).ravel()),
+                rmatvec=lambda x: self._lu.solve(np.asarray(x, dtype=float).ravel(), trans="T"),
+                dtype=float)
+            return 1.0 / (self._norm * spla.onenormest(inverse))
+        return float(_gecon(self._lu, self._norm, norm="1")[0])
+
+    def _solve_scaled(self, b: np.ndarray, transpose: bool) -> np.ndarray:
         if self.sparse:
             return self._lu.solve(b, trans="T" if transpose else "N")
         return _getrs(self._lu, self._piv, b, trans=1 if transpose else 0)[0]
@@ -79,6 +136,7 @@ class BandedFactorization:
     """
 
     sparse = False
+    _r = _c = None  # never scaled here: the pattern scales the matrix (see _Scaled)
 
     def __init__(self, ab: np.ndarray, kl: int, ku: int,
                  pivot_tolerance: float = PIVOT_TOLERANCE):
@@ -105,12 +163,36 @@ def _check_pivots(pivots: np.ndarray, pivot_tolerance: float) -> np.ndarray:
     return pivots
 
 
-def dependent_rows(Cq, relative_tolerance: float = 1e-9) -> tuple[int, list[np.ndarray]]:
+def jacobian_scaling(model, held: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column factors that make a model's constraint Jacobian dimensionless: rows by
+    one over their scale (lengths by the model's length, angles by one), columns by the
+    coordinates' scale. ``held``: coordinates appended as rows ``q[k] = const``."""
+    rows = 1.0 / model.row_scale
+    if held is not None and len(held):
+        rows = np.concatenate([rows, 1.0 / model.coordinate_scale[held]])
+    return rows, model.coordinate_scale
+
+
+def augmented_scaling(model, held: np.ndarray | None = None) -> np.ndarray:
+    """Symmetric factors for ``[M Cq^T; Cq 0]``: coordinates by ``s / (sqrt(m) L)``,
+    multipliers by ``sqrt(m) L / r`` (``s``, ``r`` the coordinate and row scales, ``m``, ``L``
+    the model's mass and length): every block of the scaled matrix is then of order one.
+    ``held``: coordinates appended as rows ``q[k] = const`` (see :func:`jacobian_scaling`)."""
+    size = np.sqrt(model.mass_scale) * model.length_scale
+    rows = model.row_scale
+    if held is not None and len(held):
+        rows = np.concatenate([rows, model.coordinate_scale[held]])
+    return np.concatenate([model.coordinate_scale / size, size / rows])
+
+
+def dependent_rows(Cq, relative_tolerance: float = 1e-9, scaling: tuple | None = None
+                   ) -> tuple[int, list[np.ndarray]]:
     """Numerical rank of ``Cq`` and, for each redundant equation, a smallest set of rows that
     depend on each other, most involved first.
 
-    The rank comes from the SVD: singular values below ``relative_tolerance`` times the
-    largest count as zero. A column-pivoted QR of ``Cq^T`` then picks ``rank`` independent
+    The rank comes from the SVD of ``diag(r) Cq diag(c)``, ``scaling = (r, c)`` (see
+    :func:`jacobian_scaling`): singular values below ``relative_tolerance`` times the largest
+    count as zero. A column-pivoted QR of ``Cq^T`` then picks ``rank`` independent
     rows; every other row is a combination of those, and the rows of that combination with
     it form its dependent set: a minimal one (no proper subset of it is dependent), so that a
     closed loop reports the rows that close it, not every row a singular vector touches.
@@ -128,6 +210,9 @@ def dependent_rows(Cq, relative_tolerance: float = 1e-9) -> tuple[int, list[np.n
     m = A.shape[0]
     if m == 0 or not np.all(np.isfinite(A)):
         return 0, []
+    if scaling is not None:  # the rank must not depend on the units of rows and columns
+        r, c = scaling
+        A = np.asarray(r)[:, None] * A * np.asarray(c)[None, :]
     U, s, _ = la.svd(A, full_matrices=True)
     s_full = np.zeros(m)
     s_full[:len(s)] = s
@@ -210,8 +295,13 @@ class _FixedPattern:
         return (np.broadcast_to(base + np.arange(nc)[None, :, None], (nb, nc, nc)).ravel(),
                 np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel())
 
-    def _lay_out(self, rows: np.ndarray, cols: np.ndarray, size: int, sparse: bool) -> None:
+    def _lay_out(self, rows: np.ndarray, cols: np.ndarray, size: int, sparse: bool,
+                 scale: np.ndarray) -> None:
         self.rows, self.cols, self.size = rows, cols, size
+        # the matrix is factored as D A D with the model's fixed powers of two D = diag(scale)
+        # (see the module doc); entry_scale multiplies the values in the pattern's order
+        self.scale = _power_of_two(scale)
+        self.entry_scale = self.scale[rows] * self.scale[cols]
         if not sparse:
             self.layout = "dense"
             self.flat = rows + cols * size  # Fortran order, as LAPACK takes it
@@ -259,19 +349,24 @@ class _FixedPattern:
         ------
         SingularMatrix
         """
+        values = values * self.entry_scale
+        if extra is not None:
+            d = self.scale
+            extra = (sp.diags(d) @ sp.csr_matrix(extra) @ sp.diags(d) if sp.issparse(extra)
+                     else d[:, None] * extra * d[None, :])
         if self.layout == "dense":
             A = self._scatter(values, self.size)
             if extra is not None:
                 A += extra.toarray() if sp.issparse(extra) else extra
-            return Factorization(A, pivot_tolerance=self.pivot_tolerance,
-                                 overwrite=True)
+            return _Scaled(self.scale, Factorization(A, pivot_tolerance=self.pivot_tolerance,
+                                                     overwrite=True))
         if self.layout == "banded":
             ab = self._scatter(values, self.band_rows)
             if extra is None or self._add_to_band(ab, extra):
-                return _Permuted(self, BandedFactorization(ab, self.kl, self.ku,
-                                                            self.pivot_tolerance))
-        return _Permuted(self, Factorization(self._permuted_csc(values, extra), "NATURAL",
-                                             self.pivot_tolerance))
+                return _Scaled(self.scale, _Permuted(self, BandedFactorization(
+                    ab, self.kl, self.ku, self.pivot_tolerance)))
+        return _Scaled(self.scale, _Permuted(self, Factorization(
+            self._permuted_csc(values, extra), "NATURAL", self.pivot_tolerance)))
 
     def solve(self, values: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Solve ``A x = b`` once for the matrix with entries ``values``: what :meth:`factor`
@@ -281,18 +376,20 @@ class _FixedPattern:
         ------
         SingularMatrix
         """
+        d = self.scale
         if self.layout == "dense":
-            lu, _, x, _ = _gesv(self._scatter(values, self.size), b, overwrite_a=1)
+            lu, _, x, _ = _gesv(self._scatter(values * self.entry_scale, self.size), d * b,
+                                overwrite_a=1)
             _check_pivots(np.abs(lu.diagonal()), self.pivot_tolerance)
-            return x
+            return d * x
         if self.layout == "banded":
-            kl, ku = self.kl, self.ku
-            lu, _, y, _ = _gbsv(kl, ku, self._scatter(values, self.band_rows), b[self.perm],
-                                overwrite_ab=1)
+            kl, ku, perm = self.kl, self.ku, self.perm
+            lu, _, y, _ = _gbsv(kl, ku, self._scatter(values * self.entry_scale, self.band_rows),
+                                (d * b)[perm], overwrite_ab=1)
             _check_pivots(np.abs(lu[kl + ku]), self.pivot_tolerance)
             x = np.empty_like(y)
-            x[self.perm] = y
-            return x
+            x[perm] = y
+            return d * x
         return self.factor(values).solve(b)
 
     def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:
@@ -311,6 +408,21 @@ class _FixedPattern:
             return False
         np.add.at(ab, (self.kl + self.ku + offset, pcol), extra.data)
         return True
+
+
+class _Scaled:
+    """Factors of ``D A D`` (``D = diag(scale)``), solving with ``A``."""
+
+    def __init__(self, scale: np.ndarray, lu):
+        self.scale, self.lu = scale, lu
+
+    @property
+    def log_abs_determinant(self) -> float:
+        return self.lu.log_abs_determinant - 2.0 * float(np.sum(np.log(self.scale)))
+
+    def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
+        # D A D is symmetric in its scaling: A x = b is (D A D)(D^-1 x) = D b, either way round
+        return self.scale * self.lu.solve(self.scale * b, transpose)
 
 
 class _Permuted:
@@ -337,7 +449,8 @@ class AugmentedPattern(_FixedPattern):
         block_rows, block_cols = self.mass_block_entries(model)
         jr, jc = model._jac_rows, model._jac_cols
         self._lay_out(np.concatenate([block_rows, n + jr, jc]),
-                      np.concatenate([block_cols, jc, n + jr]), n + m, model.sparse)
+                      np.concatenate([block_cols, jc, n + jr]), n + m, model.sparse,
+                      augmented_scaling(model))
 
 
 class PenaltyPattern(_FixedPattern):
@@ -366,7 +479,8 @@ class PenaltyPattern(_FixedPattern):
         all_rows = np.concatenate([block_rows, cols[self.first]])
         all_cols = np.concatenate([block_cols, cols[self.second]])
         linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
-        self._lay_out(linear // n, linear % n, n, model.sparse)
+        self._lay_out(linear // n, linear % n, n, model.sparse,
+                      augmented_scaling(model)[:n])
 
     def values(self, mass_factor: float, blocks: np.ndarray, penalty: float,
                jac_data: np.ndarray) -> np.ndarray:
@@ -407,8 +521,10 @@ def _augmented_values(blocks: np.ndarray, jac_data: np.ndarray) -> np.ndarray:
     return np.concatenate([blocks.ravel(), jac_data, jac_data])
 
 
-def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Solve ``[M Cq^T; Cq 0] [x; lam] = [top; bottom]``.
+def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray,
+                    scaling: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Solve ``[M Cq^T; Cq 0] [x; lam] = [top; bottom]`` (``scaling``: symmetric factors of
+    the matrix, :func:`augmented_scaling`, for a pivot test independent of units).
 
     Raises
     ------
@@ -417,7 +533,8 @@ def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray) -> tuple[np.ndar
     """
     n = M.shape[0]
     K = augmented_matrix(M, Cq)
-    sol = Factorization(K).solve(np.concatenate([top, bottom]))
+    sol = Factorization(K, scaling=None if scaling is None else (scaling, scaling)).solve(
+        np.concatenate([top, bottom]))
     return sol[:n], sol[n:]
 
 
@@ -441,7 +558,8 @@ def penalty_matrix(A, Cq, penalty: float):
 
 def solve_augmented_lagrangian(A, Cq, b: np.ndarray, c: np.ndarray, *, relative_penalty: float = 1e6,
                                lam: np.ndarray | None = None, tol: float = 1e-13,
-                               max_iterations: int = 50) -> tuple[np.ndarray, np.ndarray, int]:
+                               max_iterations: int = 50, scaling: np.ndarray | None = None
+                               ) -> tuple[np.ndarray, np.ndarray, int]:
     """Solve ``[A Cq^T; Cq 0] [x; lam] = [b; c]`` by the augmented-Lagrangian iteration.
 
     ``(A + p Cq^T Cq) x_k = b - Cq^T lam_k + p Cq^T c``, ``lam_{k+1} = lam_k + p (Cq x_k - c)``,
@@ -460,12 +578,31 @@ def solve_augmented_lagrangian(A, Cq, b: np.ndarray, c: np.ndarray, *, relative_
         Iterations used; ``max_iterations`` when ``|Cq x - c|`` did not reach ``tol`` relative
         to the size of its terms (the best iterate is returned).
 
+    ``scaling``: symmetric factors of the augmented matrix (:func:`augmented_scaling`). The
+    iteration then runs on the scaled, dimensionless system, so that its penalty, tolerances
+    and minimum norm do not depend on units (the multipliers are then the minimum-norm ones
+    in that scaling).
+
     Raises
     ------
     SingularMatrix
         If ``A + p Cq^T Cq`` is singular (``A`` is not positive definite on the null space of
         ``Cq``: a body without mass that nothing constrains).
     """
+    if scaling is not None:
+        n = A.shape[0]
+        dx, dl = scaling[:n], scaling[n:]
+        if sp.issparse(A) or sp.issparse(Cq):
+            A_s = sp.diags(dx) @ sp.csr_matrix(A) @ sp.diags(dx)
+            Cq_s = sp.csr_matrix(sp.diags(dl) @ sp.csr_matrix(Cq) @ sp.diags(dx))
+        else:
+            A_s = dx[:, None] * A * dx[None, :]
+            Cq_s = dl[:, None] * Cq * dx[None, :]
+        x, lam_s, used = solve_augmented_lagrangian(
+            A_s, Cq_s, dx * b, dl * c, relative_penalty=relative_penalty,
+            lam=None if lam is None else np.asarray(lam) / dl, tol=tol,
+            max_iterations=max_iterations)
+        return dx * x, dl * lam_s, used
     rows = (np.asarray(Cq.multiply(Cq).sum(axis=1)).ravel() if sp.issparse(Cq)
             else np.einsum("ij,ij->i", Cq, Cq))
     p = relative_penalty * penalty_scale(A.diagonal() if sp.issparse(A) else np.diag(A), rows)

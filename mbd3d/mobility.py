@@ -9,7 +9,7 @@ import numpy as np
 import scipy.linalg as la
 
 from mbd3d import constraints
-from mbd3d.linalg import dependent_rows, summarize
+from mbd3d.linalg import dependent_rows, jacobian_scaling, summarize
 
 __all__ = ["MobilityReport", "mobility"]
 
@@ -96,7 +96,7 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts), sparse=False)
     n, m = model.n_coordinates, model.n_constraints
     if m:
-        rank, groups = dependent_rows(Cq)
+        rank, groups = dependent_rows(Cq, scaling=jacobian_scaling(model))
     else:
         rank, groups = 0, []
     redundant = m - rank
@@ -104,7 +104,10 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
     dof = n - rank
     if m:
         # the columns QR pivots first span the rows' range; the others are free to choose
-        _, _, pivots = la.qr(Cq, mode="economic", pivoting=True)
+        # (in the dimensionless Jacobian, so that the choice does not depend on units)
+        rows, columns = jacobian_scaling(model)
+        _, _, pivots = la.qr(rows[:, None] * Cq * columns[None, :], mode="economic",
+                             pivoting=True)
         free = sorted(pivots[rank:])
         _, _, Vt = la.svd(Cq)
         directions = Vt[rank:].T

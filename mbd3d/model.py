@@ -418,6 +418,7 @@ class Model:
         offset = 0
         labels: list[str] = []
         row_element: list[int] = []
+        row_is_length: list[bool] = []
         c0: list[float] = []
         driver_rows, driver_motions, driver_names = [], [], []
         self._instances_of: dict[str, list[tuple[int, int]]] = {e.name: [] for e in self.joints}
@@ -433,9 +434,13 @@ class Model:
                     raise ModelError(f"joint '{self.joints[e_index].name}': primitive {kind} "
                                      f"needs {r} row labels, got {spec.labels!r}")
                 name = self.joints[e_index].name
+                cls = PRIMITIVES[kind]
+                is_length = (cls.length_rows if cls.length_rows is not None
+                             else cls.row_is_length(spec.params, self.dim))
                 for k in range(r):
                     labels.append(f"{name}.{spec.labels[k]}")
                     row_element.append(e_index)
+                    row_is_length.append(is_length)
                     c0.append(float(spec.c0) if k == 0 else 0.0)
                 if spec.motion is not None and group.motions:
                     if not isinstance(spec.motion, Motion):
@@ -456,6 +461,7 @@ class Model:
         self._lay_out_vectors()
         self.row_labels = labels
         self.row_element = np.array(row_element, dtype=np.intp)
+        self._set_scales(specs, np.array(row_is_length, dtype=bool))
         self.c0 = np.array(c0)
         self.driver_rows = np.array(driver_rows, dtype=np.intp)
         self.driver_motions = tuple(driver_motions)
@@ -573,6 +579,44 @@ class Model:
         if not body or coord not in names:
             raise ModelError(f"coordinate {spec!r} must be 'body.c' with c one of {names}")
         return self.coordinates_of(body).start + names.index(coord)
+
+    def _set_scales(self, specs, row_is_length: np.ndarray) -> None:
+        """The model's characteristic length and mass, and from them the scale of every
+        coordinate and constraint row, so that tolerances, pivots and ranks mean the same for a
+        mechanism of micrometres and grams as for one of metres and tonnes.
+
+        The length is the largest of: the spread of the bodies' guessed centres of mass about
+        their centroid, the distance of every joint point from its body's centre of mass, and
+        every body's radius of gyration; a model of one body at its own joint point has only
+        the last. The mass is the mean body mass.
+        """
+        dim, nb = self.dim, self.n_bodies
+        R = self.q0.reshape(nb, self.n_coords_per_body)[:, :dim]
+        lengths = [float(np.max(np.linalg.norm(R - R.mean(axis=0), axis=1), initial=0.0))]
+        for _, spec in specs:
+            for key, value in spec.params.items():
+                body = spec.body_i if key.endswith("_i") else spec.body_j
+                if key.startswith("u_") and not body.is_ground:
+                    lengths.append(float(np.linalg.norm(value)))
+        J = self.inertia if self.inertia.ndim == 1 else np.trace(self.inertia, axis1=1, axis2=2) / 3
+        lengths.append(float(np.max(np.sqrt(J / self.mass))))
+        length = max(lengths)
+        #: characteristic length of the mechanism [m]
+        self.length_scale = length if np.isfinite(length) and length > 0 else 1.0
+        #: characteristic mass [kg]: the mean body mass
+        self.mass_scale = float(np.mean(self.mass))
+        #: scale of each constraint row: the length scale for rows that are lengths, 1 for
+        #: rows that are angles or cosines
+        self.row_scale = np.where(row_is_length, self.length_scale, 1.0)
+        #: which constraint rows are lengths [m] (the others are angles or cosines)
+        self.length_rows = row_is_length
+        per_body = np.ones(self.n_coords_per_body)
+        per_body[:dim] = self.length_scale
+        #: scale of each coordinate: the length scale for positions, 1 for angles and
+        #: Rodrigues parameters
+        self.coordinate_scale = np.tile(per_body, nb)
+        #: which coordinates are positions [m] (the others are angles or Rodrigues parameters)
+        self.position_coordinates = np.tile(np.arange(self.n_coords_per_body) < dim, nb)
 
     def joints_of_rows(self, rows: Iterable[int]) -> list[str]:
         """Names of the joints owning ``rows``, without repetition, in row order."""

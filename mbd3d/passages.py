@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mbd3d import constraints
-from mbd3d.linalg import dependent_rows, ranked_rows, summarize
+from mbd3d.linalg import dependent_rows, jacobian_scaling, ranked_rows, summarize
 
 __all__ = ["SingularPassage", "PassageWatch"]
 
@@ -107,7 +107,7 @@ class PassageWatch:
         model = self.model
         fr = constraints.frames(model, episode["q"], charts=episode["charts"])
         Cq = constraints.jacobian(model, episode["t"], episode["q"], fr, sparse=False)
-        _, groups = dependent_rows(Cq)
+        _, groups = dependent_rows(Cq, scaling=jacobian_scaling(model))
         rows = ranked_rows(groups, model.n_constraints)
         self.passages.append(SingularPassage(
             float(episode["t"]), tuple(model.joints_of_rows(rows)),

@@ -18,8 +18,9 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import mass_matrix
 from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
-from mbd3d.linalg import (Factorization, SingularMatrix, dependent_rows, ranked_rows,
-                          solve_augmented, solve_augmented_lagrangian, summarize)
+from mbd3d.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
+                          jacobian_scaling, ranked_rows, solve_augmented,
+                          solve_augmented_lagrangian, summarize)
 
 #: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
 #: inconsistent (a lock-up), not redundant
@@ -47,12 +48,21 @@ def hold_indices(model, hold: Iterable[str | int] | None) -> np.ndarray:
 def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJacobianError:
     """A :class:`SingularJacobianError` naming the joints whose rows depend on each other,
     the most involved first (a long list is cut to its head and a count)."""
-    rank, groups = dependent_rows(Cq)
+    scaling = jacobian_scaling(model) if Cq.shape[0] == model.n_constraints else None
+    rank, groups = dependent_rows(Cq, scaling=scaling)
     rows = ranked_rows(groups, model.n_constraints)
     joints = model.joints_of_rows(rows)
+    if rank < Cq.shape[0]:
+        state = (f"singular at t = {t:.6g} s (numerical rank {rank} of {Cq.shape[0]} rows)")
+    else:  # nearly singular: every row counts, but one combination of them hardly does
+        A = Cq.toarray() if sp.issparse(Cq) else np.asarray(Cq)
+        if scaling is not None:
+            A = scaling[0][:, None] * A * scaling[1][None, :]
+        s = np.linalg.svd(A, compute_uv=False)
+        state = (f"nearly singular at t = {t:.6g} s (its smallest singular value is "
+                 f"{s[-1] / s[0]:.1e} of its largest, in the model's units)")
     return SingularJacobianError(
-        f"{what}: the constraint Jacobian is singular at t = {t:.6g} s (numerical rank {rank} of "
-        f"{model.n_constraints} rows). Dependent rows: "
+        f"{what}: the constraint Jacobian is {state}. Dependent rows: "
         f"{summarize([model.row_labels[r] for r in rows], 8)}; joints involved, most first: "
         f"{summarize(joints)}. This is a lock-up or toggle position of the mechanism, or "
         "redundant constraints. Forward dynamics passes singular positions with "
@@ -70,7 +80,7 @@ def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
     return q
 
 
-def _least_change_step(model, q, charts, J, C, m):
+def _least_change_step(model, q, charts, J, C, m, held):
     """Mass-weighted least-change ``dq`` with ``J dq = -C`` when ``J`` has dependent rows
     (None if even the penalty matrix is singular). Where the linearised rows are slightly
     inconsistent (a drifted state of a redundant mechanism: second-order small) the best
@@ -79,7 +89,8 @@ def _least_change_step(model, q, charts, J, C, m):
     M = mass_matrix(model, constraints.frames(model, q, charts=charts))
     try:
         dq, _, _ = solve_augmented_lagrangian(M, J, np.zeros(len(q)), -C,
-                                              max_iterations=MAX_AUGMENTED_LAGRANGIAN)
+                                              max_iterations=MAX_AUGMENTED_LAGRANGIAN,
+                                              scaling=augmented_scaling(model, held))
     except SingularMatrix:
         return None
     return dq if np.all(np.isfinite(dq)) else None
@@ -99,8 +110,10 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     t : float
         Time [s] (drivers are evaluated at ``t``).
     tol : float
-        Convergence when ``max |C| <= tol`` [m, or rad for angular rows]. It is raised to the
-        rounding level of the coordinates, ``100 eps (1 + max |q|)``, when that is larger.
+        Convergence when every row satisfies ``|C| <= tol``, relative to the model's scale:
+        length rows in units of ``model.length_scale``, angle rows in radians. Each kind is
+        raised to the rounding level of the coordinates it sums, ``100 eps (1 + max |R| /
+        L)`` for lengths and ``100 eps (1 + max |angle|)`` for angles, when that is larger.
     max_iterations : int
     hold : iterable of str or int, optional
         Coordinates kept at their guessed values, e.g. ``["crank.theta"]``.
@@ -150,14 +163,35 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))
         return sp.vstack([Cq, H], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H.toarray()])
 
+    # Residuals are judged relative to the model's scale: length rows (and held positions)
+    # in units of its length, angle rows in radians, so that a micrometre mechanism converges
+    # as tightly as a metre one. The rounding floor of each kind comes from the coordinates
+    # that kind sums: positions for lengths, angles for angles (which keep counting turns),
+    # so that a wild angle cannot loosen the test of the points.
+    scale = np.concatenate([model.row_scale, model.coordinate_scale[held]])
+    is_length = np.concatenate([model.length_rows, model.position_coordinates[held]])
+    positions = model.position_coordinates
+    eps100 = 100 * np.finfo(float).eps
+
+    def relative(C):
+        return C / scale
+
+    def worst_and_limit(C, qq):
+        size = np.abs(relative(C))
+        floor_length = eps100 * (1.0 + float(np.max(np.abs(qq[positions]), initial=0.0))
+                                 / model.length_scale)
+        floor_angle = eps100 * (1.0 + float(np.max(np.abs(qq[~positions]), initial=0.0)))
+        limit = np.where(is_length, max(tol, floor_length), max(tol, floor_angle))
+        return float(np.max(size / limit, initial=0.0)), float(np.max(size, initial=0.0))
+
     C = full_residual(q)
-    norm = float(np.linalg.norm(C))
+    norm = float(np.linalg.norm(relative(C)))
     history = []
     M = None
     for iteration in range(max_iterations + 1):
-        worst = float(np.max(np.abs(C))) if C.size else 0.0
+        ratio, worst = worst_and_limit(C, q)
         history.append(worst)
-        if worst <= max(tol, 100 * np.finfo(float).eps * (1.0 + float(np.max(np.abs(q))))):
+        if ratio <= 1.0:
             return q
         if iteration == max_iterations:
             break
@@ -166,15 +200,15 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             if redundant:
                 raise SingularMatrix("dependent rows")
             if m_total == n:
-                dq = Factorization(J).solve(-C)
+                dq = Factorization(J, scaling=jacobian_scaling(model, held)).solve(-C)
             else:
                 if M is None:
                     M = mass_matrix(model, constraints.frames(model, q, charts=charts))
-                dq, _ = solve_augmented(M, J, np.zeros(n), -C)
+                dq, _ = solve_augmented(M, J, np.zeros(n), -C, augmented_scaling(model, held))
         except SingularMatrix:
             # dependent rows: redundant constraints (solvable, least change) or a lock-up
             # (no solution); the augmented Lagrangian tells them apart by converging or not
-            dq = _least_change_step(model, q, charts, J, C, m)
+            dq = _least_change_step(model, q, charts, J, C, m, held)
             if dq is None:
                 raise singular_error(model, J[:m] if not sp.issparse(J) else J.tocsr()[:m], t,
                                      f"position analysis of '{model.name}'") from None
@@ -183,7 +217,7 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         while True:
             q_try = q + step * dq
             C_try = full_residual(q_try)
-            norm_try = float(np.linalg.norm(C_try))
+            norm_try = float(np.linalg.norm(relative(C_try)))
             if np.isfinite(norm_try) and norm_try < (1.0 - 1e-4 * step) * norm:
                 break
             step *= 0.5
@@ -193,9 +227,12 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             break
         q, C, norm = q_try, C_try, norm_try
 
-    order = np.argsort(-np.abs(C[:m]))[:3]
-    worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e}" for r in order)
+    order = np.argsort(-np.abs(relative(C)[:m]))[:3]
+    worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e} "
+                           f"{'m' if model.length_rows[r] else 'rad'}" for r in order)
+    # the largest residual per iteration, relative: lengths in units of the model's length
     trace = ", ".join(f"{h:.1e}" for h in history[-6:])
+    trace += f" (relative to {model.length_scale:.3g} m for lengths)"
     if iteration < max_iterations:
         # No descent direction: |C| has a local minimum with C != 0, where the gradient
         # Cq^T C vanishes, so Cq is singular there. The drivers ask for a position beyond a

@@ -10,7 +10,8 @@ in Rodrigues coordinates by ``tests/test_spatial_primitives.py``): bodies ``i`` 
 ``d = r_j - r_i``, ``a = A v`` body vectors, and ``gamma = -(Cq qd)_q qd`` is the
 velocity-dependent right-hand side of the acceleration equation (drivers add ``f''`` separately).
 
-Each primitive class provides, for ``k`` instances with body indices ``bi``, ``bj`` (k,) and
+Each primitive class says whether its rows are lengths (``length_rows``), so that residuals
+are judged relative to the model's length scale; and it provides, for ``k`` instances with body indices ``bi``, ``bj`` (k,) and
 stacked parameters ``p`` (a dict of arrays with leading dimension k):
 
 - ``rows(dim)``: rows per instance;
@@ -86,6 +87,8 @@ class PointCoincidence:
     """
 
     kind = "point"
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
     params = ("u_i", "u_j")
     vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
 
@@ -120,6 +123,8 @@ class Dot1:
     """
 
     kind = "dot1"
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = False
     params = ("v_i", "v_j")
     vectors = (("ai", "i", "v_i"), ("aj", "j", "v_j"))
 
@@ -155,6 +160,8 @@ class Dot2:
     """
 
     kind = "dot2"
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
     params = ("v_i", "u_i", "u_j")
     vectors = (("ai", "i", "v_i"), ("si", "i", "u_i"), ("sj", "j", "u_j"))
 
@@ -190,6 +197,8 @@ class Distance:
     """
 
     kind = "distance"
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
     params = ("u_i", "u_j")
     vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
 
@@ -227,6 +236,12 @@ class Coordinate:
     """``c = q_j[coordinate]``: one coordinate of body j (body i is the ground)."""
 
     kind = "coordinate"
+    #: translation coordinates are lengths, a planar angle is not (see :meth:`row_is_length`)
+    length_rows = None
+
+    @staticmethod
+    def row_is_length(params: dict, dim: int) -> bool:
+        return int(params["coordinate"]) < dim
     params = ("coordinate",)
     vectors = ()
 
@@ -252,6 +267,8 @@ class RelativeAngle:
     """``c = theta_j - theta_i``: rotation of body j relative to body i about the plane normal."""
 
     kind = "angle"
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = False
     params = ()
     vectors = ()
 
@@ -289,6 +306,8 @@ class Rotation:
     """
 
     kind = "rotation"
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = False
     params = ("f_i", "g_i", "f_j")
     vectors = (("fi", "i", "f_i"), ("gi", "i", "g_i"), ("fj", "j", "f_j"))
     time_dependent = True

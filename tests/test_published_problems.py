@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 import mbd3d as mb
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.linalg import augmented_scaling
 from mbd3d.mechanisms import pendulum_chain
 from test_examples import load
 
@@ -170,14 +171,17 @@ def test_iftomm_a04_bricard_redundant_constraint_found_and_motion_computed(capsy
         implicit_body, explicit_body = res.body(f"rod{k}"), explicit.body(f"rod{k}")
         np.testing.assert_allclose(implicit_body.position, explicit_body.position, atol=5e-6)
         np.testing.assert_allclose(implicit_body.rotation, explicit_body.rotation, atol=5e-6)
-    # minimum-norm multipliers: no component along the dependency of the rows, and the
-    # equations of motion hold with them
+    # minimum-norm multipliers, in the model's dimensionless units (rows over their scale,
+    # coordinates times theirs, see mbd3d.linalg): no component along the dependency of the
+    # rows, and the equations of motion hold with them
+    model = explicit.model
+    weights = augmented_scaling(model)[model.n_coordinates:]
     for k in (10, 40):
-        fr = constraints.frames(explicit.model, explicit.q[k], explicit.qd[k],
-                                explicit.charts[k])
-        Cq = constraints.jacobian(explicit.model, explicit.t[k], explicit.q[k], fr, sparse=False)
-        left_null = np.linalg.svd(Cq)[0][:, -1]
-        assert abs(left_null @ explicit.lam[k]) < 1e-6 * np.abs(explicit.lam[k]).max()
+        fr = constraints.frames(model, explicit.q[k], explicit.qd[k], explicit.charts[k])
+        Cq = constraints.jacobian(model, explicit.t[k], explicit.q[k], fr, sparse=False)
+        left_null = np.linalg.svd(weights[:, None] * Cq * model.coordinate_scale)[0][:, -1]
+        lam_scaled = explicit.lam[k] / weights
+        assert abs(left_null @ lam_scaled) < 1e-6 * np.abs(lam_scaled).max()
         M = mass_matrix(explicit.model, fr)
         balance = M @ explicit.qdd[k] + Cq.T @ explicit.lam[k] - generalized_forces(
             explicit.model, explicit.t[k], fr)
