@@ -199,6 +199,12 @@ def _drift(model, t, q, qd, charts) -> tuple[float, tuple]:
                float(np.max(np.abs(v) / model.row_scale, initial=0.0))), evaluated
 
 
+def _is_number(value) -> bool:
+    """A real number (not a flag, a string or an array)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+        value, (bool, np.bool_))
+
+
 def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None = None,
                      qd0: Sequence[float] | None = None, *, method: str = "RK45",
                      rtol: float = 1e-8, atol: float = 1e-10, constraint_tol: float = 1e-8,
@@ -272,8 +278,15 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         raise ModelError(f"method must be one of {', '.join(METHODS)}, {GENERALIZED_ALPHA}; "
                          f"got {method!r}")
     for label, value in (("rtol", rtol), ("atol", atol), ("constraint_tol", constraint_tol)):
-        if not (np.isfinite(value) and value > 0):
+        if not (_is_number(value) and np.isfinite(value) and value > 0):
             raise ModelError(f"{label} must be positive and finite, got {value!r}")
+    if not (_is_number(max_step) and max_step > 0):  # inf (no limit) is allowed, NaN is not
+        raise ModelError(f"max_step must be a positive time [s] (or inf: no limit), got "
+                         f"{max_step!r}")
+    if step is not None and not (_is_number(step) and np.isfinite(step) and step > 0):
+        raise ModelError(f"step must be a positive, finite time [s], got {step!r}")
+    if not (_is_number(rho_inf) and 0.0 <= rho_inf <= 1.0):
+        raise ModelError(f"rho_inf must be in [0, 1], got {rho_inf!r}")
     if method == GENERALIZED_ALPHA:
         return integrate_generalized_alpha(
             model, t, q0, qd0, step=step, rho_inf=rho_inf,

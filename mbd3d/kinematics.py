@@ -40,7 +40,16 @@ def check_times(times: Sequence[float]) -> np.ndarray:
         raise ModelError("times must be finite")
     if t.size > 1 and not np.all(np.diff(t) > 0):
         raise ModelError("times must be strictly increasing")
+    if np.max(np.abs(t)) > LATEST_TIME:
+        raise ModelError(f"times reach {np.max(np.abs(t)):.3g} s, beyond {LATEST_TIME:.0e} s: "
+                         "there doubles keep no digits for the steps of an analysis or for the "
+                         "angles of anything that turns; give times in seconds of the motion")
     return t
+
+
+#: largest time an analysis accepts [s] (about 30,000 years): beyond it, double precision
+#: leaves less than 1e-4 s of resolution for the steps and angles lose their turns
+LATEST_TIME = 1e12
 
 
 def _require_fully_driven(model, what: str) -> None:
@@ -252,6 +261,8 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 # and stays on the branch of the previous time point
                 h = tk - t[k - 1]
                 q = out.q[k - 1] + h * out.qd[k - 1] + 0.5 * h * h * out.qdd[k - 1]
+                if not np.all(np.isfinite(q)):  # a step the predictor cannot extrapolate
+                    q = out.q[k - 1]
             # keep orientation coordinates away from their singularity (spatial bodies)
             q, _, chart, _ = model.body_type.reset_charts(q, None, chart)
             q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
-from mbd3d.mechanisms import pendulum_chain, slider_crank
+from mbd3d.mechanisms import pendulum_chain, slider_crank, slider_crank_positions
 from mbd3d.joints import (CoordinateDriver, Distance, Prismatic, Revolute, RotationDriver,
                     TranslationDriver)
 
@@ -30,6 +30,8 @@ def builder_with_bar():
     (dict(mass=1.0, inertia=1.0, angle=float("nan")), ["'bar'", "angle"]),
     (dict(mass=1.0, inertia=1.0, position=(1.0, 2.0, 3.0)), ["'bar'", "position", "2"]),
     (dict(mass="heavy", inertia=1.0), ["'bar'", "mass"]),
+    (dict(mass=True, inertia=1.0), ["'bar'", "mass", "number"]),  # not 1 kg
+    (dict(mass=1.0, inertia=1.0, position=(True, False)), ["'bar'", "position"]),
 ])
 def test_body_parameters_are_checked(kwargs, words):
     b = mb.ModelBuilder(dim=2)
@@ -185,6 +187,85 @@ def test_bad_times_and_options():
         mb.forward_dynamics(model, [0.0, 1.0], rtol=-1.0)
     with pytest.raises(mb.ModelError, match="hold.*'link1.z'"):
         mb.forward_dynamics(model, [0.0, 1.0], hold=["link1.z"])
+
+
+@pytest.mark.parametrize("options, words", [
+    (dict(max_step=0.0), "max_step must be a positive"),
+    (dict(max_step=-1.0), "max_step must be a positive"),
+    (dict(max_step=float("nan")), "max_step must be a positive"),
+    (dict(max_step=True), "max_step must be a positive"),
+    (dict(method="generalized-alpha", step=0.0), "step must be a positive"),
+    (dict(method="generalized-alpha", step=float("inf")), "step must be a positive"),
+    (dict(atol="1e-8"), "atol must be positive"),
+])
+def test_integrator_options_are_checked_at_the_call(options, words):
+    with pytest.raises(mb.ModelError, match=words):
+        mb.forward_dynamics(pendulum_chain(1), [0.0, 1.0], **options)
+
+
+def test_times_beyond_what_doubles_resolve_are_refused_by_name():
+    for analysis in (mb.kinematic_analysis, mb.inverse_dynamics, mb.forward_dynamics):
+        model = slider_crank(crank_speed=None if analysis is mb.forward_dynamics else 1.0)
+        with pytest.raises(mb.ModelError, match=r"times reach 1e\+300 s"):
+            analysis(model, [0.0, 1e300])
+
+
+def test_a_driver_of_a_joint_never_added_is_refused_naming_both():
+    b, bar = builder_with_bar()
+    pin = Revolute("pin", b.ground, bar, at=(0.0, 0.0))  # made, but never added
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(0.0, 1.0)))
+    with pytest.raises(mb.ModelError, match="driver 'motor' drives joint 'pin', which was never "
+                                            "added"):
+        b.build()
+    b, bar = builder_with_bar()
+    slide = Prismatic("slide", b.ground, bar, axis=(1.0, 0.0), at=(0.5, 0.0))
+    b.add(TranslationDriver("push", slide, motion=0.0))
+    with pytest.raises(mb.ModelError, match="'push' drives joint 'slide'"):
+        b.build()
+
+
+def test_an_asymmetric_inertia_is_refused_at_any_scale():
+    tensor = np.array([[2.0, 1.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]])
+    for size in (1e-24, 1e-6, 1.0, 1e6):
+        b = mb.ModelBuilder(dim=3)
+        with pytest.raises(mb.ModelError, match="'grain': inertia must be symmetric"):
+            b.add_body("grain", mass=1e-12, inertia=size * tensor, position=(0.0, 0.0, 0.0))
+    # symmetric to rounding is symmetric, whatever the size
+    b = mb.ModelBuilder(dim=3)
+    tiny = 1e-24 * np.diag([2.0, 2.0, 3.0])
+    tiny[0, 1], tiny[1, 0] = 1e-25, 1e-25 * (1 + 1e-15)
+    b.add_body("grain", mass=1e-12, inertia=tiny, position=(0.0, 0.0, 0.0))
+
+
+def test_a_piston_driven_slider_crank_stops_at_its_dead_centre():
+    """The issue's case: driven at its piston to the dead centre at t = 1 s, the crank speed
+    there is unbounded. It used to come back as -1e5 rad/s with every later point accepted (the
+    slider beyond its reach, residuals of millimetres) and status complete."""
+    L1, L2, phi = 0.12, 0.26, math.radians(65.0)
+    a, rod_angle, b_point = slider_crank_positions(phi, L1, L2)
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    crank = b.add_body("crank", mass=1.0, inertia=1e-3, position=a / 2, angle=phi)
+    rod = b.add_body("rod", mass=2.0, inertia=1e-2, position=(a + b_point) / 2, angle=rod_angle)
+    slider = b.add_body("slider", mass=4.0, inertia=2e-2, position=b_point)
+    b.add(Revolute("O", b.ground, crank, point_i=(0.0, 0.0), point_j=(-L1 / 2, 0.0)))
+    b.add(Revolute("A", crank, rod, point_i=(L1 / 2, 0.0), point_j=(-L2 / 2, 0.0)))
+    b.add(Revolute("B", rod, slider, point_i=(L2 / 2, 0.0), point_j=(0.0, 0.0)))
+    rail = b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0), point_i=(0.0, 0.0),
+                           point_j=(0.0, 0.0)))  # the driven coordinate: x of the slider
+    b.add(TranslationDriver("piston", rail, motion=mb.Ramp(b_point[0], L1 + L2 - b_point[0])))
+    model = b.build()
+    for analysis in (mb.kinematic_analysis, mb.inverse_dynamics):
+        with pytest.raises(mb.SingularJacobianError) as info:
+            analysis(model, np.linspace(0.0, 1.05, 106))
+        assert info.value.time == pytest.approx(1.0)
+        assert {"piston", "O", "A", "B"} <= set(info.value.joints)
+        kept = info.value.results
+        assert kept.t[-1] == pytest.approx(0.99) and kept.status == "failed"
+        # what was kept is right: the closed form of the crank angle for each piston position
+        x = kept.body("slider").position[:, 0]
+        cos_phi = (x * x + L1 * L1 - L2 * L2) / (2 * x * L1)
+        np.testing.assert_allclose(np.cos(kept.body("crank").angle), cos_phi, atol=1e-10)
+        assert np.all(x <= L1 + L2)
 
 
 def test_force_returning_nan_is_named():

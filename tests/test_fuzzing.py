@@ -46,7 +46,11 @@ def chains(draw):
             "gravity": draw(st.booleans()), "rough": draw(st.floats(0.0, 0.3))}
 
 
-def build(spec) -> mb.Model:
+def build(spec, drive: float | None = None) -> mb.Model:
+    """The chain of ``spec``; with ``drive``, every joint driven from its drawn position at
+    ``drive`` rad/s or m/s."""
+    from mbd3d.joints import RotationDriver, TranslationDriver
+
     dim = spec["dim"]
     b = mb.ModelBuilder(dim=dim, gravity=(0.0, -9.81) + (0.0,) * (dim - 2) if spec["gravity"]
                         else None, name="fuzzed chain")
@@ -62,12 +66,16 @@ def build(spec) -> mb.Model:
                           inertia=inertia if dim == 2 else (inertia * 1e-2, inertia, inertia),
                           position=centre, **({"angle": a} if dim == 2 else {}))
         if link["joint"] == "revolute":
-            b.add(Revolute(f"joint{k}", previous, body, at=tip,
-                           **({} if dim == 2 else {"axis": (0.0, 0.0, 1.0)})))
+            joint = b.add(Revolute(f"joint{k}", previous, body, at=tip,
+                                   **({} if dim == 2 else {"axis": (0.0, 0.0, 1.0)})))
+            if drive is not None:
+                b.add(RotationDriver(f"drive{k}", joint, motion=mb.Ramp(0.0, drive)))
         elif link["joint"] == "spherical":
             b.add(Spherical(f"joint{k}", previous, body, at=tip))
         else:
-            b.add(Prismatic(f"joint{k}", previous, body, axis=direction, at=tip))
+            joint = b.add(Prismatic(f"joint{k}", previous, body, axis=direction, at=tip))
+            if drive is not None:
+                b.add(TranslationDriver(f"drive{k}", joint, motion=mb.Ramp(0.0, drive)))
         previous, tip = body, tip + length * direction
     if spec["closed"]:
         b.add(Revolute("closure", b.ground, previous, at=tip,
@@ -104,6 +112,40 @@ def test_random_mechanisms_integrate_implicitly_or_refuse(spec):
         res = mb.forward_dynamics(model, [0.0, 0.01], method="generalized-alpha", step=5e-3)
         assert res.status == "complete" and all_finite(res)
         assert np.max(res.position_residual) <= 1e-6
+    except mb.MBDError as error:
+        assert str(error)
+
+
+def within_tolerances(res: mb.Results, position_tol: float, velocity_tol: float) -> bool:
+    """Every output time satisfies the position and velocity constraints, residuals taken
+    relative to the model's scale (lengths in units of its length, per second for rates)."""
+    limit = max(res.model.length_scale, 1.0)
+    return bool(np.all(res.position_residual <= position_tol * limit)
+                and np.all(res.velocity_residual <= velocity_tol * limit))
+
+
+@given(chains(), st.floats(min_value=-3.0, max_value=3.0), st.floats(min_value=0.05, max_value=1.5))
+def test_any_complete_result_satisfies_the_constraints_at_every_output_time(spec, speed, span):
+    """Complete means right: with every joint driven (closed chains are then over-driven and
+    must be refused), kinematics and inverse dynamics, and without drivers forward dynamics,
+    each end complete with the constraints met at every output time, or stop with one of
+    mbd3d's errors."""
+    for link in spec["links"]:
+        if link["joint"] == "spherical":  # three rotations: not one driver's worth
+            link["joint"] = "revolute"
+    times = np.linspace(0.0, span, 21)
+    try:
+        driven = build(spec, drive=speed)
+        for analysis in (mb.kinematic_analysis, mb.inverse_dynamics):
+            res = analysis(driven, times)
+            assert res.status == "complete" and all_finite(res)
+            assert within_tolerances(res, 1e-9, 1e-9)
+    except mb.MBDError as error:
+        assert str(error)
+    try:
+        res = mb.forward_dynamics(build(spec), times[:6], method="RK45")
+        assert res.status == "complete" and all_finite(res)
+        assert within_tolerances(res, 1e-8, 1e-8)
     except mb.MBDError as error:
         assert str(error)
 
