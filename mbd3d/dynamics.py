@@ -283,10 +283,6 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     if not (_is_number(max_step) and max_step > 0):  # inf (no limit) is allowed, NaN is not
         raise ModelError(f"max_step must be a positive time [s] (or inf: no limit), got "
                          f"{max_step!r}")
-    if step is not None and not (_is_number(step) and np.isfinite(step) and step > 0):
-        raise ModelError(f"step must be a positive, finite time [s], got {step!r}")
-    if not (_is_number(rho_inf) and 0.0 <= rho_inf <= 1.0):
-        raise ModelError(f"rho_inf must be in [0, 1], got {rho_inf!r}")
     if method == GENERALIZED_ALPHA:
         return integrate_generalized_alpha(
             model, t, q0, qd0, step=step, rho_inf=rho_inf,

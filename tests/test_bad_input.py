@@ -194,8 +194,9 @@ def test_bad_times_and_options():
     (dict(max_step=-1.0), "max_step must be a positive"),
     (dict(max_step=float("nan")), "max_step must be a positive"),
     (dict(max_step=True), "max_step must be a positive"),
-    (dict(method="generalized-alpha", step=0.0), "step must be a positive"),
-    (dict(method="generalized-alpha", step=float("inf")), "step must be a positive"),
+    (dict(method="generalized-alpha", step=0.0), r"step \(the fixed time step.*positive"),
+    (dict(method="generalized-alpha", step=float("inf")), r"step \(the fixed time step.*finite"),
+    (dict(method="generalized-alpha", step=True), r"step \(the fixed time step.*number"),
     (dict(atol="1e-8"), "atol must be positive"),
 ])
 def test_integrator_options_are_checked_at_the_call(options, words):
