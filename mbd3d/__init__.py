@@ -24,7 +24,7 @@ from mbd3d.body import Body
 from mbd3d.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
 from mbd3d.equations import kinetic_energy, potential_energy
 from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
-                          NotFullyDrivenError, SingularJacobianError)
+                          NotFullyDrivenError, OverDrivenError, SingularJacobianError)
 from mbd3d.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
 from mbd3d.mobility import MobilityReport, mobility
@@ -44,6 +44,7 @@ __all__ = [
     "inverse_dynamics", "forward_dynamics", "forward_accelerations", "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "format_table", "kinetic_energy", "potential_energy",
     "Observer", "ProgressBar",
-    "MBDError", "ModelError", "NotFullyDrivenError", "AnalysisError", "AssemblyError",
+    "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",
+    "AssemblyError",
     "SingularJacobianError", "IntegrationError",
 ]

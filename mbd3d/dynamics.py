@@ -26,7 +26,7 @@ import scipy.integrate as si
 from mbd3d import constraints
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
-from mbd3d.kinematics import check_times, solve_velocity
+from mbd3d.kinematics import check_times, require_not_over_driven, solve_velocity
 from mbd3d.linalg import SingularMatrix, factor_model_augmented
 from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
@@ -321,8 +321,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
 
     def loop() -> None:
         nonlocal chart, redundant
-        q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
-                           hold=hold)
+        guess = np.asarray(model.q0 if q0 is None else q0, dtype=float)
+        if guess.shape == (n,) and np.all(np.isfinite(guess)):  # else solve_position says why
+            require_not_over_driven(model, t[0], guess, chart, f"forward dynamics of "
+                                                               f"'{model.name}'")
+        q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
         redundant = rows_dependent(model, t[0], q, chart)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
         # Redundant constraints (dependent rows from the start, as in Bricard's mechanism)

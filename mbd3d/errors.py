@@ -22,6 +22,21 @@ class NotFullyDrivenError(MBDError, ValueError):
     """A kinematic analysis was asked of a mechanism that still has degrees of freedom."""
 
 
+class OverDrivenError(MBDError, ValueError):
+    """Drivers prescribe motions that the joints, or other drivers, already fix: two motors on
+    one hinge, a motor on a rigid loop.
+
+    Attributes
+    ----------
+    drivers, joints : list of str
+        The drivers, and the joints, whose constraint rows depend on each other.
+    """
+
+    def __init__(self, message: str, *, drivers: list[str], joints: list[str]):
+        super().__init__(message)
+        self.drivers, self.joints = list(drivers), list(joints)
+
+
 class AnalysisError(MBDError, RuntimeError):
     """An analysis failed part way.
 

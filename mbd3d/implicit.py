@@ -48,7 +48,7 @@ from mbd3d.linalg import (SingularMatrix, augmented_scaling, penalty_scale,
                           solve_augmented_lagrangian, solve_model_augmented)
 from mbd3d.observers import Watch
 from mbd3d.passages import PassageWatch
-from mbd3d.kinematics import solve_velocity
+from mbd3d.kinematics import require_not_over_driven, solve_velocity
 from mbd3d.position import singular_error, solve_position
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
@@ -342,8 +342,11 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
     def loop() -> None:
         nonlocal redundant
         chart = model.charts0
-        q = solve_position(model, model.q0 if q0 is None else q0, t[0], tol=projection_tol,
-                           hold=hold)
+        guess = np.asarray(model.q0 if q0 is None else q0, dtype=float)
+        if guess.shape == (n,) and np.all(np.isfinite(guess)):  # else solve_position says why
+            require_not_over_driven(model, t[0], guess, chart, f"forward dynamics of "
+                                                               f"'{model.name}'")
+        q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
         redundant = rows_dependent(model, t[0], q, chart)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
         qdd, lam = record(q, qd, chart, None)

@@ -16,10 +16,10 @@ import scipy.sparse as sp
 
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix, mass_times
-from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError
+from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
-                          jacobian_scaling, solve_augmented, solve_augmented_lagrangian,
-                          solve_model_augmented, summarize)
+                          jacobian_scaling, ranked_rows, solve_augmented,
+                          solve_augmented_lagrangian, solve_model_augmented, summarize)
 from mbd3d.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
@@ -149,10 +149,58 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                              f"acceleration analysis of '{model.name}'") from None
 
 
+def require_not_over_driven(model, t: float, q: np.ndarray, chart, what: str) -> None:
+    """Refuse a model whose drivers depend on each other or on the joints at ``q`` (two motors
+    on one hinge, a motor on a rigid loop) with an :class:`OverDrivenError` naming them: such
+    a mechanism cannot follow its drivers, and would otherwise be reported as stuck at a
+    singular position."""
+    driver_rows = np.zeros(model.n_constraints, dtype=bool)
+    for element in model.joints:
+        if element.is_driver:
+            driver_rows[model.rows_of(element.name)] = True
+    if not np.any(driver_rows):
+        return
+    Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
+                              sparse=False)
+    rows, columns = jacobian_scaling(model)
+
+    def rank_and_groups(selected):
+        if not np.any(selected):
+            return 0, []
+        rank, groups = dependent_rows(Cq[selected], scaling=(rows[selected], columns))
+        index = np.flatnonzero(selected)
+        return rank, [index[g] for g in groups]
+    driver_rank, driver_groups = rank_and_groups(driver_rows)
+    joint_rank, _ = rank_and_groups(~driver_rows)
+    rank, groups = rank_and_groups(np.ones(model.n_constraints, dtype=bool))
+    if driver_rank < np.count_nonzero(driver_rows):
+        involved, fix = driver_groups, "the other drivers already fix"
+    elif joint_rank + driver_rank > rank:
+        involved = [g for g in groups if np.any(driver_rows[g])]
+        fix = (f"the joints already fix (the joints alone leave "
+               f"{model.n_coordinates - joint_rank} degree(s) of freedom for {driver_rank} "
+               "driven motion(s))")
+    else:
+        return
+    labels = ranked_rows(involved, model.n_constraints)
+    names = model.joints_of_rows(labels)
+    drivers = [name for name in names if model.joint(name).is_driver]
+    joints = [name for name in names if not model.joint(name).is_driver]
+    sets = "; ".join("{" + summarize([model.row_labels[r] for r in g], 8) + "}" for g in involved)
+    raise OverDrivenError(
+        f"{what}: '{model.name}' is over-driven: the driver(s) {summarize(drivers)} prescribe "
+        f"motions that {fix}"
+        + (f" (joints involved: {summarize(joints)})" if joints else "")
+        + f". Rows that depend on each other: {sets}. Remove a driver, or free the joint it "
+        "fights; mbd3d.mobility(model) lists the redundant equations.",
+        drivers=drivers, joints=joints)
+
+
 def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysis: str) -> None:
     """A mechanism with more constraint equations than coordinates must still be fully driven
-    (its rows span every coordinate, the surplus redundant) with drivers independent of the
-    joints; else a :class:`NotFullyDrivenError` that says which it is not."""
+    (its rows span every coordinate, the surplus redundant); else a
+    :class:`NotFullyDrivenError` that says so (over-driving is refused before, by
+    :func:`require_not_over_driven`)."""
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
                               sparse=False)
     rank, groups = dependent_rows(Cq, scaling=jacobian_scaling(model))
@@ -165,24 +213,6 @@ def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysi
             f"{model.n_constraints} constraint equations for {n} coordinates, but only {rank} "
             f"are independent (rows that depend on each other: {rows}), so {n - rank} degree(s) of freedom are "
             "not driven. Add drivers, or use mbd3d.forward_dynamics (see mbd3d.mobility).")
-    driver_rows = np.zeros(model.n_constraints, dtype=bool)
-    drivers = [e.name for e in model.joints if e.is_driver]
-    for name in drivers:
-        driver_rows[model.rows_of(name)] = True
-    rows, columns = jacobian_scaling(model)
-
-    def rank_of(selected):
-        if not np.any(selected):
-            return 0
-        return dependent_rows(Cq[selected], scaling=(rows[selected], columns))[0]
-    joint_rank, driver_rank = rank_of(~driver_rows), rank_of(driver_rows)
-    if joint_rank + driver_rank > rank:
-        raise NotFullyDrivenError(
-            f"{analysis} of '{model.name}': the drivers ({', '.join(drivers)}) depend on the "
-            f"joints' rows. The joints alone leave {n - joint_rank} degree(s) of freedom for "
-            f"{driver_rank} driven motion(s): the drivers ask for a motion the joints forbid "
-            "(a rigid loop, or a driver of a coordinate the joints already fix). See "
-            "mbd3d.mobility of the model without its drivers.")
 
 
 def _solve_redundant(model, t: float, M, Cq, b: np.ndarray, c: np.ndarray, what: str):
@@ -254,6 +284,8 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
     def loop() -> None:
         q = model.q0 if q_guess is None else q_guess
         chart = model.charts0
+        require_not_over_driven(model, t[0], np.asarray(q, dtype=float), chart,
+                                f"{analysis} of '{model.name}'")
         reference = 1.0  # the Jacobian's conditioning at the first time point
         for k, tk in enumerate(t):
             if k > 0:

@@ -38,6 +38,9 @@ class MobilityReport:
         by a column-pivoted QR of ``Cq`` (coordinate partitioning); the choice is not unique.
     free_directions : ndarray (n_coordinates, dof)
         Orthonormal basis of the velocities the constraints allow (null space of ``Cq``).
+    over_driven : list of str
+        Drivers among the dependent rows: they prescribe motions the joints or other drivers
+        already fix, and no analysis can follow them.
     """
 
     model: str
@@ -51,6 +54,7 @@ class MobilityReport:
     dependent: list = field(default_factory=list)
     free_coordinates: list = field(default_factory=list)
     free_directions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    over_driven: list = field(default_factory=list)
 
     @property
     def fully_driven(self) -> bool:
@@ -58,6 +62,11 @@ class MobilityReport:
 
     @property
     def message(self) -> str:
+        if self.over_driven:
+            sets = "; ".join("{" + summarize(group, 8) + "}" for group in self.dependent)
+            return (f"over-driven: the driver(s) {summarize(self.over_driven)} prescribe motions "
+                    f"the joints or other drivers already fix. Rows that depend on each other, "
+                    f"one set per redundant equation: {sets}")
         if self.redundant:
             sets = "; ".join("{" + summarize(group, 8) + "}" for group in self.dependent)
             return (f"{self.redundant} redundant constraint equation(s): the Gruebler count "
@@ -113,5 +122,9 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
         directions = Vt[rank:].T
     else:
         free, directions = range(n), np.eye(n)
+    over_driven = [] if not redundant else [
+        name for name in model.joints_of_rows(np.concatenate(groups))
+        if model.joint(name).is_driver]
     return MobilityReport(model.name, model.n_bodies, n, m, n - m, rank, dof, redundant,
-                          dependent, [model.coordinate_labels[k] for k in free], directions)
+                          dependent, [model.coordinate_labels[k] for k in free], directions,
+                          over_driven)

@@ -305,3 +305,37 @@ def test_a_huge_but_finite_state_is_not_called_diverged():
     qdd, lam = mb.forward_accelerations(model, 0.0, q, qd)
     np.testing.assert_array_equal(qdd, [0.0, -9.81, 0.0])
     assert lam.size == 0
+
+
+def parallelogram_with_two_motors() -> mb.Model:
+    """A four-bar (unit parallelogram) driven at both ground pivots: one motor too many."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="four-bar with two motors")
+    rod = {"mass": 1.0, "inertia": 1.0 / 12}
+    crank = b.add_body("crank", position=(0.0, 0.5), angle=math.pi / 2, **rod)
+    coupler = b.add_body("coupler", position=(0.5, 1.0), **rod)
+    rocker = b.add_body("rocker", position=(1.0, 0.5), angle=math.pi / 2, **rod)
+    o2 = b.add(Revolute("O2", b.ground, crank, at=(0.0, 0.0)))
+    b.add(Revolute("A", crank, coupler, at=(0.0, 1.0)))
+    b.add(Revolute("B", coupler, rocker, at=(1.0, 1.0)))
+    o4 = b.add(Revolute("O4", b.ground, rocker, at=(1.0, 0.0)))
+    b.add(RotationDriver("motor", o2, motion=mb.Ramp(0.0, 1.0)))
+    b.add(RotationDriver("rocker motor", o4, motion=mb.Ramp(0.0, 1.0)))
+    return b.build()
+
+
+def test_an_over_driven_mechanism_is_called_so_naming_its_drivers():
+    """Two motors on one hinge, and a four-bar driven at its crank and its rocker: they used
+    to be reported as stuck at a singular configuration, a lock-up or toggle position."""
+    b, bar = builder_with_bar()
+    pin = b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
+    b.add(RotationDriver("motor1", pin, motion=mb.Ramp(0.0, 1.0)))
+    b.add(RotationDriver("motor2", pin, motion=mb.Ramp(0.0, 2.0)))
+    for model, drivers in ((b.build(), {"motor1", "motor2"}),
+                           (parallelogram_with_two_motors(), {"motor", "rocker motor"})):
+        report = mb.mobility(model)
+        assert set(report.over_driven) == drivers and "over-driven" in report.message
+        for analysis in (mb.kinematic_analysis, mb.inverse_dynamics, mb.forward_dynamics):
+            with pytest.raises(mb.OverDrivenError, match="is over-driven") as info:
+                analysis(model, [0.0, 0.1])
+            assert set(info.value.drivers) == drivers, analysis
+            assert "singular" not in str(info.value)
