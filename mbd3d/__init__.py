@@ -24,7 +24,8 @@ from mbd3d.body import Body
 from mbd3d.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
 from mbd3d.equations import kinetic_energy, potential_energy
 from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
-                          NotFullyDrivenError, OverDrivenError, SingularJacobianError)
+                          NotFullyDrivenError, OverDrivenError, SingularJacobianError,
+                          StiffnessWarning)
 from mbd3d.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
 from mbd3d.mobility import MobilityReport, mobility
@@ -46,5 +47,5 @@ __all__ = [
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",
     "AssemblyError",
-    "SingularJacobianError", "IntegrationError",
+    "SingularJacobianError", "IntegrationError", "StiffnessWarning",
 ]

@@ -17,6 +17,7 @@ same way, so every reported state satisfies the constraints.
 
 from __future__ import annotations
 
+import warnings
 from collections import deque
 from typing import Sequence
 
@@ -24,7 +25,7 @@ import numpy as np
 import scipy.integrate as si
 
 from mbd3d import constraints
-from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.errors import IntegrationError, ModelError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, require_not_over_driven, solve_velocity
 from mbd3d.linalg import SingularMatrix, factor_model_augmented
@@ -150,6 +151,61 @@ _LARGEST_SVD = 4_000_000
 STEP_COLLAPSE = 1e-3
 #: accepted steps over which the longest recent step is taken
 _RECENT_STEPS = 50
+
+
+#: accepted steps after which the explicit integrators look at their average step
+_STIFFNESS_CHECK_STEPS = 200
+#: an average step this many times shorter than the output spacing is a crawl, when a stiff
+#: element's stability limit explains it (steps within ten times that limit)
+_CRAWL = 1e-2
+
+
+def stiffest_elements(model) -> list[tuple[float, str]]:
+    """The force elements by how fast they make the model respond, fastest first:
+    ``(rate [1/s], description)``, the rate being ``sqrt(k / m)`` of a spring and ``c / m`` of a
+    damper on the reduced mass (or inertia) of the bodies they join. An explicit method is
+    stable for steps up to about 3 / rate."""
+    from mbd3d.forces import RotationalSpringDamper, SpringDamper  # noqa: PLC0415
+
+    def reduced(bodies, inertia: bool) -> float:
+        values = []
+        for body in bodies:
+            if body is None or body.is_ground:
+                continue
+            if not inertia:
+                values.append(body.mass)
+            else:
+                values.append(float(np.min(np.linalg.eigvalsh(np.atleast_2d(body.inertia)))))
+        return 1.0 / sum(1.0 / v for v in values) if values else np.inf
+
+    found = []
+    for element in model.forces:
+        if isinstance(element, (SpringDamper, RotationalSpringDamper)):
+            rotational = isinstance(element, RotationalSpringDamper)
+            m = reduced((element.body_i, element.body_j), rotational)
+            k, c = float(element.stiffness or 0.0), float(element.damping or 0.0)
+            rate = max(np.sqrt(k / m), c / m)
+            units = ("N m/rad", "N m s/rad", "kg m^2") if rotational else ("N/m", "N s/m", "kg")
+            found.append((rate, f"spring-damper '{element.name}' (k = {k:.3g} {units[0]}, "
+                                f"c = {c:.3g} {units[1]} on {m:.3g} {units[2]}: "
+                                f"{rate:.3g} 1/s)"))
+    return sorted(found, reverse=True)
+
+
+def _stiffness_message(model, method: str, t: float, average_step: float, spacing: float
+                       ) -> str | None:
+    """What to tell the user when the explicit steps crawl, or None when no stiff element
+    explains the short steps (then the motion itself is fast, and the steps are right)."""
+    elements = stiffest_elements(model)
+    if not elements or average_step > 10 * 3.0 / elements[0][0]:
+        return None
+    culprit = (f"{elements[0][1]} makes the model stiff: explicit steps above about "
+               f"{3.0 / elements[0][0]:.1e} s are unstable")
+    return (f"forward dynamics of '{model.name}' ({method}) is crawling at t = {t:.6g} s: its "
+            f"steps average {average_step:.1e} s, {spacing / average_step:.0e} times shorter "
+            f"than the output spacing of {spacing:.3g} s. The {culprit}. Use "
+            "method='generalized-alpha' with step= a fraction of the motion's time scale, "
+            "which is not limited by stiffness.")
 
 
 def _singular_here(model, t: float, q: np.ndarray, charts, what: str) -> Exception | None:
@@ -351,6 +407,13 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             if not np.all(np.isfinite(solver.y)):
                 raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
                                        f"non-finite at t = {solver.t:.6g} s", time=float(solver.t))
+            if stats["steps"] == _STIFFNESS_CHECK_STEPS and len(t) > 1:
+                spacing = float(np.min(np.diff(t)))
+                average = (float(solver.t) - float(t[0])) / stats["steps"]
+                message = (_stiffness_message(model, method, float(solver.t), average, spacing)
+                           if average < _CRAWL * spacing else None)
+                if message is not None:
+                    warnings.warn(StiffnessWarning(message), stacklevel=4)
             if not redundant and solver.step_size is not None:
                 # The index-1 accelerations grow without bound at a singular position: the
                 # steps collapse there, and with luck in the rounding a pair steps over it onto

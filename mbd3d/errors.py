@@ -75,3 +75,8 @@ class SingularJacobianError(AnalysisError):
 
 class IntegrationError(AnalysisError):
     """The time integrator failed (step size underflow, non-finite state, ...)."""
+
+
+class StiffnessWarning(UserWarning):
+    """An explicit integrator is crawling: its steps are limited by a stiff element (a stiff
+    spring or damper), not by the accuracy asked for; the message names the element."""
