@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import inspect
 import io
 import itertools
 import json
@@ -29,6 +30,7 @@ import math
 import os
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
@@ -68,12 +70,27 @@ class Analysis:
                            f"{self.t!r}")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "options", dict(self.options))
+        # checked here, once, rather than failing every run of a sweep the same way
+        accepted = inspect.signature(self._function()).parameters
+        for name in self.options:
+            if name in ("progress", "observers") or name not in accepted or name in (
+                    "model", "times"):
+                raise MBDError(f"Analysis: {self.kind} takes no option {name!r}; its options "
+                               f"are {', '.join(n for n in accepted if n not in ('model', 'times', 'progress', 'observers'))}")
+        method = self.options.get("method")
+        if self.kind == "forward dynamics" and method is not None:
+            from mbd3d.dynamics import GENERALIZED_ALPHA, METHODS  # noqa: PLC0415
+            if method not in METHODS and method != GENERALIZED_ALPHA:
+                raise MBDError(f"Analysis: method must be one of {', '.join(METHODS)}, "
+                               f"{GENERALIZED_ALPHA}; got {method!r}")
+
+    def _function(self) -> Callable:
+        import mbd3d as mb  # noqa: PLC0415  (the analyses import this module's users)
+        return {"kinematic": mb.kinematic_analysis, "inverse dynamics": mb.inverse_dynamics,
+                "forward dynamics": mb.forward_dynamics}[self.kind]
 
     def __call__(self, model) -> Results:
-        import mbd3d as mb
-        run = {"kinematic": mb.kinematic_analysis, "inverse dynamics": mb.inverse_dynamics,
-               "forward dynamics": mb.forward_dynamics}[self.kind]
-        return run(model, self.t, **{**self.options, "progress": False})
+        return self._function()(model, self.t, **{**self.options, "progress": False})
 
 
 def grid(**axes: Iterable) -> list[dict]:
@@ -137,8 +154,12 @@ def monte_carlo(n: int, seed: int, **distributions: Any) -> list[dict]:
 
 
 def _plain(value: Any) -> Any:
-    """NumPy scalars as Python numbers, so parameters serialize to JSON."""
-    return value.item() if isinstance(value, np.generic) else value
+    """NumPy scalars and arrays as Python numbers and lists, so values serialize to JSON."""
+    if isinstance(value, np.generic) or (isinstance(value, np.ndarray) and value.ndim == 0):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value
 
 
 def _as_given(value: Any) -> Any:
@@ -151,10 +172,34 @@ def _as_given(value: Any) -> Any:
     return value
 
 
-def _key(params: Mapping[str, Any]) -> str:
-    """A name for a run, the same for the same parameters in any session."""
-    text = json.dumps(params, sort_keys=True, separators=(",", ":"))
+def _key(params: Mapping[str, Any], signature: str = "") -> str:
+    """A name for a run, the same for the same parameters and the same sweep (analysis,
+    factory: :func:`_signature`) in any session. Numbers are compared by value: ``1`` and
+    ``1.0`` are one point."""
+    plain = {name: (float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v)
+             for name, v in params.items()}
+    text = json.dumps([plain, signature], sort_keys=True, separators=(",", ":"))
     return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def _identity(function: Callable) -> str:
+    """What makes a function the same function across sessions: where it is defined and its
+    compiled code (so an edited factory or metric counts as a new one)."""
+    code = getattr(function, "__code__", None)
+    digest = "" if code is None else hashlib.sha1(
+        code.co_code + repr(code.co_consts).encode()).hexdigest()[:12]
+    return f"{getattr(function, '__module__', '')}.{getattr(function, '__qualname__', repr(function))}:{digest}"
+
+
+def _signature(factory: Callable, analysis: Callable) -> str:
+    """Everything besides the parameters that determines a run's results: the analysis (kind,
+    every time, options) and the factory."""
+    if isinstance(analysis, Analysis):
+        described = [analysis.kind, hashlib.sha1(np.ascontiguousarray(analysis.t).tobytes())
+                     .hexdigest(), repr(sorted((k, repr(v)) for k, v in analysis.options.items()))]
+    else:
+        described = [_identity(analysis)]
+    return json.dumps([described, _identity(factory)])
 
 
 def _run_one(factory: Callable[..., Any], analysis: Callable[[Any], Results],
@@ -358,20 +403,64 @@ def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],
                     isinstance(value, float) and not math.isfinite(value)):
                 raise MBDError(f"sweep: point {index}, parameter '{name}' = {value!r}: "
                                "parameters must be finite numbers, strings or booleans")
-    keys = [_key(p) for p in points]
+    # a run is named by its parameters and by everything else that determines its results
+    # (the analysis with its times and options, the factory): a changed analysis runs again
+    keys = [_key(p, _signature(factory, analysis)) for p in points]
     if len(set(keys)) != len(keys):
-        raise MBDError("sweep: the same parameters appear more than once among the points")
+        raise MBDError("sweep: the same parameters appear more than once among the points "
+                       "(1 and 1.0 are the same value)")
 
     folder = os.fspath(folder)
     runs_folder = os.path.join(folder, "runs")
     os.makedirs(runs_folder, exist_ok=True)
-    records = _load_records(runs_folder, set(keys))
+    with _FolderLock(folder):
+        return _sweep_locked(factory, analysis, metrics, points, parameters, keys, folder,
+                             runs_folder, keep_results, client, workers, backend, retry_failed,
+                             progress)
+
+
+class _FolderLock:
+    """An exclusive lock on a sweep's folder for the time of the sweep (``folder/.lock``, an
+    OS lock that dies with its process), so that two sweeps never write one folder at once."""
+
+    def __init__(self, folder: str):
+        self.path = os.path.join(folder, ".lock")
+        self.file = None
+
+    def __enter__(self) -> "_FolderLock":
+        self.file = open(self.path, "a+")
+        try:
+            import fcntl  # noqa: PLC0415  (POSIX)
+            fcntl.flock(self.file, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except ImportError:  # no advisory locks here: the folder is not protected
+            pass
+        except OSError:
+            self.file.seek(0)
+            holder = self.file.read().strip() or "another process"
+            self.file.close()
+            raise MBDError(f"sweep: the folder '{os.path.dirname(self.path)}' is in use by "
+                           f"another sweep ({holder}); wait for it to finish, or give this "
+                           "sweep another folder") from None
+        self.file.seek(0)
+        self.file.truncate()
+        self.file.write(f"process {os.getpid()} since {time.strftime('%Y-%m-%d %H:%M:%S')}")
+        self.file.flush()
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.file.close()  # releases the lock
+
+
+def _sweep_locked(factory, analysis, metrics, points, parameters, keys, folder, runs_folder,
+                  keep_results, client, workers, backend, retry_failed, progress) -> "SweepTable":
+    """The body of :func:`sweep`, with the folder locked."""
+    metric_names = list(metrics)
+    records = _load_records(runs_folder, set(keys), metric_names)
     if retry_failed:
         records = {k: r for k, r in records.items() if r["status"] == "ok"}
     todo = [(k, p) for k, p in zip(keys, points) if k not in records]
     skipped = len(points) - len(todo)
 
-    metric_names = list(metrics)
     summary = {"runs": len(points), "ok": 0, "failed": 0, "skipped": skipped,
                "wall_time": 0.0, "run_time": 0.0, "speedup": float("nan"), "workers": 1,
                "interrupted": False}
@@ -412,8 +501,8 @@ def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],
         raise MBDError(f"sweep: backend 'dask' asked for, but Dask is not installed; {_DASK_HINT}")
     try:
         if todo and use_dask:
-            summary["workers"] = _run_on_dask(todo, factory, analysis, metrics, keep_results,
-                                              client, workers, finished)
+            _run_on_dask(todo, factory, analysis, metrics, keep_results, client, workers,
+                         finished, summary)
         elif todo:
             if backend == "auto" and progress:
                 print(f"sweep: running serially in this process; {_DASK_HINT}", file=sys.stderr)
@@ -439,9 +528,11 @@ def _dask_available() -> bool:
     return True
 
 
-def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finished) -> int:
-    """Submit every point, hand each record to ``finished`` as it arrives; returns the number
-    of workers. A local cluster (loopback, one thread per worker process) is started when no
+def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finished,
+                 summary: dict) -> None:
+    """Submit every point, hand each record to ``finished`` as it arrives; the number of
+    workers goes into ``summary`` as soon as it is known (an interrupted sweep reports it
+    too). A local cluster (loopback, one thread per worker process) is started when no
     client is given and closed at the end."""
     from distributed import Client, LocalCluster, as_completed
 
@@ -463,7 +554,7 @@ def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finish
             future = client.submit(_run_one, factory, analysis, metrics, point, keep,
                                    pure=False)
             futures[future] = (key, point)
-        n_workers = len(client.scheduler_info().get("workers", {})) or 1
+        summary["workers"] = len(client.scheduler_info().get("workers", {})) or 1
         try:
             for future in as_completed(futures):
                 key, point = futures[future]
@@ -477,27 +568,38 @@ def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finish
         except KeyboardInterrupt:
             client.cancel(list(futures))
             raise
-        return n_workers
     finally:
         for resource in reversed(own):
             resource.close()
 
 
-def _load_records(runs_folder: str, wanted: set) -> dict:
-    """The stored outcomes of earlier runs of the points ``wanted`` (by key)."""
+def _load_records(runs_folder: str, wanted: set, metric_names: list) -> dict:
+    """The stored outcomes of earlier runs of the points ``wanted`` (by key). A run file that
+    cannot be read, or does not hold a run, is reported by name and its point runs again; so
+    does a successful run without a value of every metric asked for now (a metric added on
+    resume is computed, never left empty)."""
     records = {}
     for name in os.listdir(runs_folder):
         key, ext = os.path.splitext(name)
         if ext != ".json" or key not in wanted:
             continue
+        path = os.path.join(runs_folder, name)
         try:
-            with open(os.path.join(runs_folder, name)) as f:
+            with open(path) as f:
                 record = json.load(f)
-        except (OSError, ValueError):
-            continue  # unreadable: the point is run again
-        if not isinstance(record, dict) or not {"status", "metrics", "error",
-                                                "wall_time"} <= set(record):
+        except (OSError, ValueError) as exc:
+            warnings.warn(f"sweep: run file '{path}' cannot be read ({exc}); its point runs "
+                          "again", stacklevel=4)
             continue
+        if not (isinstance(record, dict)
+                and {"status", "metrics", "error", "wall_time"} <= set(record)
+                and isinstance(record["metrics"], dict) and record["status"] in ("ok", "failed")
+                and isinstance(record["wall_time"], (int, float))):
+            warnings.warn(f"sweep: run file '{path}' does not hold a run's outcome; its point "
+                          "runs again", stacklevel=4)
+            continue
+        if record["status"] == "ok" and not set(metric_names) <= set(record["metrics"]):
+            continue  # a metric added since: run the point again to compute it
         records[key] = record
     return records
 

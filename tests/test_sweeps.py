@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from mbd3d.errors import MBDError
-from mbd3d.mechanisms import slider_crank
+from mbd3d.mechanisms import slider_crank, slider_crank_positions
 from mbd3d.sweeps import Analysis, grid, monte_carlo, sweep
 from slider_crank_oracle import SliderCrankOracle
 
@@ -179,3 +179,83 @@ def test_table_reads_into_pandas_and_writes_parameters_as_given(serial_table, tm
     with open(path, newline="") as f:
         written = [row["rod"] for row in csv.DictReader(f)]
     assert written == ["0.1", "0.15", "0.2"]
+
+
+def test_a_changed_analysis_or_an_added_metric_never_returns_old_values(tmp_path):
+    """The run's key covers the analysis (kind, times, options) and the factory: resuming on
+    the same folder after changing the analysis runs again instead of returning the old
+    values marked ok; a metric added on resume is computed, not left NaN."""
+    points = grid(speed=[5.0], rod=[0.3])
+    short = Analysis("inverse dynamics", np.linspace(0.0, 0.2, 21))
+    long = Analysis("inverse dynamics", np.linspace(0.0, 2.0, 201))
+    final = {"final slider x": lambda r: float(r.body("slider").position[-1, 0])}
+    sweep(factory, points, short, final, tmp_path, backend="serial", progress=False)
+    second = sweep(factory, points, long, final, tmp_path, backend="serial", progress=False)
+    assert second.summary["skipped"] == 0
+    slider_at_2s = slider_crank_positions(math.radians(65.0) + 5.0 * 2.0, CRANK, 0.3)[2]
+    assert second.rows[0]["final slider x"] == pytest.approx(slider_at_2s[0], rel=1e-12)
+    more = {**final, "final crank angle": lambda r: float(r.body("crank").angle[-1])}
+    third = sweep(factory, points, long, more, tmp_path, backend="serial", progress=False)
+    assert third.rows[0]["final crank angle"] == pytest.approx(math.radians(65.0) + 5.0 * 2.0)
+    assert third.rows[0]["status"] == "ok"
+
+
+def test_an_unreadable_run_file_is_named_and_its_point_runs_again(tmp_path):
+    points = grid(speed=[5.0], rod=[0.3])
+    sweep(factory, points, ANALYSIS, METRICS, tmp_path, backend="serial", progress=False)
+    (run_file,) = (tmp_path / "runs").glob("*.json")
+    run_file.write_text('{"status": "ok", "metrics": [], "error": null, "wall_time": 0.1}')
+    with pytest.warns(UserWarning, match=f"run file '{run_file}' does not hold a run"):
+        table = sweep(factory, points, ANALYSIS, METRICS, tmp_path, backend="serial",
+                      progress=False)
+    assert table.summary["skipped"] == 0 and table.rows[0]["status"] == "ok"
+
+
+def test_one_folder_holds_one_sweep_at_a_time(tmp_path):
+    from mbd3d.sweeps import _FolderLock
+
+    with _FolderLock(str(tmp_path)):  # another sweep at work in the folder
+        with pytest.raises(MBDError, match="is in use by another sweep"):
+            sweep(factory, grid(speed=[5.0], rod=[0.3]), ANALYSIS, METRICS, tmp_path,
+                  backend="serial", progress=False)
+    sweep(factory, grid(speed=[5.0], rod=[0.3]), ANALYSIS, METRICS, tmp_path,
+          backend="serial", progress=False)  # free again
+
+
+def test_values_and_options_are_taken_as_meant(tmp_path):
+    # 1 and 1.0 are one point
+    with pytest.raises(MBDError, match="more than once"):
+        sweep(factory, [{"speed": 5, "rod": 0.3}, {"speed": 5.0, "rod": 0.3}], ANALYSIS,
+              METRICS, tmp_path, backend="serial", progress=False)
+    sweep(factory, [{"speed": 5, "rod": 0.3}], ANALYSIS, METRICS, tmp_path, backend="serial",
+          progress=False)
+    again = sweep(factory, [{"speed": 5.0, "rod": 0.3}], ANALYSIS, METRICS, tmp_path,
+                  backend="serial", progress=False)
+    assert again.summary["skipped"] == 1
+    # a 0-d NumPy array is a number
+    table = sweep(factory, grid(speed=[5.0], rod=[0.3]), ANALYSIS,
+                  {"peak": lambda r: np.max(np.abs(r.body("slider").velocity[:, 0]),
+                                            keepdims=False).reshape(())},
+                  tmp_path / "arrays", backend="serial", progress=False)
+    assert table.rows[0]["status"] == "ok" and isinstance(table.rows[0]["peak"], float)
+    # bad options are refused once, when the analysis is described
+    with pytest.raises(MBDError, match="takes no option 'rtl'"):
+        Analysis("forward dynamics", T, {"rtl": 1e-9})
+    with pytest.raises(MBDError, match="method must be one of"):
+        Analysis("forward dynamics", T, {"method": "Euler"})
+
+
+def test_an_interrupted_sweep_reports_the_workers_it_had(tmp_path, monkeypatch):
+    import distributed
+
+    real = distributed.as_completed
+
+    def interrupted_after_one(futures):
+        for k, future in enumerate(real(futures)):
+            if k == 1:
+                raise KeyboardInterrupt
+            yield future
+    monkeypatch.setattr(distributed, "as_completed", interrupted_after_one)
+    table = sweep(factory, POINTS, ANALYSIS, METRICS, tmp_path, workers=2, backend="dask",
+                  progress=False)
+    assert table.summary["interrupted"] and table.summary["workers"] == 2
