@@ -185,13 +185,20 @@ def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma
 
 
 def _penalty(model, blocks: np.ndarray, jac_data: np.ndarray, beta_prime: float,
-             relative_penalty: float) -> float:
-    """The penalty ``p`` of the augmented Lagrangian: ``relative_penalty`` times the mass term
-    ``beta' M`` per squared unit of ``Cq``, so that the ratio means the same for any model (see
-    linalg.penalty_scale)."""
-    row_norms = np.bincount(model._jac_rows, weights=jac_data * jac_data,
+             relative_penalty: float) -> np.ndarray:
+    """The penalties ``p`` (one per row) of the augmented Lagrangian: ``relative_penalty``
+    times the mass term ``beta' M`` per squared unit of ``Cq``, taken in the model's
+    dimensionless units (coordinates over their scale ``s``, rows over theirs ``r``, masses
+    over ``m L^2``; see linalg.penalty_scale), so that the ratio means the same for a
+    mechanism of any size: ``p_i = p~ m L^2 / r_i^2``."""
+    s, r = model.coordinate_scale, model.row_scale
+    mass_unit = model.mass_scale * model.length_scale ** 2
+    scaled = jac_data * s[model._jac_cols] / r[model._jac_rows]
+    row_norms = np.bincount(model._jac_rows, weights=scaled * scaled,
                             minlength=model.n_constraints)
-    return relative_penalty * beta_prime * penalty_scale(np.einsum("kii->ki", blocks), row_norms)
+    mass_diagonal = np.einsum("kii->ki", blocks).ravel() * s * s / mass_unit
+    scaled_penalty = relative_penalty * beta_prime * penalty_scale(mass_diagonal, row_norms)
+    return scaled_penalty * mass_unit / (r * r)
 
 
 class _IterationMatrix:
@@ -263,8 +270,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         for _ in range(8):
             if np.max(np.abs(violation) / model.row_scale, initial=0.0) <= projection_tol:
                 break
-            qd = qd - lu.solve(penalty * constraints.jacobian_transpose_times(model, jac_data,
-                                                                               violation))
+            qd = qd - lu.solve(constraints.jacobian_transpose_times(model, jac_data,
+                                                                     penalty * violation))
             violation = constraints.jacobian_times(model, jac_data, qd) - nu
         return qd
 

@@ -476,17 +476,20 @@ class PenaltyPattern(_FixedPattern):
         self.first = np.repeat(np.arange(len(rows)), per_row)
         start = np.repeat(np.cumsum(per_row) - per_row, per_row)
         self.second = indptr[rows[self.first]] + np.arange(len(self.first)) - start
+        self.first_rows = rows[self.first]  # the constraint row of each product
         all_rows = np.concatenate([block_rows, cols[self.first]])
         all_cols = np.concatenate([block_cols, cols[self.second]])
         linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
         self._lay_out(linear // n, linear % n, n, model.sparse,
                       augmented_scaling(model)[:n])
 
-    def values(self, mass_factor: float, blocks: np.ndarray, penalty: float,
+    def values(self, mass_factor: float, blocks: np.ndarray, penalty,
                jac_data: np.ndarray) -> np.ndarray:
-        """Entries of ``mass_factor M + penalty Cq^T Cq`` in the pattern's order."""
+        """Entries of ``mass_factor M + Cq^T diag(penalty) Cq`` in the pattern's order
+        (``penalty``: one per constraint row, or one for all)."""
+        per_entry = (penalty[self.first_rows] if np.ndim(penalty) else penalty)
         weights = np.concatenate([mass_factor * blocks.ravel(),
-                                  penalty * jac_data[self.first] * jac_data[self.second]])
+                                  per_entry * jac_data[self.first] * jac_data[self.second]])
         return np.bincount(self.target, weights=weights, minlength=len(self.rows))
 
 
