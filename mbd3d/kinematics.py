@@ -356,7 +356,8 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
         Guess for the first time point (default: the bodies' initial guesses); it selects the
         assembly branch, which is then followed.
     tol : float
-        Newton-Raphson tolerance on ``max |C|``.
+        Newton-Raphson tolerance, relative to the model's scale (see
+        :func:`mbd3d.solve_position`).
     observers : sequence of Observer, optional
         Watch the analysis as it goes (e.g. ``viewer.Recorder``); see :mod:`mbd3d.observers`.
     progress : bool, optional
@@ -371,9 +372,13 @@ def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] |
     ------
     NotFullyDrivenError
         The mechanism has undriven degrees of freedom (also when redundant rows leave some).
+    OverDrivenError
+        Drivers prescribe motions the joints or other drivers already fix.
     AssemblyError, SingularJacobianError
-        At a time point that cannot be solved (e.g. a lock-up); ``.results`` holds what was
-        computed before it.
+        At a time point that cannot be solved (e.g. a lock-up), or at a singular position,
+        where the Jacobian's reciprocal condition number (in the model's units) has fallen
+        below 1e-4 of its value at the first point and the velocities are unbounded;
+        ``.results`` holds what was computed before it.
     """
     return _sweep(model, times, q_guess, tol, False, "kinematic analysis", observers, progress)
 
