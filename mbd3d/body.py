@@ -173,6 +173,25 @@ class BodyType(ABC):
         """
         return q, qd, charts, False
 
+    # -- the velocities the explicit integrators carry ----------------------------------------
+    # An integrator's error control and a chart reset act on the velocities it carries. For
+    # spatial bodies those are the angular velocities in body axes, not the rates of the
+    # Rodrigues parameters: omega_bar is physical, bounded and unchanged by a chart reset,
+    # and for a free body it obeys Euler's equations alone, so a tolerance buys the accuracy
+    # it buys elsewhere (the rates of g, carried instead, cost up to 1000 x in accuracy on a
+    # tumbling body). Planar bodies carry their coordinates' rates.
+    def velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The integrated velocities ``v`` (n,) of coordinates ``q`` with rates ``qd``."""
+        return qd
+
+    def rates(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The coordinates' rates ``qd`` (n,) of integrated velocities ``v``."""
+        return v
+
+    def velocity_derivative(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """``dv/dt`` (n,) from the coordinates' second derivatives ``qdd``."""
+        return qdd
+
     # -- kinematics ------------------------------------------------------------------------------
     # The primitives work with ``s = A v``, the global components of a body-fixed vector, and
     # what follows from it and per-body data (:meth:`vectors`): the formulas of a body type are

@@ -364,9 +364,21 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, redundant=True)
         return qdd, lam
 
+    # the integrated state is (q, v): positions and the velocities of BodyType.velocities
+    # (angular velocities in body axes for spatial bodies), not (q, qd)
+    bt = model.body_type
+
     def rhs(tt: float, y: np.ndarray) -> np.ndarray:
         stats["rhs_evaluations"] += 1
-        return np.concatenate([y[n:], accelerations(tt, y[:n], y[n:])[0]])
+        q = y[:n]
+        qd = bt.rates(q, y[n:])
+        return np.concatenate([qd, bt.velocity_derivative(q, qd, accelerations(tt, q, qd)[0])])
+
+    def state(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        return np.concatenate([q, bt.velocities(q, qd)])
+
+    def split(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return y[:n], bt.rates(y[:n], y[n:])
 
     def record(q: np.ndarray, qd: np.ndarray) -> None:
         tk = t[out.done]
@@ -397,7 +409,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                    "max_step": max_step}
         if method == "Radau":
             options["jac"] = _difference_jacobian(rhs, 2 * n)
-        solver = solver_cls(rhs, t[0], np.concatenate([q, qd]), t[-1], **options)
+        solver = solver_cls(rhs, t[0], state(q, qd), t[-1], **options)
         recent: deque = deque(maxlen=_RECENT_STEPS)  # lengths of the last accepted steps [s]
         while out.done < k_max:
             message = solver.step()
@@ -432,13 +444,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 dense = solver.dense_output()
                 while out.done < k_max and t[out.done] <= solver.t:
                     tk = t[out.done]
-                    y_k = dense(tk)
-                    record(*project_state(model, tk, y_k[:n], y_k[n:], projection_tol, chart,
+                    record(*project_state(model, tk, *split(dense(tk)), projection_tol, chart,
                                           redundant))
             watch.tick(solver.t, stats["steps"])
             if solver.status == "finished" or out.done >= k_max:
                 break
-            q, qd = solver.y[:n], solver.y[n:]
+            q, qd = split(solver.y)
             drift, evaluated = _drift(model, solver.t, q, qd, chart)
             stats["max_drift"] = max(stats["max_drift"], drift)
             restart = drift > constraint_tol
@@ -454,7 +465,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 stats["chart_resets"] += 1
             if restart or moved:
                 h = min(solver.step_size or np.inf, t[-1] - solver.t)
-                solver = solver_cls(rhs, solver.t, np.concatenate([q, qd]), t[-1], first_step=h,
+                solver = solver_cls(rhs, solver.t, state(q, qd), t[-1], first_step=h,
                                     **options)
 
     watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)

@@ -162,6 +162,28 @@ class SpatialBody(BodyType):
         raise ModelError("a relative angle about the plane normal is defined for planar bodies "
                          "only")
 
+    def velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``(R_dot, omega_bar)`` per body, ``omega_bar = G_bar(g) g_dot`` [2.5]."""
+        Q, V = q.reshape(-1, 6), np.array(qd, dtype=float).reshape(-1, 6)
+        V[:, 3:] = np.matvec(rot.g_bar(Q[:, 3:]), V[:, 3:])
+        return V.ravel()
+
+    def rates(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``g_dot = G_bar(g)^-1 omega_bar`` [2.4] per body."""
+        Q, Qd = q.reshape(-1, 6), np.array(v, dtype=float).reshape(-1, 6)
+        Qd[:, 3:] = np.matvec(rot.g_bar_inverse(Q[:, 3:]), Qd[:, 3:])
+        return Qd.ravel()
+
+    def velocity_derivative(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """``d omega_bar/dt = G_bar g_ddot - kappa omega_bar`` [2.8] per body."""
+        Q, Qd = q.reshape(-1, 6), qd.reshape(-1, 6)
+        Vd = np.array(qdd, dtype=float).reshape(-1, 6)
+        g, g_dot = Q[:, 3:], Qd[:, 3:]
+        Gb = rot.g_bar(g)
+        kappa = 2.0 * np.vecdot(g, g_dot) / (1.0 + np.vecdot(g, g))
+        Vd[:, 3:] = np.matvec(Gb, Vd[:, 3:]) - kappa[:, None] * np.matvec(Gb, g_dot)
+        return Vd.ravel()
+
     def reset_charts(self, q: np.ndarray, qd: np.ndarray | None, charts: np.ndarray,
                      limit: float = CHART_LIMIT):
         """Move the chart of every body with ``|g| > limit`` (and, to restart the integrator
