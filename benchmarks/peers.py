@@ -171,5 +171,8 @@ def mujoco_chain(n_links: int, step: float, duration: float = 1.0, spatial: bool
     start = time.perf_counter()
     for _ in range(steps):
         mujoco.mj_step(model, data)
+    # mj_step leaves the site positions of the start of its last step (they are computed
+    # before the integration): the tip of the final state needs its kinematics done once
+    mujoco.mj_kinematics(model, data)
     wall = time.perf_counter() - start
     return data.site_xpos[0][:3 if spatial else 2].copy(), wall

@@ -68,3 +68,12 @@ def test_sweep_speedup_benchmark_runs(capsys, monkeypatch):
     medians = _load("sweep_speedup").main(points=2, repeat=1, n_points=11)
     assert set(medians) == {"serial", "1 worker", "2 workers"}
     assert "speed-up 2 workers / 1 worker" in capsys.readouterr().out
+
+
+def test_free_body_benchmark_runs_without_peers(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    module = _load("free_body")
+    monkeypatch.setattr(module, "available", lambda name: False)
+    rows = module.main(tolerance=1e-6, duration=1.0)
+    assert [r["engine"] for r in rows] == ["mbd3d DOP853"] and rows[0]["error"] <= 1e-6
+    assert "right-hand sides" in capsys.readouterr().out
