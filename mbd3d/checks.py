@@ -9,7 +9,7 @@ import numpy as np
 
 from mbd3d.errors import ModelError
 
-__all__ = ["finite_scalar", "finite_vector"]
+__all__ = ["finite_scalar", "finite_vector", "is_finite_vector"]
 
 
 def finite_scalar(value: Any, what: str, positive: bool = False) -> float:
@@ -40,3 +40,13 @@ def finite_vector(value: Any, size: int, what: str) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ModelError(f"{what} must be finite, got {value!r}")
     return arr
+
+
+def is_finite_vector(value: Any, size: int) -> bool:
+    """Whether ``value`` is ``size`` finite numbers (a test; :func:`finite_vector` says what is
+    wrong)."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return arr.shape == (size,) and bool(np.all(np.isfinite(arr)))

@@ -25,10 +25,11 @@ import numpy as np
 import scipy.integrate as si
 
 from mbd3d import constraints
+from mbd3d.checks import is_finite_vector
 from mbd3d.errors import IntegrationError, ModelError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, require_not_over_driven, solve_velocity
-from mbd3d.linalg import SingularMatrix, factor_model_augmented
+from mbd3d.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
 from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
@@ -216,7 +217,8 @@ def _singular_here(model, t: float, q: np.ndarray, charts, what: str) -> Excepti
         return None
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts),
                               sparse=False)
-    s = np.linalg.svd(Cq, compute_uv=False)
+    rows, columns = jacobian_scaling(model)  # in the model's units, whatever its size
+    s = np.linalg.svd(rows[:, None] * Cq * columns[None, :], compute_uv=False)
     if s[-1] <= NEARLY_SINGULAR * s[0]:
         return singular_error(model, Cq, t, what)
     return None
@@ -389,8 +391,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
 
     def loop() -> None:
         nonlocal chart, redundant
-        guess = np.asarray(model.q0 if q0 is None else q0, dtype=float)
-        if guess.shape == (n,) and np.all(np.isfinite(guess)):  # else solve_position says why
+        if q0 is not None and not is_finite_vector(q0, n):
+            raise ModelError(f"forward dynamics of '{model.name}': q0 must be {n} finite "
+                             f"numbers (one per coordinate: {', '.join(model.coordinate_labels[:3])}"
+                             f", ...), got {q0!r}")
+        guess = model.q0 if q0 is None else q0
+        if is_finite_vector(guess, n):
             require_not_over_driven(model, t[0], guess, chart, f"forward dynamics of "
                                                                f"'{model.name}'")
         q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)

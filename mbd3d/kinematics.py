@@ -16,6 +16,7 @@ import scipy.sparse as sp
 
 from mbd3d import constraints
 from mbd3d.equations import generalized_forces, mass_matrix, mass_times
+from mbd3d.checks import is_finite_vector
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
                           jacobian_scaling, ranked_rows, solve_augmented,
@@ -149,6 +150,11 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                              f"acceleration analysis of '{model.name}'") from None
 
 
+#: largest Jacobian (rows x columns) checked for over-driving before an analysis (three dense
+#: SVDs, about 0.1 s each at this size)
+_LARGEST_RANK_CHECK = 250_000
+
+
 def require_not_over_driven(model, t: float, q: np.ndarray, chart, what: str) -> None:
     """Refuse a model whose drivers depend on each other or on the joints at ``q`` (two motors
     on one hinge, a motor on a rigid loop) with an :class:`OverDrivenError` naming them: such
@@ -158,7 +164,8 @@ def require_not_over_driven(model, t: float, q: np.ndarray, chart, what: str) ->
     for element in model.joints:
         if element.is_driver:
             driver_rows[model.rows_of(element.name)] = True
-    if not np.any(driver_rows):
+    if not np.any(driver_rows) or model.n_constraints * model.n_coordinates > _LARGEST_RANK_CHECK:
+        # three dense SVDs: for large models the analysis itself names the joints if it fails
         return
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
                               sparse=False)
@@ -211,8 +218,8 @@ def _require_redundant_but_driven(model, t: float, q: np.ndarray, chart, analysi
         raise NotFullyDrivenError(
             f"{analysis} needs a fully driven mechanism: '{model.name}' has "
             f"{model.n_constraints} constraint equations for {n} coordinates, but only {rank} "
-            f"are independent (rows that depend on each other: {rows}), so {n - rank} degree(s) of freedom are "
-            "not driven. Add drivers, or use mbd3d.forward_dynamics (see mbd3d.mobility).")
+            f"are independent (rows that depend on each other: {rows}), so {n - rank} "
+            "degree(s) of freedom are not driven. Add drivers, or use mbd3d.forward_dynamics (see mbd3d.mobility).")
 
 
 def _solve_redundant(model, t: float, M, Cq, b: np.ndarray, c: np.ndarray, what: str):
@@ -284,8 +291,9 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
     def loop() -> None:
         q = model.q0 if q_guess is None else q_guess
         chart = model.charts0
-        require_not_over_driven(model, t[0], np.asarray(q, dtype=float), chart,
-                                f"{analysis} of '{model.name}'")
+        if is_finite_vector(q, model.n_coordinates):  # else solve_position says what is wrong
+            require_not_over_driven(model, t[0], np.asarray(q, dtype=float), chart,
+                                    f"{analysis} of '{model.name}'")
         reference = 1.0  # the Jacobian's conditioning at the first time point
         for k, tk in enumerate(t):
             if k > 0:

@@ -70,7 +70,11 @@ def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJaco
 
 
 def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
-    q = np.array(q, dtype=float).reshape(-1)
+    try:
+        q = np.array(q, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} must be {model.n_coordinates} numbers (one per coordinate), "
+                         f"got {q!r}") from None
     if q.size != model.n_coordinates:
         raise ModelError(f"{what} must have {model.n_coordinates} entries (one per coordinate), "
                          f"got {q.size}")
