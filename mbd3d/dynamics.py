@@ -25,10 +25,9 @@ import numpy as np
 import scipy.integrate as si
 
 from mbd3d import constraints
-from mbd3d.checks import is_finite_vector
 from mbd3d.errors import IntegrationError, ModelError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
-from mbd3d.kinematics import check_times, require_not_over_driven, solve_velocity
+from mbd3d.kinematics import check_times, initial_guess, solve_velocity
 from mbd3d.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
 from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
@@ -391,14 +390,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
 
     def loop() -> None:
         nonlocal chart, redundant
-        if q0 is not None and not is_finite_vector(q0, n):
-            raise ModelError(f"forward dynamics of '{model.name}': q0 must be {n} finite "
-                             f"numbers (one per coordinate: {', '.join(model.coordinate_labels[:3])}"
-                             f", ...), got {q0!r}")
-        guess = model.q0 if q0 is None else q0
-        if is_finite_vector(guess, n):
-            require_not_over_driven(model, t[0], guess, chart, f"forward dynamics of "
-                                                               f"'{model.name}'")
+        guess = initial_guess(model, t[0], q0, chart, f"forward dynamics of '{model.name}'",
+                              "q0")
         q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
         redundant = rows_dependent(model, t[0], q, chart)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)

@@ -41,14 +41,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from mbd3d import constraints
-from mbd3d.checks import finite_scalar, is_finite_vector
+from mbd3d.checks import finite_scalar
 from mbd3d.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.linalg import (SingularMatrix, augmented_scaling, penalty_scale,
                           solve_augmented_lagrangian, solve_model_augmented)
 from mbd3d.observers import Watch
 from mbd3d.passages import PassageWatch
-from mbd3d.kinematics import require_not_over_driven, solve_velocity
+from mbd3d.kinematics import initial_guess, solve_velocity
 from mbd3d.position import singular_error, solve_position
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
@@ -349,14 +349,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
     def loop() -> None:
         nonlocal redundant
         chart = model.charts0
-        if q0 is not None and not is_finite_vector(q0, n):
-            raise ModelError(f"forward dynamics of '{model.name}': q0 must be {n} finite "
-                             f"numbers (one per coordinate: {', '.join(model.coordinate_labels[:3])}"
-                             f", ...), got {q0!r}")
-        guess = model.q0 if q0 is None else q0
-        if is_finite_vector(guess, n):
-            require_not_over_driven(model, t[0], guess, chart, f"forward dynamics of "
-                                                               f"'{model.name}'")
+        guess = initial_guess(model, t[0], q0, chart, f"forward dynamics of '{model.name}'",
+                              "q0")
         q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
         redundant = rows_dependent(model, t[0], q, chart)
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)

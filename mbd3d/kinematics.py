@@ -150,6 +150,19 @@ def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                              f"acceleration analysis of '{model.name}'") from None
 
 
+def initial_guess(model, t0: float, guess, chart, what: str, name: str) -> np.ndarray:
+    """The guess ``guess`` of an analysis's first positions (default the model's), refused by
+    ``name`` when it is no vector of ``n`` finite numbers, and the model refused when it is
+    over-driven there (:func:`require_not_over_driven`)."""
+    n = model.n_coordinates
+    if guess is not None and not is_finite_vector(guess, n):
+        raise ModelError(f"{what}: {name} must be {n} finite numbers (one per coordinate: "
+                         f"{', '.join(model.coordinate_labels[:3])}, ...), got {guess!r}")
+    q = np.array(model.q0 if guess is None else guess, dtype=float)
+    require_not_over_driven(model, t0, q, chart, what)
+    return q
+
+
 #: largest Jacobian (rows x columns) checked for over-driving before an analysis (three dense
 #: SVDs, about 0.1 s each at this size)
 _LARGEST_RANK_CHECK = 250_000
@@ -289,11 +302,9 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
     out = ResultsBuffer(model, analysis, t, stats, with_lam=with_forces)
 
     def loop() -> None:
-        q = model.q0 if q_guess is None else q_guess
         chart = model.charts0
-        if is_finite_vector(q, model.n_coordinates):  # else solve_position says what is wrong
-            require_not_over_driven(model, t[0], np.asarray(q, dtype=float), chart,
-                                    f"{analysis} of '{model.name}'")
+        q = initial_guess(model, t[0], q_guess, chart, f"{analysis} of '{model.name}'",
+                          "q_guess")
         reference = 1.0  # the Jacobian's conditioning at the first time point
         for k, tk in enumerate(t):
             if k > 0:
