@@ -17,7 +17,7 @@ the reference series and its source: examples/data/README.md.
 Recorded to iftomm_four_bar.rrd: rerun iftomm_four_bar.rrd
 
 Run: python examples/iftomm_four_bar.py [--bars 40] [--duration 20] [--rrd FILE] [--show]
-(about half a minute)
+(about ten seconds)
 """
 
 from __future__ import annotations

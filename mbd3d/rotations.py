@@ -38,7 +38,7 @@ def skew(a: np.ndarray) -> np.ndarray:
 
 
 def from_rodrigues(g: np.ndarray) -> np.ndarray:
-    """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` (rodrigues.md 1.1), ``s = g.g``.
+    """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` ([1.1] of the formula sheet), ``s = g.g``.
 
     Evaluated as ``((1 - s) I + 2 (g g^T + g~)) / (1 + s)`` (using ``g~^2 = g g^T - s I``):
     element-wise, with no batched 3x3 products, since it runs for every body and state.
@@ -53,7 +53,8 @@ def from_rodrigues(g: np.ndarray) -> np.ndarray:
 
 def to_quaternion(A: np.ndarray) -> np.ndarray:
     """Unit quaternion ``(w, x, y, z)`` with ``w >= 0`` of rotation matrices (Shepperd's method:
-    the largest of ``tr A, A11, A22, A33`` chooses the stable formula; rodrigues.md 1.8)."""
+    the largest of ``tr A, A11, A22, A33`` chooses the stable formula; [1.8] of the formula
+    sheet)."""
     A = np.asarray(A, dtype=float)
     M = A.reshape(-1, 3, 3)
     tr = np.trace(M, axis1=1, axis2=2)
@@ -139,13 +140,14 @@ def g_bar(g: np.ndarray) -> np.ndarray:
 
 
 def g_bar_inverse(g: np.ndarray) -> np.ndarray:
-    """``G_bar^-1 = (I + g~ + g g^T) / 2`` (rodrigues.md 2.4)."""
+    """``G_bar^-1 = (I + g~ + g g^T) / 2`` ([2.4] of the formula sheet)."""
     g = np.asarray(g, dtype=float)
     return 0.5 * (np.eye(3) + skew(g) + g[..., :, None] * g[..., None, :])
 
 
 def compose_rodrigues(ga: np.ndarray, gb: np.ndarray) -> np.ndarray:
-    """``g_ab`` with ``A(ga) A(gb) = A(g_ab)`` (rodrigues.md 1.6; undefined at a half turn)."""
+    """``g_ab`` with ``A(ga) A(gb) = A(g_ab)`` ([1.6] of the formula sheet; undefined at a
+    half turn)."""
     return (ga + gb + np.cross(ga, gb)) / (1.0 - np.vecdot(ga, gb))[..., None]
 
 
@@ -195,7 +197,7 @@ def as_rotation_matrix(orientation: Any, what: str) -> np.ndarray:
 def initial_chart(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Reference rotation ``A0`` and parameters ``g`` with ``A0 A(g) = A`` and ``|g| <= 1``:
     the global chart when ``A`` is within 90 degrees of the identity, else ``A0 = A, g = 0``
-    (rodrigues.md section 1)."""
+    (section 1 of the formula sheet)."""
     q = to_quaternion(A)
     if q[0] >= np.sqrt(0.5):  # |g| = tan(angle / 2) <= 1
         return np.eye(3), q[1:] / q[0]

@@ -112,7 +112,8 @@ def test_iftomm_a02_forty_four_bars_follow_the_adams_series_through_singular_pos
 
 def test_iftomm_a02_two_four_bars_converge_to_the_reduced_equation():
     """N = 2 (the variant MBS-BOS and Exudyn simulate): x_B0(10 s) against the reduced
-    equation; Exudyn's generalized-alpha at h = 1e-3 is 4.7e-5 m off (validation.md)."""
+    equation; Exudyn's generalized-alpha at h = 1e-3 is 4.7e-5 m off (its test model
+    fourBarMechanismIftomm.py)."""
     example = load("iftomm_four_bar")
     t = np.linspace(0.0, 10.0, 201)
     exact = four_bar_oscillator(2, t)
