@@ -586,18 +586,22 @@ class Model:
         mechanism of micrometres and grams as for one of metres and tonnes.
 
         The length is the largest of: the spread of the bodies' guessed centres of mass about
-        their centroid, the distance of every joint point from its body's centre of mass, and
-        every body's radius of gyration; a model of one body at its own joint point has only
-        the last. The mass is the mean body mass.
+        their centroid, the distance of every joint point from its body's centre of mass (of a
+        ground point, from the body it holds), and every body's radius of gyration. The mass is the mean body mass.
         """
         dim, nb = self.dim, self.n_bodies
         R = self.q0.reshape(nb, self.n_coords_per_body)[:, :dim]
         lengths = [float(np.max(np.linalg.norm(R - R.mean(axis=0), axis=1), initial=0.0))]
         for _, spec in specs:
             for key, value in spec.params.items():
-                body = spec.body_i if key.endswith("_i") else spec.body_j
-                if key.startswith("u_") and not body.is_ground:
+                if not key.startswith("u_"):
+                    continue
+                body, other = ((spec.body_i, spec.body_j) if key.endswith("_i")
+                               else (spec.body_j, spec.body_i))
+                if not body.is_ground:  # a point in the body's frame: its offset
                     lengths.append(float(np.linalg.norm(value)))
+                elif not other.is_ground:  # a point of the ground: its distance to the body
+                    lengths.append(float(np.linalg.norm(np.asarray(value) - R[other.index])))
         J = self.inertia if self.inertia.ndim == 1 else np.trace(self.inertia, axis1=1, axis2=2) / 3
         lengths.append(float(np.max(np.sqrt(J / self.mass))))
         length = max(lengths)
