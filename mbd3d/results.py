@@ -423,7 +423,8 @@ class Results:
                         (f"{b.name}.omega", "rad/s", h.angular_velocity),
                         (f"{b.name}.alpha", "rad/s^2", h.angular_acceleration)]
             else:
-                out += [(f"{b.name}.q{c}", "-", h.quaternion[:, k]) for k, c in enumerate("wxyz")]
+                quaternion = h.quaternion  # computed per call: once
+                out += [(f"{b.name}.q{c}", "-", quaternion[:, k]) for k, c in enumerate("wxyz")]
                 out += [(f"{b.name}.omega_{c}", "rad/s", h.angular_velocity[:, k])
                         for k, c in enumerate(axes)]
                 out += [(f"{b.name}.alpha_{c}", "rad/s^2", h.angular_acceleration[:, k])
