@@ -200,7 +200,9 @@ def _stiffness_message(model, method: str, t: float, average_step: float, spacin
     if not elements or average_step > 10 * 3.0 / elements[0][0]:
         return None
     culprit = (f"{elements[0][1]} makes the model stiff: explicit steps above about "
-               f"{3.0 / elements[0][0]:.1e} s are unstable")
+               f"{3.0 / elements[0][0]:.1e} s are unstable"
+               + (", and Radau, restarted after every projection onto the constraints, does "
+                  "not get far past that either" if method == "Radau" else ""))
     return (f"forward dynamics of '{model.name}' ({method}) is crawling at t = {t:.6g} s: its "
             f"steps average {average_step:.1e} s, {spacing / average_step:.0e} times shorter "
             f"than the output spacing of {spacing:.3g} s. The {culprit}. Use "
