@@ -23,7 +23,8 @@ def test_library_folders_install_inside_the_mbd3d_namespace():
 
 
 def test_nothing_in_the_repository_reads_the_developers_notes_beside_it():
-    """Users clone the repository alone: ../shared is not theirs."""
+    """Users clone the repository alone: the notes folder beside the developers' clone is not
+    theirs."""
     tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True,
                              check=True).stdout.split()
     notes = "shared"  # the folder's name, spelt apart so that this file does not match itself
