@@ -587,7 +587,8 @@ class Model:
 
         The length is the largest of: the spread of the bodies' guessed centres of mass about
         their centroid, the distance of every joint point from its body's centre of mass (of a
-        ground point, from the body it holds), and every body's radius of gyration. The mass is the mean body mass.
+        ground point, from the body it holds), and every body's radius of gyration. The mass
+        is the mean body mass.
         """
         dim, nb = self.dim, self.n_bodies
         R = self.q0.reshape(nb, self.n_coords_per_body)[:, :dim]

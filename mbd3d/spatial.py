@@ -2,7 +2,8 @@
 
 Formulas after Shabana, *Dynamics of Multibody Systems*, ch. 2 (Rodrigues parameters); the
 numbers in brackets are those of the developers' formula sheet, where each was verified
-numerically (the tests check them against finite differences and conservation laws). Each body keeps a reference rotation ``A0`` (its *chart*, part of the state, not of
+numerically (the tests check them against finite differences and conservation laws). Each
+body keeps a reference rotation ``A0`` (its *chart*, part of the state, not of
 the body): ``A = A0 A(g)`` [5.1]. With ``s = A v`` a body vector in global components:
 
 - ``d(A v)/dg = -s~ A G_bar`` [2.9, 4.1], ``d(R + s)/dq = [I3, -s~ A G_bar]``;
@@ -38,6 +39,17 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
     out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
     return out
+
+
+def _kappa(g: np.ndarray, g_dot: np.ndarray) -> np.ndarray:
+    """``kappa = 2 g.g_dot / (1 + g.g)`` per row [2.7]."""
+    return 2.0 * np.vecdot(g, g_dot) / (1.0 + np.vecdot(g, g))
+
+
+def _alpha_bar(Gb: np.ndarray, g_ddot: np.ndarray, kappa: np.ndarray,
+               omega_bar: np.ndarray) -> np.ndarray:
+    """Angular acceleration in body axes, ``G_bar g_ddot - kappa omega_bar`` per row [2.8]."""
+    return np.matvec(Gb, g_ddot) - kappa[:, None] * omega_bar
 
 
 class SpatialBody(BodyType):
@@ -101,7 +113,7 @@ class SpatialBody(BodyType):
         g_dot = Qd[:, 3:6]
         omega_bar = np.matmul(Gb, g_dot[:, :, None])[:, :, 0]
         omega = np.matmul(A, omega_bar[:, :, None])[:, :, 0]
-        kappa = 2.0 * np.vecdot(g, g_dot) / (1.0 + np.vecdot(g, g))
+        kappa = _kappa(g, g_dot)
         return Frames(Q=Q, A=A, R=Q[:, :3], g=g, Gbar=Gb, AG=AG, Qd=Qd, Rd=Qd[:, :3],
                       omega=omega, omega_bar=omega_bar, kappa=kappa)
 
@@ -152,10 +164,8 @@ class SpatialBody(BodyType):
         return fr.omega[idx]
 
     def angular_acceleration(self, fr: Frames, idx: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        # alpha = A (G_bar g_ddot - kappa omega_bar)  [2.8]
-        alpha_bar = (np.matmul(fr.Gbar[idx], qdd[:, 3:, None])[:, :, 0]
-                     - fr.kappa[idx, None] * fr.omega_bar[idx])
-        return np.matmul(fr.A[idx], alpha_bar[:, :, None])[:, :, 0]
+        alpha_bar = _alpha_bar(fr.Gbar[idx], qdd[:, 3:], fr.kappa[idx], fr.omega_bar[idx])
+        return np.matvec(fr.A[idx], alpha_bar)
 
     def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,
                        jacobian: bool = False) -> np.ndarray:
@@ -180,8 +190,7 @@ class SpatialBody(BodyType):
         Vd = np.array(qdd, dtype=float).reshape(-1, 6)
         g, g_dot = Q[:, 3:], Qd[:, 3:]
         Gb = rot.g_bar(g)
-        kappa = 2.0 * np.vecdot(g, g_dot) / (1.0 + np.vecdot(g, g))
-        Vd[:, 3:] = np.matvec(Gb, Vd[:, 3:]) - kappa[:, None] * np.matvec(Gb, g_dot)
+        Vd[:, 3:] = _alpha_bar(Gb, Vd[:, 3:], _kappa(g, g_dot), np.matvec(Gb, g_dot))
         return Vd.ravel()
 
     def reset_charts(self, q: np.ndarray, qd: np.ndarray | None, charts: np.ndarray,
