@@ -182,24 +182,60 @@ def _key(params: Mapping[str, Any], signature: str = "") -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
+def _code_digest(code, into) -> None:
+    """Feed a code object to a hash: its bytecode, names and constants, nested code objects
+    (comprehensions, inner functions) by their own contents, never by their repr (which
+    holds a memory address that changes from session to session)."""
+    into.update(code.co_code)
+    into.update(repr(code.co_names).encode())
+    for const in code.co_consts:
+        if hasattr(const, "co_code"):
+            _code_digest(const, into)
+        else:
+            into.update(repr(const).encode())
+
+
+def _plain_value(value: Any) -> str:
+    """A value captured by a function, as text that is the same in every session."""
+    if isinstance(value, (int, float, str, bool, type(None), tuple)):
+        return repr(value)
+    if isinstance(value, np.ndarray):
+        return hashlib.sha1(np.ascontiguousarray(value).tobytes()).hexdigest()
+    if callable(value):
+        return _identity(value)
+    return type(value).__qualname__
+
+
 def _identity(function: Callable) -> str:
-    """What makes a function the same function across sessions: where it is defined and its
-    compiled code (so an edited factory or metric counts as a new one)."""
+    """What makes a function the same function across sessions: where it is defined, its
+    compiled code and the values it captures (so an edited factory or metric counts as a
+    new one)."""
+    digest = hashlib.sha1()
     code = getattr(function, "__code__", None)
-    digest = "" if code is None else hashlib.sha1(
-        code.co_code + repr(code.co_consts).encode()).hexdigest()[:12]
-    return f"{getattr(function, '__module__', '')}.{getattr(function, '__qualname__', repr(function))}:{digest}"
+    if code is not None:
+        _code_digest(code, digest)
+    for value in (getattr(function, "__defaults__", None) or ()):
+        digest.update(_plain_value(value).encode())
+    for cell in (getattr(function, "__closure__", None) or ()):
+        try:
+            digest.update(_plain_value(cell.cell_contents).encode())
+        except ValueError:  # an empty cell
+            pass
+    name = getattr(function, "__qualname__", type(function).__qualname__)
+    return f"{getattr(function, '__module__', '')}.{name}:{digest.hexdigest()[:12]}"
 
 
-def _signature(factory: Callable, analysis: Callable) -> str:
+def _signature(factory: Callable, analysis: Callable, metrics: Mapping[str, Callable]) -> str:
     """Everything besides the parameters that determines a run's results: the analysis (kind,
-    every time, options) and the factory."""
+    every time, options), the factory and the metrics (an added or edited metric runs the
+    points again, so that no row shows a metric it was not computed with)."""
     if isinstance(analysis, Analysis):
         described = [analysis.kind, hashlib.sha1(np.ascontiguousarray(analysis.t).tobytes())
                      .hexdigest(), repr(sorted((k, repr(v)) for k, v in analysis.options.items()))]
     else:
         described = [_identity(analysis)]
-    return json.dumps([described, _identity(factory)])
+    return json.dumps([described, _identity(factory),
+                       {name: _identity(metric) for name, metric in sorted(metrics.items())}])
 
 
 def _run_one(factory: Callable[..., Any], analysis: Callable[[Any], Results],
@@ -404,8 +440,8 @@ def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],
                 raise MBDError(f"sweep: point {index}, parameter '{name}' = {value!r}: "
                                "parameters must be finite numbers, strings or booleans")
     # a run is named by its parameters and by everything else that determines its results
-    # (the analysis with its times and options, the factory): a changed analysis runs again
-    keys = [_key(p, _signature(factory, analysis)) for p in points]
+    # (the analysis with its times and options, the factory, the metrics): a change runs again
+    keys = [_key(p, _signature(factory, analysis, metrics)) for p in points]
     if len(set(keys)) != len(keys):
         raise MBDError("sweep: the same parameters appear more than once among the points "
                        "(1 and 1.0 are the same value)")
@@ -455,7 +491,7 @@ def _sweep_locked(factory, analysis, metrics, points, parameters, keys, folder, 
                   keep_results, client, workers, backend, retry_failed, progress) -> "SweepTable":
     """The body of :func:`sweep`, with the folder locked."""
     metric_names = list(metrics)
-    records = _load_records(runs_folder, set(keys), metric_names)
+    records = _load_records(runs_folder, set(keys))
     if retry_failed:
         records = {k: r for k, r in records.items() if r["status"] == "ok"}
     todo = [(k, p) for k, p in zip(keys, points) if k not in records]
@@ -573,11 +609,9 @@ def _run_on_dask(todo, factory, analysis, metrics, keep, client, workers, finish
             resource.close()
 
 
-def _load_records(runs_folder: str, wanted: set, metric_names: list) -> dict:
+def _load_records(runs_folder: str, wanted: set) -> dict:
     """The stored outcomes of earlier runs of the points ``wanted`` (by key). A run file that
-    cannot be read, or does not hold a run, is reported by name and its point runs again; so
-    does a successful run without a value of every metric asked for now (a metric added on
-    resume is computed, never left empty)."""
+    cannot be read, or does not hold a run, is reported by name and its point runs again."""
     records = {}
     for name in os.listdir(runs_folder):
         key, ext = os.path.splitext(name)
@@ -598,8 +632,6 @@ def _load_records(runs_folder: str, wanted: set, metric_names: list) -> dict:
             warnings.warn(f"sweep: run file '{path}' does not hold a run's outcome; its point "
                           "runs again", stacklevel=4)
             continue
-        if record["status"] == "ok" and not set(metric_names) <= set(record["metrics"]):
-            continue  # a metric added since: run the point again to compute it
         records[key] = record
     return records
 

@@ -101,20 +101,22 @@ def test_a_killed_worker_loses_no_result(serial_table, tmp_path):
 
 def test_interrupted_sweep_resumes_with_only_the_missing_points(tmp_path):
     calls = []
+    # a switch the factory reads, not a value it captures: a factory that captures another
+    # value is another factory, and its points run again (see the next test)
+    interrupt = {"on": True}
 
     def counting_factory(speed, rod):
         calls.append((speed, rod))
-        if len(calls) == 4 and interrupt:
+        if len(calls) == 4 and interrupt["on"]:
             raise KeyboardInterrupt  # Ctrl-C while the fourth model is built
         return factory(speed, rod)
 
-    interrupt = True
     first = sweep(counting_factory, POINTS, ANALYSIS, METRICS, tmp_path, backend="serial",
                   progress=False)
     assert first.summary["interrupted"] and len(first) == 3
     with open(tmp_path / "table.csv") as f:
         assert len(list(csv.DictReader(f))) == 3  # a valid table of what was done
-    interrupt, calls[:] = False, []
+    interrupt["on"], calls[:] = False, []
     second = sweep(counting_factory, POINTS, ANALYSIS, METRICS, tmp_path, backend="serial",
                    progress=False)
     assert calls == [(p["speed"], p["rod"]) for p in POINTS[3:]]
@@ -125,6 +127,33 @@ def test_interrupted_sweep_resumes_with_only_the_missing_points(tmp_path):
     sweep(counting_factory, POINTS, ANALYSIS, METRICS, tmp_path, backend="serial",
           retry_failed=True, progress=False)
     assert sorted(calls) == sorted((p["speed"], p["rod"]) for p in POINTS if p["rod"] < 0.11)
+
+
+def test_a_run_is_the_same_run_in_another_session_and_another_after_an_edit(tmp_path):
+    """A factory's identity holds across processes (a comprehension in it once made it differ:
+    its code object's repr holds a memory address), and changes with a value it captures."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from mbd3d.sweeps import _identity\n"
+            "def factory(rods):\n    return [r * 2 for r in rods]\n"
+            "print(_identity(factory))")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    seen = {subprocess.run([sys.executable, "-c", code, root], capture_output=True, text=True,
+                           check=True).stdout for _ in range(2)}
+    assert len(seen) == 1
+
+    def made_with(rod_length):
+        return lambda speed: factory(speed, rod_length)
+    points = grid(speed=[5.0])
+    sweep(made_with(0.3), points, ANALYSIS, METRICS, tmp_path, backend="serial", progress=False)
+    again = sweep(made_with(0.3), points, ANALYSIS, METRICS, tmp_path, backend="serial",
+                  progress=False)
+    edited = sweep(made_with(0.4), points, ANALYSIS, METRICS, tmp_path, backend="serial",
+                   progress=False)
+    assert again.summary["skipped"] == 1 and edited.summary["skipped"] == 0
+    assert edited.rows[0]["peak_speed"] == pytest.approx(closed_form_peak_speed(5.0, 0.4),
+                                                        rel=1e-9)
 
 
 def test_full_results_are_kept_on_request(tmp_path):
