@@ -14,8 +14,8 @@ import scipy.sparse as sp
 from mbd3d.body import Frames
 from mbd3d.errors import ModelError
 
-__all__ = ["frames", "evaluate", "residual", "jacobian", "jacobian_matrix", "jacobian_times",
-           "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs", "driver_values"]
+__all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
+           "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs", "driver_values"]
 
 
 def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
@@ -30,6 +30,12 @@ def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
     Q = np.concatenate((q, ground)).reshape(shape)
     Qd = None if qd is None else np.concatenate((qd, ground)).reshape(shape)
     return model.body_type.frames(Q, Qd, model.charts0 if charts is None else charts)
+
+
+def largest_relative(model, rows: np.ndarray) -> float:
+    """``max |rows|`` over constraint rows (residuals of positions or of velocities), each in
+    the model's units: lengths over its length scale, angles as they are."""
+    return float(np.max(np.abs(rows) / model.row_scale, initial=0.0))
 
 
 def driver_values(model, t: float) -> np.ndarray:

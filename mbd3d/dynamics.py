@@ -100,7 +100,7 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
     except SingularMatrix:
         return None
     for _ in range(_SIMPLIFIED_NEWTON_ITERATIONS):
-        if np.max(np.abs(C) / model.row_scale, initial=0.0) <= tol:
+        if constraints.largest_relative(model, C) <= tol:
             break
         q = q + lu.solve(np.concatenate([zeros, -C]))[:n]
         fr, C, jac_data = _constraints_at(model, t, q, charts)
@@ -109,7 +109,7 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
     nu = constraints.velocity_rhs(model, t, fr)
     for _ in range(_SIMPLIFIED_NEWTON_ITERATIONS):
         violation = constraints.jacobian_times(model, jac_data, qd) - nu
-        if np.max(np.abs(violation) / model.row_scale, initial=0.0) <= tol:
+        if constraints.largest_relative(model, violation) <= tol:
             return q, qd
         qd = qd - lu.solve(np.concatenate([zeros, violation]))[:n]
     return None
@@ -254,8 +254,8 @@ def _drift(model, t, q, qd, charts) -> tuple[float, tuple]:
     (``(frames, C, Jacobian values)``, which a projection from ``q`` starts from)."""
     evaluated = fr, C, jac_data = _constraints_at(model, t, q, charts)
     v = constraints.jacobian_times(model, jac_data, qd) - constraints.velocity_rhs(model, t, fr)
-    return max(float(np.max(np.abs(C) / model.row_scale, initial=0.0)),
-               float(np.max(np.abs(v) / model.row_scale, initial=0.0))), evaluated
+    return max(constraints.largest_relative(model, C),
+               constraints.largest_relative(model, v)), evaluated
 
 
 def _is_number(value) -> bool:

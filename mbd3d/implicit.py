@@ -265,10 +265,10 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         nu = constraints.velocity_rhs(model, tt, fr)
         violation = constraints.jacobian_times(model, jac_data, qd) - nu
         stats["max_drift"] = max(stats["max_drift"],
-                                 float(np.max(np.abs(C) / model.row_scale, initial=0.0)),
-                                 float(np.max(np.abs(violation) / model.row_scale, initial=0.0)))
+                                 constraints.largest_relative(model, C),
+                                 constraints.largest_relative(model, violation))
         for _ in range(8):
-            if np.max(np.abs(violation) / model.row_scale, initial=0.0) <= projection_tol:
+            if constraints.largest_relative(model, violation) <= projection_tol:
                 break
             qd = qd - lu.solve(constraints.jacobian_transpose_times(model, jac_data,
                                                                      penalty * violation))
@@ -336,7 +336,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
             # by the observed rate, as for any linearly convergent iteration
             remaining = size * rate / (1.0 - rate) if rate < 1.0 else np.inf
             if (min(size, remaining) <= newton_tol
-                    and np.max(np.abs(C) / model.row_scale, initial=0.0) <= projection_tol):
+                    and constraints.largest_relative(model, C) <= projection_tol):
                 qdd = beta_prime * (q - q_hat)
                 qd = qd_hat + gamma_prime * (q - q_hat)
                 a = shift + (1.0 - af) / (1.0 - am) * qdd
