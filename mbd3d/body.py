@@ -2,9 +2,9 @@
 
 A :class:`Body` is the user's description of one rigid body (name, mass properties, initial guess).
 A :class:`BodyType` holds the kinematics of one kind of body (planar or spatial) and evaluates them
-*batched*: every method takes an array of body indices and returns one row per index, so a
-constraint primitive evaluates all its instances with a few NumPy calls whatever the number of
-joints. Joints never look at the coordinates themselves; they ask the body type for
+*batched*: every method takes an array of body indices and returns one row per index (the
+formulas themselves are compiled loops, :mod:`mbd3d.compiled.bodies`). Joints never look at the
+coordinates themselves; they ask the body type for
 
 - the global position of a body point ``r = R + A u`` and its Jacobian ``dr/dq``,
 - a body-fixed vector ``a = A v`` and its Jacobian,
@@ -24,6 +24,8 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
+
+from mbd3d.compiled.bodies import body_vectors
 
 __all__ = ["Body", "BodyType", "Frames", "Vectors", "rotate_rows"]
 
@@ -72,13 +74,25 @@ class Body:
 class Frames:
     """Per-body kinematic quantities for one state, computed once per evaluation.
 
-    All arrays have one row per body plus a last row for the ground. Which attributes exist
-    depends on the body type; ``Q`` and ``A`` always do, ``Qd`` and ``omega`` when velocities were
-    given.
+    All arrays have one row per body plus a last row for the ground. Every body type gives
+    ``Q``, ``R``, ``A`` and the arrays of the compiled core (``axes``, ``omega3``, ``kappa``:
+    see :mod:`mbd3d.compiled.bodies`); ``Qd``, ``Rd`` and ``omega`` exist when velocities were
+    given (``Qd`` is None otherwise), and each body type adds its own.
     """
+
+    Qd = None
 
     def __init__(self, **arrays: np.ndarray):
         self.__dict__.update(arrays)
+
+    def vectors(self, bodies: np.ndarray, local: np.ndarray, velocities: bool = False):
+        """``(s, J, v, a)`` of body-frame vectors ``local`` (k, dim) of ``bodies`` (k,): see
+        :class:`Vectors` (``v``, ``a`` empty without ``velocities``)."""
+        if velocities and self.Qd is None:
+            raise ValueError("body vector velocities need frames with velocities")
+        return body_vectors(self.A, self.axes, self.omega3, self.kappa,
+                            np.asarray(bodies, dtype=np.int64),
+                            np.ascontiguousarray(local, dtype=float), velocities)
 
 
 #: rows above which :func:`rotate_rows` uses einsum: np.matvec's cost per row (tens of ns for
@@ -115,19 +129,6 @@ class Vectors:
     def __init__(self, s: np.ndarray, J: np.ndarray, v: np.ndarray | None = None,
                  a: np.ndarray | None = None):
         self.s, self.J, self.v, self.a = s, J, v, a
-
-    def part(self, rows: slice) -> "Vectors":
-        """The vectors of ``rows`` (views, no copies)."""
-        return Vectors(self.s[rows], self.J[rows], None if self.v is None else self.v[rows],
-                       None if self.a is None else self.a[rows])
-
-    def combine(self, x: np.ndarray, other: "Vectors", y: np.ndarray) -> "Vectors":
-        """``x self + y other`` row by row, for coefficients ``x``, ``y`` (k,): every part is
-        linear in ``v`` (vectors of the same bodies)."""
-        x2, y2 = x[:, None], y[:, None]
-        return Vectors(x2 * self.s + y2 * other.s, x2[:, :, None] * self.J + y2[:, :, None] * other.J,
-                       None if self.v is None else x2 * self.v + y2 * other.v,
-                       None if self.a is None else x2 * self.a + y2 * other.a)
 
 
 class BodyType(ABC):
@@ -194,20 +195,21 @@ class BodyType(ABC):
 
     # -- kinematics ------------------------------------------------------------------------------
     # The primitives work with ``s = A v``, the global components of a body-fixed vector, and
-    # what follows from it and per-body data (:meth:`vectors`): the formulas of a body type are
-    # written once there, for all the vectors of a model at once.
+    # what follows from it and per-body data (:meth:`vectors`): a body type differs only in
+    # its frames, from which one compiled loop serves planar and spatial vectors.
     @abstractmethod
     def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
                charts: np.ndarray | None = None) -> Frames:
         """Per-body quantities for coordinates ``Q`` (n_bodies + 1, n_coords), ground row last,
         relative to the bodies' ``charts`` (reference rotations; ignored by planar bodies)."""
 
-    @abstractmethod
     def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
                 ) -> Vectors:
         """Everything the constraint primitives need of body-frame vectors ``v`` (k, dim) of
-        bodies ``idx``, in one batched evaluation (see :class:`Vectors`); ``velocities`` asks
+        bodies ``idx``, in one compiled evaluation (see :class:`Vectors`); ``velocities`` asks
         for ``ds/dt`` and the acceleration term too (needs velocities in ``fr``)."""
+        s, J, v_dot, a = fr.vectors(idx, v, velocities)
+        return Vectors(s, J, v_dot, a) if velocities else Vectors(s, J)
 
     def rotate(self, fr: Frames, idx: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``s = A v``: global components of body-frame vectors ``v`` (k, dim)."""
@@ -272,7 +274,6 @@ class BodyType(ABC):
         """Angular acceleration [rad/s^2] of bodies ``idx`` whose coordinate accelerations are
         ``qdd`` (k, n_coords): (k,) in 2D, (k, 3) global in 3D."""
 
-    @abstractmethod
     def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,
                        jacobian: bool = False) -> np.ndarray:
         """Rotation of body j relative to body i about the plane normal [rad], unwrapped.

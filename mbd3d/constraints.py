@@ -1,8 +1,8 @@
 """Evaluation of the constraint equations of a model: ``C``, ``Cq``, ``-Ct`` and ``Qd``.
 
-``C = c(q) - c0 - f(t)`` row by row (see :mod:`mbd3d.primitives`). Each primitive type is
-evaluated for all its instances in one call; the Jacobian values are scattered into the pattern
-fixed when the model was built (dense array, or CSR with precomputed ordering when
+``C = c(q) - c0 - f(t)`` row by row (see :mod:`mbd3d.primitives`). All primitive instances are
+evaluated in one compiled loop; the Jacobian values go straight into the pattern fixed when the
+model was built (dense array, or CSR with precomputed ordering when
 ``model.sparse``).
 """
 
@@ -13,9 +13,10 @@ import scipy.sparse as sp
 
 from mbd3d.body import Frames
 from mbd3d.errors import ModelError
+from mbd3d.primitives import evaluate_rows
 
 __all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
-           "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs", "driver_values"]
+           "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs", "driver_values", "motion_phases"]
 
 
 def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
@@ -63,48 +64,41 @@ def _motion_values(motions, names, t: float) -> np.ndarray:
     return out
 
 
-def _params(g, t: float) -> dict:
-    if not g.motions:
-        return g.params
-    return {**g.params, "phi": _motion_values(g.motions, g.motion_names, t)}
+def motion_phases(model, t: float) -> np.ndarray:
+    """``(f, f', f'')`` of the motions of rows whose time dependence sits inside the primitive
+    (spatial rotation drivers), (k, 3)."""
+    if not model.rotation_motions:
+        return _NO_MOTIONS
+    return _motion_values(model.rotation_motions, model.rotation_motion_names, t)
+
+
+_NO_MOTIONS = np.zeros((0, 3))
 
 
 def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,
-             gamma: bool = False) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
-    """``C``, the Jacobian values in the model's pattern, and ``Qd``, in one pass over the groups.
+             gamma: bool = False, rate: bool = False
+             ) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """``C``, the Jacobian values in the model's pattern, and ``Qd``, in one compiled pass over
+    all primitive instances (:func:`mbd3d.primitives.evaluate_rows`).
 
-    Returns ``(C (m,), jac_data (nnz,), Qd (m,))`` with ``None`` for the parts not asked for;
-    turn ``jac_data`` into a matrix with :func:`jacobian_matrix`.
+    Returns ``(C (m,), jac_data (nnz,), Qd (m,))`` with ``None`` for the parts not asked for,
+    and with ``rate`` a fourth part, ``-Ct`` (m,); turn ``jac_data`` into a matrix with
+    :func:`jacobian_matrix`.
     """
-    bt, m = model.body_type, model.n_constraints
-    C = np.empty(m) if value else None
-    Qd = np.empty(m) if gamma else None
-    parts = []
-    table = (bt.vectors(fr, model._vector_bodies, model._vector_local, gamma)
-             if len(model._vector_bodies) else None)
-    for g in model.groups:
-        vectors = {name: table.part(rows) for name, rows in g.vector_rows.items()}
-        c, J, gam = g.cls.evaluate(bt, fr, g.bi, g.bj, _params(g, t), value, jacobian, gamma,
-                                   vectors)
-        rows = slice(g.offset, g.offset + g.n_rows)
-        if value:
-            C[rows] = c.ravel()
-        if jacobian:
-            parts.append(J.ravel())
-        if gamma:
-            Qd[rows] = gam.ravel()
-    data = None
-    if jacobian:
-        data = np.concatenate(parts)[model._jac_take] if parts else np.zeros(0)
-    if (value or gamma) and len(model.driver_rows):
+    C, data, Qd, nu = evaluate_rows(model.row_table, fr, motion_phases(model, t), value,
+                                    jacobian, gamma, rate, model._jac_destination,
+                                    len(model._jac_take))
+    if (value or gamma or rate) and len(model.driver_rows):
         f = driver_values(model, t)
         if value:
             C[model.driver_rows] -= f[0]
         if gamma:
             Qd[model.driver_rows] += f[2]
+        if rate:
+            nu[model.driver_rows] = f[1]
     if value:
         C -= model.c0
-    return C, data, Qd
+    return (C, data, Qd, nu) if rate else (C, data, Qd)
 
 
 def jacobian_matrix(model, data: np.ndarray, sparse: bool | None = None):
@@ -148,16 +142,14 @@ def velocity_rhs(model, t: float, fr: Frames | None = None) -> np.ndarray:
     Rows whose time dependence sits inside the primitive (spatial rotation drivers) need the
     configuration ``fr``.
     """
-    nu = np.zeros(model.n_constraints)
-    if len(model.driver_rows):
-        nu[model.driver_rows] = driver_values(model, t)[1]
-    for g in model.groups:
-        if g.motions:
-            if fr is None:
-                raise ValueError("velocity_rhs needs the configuration (fr) for this model")
-            nu[g.offset:g.offset + g.n_rows] = g.cls.rate(model.body_type, fr, g.bi, g.bj,
-                                                          _params(g, t)).ravel()
-    return nu
+    if not model.rotation_motions:
+        nu = np.zeros(model.n_constraints)
+        if len(model.driver_rows):
+            nu[model.driver_rows] = driver_values(model, t)[1]
+        return nu
+    if fr is None:
+        raise ValueError("velocity_rhs needs the configuration (fr) for this model")
+    return evaluate(model, t, fr, value=False, jacobian=False, rate=True)[3]
 
 
 def acceleration_rhs(model, t: float, q: np.ndarray, qd: np.ndarray,

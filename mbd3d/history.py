@@ -2,8 +2,8 @@
 
 The solvers evaluate one state at a time; post-processing a run (results, plots, recordings)
 needs the same quantities at thousands of time points. Here the states are stacked as if they
-were the bodies of one large model (``k`` copies of the bodies plus the ground), so every
-primitive is evaluated once per chunk of time points instead of once per time point.
+were the bodies of one large model (``k`` copies of the bodies plus the ground), so the
+constraint rows are evaluated by one compiled call per chunk of time points.
 """
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from mbd3d.body import Frames
-from mbd3d.constraints import _motion_values, driver_values
+from mbd3d.constraints import driver_values, motion_phases
+from mbd3d.primitives import evaluate_rows
 
 __all__ = ["residuals", "energies"]
 
@@ -74,26 +75,17 @@ def _residual_chunk(model, t, q, qd, charts):
     k, m = len(t), model.n_constraints
     if m == 0:
         return np.zeros(k), np.zeros(k)
-    bt = model.body_type
     fr = _stacked_frames(model, q, qd, charts, ground=True)
-    offsets = (model.n_bodies + 1) * np.arange(k)[:, None]
-    C = np.empty((k, m))
-    V = np.empty((k, m))
-    for g in model.groups:
-        bi = (g.bi[None, :] + offsets).ravel()
-        bj = (g.bj[None, :] + offsets).ravel()
-        params = {key: np.tile(v, (k,) + (1,) * (v.ndim - 1)) for key, v in g.params.items()}
-        if g.motions:
-            params["phi"] = np.concatenate([_motion_values(g.motions, g.motion_names, tk)
-                                            for tk in t])
-        c, J, _ = g.cls.evaluate(bt, fr, bi, bj, params, True, True, False)
-        v = (np.einsum("irn,in->ir", J[:, :, 0], fr.Qd[bi])
-             + np.einsum("irn,in->ir", J[:, :, 1], fr.Qd[bj]))
-        if g.motions:
-            v -= g.cls.rate(bt, fr, bi, bj, params).reshape(v.shape)
-        rows = slice(g.offset, g.offset + g.n_rows)
-        C[:, rows] = c.reshape(k, -1)
-        V[:, rows] = v.reshape(k, -1)
+    n_motions = len(model.rotation_motions)
+    table = model.row_table.repeated(k, model.n_bodies + 1, n_motions)
+    phi = (np.concatenate([motion_phases(model, tk) for tk in t]) if n_motions
+           else np.zeros((0, 3)))
+    c, J, _, nu = evaluate_rows(table, fr, phi, True, True, False, rate=True)
+    bi, bj = table.row_bodies()
+    v = (np.einsum("rn,rn->r", J[:, 0], fr.Qd[bi]) + np.einsum("rn,rn->r", J[:, 1], fr.Qd[bj])
+         - nu)
+    C = c.reshape(k, m)
+    V = v.reshape(k, m)
     if len(model.driver_rows):
         f = np.stack([driver_values(model, tk) for tk in t])  # (k, 3, n_drivers)
         C[:, model.driver_rows] -= f[:, 0]

@@ -22,10 +22,12 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg as la
 from scipy.linalg.lapack import dgbsv as _gbsv, dgbtrf as _gbtrf, dgbtrs as _gbtrs, \
-    dgecon as _gecon, dgesv as _gesv, dgetrf as _getrf, dgetrs as _getrs
+    dgecon as _gecon, dgetrf as _getrf, dgetrs as _getrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+from mbd3d.compiled.dense import solve_pattern
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
            "jacobian_scaling", "augmented_scaling",
@@ -370,7 +372,8 @@ class _FixedPattern:
 
     def solve(self, values: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Solve ``A x = b`` once for the matrix with entries ``values``: what :meth:`factor`
-        then ``solve`` give, in one LAPACK call (``gesv``, or ``gbsv`` in band storage).
+        then ``solve`` give, in one call (the compiled dense LU of
+        :func:`mbd3d.compiled.dense.solve_pattern`, or LAPACK's ``gbsv`` in band storage).
 
         Raises
         ------
@@ -378,10 +381,11 @@ class _FixedPattern:
         """
         d = self.scale
         if self.layout == "dense":
-            lu, _, x, _ = _gesv(self._scatter(values * self.entry_scale, self.size), d * b,
-                                overwrite_a=1)
-            _check_pivots(np.abs(lu.diagonal()), self.pivot_tolerance)
-            return d * x
+            x, regular = solve_pattern(self.rows, self.cols, self.entry_scale, d, values, b,
+                                       self.pivot_tolerance)
+            if not regular:
+                raise SingularMatrix("smallest pivot below tolerance")
+            return x
         if self.layout == "banded":
             kl, ku, perm = self.kl, self.ku, self.perm
             lu, _, y, _ = _gbsv(kl, ku, self._scatter(values * self.entry_scale, self.band_rows),

@@ -23,7 +23,7 @@ from mbd3d.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.linalg import AugmentedPattern, PenaltyPattern
 from mbd3d.motion import Motion
-from mbd3d.primitives import PRIMITIVES, stack_vectors
+from mbd3d.primitives import PRIMITIVES, RowTable
 
 __all__ = ["ModelBuilder", "Model", "BuildContext"]
 
@@ -411,6 +411,9 @@ class Model:
             if spec.kind not in PRIMITIVES:
                 raise ModelError(f"joint '{self.joints[e_index].name}': unknown primitive "
                                  f"{spec.kind!r}")
+            if spec.kind == "angle" and self.dim != 2:
+                raise ModelError(f"joint '{self.joints[e_index].name}': a relative angle about "
+                                 "the plane normal is defined for planar bodies only")
             if spec.body_i.is_ground and spec.body_j.is_ground:
                 raise ModelError(f"joint '{self.joints[e_index].name}' connects the ground to itself")
             by_kind[spec.kind].append((e_index, spec))
@@ -421,14 +424,17 @@ class Model:
         row_is_length: list[bool] = []
         c0: list[float] = []
         driver_rows, driver_motions, driver_names = [], [], []
-        self._instances_of: dict[str, list[tuple[int, int]]] = {e.name: [] for e in self.joints}
+        # each joint's primitive instances: their positions in the row table (row order)
+        self._instances_of: dict[str, list[int]] = {e.name: [] for e in self.joints}
+        instance = 0
         for kind, items in by_kind.items():
             if not items:
                 continue
             group = _Group(PRIMITIVES[kind], self.dim, nb, items, offset)
             self.groups.append(group)
             for local, (e_index, spec) in enumerate(items):
-                self._instances_of[self.joints[e_index].name].append((len(self.groups) - 1, local))
+                self._instances_of[self.joints[e_index].name].append(instance)
+                instance += 1
                 r = group.rows_per
                 if len(spec.labels) != r:
                     raise ModelError(f"joint '{self.joints[e_index].name}': primitive {kind} "
@@ -458,7 +464,7 @@ class Model:
                     driver_names.append(name)
                 offset += r
         self.n_constraints = offset
-        self._lay_out_vectors()
+        self._lay_out_rows()
         self.row_labels = labels
         self.row_element = np.array(row_element, dtype=np.intp)
         self._set_scales(specs, np.array(row_is_length, dtype=bool))
@@ -483,24 +489,23 @@ class Model:
                     *(() if self.charts0 is None else (self.charts0,))):
             arr.setflags(write=False)
 
-    # -- the body-fixed vectors of all primitives --------------------------------------------------
-    def _lay_out_vectors(self) -> None:
-        """Stack the body-frame vectors of every primitive instance into one table, evaluated
-        by one batched call per state (:meth:`BodyType.vectors`); each group keeps the rows
-        of each of its vectors."""
-        bodies, local = [np.zeros(0, dtype=np.intp)], [np.zeros((0, self.dim))]
-        start = 0
+    # -- the table of all primitive instances --------------------------------------------------
+    def _lay_out_rows(self) -> None:
+        """Stack every primitive instance, in row order, into the :class:`RowTable` the
+        compiled loop evaluates in one call; the motions of rotation drivers are numbered
+        in the same order (rows of ``phi``)."""
+        instances, motions, names = [], [], []
         for g in self.groups:
-            idx, vectors, rows = stack_vectors(g.cls, g.bi, g.bj, g.params, self.dim)
-            bodies.append(idx)
-            local.append(vectors)
-            g.vector_rows = {name: slice(start + r.start, start + r.stop)
-                             for name, r in rows.items()}
-            start += len(idx)
-        self._vector_bodies = np.concatenate(bodies)
-        self._vector_local = np.concatenate(local)
-        self._vector_bodies.setflags(write=False)
-        self._vector_local.setflags(write=False)
+            for local in range(g.count):
+                params = {key: value[local] for key, value in g.params.items()}
+                motion_row = -1
+                if g.motions:
+                    motion_row = len(motions)
+                    motions.append(g.motions[local])
+                    names.append(g.motion_names[local])
+                instances.append((g.cls, g.bi[local], g.bj[local], params, motion_row))
+        self.row_table = RowTable.from_instances(instances, self.dim)
+        self.rotation_motions, self.rotation_motion_names = tuple(motions), tuple(names)
 
     # -- Jacobian sparsity pattern ---------------------------------------------------------------
     def _build_jacobian_pattern(self) -> None:
@@ -525,6 +530,10 @@ class Model:
         self._jac_cols = cols[order]
         counts = np.bincount(self._jac_rows, minlength=self.n_constraints)
         self._jac_indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+        # where the compiled loop puts entry (2 row + side) n_coords + coordinate: its position
+        # in the values of the pattern, -1 for the ground's columns
+        self._jac_destination = np.full(self.n_constraints * 2 * nc, -1, dtype=np.int64)
+        self._jac_destination[self._jac_take] = np.arange(len(take))
 
     # -- named access ----------------------------------------------------------------------------
     def body(self, name: str) -> Body:

@@ -1,83 +1,31 @@
-"""Constraint primitives, each evaluated for all its instances at once.
+"""Constraint primitives: what each one means, and the table that evaluates all of a model's.
 
 Every constraint row of a model has the form ``C = c(q) - c0 - f(t)``: ``c`` one of the primitive
 functions below, ``c0`` a constant of the row (a distance, a relative angle of the drawing) and
-``f`` an optional prescribed motion (drivers). The primitives are written against
-:class:`mbd3d.body.BodyType` only, so the same code serves planar and spatial bodies.
+``f`` an optional prescribed motion (drivers). The formulas are written once, against body
+vectors, in the compiled loop of :mod:`mbd3d.compiled.rows`, so the same code serves planar and
+spatial bodies; the classes here describe each primitive to the model builder.
 
 Conventions (Haug, *Computer-Aided Kinematics and Dynamics of Mechanical Systems*, 1989; verified
 in Rodrigues coordinates by ``tests/test_spatial_primitives.py``): bodies ``i`` and ``j``,
 ``d = r_j - r_i``, ``a = A v`` body vectors, and ``gamma = -(Cq qd)_q qd`` is the
 velocity-dependent right-hand side of the acceleration equation (drivers add ``f''`` separately).
 
-Each primitive class says whether its rows are lengths (``length_rows``), so that residuals
-are judged relative to the model's length scale; and it provides, for ``k`` instances with body indices ``bi``, ``bj`` (k,) and
-stacked parameters ``p`` (a dict of arrays with leading dimension k):
-
-- ``rows(dim)``: rows per instance;
-- ``vectors``: the body-frame vectors it needs, as ``(name, body "i" or "j", parameter)``;
-- ``evaluate(bt, fr, bi, bj, p, value, jacobian, gamma, vectors)`` returning the requested parts
-  ``(c (k, r), dc/dq (k, r, 2, n_coords), gamma (k, r))``, ``None`` for the others. The Jacobian
-  holds the derivatives with respect to body i (``[:, :, 0]``) and body j (``[:, :, 1]``);
-  ``gamma`` needs velocities in ``fr``.
-
-``vectors`` maps each name to a :class:`mbd3d.body.Vectors` (``s = A v``, its Jacobian,
-velocity and acceleration term). A model evaluates the vectors of all its primitives in one
-batched call per state and hands each group its rows, so that the NumPy calls per evaluation
-do not grow with the number of primitive types; called without them, a primitive evaluates
-its own.
+Each primitive class gives its ``code`` in the compiled loop, its parameters, the rows per
+instance (``rows(dim)``), whether its rows are lengths (``length_rows``: residuals are judged
+relative to the model's length scale) and the body-frame vectors it needs, as
+``(name, body "i" or "j", parameter)``. :class:`RowTable` stacks every instance of a model in
+row order; one call of :func:`evaluate_rows` evaluates them all.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from mbd3d.body import Vectors
+from mbd3d.compiled import rows as kernel
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation", "own_vectors", "stack_vectors"]
-
-_dot = np.vecdot
-
-
-def stack_vectors(cls, bi: np.ndarray, bj: np.ndarray, p: dict, dim: int
-                  ) -> tuple[np.ndarray, np.ndarray, dict[str, slice]]:
-    """The body-frame vectors of ``cls.vectors`` for ``k`` instances, stacked one vector name
-    after the other: body indices (k * n_vectors,), vectors (k * n_vectors, dim), and the rows
-    of each name."""
-    k = len(bi)
-    if not cls.vectors:
-        return np.zeros(0, dtype=np.intp), np.zeros((0, dim)), {}
-    idx = np.concatenate([bi if side == "i" else bj for _, side, _ in cls.vectors])
-    local = np.concatenate([np.broadcast_to(p[key], (k, dim)) for _, _, key in cls.vectors])
-    rows = {name: slice(n * k, (n + 1) * k) for n, (name, _, _) in enumerate(cls.vectors)}
-    return idx, local, rows
-
-
-def own_vectors(cls, bt, fr, bi: np.ndarray, bj: np.ndarray, p: dict, velocities: bool
-                ) -> dict[str, Vectors]:
-    """The vectors of ``cls.vectors`` for these instances, in one batched evaluation (what a
-    model does for all its primitives at once)."""
-    if not cls.vectors:
-        return {}
-    idx, local, rows = stack_vectors(cls, bi, bj, p, bt.dim)
-    table = bt.vectors(fr, idx, local, velocities)
-    return {name: table.part(r) for name, r in rows.items()}
-
-
-def _jacobian(k: int, rows: int, bt) -> np.ndarray:
-    return np.zeros((k, rows, 2, bt.n_coords))
-
-
-def _relative_velocity(fr, bi, bj, si: Vectors, sj: Vectors) -> np.ndarray:
-    """Time derivative of ``d = r_j - r_i`` between body points ``si``, ``sj``."""
-    return (fr.Rd.take(bj, axis=0) - fr.Rd.take(bi, axis=0)) + (sj.v - si.v)
-
-
-def _relative_position(fr, bi, bj, si: Vectors, sj: Vectors) -> np.ndarray:
-    """``d = r_j - r_i`` between body points ``si``, ``sj``."""
-    return (fr.R.take(bj, axis=0) - fr.R.take(bi, axis=0)) + (sj.s - si.s)
-
+           "RelativeAngle", "Rotation", "RowTable", "evaluate_rows"]
 
 class PointCoincidence:
     """``c = r_i - r_j``: point ``u_i`` of body i coincides with point ``u_j`` of body j.
@@ -87,6 +35,7 @@ class PointCoincidence:
     """
 
     kind = "point"
+    code = kernel.POINT
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
     length_rows = True
     params = ("u_i", "u_j")
@@ -95,24 +44,6 @@ class PointCoincidence:
     @staticmethod
     def rows(dim: int) -> int:
         return dim
-
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        vec = vectors or own_vectors(PointCoincidence, bt, fr, bi, bj, p, gamma)
-        si, sj = vec["si"], vec["sj"]
-        dim = bt.dim
-        c = J = g = None
-        if value:
-            c = -_relative_position(fr, bi, bj, si, sj)
-        if jacobian:
-            J = _jacobian(len(bi), dim, bt)
-            J[:, :, 0, :dim] = _EYE[dim]
-            J[:, :, 1, :dim] = _MINUS_EYE[dim]
-            J[:, :, 0, dim:] = si.J
-            np.negative(sj.J, out=J[:, :, 1, dim:])
-        if gamma:
-            g = sj.a - si.a
-        return c, J, g
 
 
 class Dot1:
@@ -123,6 +54,7 @@ class Dot1:
     """
 
     kind = "dot1"
+    code = kernel.DOT1
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
     length_rows = False
     params = ("v_i", "v_j")
@@ -132,26 +64,6 @@ class Dot1:
     def rows(dim: int) -> int:
         return 1
 
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        vec = vectors or own_vectors(Dot1, bt, fr, bi, bj, p, gamma)
-        return _dot1(bt, vec["ai"], vec["aj"], value, jacobian, gamma)
-
-
-def _dot1(bt, ai: Vectors, aj: Vectors, value: bool, jacobian: bool, gamma: bool):
-    """``a_i . a_j``, its Jacobian and ``gamma`` for vectors of bodies i and j."""
-    c = J = g = None
-    if value:
-        c = _dot(ai.s, aj.s)[:, None]
-    if jacobian:
-        dim = bt.dim
-        J = _jacobian(len(ai.s), 1, bt)
-        np.vecmat(aj.s, ai.J, out=J[:, 0, 0, dim:])
-        np.vecmat(ai.s, aj.J, out=J[:, 0, 1, dim:])
-    if gamma:
-        g = -(_dot(aj.s, ai.a) + _dot(ai.s, aj.a) + 2.0 * _dot(ai.v, aj.v))[:, None]
-    return c, J, g
-
 
 class Dot2:
     """``c = a_i . (r_j - r_i)``: point j stays on a plane (3D) or line (2D) of body i.
@@ -160,6 +72,7 @@ class Dot2:
     """
 
     kind = "dot2"
+    code = kernel.DOT2
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
     length_rows = True
     params = ("v_i", "u_i", "u_j")
@@ -169,26 +82,6 @@ class Dot2:
     def rows(dim: int) -> int:
         return 1
 
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        vec = vectors or own_vectors(Dot2, bt, fr, bi, bj, p, gamma)
-        ai, si, sj = vec["ai"], vec["si"], vec["sj"]
-        d = _relative_position(fr, bi, bj, si, sj)
-        c = J = g = None
-        if value:
-            c = _dot(ai.s, d)[:, None]
-        if jacobian:
-            dim = bt.dim
-            J = _jacobian(len(bi), 1, bt)
-            np.negative(ai.s, out=J[:, 0, 0, :dim])
-            np.subtract(np.vecmat(d, ai.J), np.vecmat(ai.s, si.J), out=J[:, 0, 0, dim:])
-            J[:, 0, 1, :dim] = ai.s
-            np.vecmat(ai.s, sj.J, out=J[:, 0, 1, dim:])
-        if gamma:
-            d_dot = _relative_velocity(fr, bi, bj, si, sj)
-            g = -(_dot(d, ai.a) + 2.0 * _dot(ai.v, d_dot) + _dot(ai.s, sj.a - si.a))[:, None]
-        return c, J, g
-
 
 class Distance:
     """``c = |r_j - r_i|``: with ``c0 = L`` a massless rigid link of length L.
@@ -197,6 +90,7 @@ class Distance:
     """
 
     kind = "distance"
+    code = kernel.DISTANCE
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
     length_rows = True
     params = ("u_i", "u_j")
@@ -206,67 +100,32 @@ class Distance:
     def rows(dim: int) -> int:
         return 1
 
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        vec = vectors or own_vectors(Distance, bt, fr, bi, bj, p, gamma)
-        si, sj = vec["si"], vec["sj"]
-        d = _relative_position(fr, bi, bj, si, sj)
-        # a zero length is refused when the model is built; the floor only avoids 0/0 in an
-        # iterate that passes through coincidence
-        length = np.maximum(np.sqrt(_dot(d, d)), 1e-300)
-        e = d / length[:, None]
-        c = J = g = None
-        if value:
-            c = length[:, None]
-        if jacobian:
-            dim = bt.dim
-            J = _jacobian(len(bi), 1, bt)
-            np.negative(e, out=J[:, 0, 0, :dim])
-            np.negative(np.vecmat(e, si.J), out=J[:, 0, 0, dim:])
-            J[:, 0, 1, :dim] = e
-            np.vecmat(e, sj.J, out=J[:, 0, 1, dim:])
-        if gamma:
-            d_dot = _relative_velocity(fr, bi, bj, si, sj)
-            e_dd = _dot(e, d_dot)
-            g = -(_dot(e, sj.a - si.a) + (_dot(d_dot, d_dot) - e_dd * e_dd) / length)[:, None]
-        return c, J, g
-
 
 class Coordinate:
     """``c = q_j[coordinate]``: one coordinate of body j (body i is the ground)."""
 
     kind = "coordinate"
+    code = kernel.COORDINATE
     #: translation coordinates are lengths, a planar angle is not (see :meth:`row_is_length`)
     length_rows = None
+    params = ("coordinate",)
+    vectors = ()
 
     @staticmethod
     def row_is_length(params: dict, dim: int) -> bool:
         return int(params["coordinate"]) < dim
-    params = ("coordinate",)
-    vectors = ()
 
     @staticmethod
     def rows(dim: int) -> int:
         return 1
 
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        k = len(bj)
-        c = J = g = None
-        if value:
-            c = fr.Q[bj, p["coordinate"]][:, None]
-        if jacobian:
-            J = _jacobian(k, 1, bt)
-            J[np.arange(k), 0, 1, p["coordinate"]] = 1.0
-        if gamma:
-            g = np.zeros((k, 1))
-        return c, J, g
-
 
 class RelativeAngle:
-    """``c = theta_j - theta_i``: rotation of body j relative to body i about the plane normal."""
+    """``c = theta_j - theta_i``: rotation of body j relative to body i about the plane normal
+    (planar bodies only)."""
 
     kind = "angle"
+    code = kernel.ANGLE
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
     length_rows = False
     params = ()
@@ -275,18 +134,6 @@ class RelativeAngle:
     @staticmethod
     def rows(dim: int) -> int:
         return 1
-
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        c = J = g = None
-        if value:
-            c = bt.relative_angle(fr, bi, bj)[:, None]
-        if jacobian:
-            J = bt.relative_angle(fr, bi, bj, jacobian=True)[:, None]
-        if gamma:
-            # theta_j - theta_i is linear in q for planar bodies: no velocity-dependent term
-            g = np.zeros((len(bi), 1))
-        return c, J, g
 
 
 class Rotation:
@@ -297,8 +144,7 @@ class Rotation:
     direction in that plane; with ``theta`` the angle from ``f_i`` to ``f_j`` about the hinge,
     ``C = sin(theta - phi)``: no turn counting, any number of revolutions, and ``lam`` is minus
     the driving torque about the hinge. The time dependence sits inside the row, so this class
-    supplies its own ``-C_t`` (``rate``) and time terms of ``Qd``; ``p["phi"]`` holds
-    ``(f, f', f'')`` per instance. With ``u = A_i (g cos(phi) - f sin(phi))`` and
+    supplies its own ``-C_t`` and time terms of ``Qd`` from ``(f, f', f'')`` of its motion. With ``u = A_i (g cos(phi) - f sin(phi))`` and
     ``w = A_i (f cos(phi) + g sin(phi))``: ``-C_t = (f_j . w) phi'`` and
     ``Qd = gamma_dot1(u, f_j) + 2 phi' (f_j . (omega_i x w) + w . (omega_j x f_j))
     + (f_j . u) phi'^2 + (f_j . w) phi''``. ``u`` and ``w`` and everything derived from them
@@ -306,6 +152,7 @@ class Rotation:
     """
 
     kind = "rotation"
+    code = kernel.ROTATION
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
     length_rows = False
     params = ("f_i", "g_i", "f_j")
@@ -316,37 +163,118 @@ class Rotation:
     def rows(dim: int) -> int:
         return 1
 
-    @staticmethod
-    def _turned(p, vec) -> tuple[Vectors, Vectors]:
-        """``u`` and ``w`` of the class docstring, from the parts of ``f_i`` and ``g_i``."""
-        c, s = np.cos(p["phi"][:, 0]), np.sin(p["phi"][:, 0])
-        fi, gi = vec["fi"], vec["gi"]
-        return gi.combine(c, fi, -s), fi.combine(c, gi, s)
-
-    @staticmethod
-    def evaluate(bt, fr, bi, bj, p, value=True, jacobian=True, gamma=False, vectors=None):
-        vec = vectors or own_vectors(Rotation, bt, fr, bi, bj, p, gamma)
-        u, w = Rotation._turned(p, vec)
-        f_j = vec["fj"]
-        c, J, g = _dot1(bt, u, f_j, value, jacobian, gamma)
-        if gamma:
-            rate, accel = p["phi"][:, 1], p["phi"][:, 2]
-            mixed = _dot(f_j.s, w.v) + _dot(w.s, f_j.v)
-            g = g + (2.0 * rate * mixed + _dot(f_j.s, u.s) * rate * rate
-                     + _dot(f_j.s, w.s) * accel)[:, None]
-        return c, J, g
-
-    @staticmethod
-    def rate(bt, fr, bi, bj, p) -> np.ndarray:
-        """``-C_t``, shape (k, 1)."""
-        vec = own_vectors(Rotation, bt, fr, bi, bj, p, False)
-        _, w = Rotation._turned(p, vec)
-        return (_dot(vec["fj"].s, w.s) * p["phi"][:, 1])[:, None]
-
-
-#: translation part of a point's Jacobian, by dimension
-_EYE = {2: np.eye(2), 3: np.eye(3)}
-_MINUS_EYE = {dim: -eye for dim, eye in _EYE.items()}
 
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation)}
+
+
+class RowTable:
+    """Every primitive instance of a model in row order, as the arrays of the compiled loop.
+
+    Attributes
+    ----------
+    code, bi, bj, first_row, coordinate, motion : ndarray (k,) of int
+        Primitive code, bodies i and j (rows of the frames, the ground last), first row,
+        coordinate of a :class:`Coordinate` and row of a :class:`Rotation`'s motion in
+        ``phi`` (-1 for the others).
+    slots : ndarray (k, 3) of int
+        Rows of each instance's vectors (in the order of its class's ``vectors``) in the
+        vector table ``vector_bodies`` (V,), ``vector_local`` (V, dim).
+    n_rows : int
+    """
+
+    def __init__(self, code, bi, bj, first_row, slots, coordinate, motion, vector_bodies,
+                 vector_local, n_rows: int):
+        self.code, self.bi, self.bj, self.first_row = code, bi, bj, first_row
+        self.slots, self.coordinate, self.motion = slots, coordinate, motion
+        self.vector_bodies, self.vector_local, self.n_rows = vector_bodies, vector_local, n_rows
+
+    @classmethod
+    def from_instances(cls, instances: list, dim: int) -> "RowTable":
+        """``instances``: ``(primitive class, bi, bj, params, motion row)`` in row order."""
+        k = len(instances)
+        code, bi, bj, first_row, coordinate, motion = (np.zeros(k, dtype=np.int64)
+                                                        for _ in range(6))
+        slots = np.full((k, 3), -1, dtype=np.int64)
+        bodies, local = [], []
+        row = 0
+        for e, (prim, i, j, params, motion_row) in enumerate(instances):
+            code[e], bi[e], bj[e], first_row[e], motion[e] = prim.code, i, j, row, motion_row
+            coordinate[e] = int(params.get("coordinate", 0))
+            for n, (_, side, key) in enumerate(prim.vectors):
+                slots[e, n] = len(bodies)
+                bodies.append(i if side == "i" else j)
+                local.append(np.asarray(params[key], dtype=float))
+            row += prim.rows(dim)
+        return cls(code, bi, bj, first_row, slots, coordinate, motion,
+                   np.array(bodies, dtype=np.int64), np.array(local).reshape(-1, dim), row)
+
+    def row_bodies(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bodies i and j of every row, (m,) each."""
+        rows_per = np.diff(np.append(self.first_row, self.n_rows))
+        return np.repeat(self.bi, rows_per), np.repeat(self.bj, rows_per)
+
+    def subset(self, instances: np.ndarray) -> "RowTable":
+        """The table of some instances only, their rows and vectors renumbered from 0."""
+        rows_per = np.diff(np.append(self.first_row, self.n_rows))[instances]
+        first = np.concatenate([[0], np.cumsum(rows_per)[:-1]]).astype(np.int64)
+        slots = self.slots[instances]
+        used = slots[slots >= 0]
+        renumbered = np.full_like(slots, -1)
+        renumbered[slots >= 0] = np.arange(len(used))
+        return RowTable(self.code[instances], self.bi[instances], self.bj[instances], first,
+                        renumbered, self.coordinate[instances], self.motion[instances],
+                        self.vector_bodies[used], self.vector_local[used], int(rows_per.sum()))
+
+    def on_bodies(self, body_map: np.ndarray) -> "RowTable":
+        """The same rows read from other body rows: body ``b`` becomes ``body_map[b]``."""
+        return RowTable(self.code, body_map[self.bi], body_map[self.bj], self.first_row,
+                        self.slots, self.coordinate, self.motion, body_map[self.vector_bodies],
+                        self.vector_local, self.n_rows)
+
+    def repeated(self, copies: int, body_stride: int, motion_stride: int) -> "RowTable":
+        """The table for ``copies`` states stacked one after the other: copy ``c`` reads bodies
+        ``c * body_stride + b``, motions ``c * motion_stride + r`` and writes rows
+        ``c * n_rows + r``."""
+        offset = np.arange(copies)[:, None]
+        tile = lambda a, stride: (a[None] + stride * offset).reshape(-1)  # noqa: E731
+        n_vectors = len(self.vector_bodies)
+        slots = np.where(self.slots[None] >= 0, self.slots[None] + n_vectors * offset[:, :, None],
+                         -1).reshape(-1, 3)
+        return RowTable(np.tile(self.code, copies), tile(self.bi, body_stride),
+                        tile(self.bj, body_stride), tile(self.first_row, self.n_rows), slots,
+                        np.tile(self.coordinate, copies),
+                        np.where(self.motion[None] >= 0, tile(self.motion, motion_stride)
+                                 .reshape(copies, -1), -1).reshape(-1),
+                        tile(self.vector_bodies, body_stride),
+                        np.tile(self.vector_local, (copies, 1)), copies * self.n_rows)
+
+
+def evaluate_rows(table: RowTable, fr, phi: np.ndarray, value: bool = True,
+                  jacobian: bool = True, gamma: bool = False, rate: bool = False,
+                  destination: np.ndarray | None = None, nnz: int | None = None):
+    """``c(q)`` (m,), Jacobian values, ``gamma`` (m,) and ``-C_t`` (m,) of the table's rows at
+    the frames ``fr`` (velocities needed for ``gamma``), ``None`` for the parts not asked for.
+
+    The Jacobian values go to positions ``destination`` of an array of ``nnz`` (indexed by
+    ``(2 row + side) n_coords + coordinate``, -1 for entries left out: the ground's); by
+    default the full array (m, 2, n_coords) of derivatives with respect to bodies i and j.
+    ``phi`` (k_motion, 3): ``(f, f', f'')`` of the motions of rotation drivers.
+    """
+    nc = fr.Q.shape[1]
+    raw = destination is None
+    if raw:
+        nnz = table.n_rows * 2 * nc
+        destination = np.arange(nnz)
+    velocities = gamma and fr.Qd is not None
+    if gamma and not velocities:
+        raise ValueError("gamma needs frames with velocities")
+    s, J, v, a = fr.vectors(table.vector_bodies, table.vector_local, velocities)
+    C, data, G, nu = kernel.constraint_rows(
+        table.code, table.bi, table.bj, table.first_row, table.slots, table.coordinate,
+        table.motion, phi, table.n_rows, fr.Q, fr.Qd if velocities else fr.Q, s, J, v, a,
+        destination, nnz, value, jacobian, gamma, rate)
+    if jacobian and raw:
+        data = data.reshape(table.n_rows, 2, nc)
+    return (C if value else None, data if jacobian else None, G if gamma else None,
+            nu if rate else None)

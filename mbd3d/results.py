@@ -21,9 +21,10 @@ from typing import Any, BinaryIO, Callable, Sequence
 
 import numpy as np
 
-from mbd3d import files, history
+from mbd3d import constraints, files, history
 from mbd3d.body import Body
 from mbd3d.errors import MBDError, ModelError
+from mbd3d.primitives import evaluate_rows
 from mbd3d.rotations import continuous_quaternions, to_quaternion
 
 __all__ = ["Results", "ResultsBuffer", "BodyHistory", "PointHistory", "Reaction", "JointHistory",
@@ -333,20 +334,23 @@ class Results:
                 if charts is not None:
                     charts[side::2] = self._body_charts(b)
         fr = bt.frames(Q, charts=charts)
-        side_of = {model.padded_index(element.body_i): 0, model.padded_index(element.body_j): 1}
-        target = model.padded_index(body)
-        stacked = 2 * np.arange(k)
-        generalized = np.zeros((k, nc))
-        for g_index, local in model._instances_of[name]:
-            g = model.groups[g_index]
-            rows = g.offset + local * g.rows_per + np.arange(g.rows_per)
-            params = {key: np.broadcast_to(v[local], (k,) + v.shape[1:]) for key, v in g.params.items()}
-            bodies = (g.bi[local], g.bj[local])
-            J = g.cls.evaluate(bt, fr, stacked + side_of[bodies[0]], stacked + side_of[bodies[1]],
-                               params, False, True, False)[1]  # (k, r, 2, nc)
-            for s, b in enumerate(bodies):
-                if b == target:  # constraint force on this body: -Cq^T lam
-                    generalized -= np.einsum("krn,kr->kn", J[:, :, s, :], lam[:, rows])
+        # the joint's rows read body i from row 2t and body j from row 2t + 1 at time t
+        body_map = np.full(model.n_bodies + 1, -1, dtype=np.int64)
+        body_map[model.padded_index(element.body_i)] = 0
+        body_map[model.padded_index(element.body_j)] = 1
+        n_motions = len(model.rotation_motions)
+        table = (model.row_table.subset(np.array(model._instances_of[name]))
+                 .on_bodies(body_map).repeated(k, 2, n_motions))
+        phi = (np.concatenate([constraints.motion_phases(model, tk) for tk in self.t])
+               if n_motions else np.zeros((0, 3)))
+        J = evaluate_rows(table, fr, phi, value=False)[1]  # (k * r, 2, nc)
+        rows = model.rows_of(name)
+        # constraint force on this body, -Cq^T lam, from the side of each row that is this
+        # body (a primitive may take the joint's bodies in either order)
+        target = body_map[model.padded_index(body)]
+        bi, bj = table.row_bodies()
+        J_body = (J[:, 0] * (bi % 2 == target)[:, None] + J[:, 1] * (bj % 2 == target)[:, None])
+        generalized = -np.einsum("krn,kr->kn", J_body.reshape(k, len(rows), nc), lam[:, rows])
         side = 0 if body is element.body_i else 1
         idx = np.arange(k) * 2 + side
         force, moment_cm = bt.wrench(fr, idx, generalized)

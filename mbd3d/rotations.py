@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from mbd3d.compiled import rotations as compiled
 from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
@@ -37,18 +38,17 @@ def skew(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def from_rodrigues(g: np.ndarray) -> np.ndarray:
-    """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` ([1.1] of the formula sheet), ``s = g.g``.
-
-    Evaluated as ``((1 - s) I + 2 (g g^T + g~)) / (1 + s)`` (using ``g~^2 = g g^T - s I``):
-    element-wise, with no batched 3x3 products, since it runs for every body and state.
-    """
+def _batched(kernel, g: np.ndarray) -> np.ndarray:
+    """A compiled per-row kernel applied to ``g`` (..., 3), giving (..., 3, 3)."""
     g = np.asarray(g, dtype=float)
-    s = np.vecdot(g, g)
-    A = 2.0 * (g[..., :, None] * g[..., None, :] + skew(g))
-    diagonal = np.einsum("...ii->...i", A)
-    diagonal += (1.0 - s)[..., None]
-    return A / (1.0 + s)[..., None, None]
+    return kernel(np.ascontiguousarray(g.reshape(-1, 3))).reshape(g.shape[:-1] + (3, 3))
+
+
+def from_rodrigues(g: np.ndarray) -> np.ndarray:
+    """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` ([1.1] of the formula sheet), ``s = g.g``
+    (evaluated as ``((1 - s) I + 2 (g g^T + g~)) / (1 + s)``, :mod:`mbd3d.compiled.rotations`).
+    """
+    return _batched(compiled.rodrigues_matrices, g)
 
 
 def to_quaternion(A: np.ndarray) -> np.ndarray:
@@ -134,15 +134,12 @@ def axis_angle(axis: Any, angle: float) -> np.ndarray:
 
 def g_bar(g: np.ndarray) -> np.ndarray:
     """``G_bar(g) = 2 / (1 + s) (I - g~)``: body angular velocity ``omega_bar = G_bar g_dot``."""
-    g = np.asarray(g, dtype=float)
-    s = np.vecdot(g, g)
-    return (2.0 / (1.0 + s))[..., None, None] * (np.eye(3) - skew(g))
+    return _batched(compiled.g_bar_matrices, g)
 
 
 def g_bar_inverse(g: np.ndarray) -> np.ndarray:
     """``G_bar^-1 = (I + g~ + g g^T) / 2`` ([2.4] of the formula sheet)."""
-    g = np.asarray(g, dtype=float)
-    return 0.5 * (np.eye(3) + skew(g) + g[..., :, None] * g[..., None, :])
+    return _batched(compiled.g_bar_inverse_matrices, g)
 
 
 def compose_rodrigues(ga: np.ndarray, gb: np.ndarray) -> np.ndarray:

@@ -25,7 +25,10 @@ from typing import Any
 import numpy as np
 
 from mbd3d import rotations as rot
-from mbd3d.body import BodyType, Frames, Vectors
+from mbd3d.body import BodyType, Frames
+from mbd3d.compiled.bodies import (spatial_frames, spatial_mass_blocks,
+                                   spatial_quadratic_velocity, spatial_rates,
+                                   spatial_velocities, spatial_velocity_derivative)
 from mbd3d.checks import finite_vector
 from mbd3d.errors import ModelError
 
@@ -39,17 +42,6 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
     out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
     return out
-
-
-def _kappa(g: np.ndarray, g_dot: np.ndarray) -> np.ndarray:
-    """``kappa = 2 g.g_dot / (1 + g.g)`` per row [2.7]."""
-    return 2.0 * np.vecdot(g, g_dot) / (1.0 + np.vecdot(g, g))
-
-
-def _alpha_bar(Gb: np.ndarray, g_ddot: np.ndarray, kappa: np.ndarray,
-               omega_bar: np.ndarray) -> np.ndarray:
-    """Angular acceleration in body axes, ``G_bar g_ddot - kappa omega_bar`` per row [2.8]."""
-    return np.matvec(Gb, g_ddot) - kappa[:, None] * omega_bar
 
 
 class SpatialBody(BodyType):
@@ -102,51 +94,25 @@ class SpatialBody(BodyType):
 
     def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
                charts: np.ndarray | None = None) -> Frames:
-        g = Q[:, 3:6]
-        A = rot.from_rodrigues(g)
-        if charts is not None:
-            A = charts @ A
-        Gb = rot.g_bar(g)
-        AG = A @ Gb
-        if Qd is None:
-            return Frames(Q=Q, A=A, R=Q[:, :3], g=g, Gbar=Gb, AG=AG)
-        g_dot = Qd[:, 3:6]
-        omega_bar = np.matmul(Gb, g_dot[:, :, None])[:, :, 0]
-        omega = np.matmul(A, omega_bar[:, :, None])[:, :, 0]
-        kappa = _kappa(g, g_dot)
-        return Frames(Q=Q, A=A, R=Q[:, :3], g=g, Gbar=Gb, AG=AG, Qd=Qd, Rd=Qd[:, :3],
-                      omega=omega, omega_bar=omega_bar, kappa=kappa)
-
-    def vectors(self, fr: Frames, idx: np.ndarray, v: np.ndarray, velocities: bool = False
-                ) -> Vectors:
-        s = self.rotate(fr, idx, v)
-        # column c of ds/dg is -s x (A G_bar)[:, c] = (A G_bar)[:, c] x s
-        J = _cross(fr.AG.take(idx, axis=0).swapaxes(1, 2), s[:, None, :]).swapaxes(1, 2)
-        if not velocities:
-            return Vectors(s, J)
-        w = fr.omega.take(idx, axis=0)
-        w_s = _cross(w, s)
-        return Vectors(s, J, w_s, _cross(w, w_s) - fr.kappa[idx][:, None] * w_s)
+        velocities = Qd is not None
+        if charts is None:
+            charts = np.broadcast_to(np.eye(3), (len(Q), 3, 3))
+        A, AG, omega, kappa, Gb, omega_bar = spatial_frames(
+            Q, Qd if velocities else Q, charts, velocities)
+        fr = Frames(Q=Q, A=A, R=Q[:, :3], g=Q[:, 3:6], Gbar=Gb, AG=AG, axes=AG, omega3=omega,
+                    kappa=kappa)
+        if velocities:
+            fr.Qd, fr.Rd, fr.omega, fr.omega_bar = Qd, Qd[:, :3], omega, omega_bar
+        return fr
 
     def cross(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return _cross(a, b)
 
     def mass_blocks(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-        nb = len(mass)
-        blocks = np.zeros((nb, 6, 6))
-        blocks[:, 0, 0] = blocks[:, 1, 1] = blocks[:, 2, 2] = mass
-        Gb = fr.Gbar[:nb]
-        blocks[:, 3:, 3:] = Gb.swapaxes(1, 2) @ inertia @ Gb
-        return blocks
+        return spatial_mass_blocks(fr.Gbar, mass, inertia)
 
     def quadratic_velocity(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-        nb = len(mass)
-        w = fr.omega_bar[:nb]
-        Jw = np.matmul(inertia, w[:, :, None])[:, :, 0]
-        torque = -_cross(w, Jw) + fr.kappa[:nb, None] * Jw
-        out = np.zeros((nb, 6))
-        out[:, 3:] = np.matmul(fr.Gbar[:nb].swapaxes(1, 2), torque[:, :, None])[:, :, 0]
-        return out
+        return spatial_quadratic_velocity(fr.Gbar, fr.omega_bar, fr.kappa, inertia)
 
     def torque_generalized(self, fr: Frames, idx: np.ndarray, torque: np.ndarray) -> np.ndarray:
         out = np.zeros((len(idx), 6))
@@ -164,34 +130,25 @@ class SpatialBody(BodyType):
         return fr.omega[idx]
 
     def angular_acceleration(self, fr: Frames, idx: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        alpha_bar = _alpha_bar(fr.Gbar[idx], qdd[:, 3:], fr.kappa[idx], fr.omega_bar[idx])
+        # d omega_bar/dt of the bodies' own coordinates, turned to global axes
+        k = len(idx)
+        alpha_bar = spatial_velocity_derivative(
+            np.ravel(fr.Q[idx]), np.ravel(fr.Qd[idx]), np.ravel(qdd)).reshape(k, 6)[:, 3:]
         return np.matvec(fr.A[idx], alpha_bar)
-
-    def relative_angle(self, fr: Frames, idx_i: np.ndarray, idx_j: np.ndarray,
-                       jacobian: bool = False) -> np.ndarray:
-        raise ModelError("a relative angle about the plane normal is defined for planar bodies "
-                         "only")
 
     def velocities(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``(R_dot, omega_bar)`` per body, ``omega_bar = G_bar(g) g_dot`` [2.5]."""
-        Q, V = q.reshape(-1, 6), np.array(qd, dtype=float).reshape(-1, 6)
-        V[:, 3:] = np.matvec(rot.g_bar(Q[:, 3:]), V[:, 3:])
-        return V.ravel()
+        return spatial_velocities(np.asarray(q, dtype=float), np.asarray(qd, dtype=float))
 
     def rates(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``g_dot = G_bar(g)^-1 omega_bar`` [2.4] per body."""
-        Q, Qd = q.reshape(-1, 6), np.array(v, dtype=float).reshape(-1, 6)
-        Qd[:, 3:] = np.matvec(rot.g_bar_inverse(Q[:, 3:]), Qd[:, 3:])
-        return Qd.ravel()
+        return spatial_rates(np.asarray(q, dtype=float), np.asarray(v, dtype=float))
 
     def velocity_derivative(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
         """``d omega_bar/dt = G_bar g_ddot - kappa omega_bar`` [2.8] per body."""
-        Q, Qd = q.reshape(-1, 6), qd.reshape(-1, 6)
-        Vd = np.array(qdd, dtype=float).reshape(-1, 6)
-        g, g_dot = Q[:, 3:], Qd[:, 3:]
-        Gb = rot.g_bar(g)
-        Vd[:, 3:] = _alpha_bar(Gb, Vd[:, 3:], _kappa(g, g_dot), np.matvec(Gb, g_dot))
-        return Vd.ravel()
+        return spatial_velocity_derivative(np.asarray(q, dtype=float),
+                                           np.asarray(qd, dtype=float),
+                                           np.asarray(qdd, dtype=float))
 
     def reset_charts(self, q: np.ndarray, qd: np.ndarray | None, charts: np.ndarray,
                      limit: float = CHART_LIMIT):
