@@ -61,9 +61,6 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     SingularJacobianError
         When the augmented matrix is singular (names the dependent joints and the time).
     """
-    if not (np.isfinite(q).all() and np.isfinite(qd).all()):
-        raise IntegrationError(f"forward dynamics of '{model.name}': the state is not finite at "
-                               f"t = {t:.6g} s (the integration diverged)", time=t)
     qdd, lam, _ = consistent_accelerations(model, t, q, qd, charts, fallback=False)
     return qdd, lam
 

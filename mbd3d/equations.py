@@ -7,10 +7,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from mbd3d.body import Frames, rotate_rows
-from mbd3d.constraints import frames
+from mbd3d.compiled import accelerations as kernel
+from mbd3d.constraints import driver_values, frames, motion_phases
+from mbd3d.linalg import SingularMatrix
 
 __all__ = ["mass_matrix", "mass_times", "generalized_forces", "kinetic_energy",
-           "potential_energy"]
+           "potential_energy", "augmented_accelerations"]
 
 
 def mass_matrix(model, fr: Frames, sparse: bool | None = None):
@@ -63,3 +65,64 @@ def potential_energy(model, q: np.ndarray, charts: np.ndarray | None = None) -> 
             fr = frames(model, q, np.zeros_like(q), charts)
         V += group.potential(model, fr)
     return V
+
+
+class _Core:
+    """A model's arrays in the form the compiled augmented solve takes them, fixed at build."""
+
+    def __init__(self, model):
+        table, pattern = model.row_table, model._augmented_pattern
+        nb = model.n_bodies
+        self.spatial = model.dim == 3
+        self.dense = pattern.layout == "dense"
+        self.no_forces = np.zeros(model.n_coordinates)
+        self.no_drivers = np.zeros(0)
+        self.before = (model.mass, model.inertia, np.ascontiguousarray(model._weight[:nb].ravel()),
+                       table.code, table.bi, table.bj, table.first_row, table.slots,
+                       table.coordinate, table.motion, table.vector_bodies,
+                       np.ascontiguousarray(table.vector_local), table.n_rows)
+        self.driver_rows = np.asarray(model.driver_rows, dtype=np.int64)
+        self.after = (model._jac_destination, len(model._jac_take),
+                      np.asarray(pattern.rows, dtype=np.int64),
+                      np.asarray(pattern.cols, dtype=np.int64), pattern.entry_scale,
+                      pattern.scale, pattern.pivot_tolerance, self.dense)
+
+
+def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
+                            charts: np.ndarray | None = None) -> np.ndarray | None:
+    """``(qdd, lam)`` stacked (n + m,) from the augmented equations at ``(t, q, qd)``, or None
+    when the state is not finite.
+
+    Everything but the force elements, the drivers' motions (Python objects) and the banded
+    solve of a large model is one compiled call (:mod:`mbd3d.compiled.accelerations`): the
+    one place this system is assembled and solved.
+
+    Raises
+    ------
+    SingularMatrix
+        When the matrix is singular (dependent constraint rows).
+    """
+    core = model._core
+    extra = core.no_forces
+    if model.force_groups:
+        fr = frames(model, q, qd, charts)
+        Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+        for group in model.force_groups:
+            group.apply(model, t, fr, Q)
+        extra = Q[:model.n_bodies].ravel()
+    phi = motion_phases(model, t)
+    f2 = driver_values(model, t)[2] if len(core.driver_rows) else core.no_drivers
+    q = np.asarray(q, dtype=float)
+    qd = np.asarray(qd, dtype=float)
+    if core.spatial:
+        x, status, values, rhs = kernel.spatial_accelerations(
+            q, qd, model.charts0 if charts is None else charts, extra, *core.before, phi,
+            core.driver_rows, f2, *core.after)
+    else:
+        x, status, values, rhs = kernel.planar_accelerations(
+            q, qd, extra, *core.before, phi, core.driver_rows, f2, *core.after)
+    if status == kernel.NOT_FINITE:
+        return None
+    if status == kernel.SINGULAR:
+        raise SingularMatrix("smallest pivot below tolerance")
+    return x if core.dense else model._augmented_pattern.solve(values, rhs)

@@ -42,7 +42,7 @@ import scipy.sparse as sp
 
 from mbd3d import constraints
 from mbd3d.checks import finite_scalar
-from mbd3d.equations import generalized_forces, mass_matrix, mass_times
+from mbd3d.equations import augmented_accelerations, generalized_forces, mass_matrix, mass_times
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.linalg import (SingularMatrix, augmented_scaling, penalty_scale,
                           solve_augmented_lagrangian, solve_model_augmented)
@@ -104,19 +104,23 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
     regular : bool
         False when the augmented matrix was singular (multipliers not unique).
     """
-    fr = constraints.frames(model, q, qd, charts)
-    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
-    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-    Qe = generalized_forces(model, t, fr)
     n = model.n_coordinates
     if not redundant:
         try:
-            x = solve_model_augmented(model, blocks, jac_data, np.concatenate([Qe, gamma]))
-            return x[:n], x[n:], True
+            x = augmented_accelerations(model, t, q, qd, charts)
         except SingularMatrix:
             if not fallback:
-                raise singular_error(model, constraints.jacobian_matrix(model, jac_data), t,
-                                     f"forward dynamics of '{model.name}'") from None
+                raise singular_error(model, constraints.jacobian(model, t, q, constraints.frames(
+                    model, q, charts=charts)), t, f"forward dynamics of '{model.name}'") from None
+        else:
+            if x is None:
+                raise IntegrationError(f"forward dynamics of '{model.name}': the state is not "
+                                       f"finite at t = {t:.6g} s (the integration diverged)",
+                                       time=t)
+            return x[:n], x[n:], True
+    fr = constraints.frames(model, q, qd, charts)
+    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
+    Qe = generalized_forces(model, t, fr)
     M = mass_matrix(model, fr)
     Cq = constraints.jacobian_matrix(model, jac_data)
     try:

@@ -482,12 +482,14 @@ class Model:
         self._augmented_pattern = AugmentedPattern(self)
         self._penalty_pattern = PenaltyPattern(self)
 
+        from mbd3d.equations import _Core
         from mbd3d.forces import compile_forces
         self.force_groups = compile_forces(self.forces, ctx)
         for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0,
                     self._ground_row, self._weight,
                     *(() if self.charts0 is None else (self.charts0,))):
             arr.setflags(write=False)
+        self._core = _Core(self)
 
     # -- the table of all primitive instances --------------------------------------------------
     def _lay_out_rows(self) -> None:
