@@ -38,7 +38,6 @@ STUDY = {
     "RK45": [{"rtol": r} for r in (1e-5, 1e-7, 1e-9)],
     "DOP853": [{"rtol": r} for r in (1e-5, 1e-7, 1e-9, 1e-11)],
     "RK23": [{"rtol": r} for r in (1e-5, 1e-7)],
-    "Radau": [{"rtol": 1e-5}],
     "generalized-alpha": [{"step": h} for h in (1e-3, 2.5e-4, 6.25e-5)],
 }
 

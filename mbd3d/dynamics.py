@@ -18,33 +18,40 @@ same way, so every reported state satisfies the constraints.
 from __future__ import annotations
 
 import warnings
-from collections import deque
 from typing import Sequence
 
 import numpy as np
-import scipy.integrate as si
 
 from mbd3d import constraints
-from mbd3d.errors import IntegrationError, ModelError, StiffnessWarning
+from mbd3d.compiled import callbacks, integration as stepping
+from mbd3d.compiled.runge_kutta import TABLEAUS, interpolate, rms
+from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, initial_guess, solve_velocity
 from mbd3d.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
 from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
+from mbd3d.spatial import CHART_LIMIT
 
 __all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS",
            "GENERALIZED_ALPHA"]
 
-#: integrators selectable by name; "RK45" is the Dormand-Prince 5(4) pair of MATLAB's ode45
-METHODS = {"RK45": si.RK45, "DOP853": si.DOP853, "RK23": si.RK23, "Radau": si.Radau}
-#: SciPy integrators refused, and why: a projection onto the constraints restarts them
+#: the explicit integrators selectable by name (the compiled pairs of
+#: :mod:`mbd3d.compiled.runge_kutta`); "RK45" is the Dormand-Prince 5(4) pair of MATLAB's ode45
+METHODS = tuple(TABLEAUS)
+#: integrators refused, and why
 _REFUSED = {name: (f"{name} is a multistep method: every projection onto the constraints "
-                   "restarts it at order one with a tiny step, so that it projects again after "
-                   "the next step (0.1 s of the free slider-crank took 98 s and 12,000 "
-                   "projections). Use 'generalized-alpha' for stiff models, 'Radau' for an "
-                   "implicit one-step method, or RK45/DOP853 otherwise.")
+                   "would restart it at order one with a tiny step, so that it projects again "
+                   "after the next step (0.1 s of the free slider-crank took 98 s and 12,000 "
+                   "projections with SciPy's). Use 'generalized-alpha' for stiff models, or "
+                   "RK45/DOP853 otherwise.")
             for name in ("BDF", "LSODA")}
+_REFUSED["Radau"] = ("Radau is no longer offered: SciPy's implementation had to be restarted, "
+                     "with a new finite-difference Jacobian, at every projection onto the "
+                     "constraints, and was slower than 'generalized-alpha' (the implicit "
+                     "method for stiff models) and the explicit pairs everywhere measured. Use "
+                     "'generalized-alpha' for stiff models, or RK45/DOP853.")
 #: the implicit index-3 integrator of :mod:`mbd3d.implicit`
 GENERALIZED_ALPHA = "generalized-alpha"
 
@@ -114,25 +121,6 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
 
 #: iterations allowed to :func:`_project_with_one_factorization` before falling back
 _SIMPLIFIED_NEWTON_ITERATIONS = 6
-
-
-def _difference_jacobian(rhs, n_y: int):
-    """Forward-difference Jacobian of ``rhs`` for the implicit integrators.
-
-    SciPy's own estimate adapts its step per column and lets it grow without bound on columns
-    that are identically zero (coordinates nothing depends on, such as a free body's position
-    under constant gravity), which overflows; a fixed relative step is robust here.
-    """
-    def jac(t: float, y: np.ndarray) -> np.ndarray:
-        f0 = rhs(t, y)
-        J = np.empty((n_y, n_y))
-        for j in range(n_y):
-            h = 1.5e-8 * max(1.0, abs(y[j]))
-            y_step = y.copy()
-            y_step[j] += h
-            J[:, j] = (rhs(t, y_step) - f0) / h
-        return J
-    return jac
 
 
 #: smallest singular value of ``Cq``, relative to its largest, below which a collapsed step
@@ -347,52 +335,60 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     if step is not None:
         raise ModelError(f"step applies to method='{GENERALIZED_ALPHA}'; the {method} "
                          "integrator chooses its own steps (limit them with max_step)")
-    solver_cls = METHODS[method]
+    tableau = TABLEAUS[method]
     n = model.n_coordinates
     projection_tol = constraint_tol * 1e-3
     stats = {"method": method, "steps": 0, "rhs_evaluations": 0, "projections": 0,
              "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
     k_max = len(t)
     out = ResultsBuffer(model, "forward dynamics", t, stats)
-    chart = model.charts0  # reference rotations of the current integration segment
-
+    bt = model.body_type
+    spatial = model.dim == 3
+    # the reference rotations of the integration, moved in place by the compiled loop
+    charts = np.array(model.charts0) if spatial else np.zeros((1, 3, 3))
     redundant = False  # set at the start: the constraint rows depend on each other
 
-    def accelerations(tt, q, qd):
-        if not redundant:
-            return forward_accelerations(model, tt, q, qd, chart)
-        qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, redundant=True)
-        return qdd, lam
-
-    # the integrated state is (q, v): positions and the velocities of BodyType.velocities
-    # (angular velocities in body axes for spatial bodies), not (q, qd)
-    bt = model.body_type
-
-    def rhs(tt: float, y: np.ndarray) -> np.ndarray:
-        stats["rhs_evaluations"] += 1
-        q = y[:n]
-        qd = bt.rates(q, y[n:])
-        return np.concatenate([qd, bt.velocity_derivative(q, qd, accelerations(tt, q, qd)[0])])
-
-    def state(q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        return np.concatenate([q, bt.velocities(q, qd)])
-
-    def split(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return y[:n], bt.rates(y[:n], y[n:])
+    def chart() -> np.ndarray | None:
+        return charts.copy() if spatial else None
 
     def record(q: np.ndarray, qd: np.ndarray) -> None:
         tk = t[out.done]
-        qdd, lam = accelerations(tk, q, qd)
+        qdd, lam, _ = consistent_accelerations(model, tk, q, qd, chart(),
+                                               fallback=redundant, redundant=redundant)
         if redundant:
             stats["singular_outputs"].append(float(tk))
-        out.store(q, qd, qdd, lam, chart)
+        out.store(q, qd, qdd, lam, chart())
+
+    # the integrated state is y = (q, v): positions and the velocities of BodyType.velocities
+    # (angular velocities in body axes for spatial bodies), not (q, qd)
+    def split(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return y[:n].copy(), bt.rates(y[:n], y[n:])
+
+    def redundant_accelerations(tt, q, qd, charts_now):
+        qdd, lam, _ = consistent_accelerations(model, tt, q, qd, charts_now, redundant=True)
+        return qdd, lam
+
+    def failure(flags: int, t_fail: float, y_fail: np.ndarray) -> Exception:
+        q, qd = split(y_fail)
+        if flags == stepping.STEP_TOO_SMALL:
+            return _step_failure(model, method, t_fail, q, chart(),
+                                 "the step size fell below the spacing of floating-point "
+                                 "numbers at this time")
+        if flags == stepping.SINGULAR:
+            try:  # raises the error that names the dependent joints
+                consistent_accelerations(model, t_fail, q, qd, chart(), fallback=False)
+            except (SingularJacobianError, IntegrationError) as error:
+                return error
+        return IntegrationError(f"forward dynamics of '{model.name}': the state became "
+                                f"non-finite at t = {t_fail:.6g} s (the integration diverged)",
+                                time=t_fail)
 
     def loop() -> None:
-        nonlocal chart, redundant
-        guess = initial_guess(model, t[0], q0, chart, f"forward dynamics of '{model.name}'",
+        nonlocal redundant
+        guess = initial_guess(model, t[0], q0, chart(), f"forward dynamics of '{model.name}'",
                               "q0")
         q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
-        redundant = rows_dependent(model, t[0], q, chart)
+        redundant = rows_dependent(model, t[0], q, chart())
         qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
         # Redundant constraints (dependent rows from the start, as in Bricard's mechanism)
         # are solved throughout by the augmented Lagrangian, which gives the accelerations
@@ -401,70 +397,108 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         # index-1 accelerations jump, and generalized-alpha is the method to use.
         record(q, qd)
         watch.tick(t[0], 0)
+        system = model._core.system(redundant)
         # atol in the model's units: positions in units of its length, angles in radians,
         # rates per second, so that a micrometre mechanism is integrated as accurately
-        options = {"rtol": rtol, "atol": atol * np.tile(model.coordinate_scale, 2),
-                   "max_step": max_step}
-        if method == "Radau":
-            options["jac"] = _difference_jacobian(rhs, 2 * n)
-        solver = solver_cls(rhs, t[0], state(q, qd), t[-1], **options)
-        recent: deque = deque(maxlen=_RECENT_STEPS)  # lengths of the last accepted steps [s]
-        while out.done < k_max:
-            message = solver.step()
-            if solver.status == "failed":
-                raise _step_failure(model, method, float(solver.t), solver.y[:n], chart, message)
-            stats["steps"] += 1
-            if not np.all(np.isfinite(solver.y)):
-                raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
-                                       f"non-finite at t = {solver.t:.6g} s", time=float(solver.t))
-            if stats["steps"] == _STIFFNESS_CHECK_STEPS and len(t) > 1:
-                spacing = float(np.min(np.diff(t)))
-                average = (float(solver.t) - float(t[0])) / stats["steps"]
-                message = (_stiffness_message(model, method, float(solver.t), average, spacing)
-                           if average < _CRAWL * spacing else None)
-                if message is not None:
-                    warnings.warn(StiffnessWarning(message), stacklevel=4)
-            if not redundant and solver.step_size is not None:
-                # The index-1 accelerations grow without bound at a singular position: the
-                # steps collapse there, and with luck in the rounding a pair steps over it onto
-                # another branch and goes on, a wrong motion that would end "complete". So a
-                # collapse is checked, and a singular Jacobian stops the run.
-                recent.append(solver.step_size)
-                if solver.step_size < STEP_COLLAPSE * max(recent):
+        atol_y = atol * np.tile(model.coordinate_scale, 2)
+        y = np.concatenate([q, bt.velocities(q, qd)])
+        f = np.empty(2 * n)
+        K = np.empty((tableau.n_stored, 2 * n))
+        y_old = np.empty(2 * n)
+        dense = np.empty((tableau.dense_rows, 2 * n))
+        recent = np.zeros(_RECENT_STEPS)  # lengths of the last accepted steps [s]
+        counters = np.zeros(4, dtype=np.int64)
+        drift = np.zeros(2)
+        with callbacks.Run(model, redundant_accelerations) as key:
+            def first_stage(tt: float) -> None:
+                status = stepping.derivative(system, key, tt, y, charts, f)
+                counters[stepping.RHS_EVALUATIONS] += 1
+                if status != 0:
+                    raise failure(stepping.SINGULAR if status == 1 else stepping.DIVERGED,
+                                  tt, y)
+
+            first_stage(t[0])
+            h = _initial_step(system, key, tableau, t[0], y, f, charts, rtol, atol_y,
+                              min(max_step, t[-1] - t[0]), counters)
+            t_now = t[0]
+            check_at = _STIFFNESS_CHECK_STEPS if len(t) > 1 else -1
+            while out.done < k_max:
+                flags, t_now, t_old, step, h = stepping.advance(
+                    system, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
+                    atol_y, max_step, charts, constraint_tol, CHART_LIMIT, recent, counters,
+                    drift, K, y_old, dense, 0.0 if redundant else STEP_COLLAPSE, check_at,
+                    _STEPS_PER_CALL)
+                stats.update(steps=int(counters[stepping.STEPS]),
+                             rhs_evaluations=int(counters[stepping.RHS_EVALUATIONS]),
+                             chart_resets=int(counters[stepping.CHART_RESETS]),
+                             max_drift=float(drift[0]))
+                if flags in _FAILURES:
+                    raise failure(flags, t_now, y_old)
+                if flags & stepping.CHECK_STIFFNESS:
+                    spacing = float(np.min(np.diff(t)))
+                    average = (t_now - float(t[0])) / stats["steps"]
+                    message = (_stiffness_message(model, method, t_now, average, spacing)
+                               if average < _CRAWL * spacing else None)
+                    if message is not None:
+                        warnings.warn(StiffnessWarning(message), stacklevel=4)
+                if flags & stepping.COLLAPSED:
+                    # a regular collapse (a sharp force) becomes the new normal
                     singular = _singular_here(
-                        model, float(solver.t), solver.y[:n], chart,
+                        model, t_now, y[:n], chart(),
                         f"forward dynamics of '{model.name}' ({method}: the steps collapsed "
-                        f"to {solver.step_size:.1e} s)")
+                        f"to {step:.1e} s)")
                     if singular is not None:
                         raise singular
-                    recent.clear()  # a regular collapse (a sharp force): the new normal
-            if t[out.done] <= solver.t:
-                dense = solver.dense_output()
-                while out.done < k_max and t[out.done] <= solver.t:
-                    tk = t[out.done]
-                    record(*project_state(model, tk, *split(dense(tk)), projection_tol, chart,
-                                          redundant))
-            watch.tick(solver.t, stats["steps"])
-            if solver.status == "finished" or out.done >= k_max:
-                break
-            q, qd = split(solver.y)
-            drift, evaluated = _drift(model, solver.t, q, qd, chart)
-            stats["max_drift"] = max(stats["max_drift"], drift)
-            restart = drift > constraint_tol
-            if restart:
-                projected = None if redundant else _project_with_one_factorization(
-                    model, solver.t, q, qd, projection_tol, chart, evaluated)
-                q, qd = projected or project_state(model, solver.t, q, qd, projection_tol,
-                                                   chart, redundant)
-                stats["projections"] += 1
-            # between steps only: every stage of a step is evaluated in one chart
-            q, qd, chart, moved = model.body_type.reset_charts(q, qd, chart)
-            if moved:
-                stats["chart_resets"] += 1
-            if restart or moved:
-                h = min(solver.step_size or np.inf, t[-1] - solver.t)
-                solver = solver_cls(rhs, solver.t, state(q, qd), t[-1], first_step=h,
-                                    **options)
+                    recent[:] = 0.0
+                if flags & stepping.OUTPUT:
+                    while out.done < k_max and t[out.done] <= t_now:
+                        tk = t[out.done]
+                        yk = interpolate(tableau.dense_kind, dense, y_old, t_old, step, tk)
+                        record(*project_state(model, tk, *split(yk), projection_tol, chart(),
+                                              redundant))
+                watch.tick(t_now, stats["steps"])
+                if out.done >= k_max:
+                    break
+                if flags & stepping.DRIFTED:
+                    q, qd = split(y)
+                    projected = None if redundant else _project_with_one_factorization(
+                        model, t_now, q, qd, projection_tol, chart())
+                    q, qd = projected or project_state(model, t_now, q, qd, projection_tol,
+                                                       chart(), redundant)
+                    stats["projections"] += 1
+                    # the method goes on from the projected state: only its first stage
+                    # is evaluated again
+                    y[:] = np.concatenate([q, bt.velocities(q, qd)])
+                    first_stage(t_now)
 
     watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)
     return run_keeping_results(loop, out.partial, watch)
+
+
+#: accepted steps the compiled loop takes before it returns to Python anyway, so that an
+#: interrupt (Ctrl-C) and the progress bar are seen during a long stretch without outputs
+_STEPS_PER_CALL = 2000
+#: what the compiled loop returns when it failed
+_FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
+
+
+def _initial_step(system, key, tableau, t0: float, y: np.ndarray, f: np.ndarray, charts,
+                  rtol: float, atol: np.ndarray, interval: float, counters) -> float:
+    """The first step (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4): from the sizes of
+    the state, its derivative and a difference of derivatives, so that the first step's error
+    is near the tolerance."""
+    scale = atol + np.abs(y) * rtol
+    d0, d1 = rms(y, scale), rms(f, scale)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, interval)
+    f1 = np.empty_like(f)
+    status = stepping.derivative(system, key, t0 + h0, y + h0 * f, charts, f1)
+    counters[stepping.RHS_EVALUATIONS] += 1
+    if status != 0:
+        return min(h0, interval)
+    d2 = rms(f1 - f, scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1.0 / (tableau.error_order + 1))
+    return min(100 * h0, h1, interval)

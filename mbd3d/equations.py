@@ -77,15 +77,35 @@ class _Core:
         self.dense = pattern.layout == "dense"
         self.no_forces = np.zeros(model.n_coordinates)
         self.no_drivers = np.zeros(0)
-        self.before = (model.mass, model.inertia, np.ascontiguousarray(model._weight[:nb].ravel()),
-                       table.code, table.bi, table.bj, table.first_row, table.slots,
-                       table.coordinate, table.motion, table.vector_bodies,
-                       np.ascontiguousarray(table.vector_local), table.n_rows)
-        self.driver_rows = np.asarray(model.driver_rows, dtype=np.int64)
+        # writable contiguous copies: the compiled functions are typed (and cached) for those
+        inertia = np.array(model.inertia)
+        if not self.spatial:
+            from mbd3d.planar.body import inertia_tensors
+            inertia = inertia_tensors(inertia)
+        self.before = (np.array(model.mass), inertia,
+                       np.array(model._weight[:nb].ravel()), table.code, table.bi, table.bj,
+                       table.first_row, table.slots, table.coordinate, table.motion,
+                       table.vector_bodies, np.ascontiguousarray(table.vector_local),
+                       table.n_rows)
+        self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
         self.after = (model._jac_destination, len(model._jac_take),
-                      np.asarray(pattern.rows, dtype=np.int64),
-                      np.asarray(pattern.cols, dtype=np.int64), pattern.entry_scale,
-                      pattern.scale, pattern.pivot_tolerance, self.dense)
+                      np.array(pattern.rows, dtype=np.int64),
+                      np.array(pattern.cols, dtype=np.int64), np.array(pattern.entry_scale),
+                      np.array(pattern.scale), float(pattern.pivot_tolerance), self.dense)
+        self._model = model
+
+    def system(self, redundant: bool) -> tuple:
+        """The model as the compiled integrator loop takes it (see
+        :mod:`mbd3d.compiled.integration`); ``redundant``: accelerations from Python's
+        augmented-Lagrangian solve."""
+        model = self._model
+        python_parts = bool(model.force_groups or len(model.driver_rows)
+                            or model.rotation_motions)
+        return (model.dim == 3, model.n_coordinates, bool(redundant), python_parts, self.dense,
+                self.before, self.driver_rows, self.after, np.array(model.c0),
+                np.array(model.row_scale, dtype=float),
+                np.array(model._jac_rows, dtype=np.int64),
+                np.array(model._jac_cols, dtype=np.int64), self.no_forces)
 
 
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,

@@ -28,6 +28,7 @@ from mbd3d import rotations as rot
 from mbd3d.body import BodyType, Frames
 from mbd3d.compiled.bodies import (spatial_frames, spatial_mass_blocks,
                                    spatial_quadratic_velocity, spatial_rates,
+                                   spatial_reset_charts,
                                    spatial_velocities, spatial_velocity_derivative)
 from mbd3d.checks import finite_vector
 from mbd3d.errors import ModelError
@@ -155,23 +156,12 @@ class SpatialBody(BodyType):
         """Move the chart of every body with ``|g| > limit`` (and, to restart the integrator
         less often, of every body past half of it when one does) to its current orientation.
 
-        Returns ``(q, qd, charts, changed)``; the inputs are not modified.
+        Returns ``(q, qd, charts, changed)``; the inputs are not modified (the formulas are
+        :func:`mbd3d.compiled.bodies.spatial_reset_charts`).
         """
-        nb = charts.shape[0] - 1
-        G = np.reshape(q, (nb, 6))[:, 3:]
-        size = np.einsum("ki,ki->k", G, G)
-        if not np.any(size > limit * limit):
-            return q, qd, charts, False
-        move = np.flatnonzero(size > 0.25 * limit * limit)
         q = np.array(q, dtype=float)
-        charts = charts.copy()
-        g = G[move]
-        charts[move] = charts[move] @ rot.from_rodrigues(g)
-        Q = q.reshape(nb, 6)
-        Q[move, 3:] = 0.0
-        if qd is not None:
-            qd = np.array(qd, dtype=float)
-            Qd = qd.reshape(nb, 6)
-            # g_dot <- G_bar(0)^-1 G_bar(g) g_dot = omega_bar / 2: angular velocity unchanged
-            Qd[move, 3:] = 0.5 * np.matmul(rot.g_bar(g), Qd[move, 3:, None])[:, :, 0]
+        qd = None if qd is None else np.array(qd, dtype=float)
+        charts = np.array(charts, dtype=float)
+        if not spatial_reset_charts(q, np.zeros(0) if qd is None else qd, charts, limit):
+            return q, qd, charts, False
         return q, qd, charts, True

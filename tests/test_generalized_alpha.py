@@ -131,8 +131,10 @@ def test_bad_integrator_options_are_named():
     with pytest.raises(mb.ModelError, match="generalized-alpha"):
         mb.forward_dynamics(model, t, method="Euler")
     for multistep in ("BDF", "LSODA"):
-        with pytest.raises(mb.ModelError, match=f"{multistep} is a multistep method.*restarts"):
+        with pytest.raises(mb.ModelError, match=f"{multistep} is a multistep method.*restart"):
             mb.forward_dynamics(model, t, method=multistep)
+    with pytest.raises(mb.ModelError, match="Radau is no longer offered.*generalized-alpha"):
+        mb.forward_dynamics(model, t, method="Radau")
 
 
 def crossing_times(t: np.ndarray, values: np.ndarray) -> np.ndarray:

@@ -7,6 +7,8 @@ import math
 import os
 import stat
 
+import time
+
 import numpy as np
 import pytest
 
@@ -153,19 +155,38 @@ def test_interrupt_keeps_the_results_so_far(monkeypatch):
     model = pendulum_chain(2)
     calls = {"n": 0}
     import mbd3d.dynamics as dynamics
-    real = dynamics.forward_accelerations
+    real = dynamics.project_state
 
-    def interrupted(*args):
+    def interrupted(*args):  # Ctrl-C while an output is being stored
         calls["n"] += 1
         if calls["n"] > 200:
             raise KeyboardInterrupt
         return real(*args)
 
-    monkeypatch.setattr(dynamics, "forward_accelerations", interrupted)
+    monkeypatch.setattr(dynamics, "project_state", interrupted)
     res = mb.forward_dynamics(model, np.linspace(0.0, 5.0, 501))
     assert res.status == "interrupted" and 1 < len(res) < 501
     assert "interrupted" in res.message
     np.testing.assert_array_equal(res.t, np.linspace(0.0, 5.0, 501)[:len(res)])
+
+
+def test_ctrl_c_stops_a_long_stretch_of_compiled_steps():
+    # outputs far apart: the compiled loop still returns every few thousand steps, so a real
+    # SIGINT ends the run with the outputs done so far instead of waiting for the next one
+    import os
+    import signal
+    import threading
+
+    model = pendulum_chain(8)
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    try:
+        res = mb.forward_dynamics(model, [0.0, 1.0, 1000.0], rtol=1e-10, atol=1e-12)
+    finally:
+        timer.cancel()
+    assert res.status == "interrupted" and len(res) == 2
+    assert time.perf_counter() - start < 30.0
 
 
 def test_mobility_of_a_fully_driven_and_a_free_mechanism():

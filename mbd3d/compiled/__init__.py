@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numba
 
-__all__ = ["jit", "DISABLED"]
+__all__ = ["jit", "jit_calling_python", "DISABLED"]
 
 #: whether Numba runs the kernels interpreted (``NUMBA_DISABLE_JIT=1``)
 DISABLED = bool(numba.config.DISABLE_JIT)
@@ -28,3 +28,6 @@ DISABLED = bool(numba.config.DISABLE_JIT)
 #: compiled once per machine and cached; "numpy" error model: 1/0 gives inf as in NumPy, with
 #: no exception checks in the loops; no fastmath: results must not depend on reassociation
 jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+#: for the small functions that call back into Python (Numba's object mode holds the GIL)
+jit_calling_python = numba.njit(cache=True)

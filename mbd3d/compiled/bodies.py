@@ -146,13 +146,15 @@ def spatial_mass_blocks(Gb: np.ndarray, mass: np.ndarray, inertia: np.ndarray) -
 
 @jit
 def planar_mass_blocks(mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-    """``diag(m, m, J)`` per body, (b, 3, 3)."""
+    """``diag(m, m, J)`` per body, (b, 3, 3), with ``J = inertia[:, 2, 2]``: the inertia
+    tensors (b, 3, 3) of the compiled core, whose entry about the plane normal is a planar
+    body's inertia (one argument type for planar and spatial models)."""
     b = mass.shape[0]
     out = np.zeros((b, 3, 3))
     for k in range(b):
         out[k, 0, 0] = mass[k]
         out[k, 1, 1] = mass[k]
-        out[k, 2, 2] = inertia[k]
+        out[k, 2, 2] = inertia[k, 2, 2]
     return out
 
 
@@ -218,3 +220,41 @@ def spatial_velocity_derivative(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) 
                               + G[i, 1] * (qdd[o + 4] - kappa * qd[o + 4])
                               + G[i, 2] * (qdd[o + 5] - kappa * qd[o + 5]))
     return out
+
+
+@jit
+def spatial_reset_charts(q: np.ndarray, qd: np.ndarray, charts: np.ndarray, limit: float
+                         ) -> bool:
+    """Move the chart of every body with ``|g| > limit`` (and, so that charts move less often,
+    of every body past half of it when one does) to its current orientation [5.2-5.4], in
+    place: ``A0 <- A0 A(g)``, ``g <- 0`` and, when ``qd`` is not empty, ``g_dot <- G_bar(g)
+    g_dot / 2`` (the same angular velocity). Returns whether a chart moved."""
+    n_bodies = q.shape[0] // 6
+    over = False
+    for b in range(n_bodies):
+        o = 6 * b
+        if q[o + 3] ** 2 + q[o + 4] ** 2 + q[o + 5] ** 2 > limit * limit:
+            over = True
+    if not over:
+        return False
+    local = np.empty((3, 3))
+    G = np.empty((3, 3))
+    moved = np.empty((3, 3))
+    for b in range(n_bodies):
+        o = 6 * b
+        g = q[o + 3:o + 6]
+        if g[0] ** 2 + g[1] ** 2 + g[2] ** 2 <= 0.25 * limit * limit:
+            continue
+        rodrigues_matrix(g, local)
+        for i in range(3):
+            for j in range(3):
+                moved[i, j] = (charts[b, i, 0] * local[0, j] + charts[b, i, 1] * local[1, j]
+                               + charts[b, i, 2] * local[2, j])
+        charts[b] = moved
+        if qd.shape[0]:
+            g_bar_matrix(g, G)
+            w0, w1, w2 = qd[o + 3], qd[o + 4], qd[o + 5]
+            for i in range(3):
+                qd[o + 3 + i] = 0.5 * (G[i, 0] * w0 + G[i, 1] * w1 + G[i, 2] * w2)
+        g[0] = g[1] = g[2] = 0.0
+    return True

@@ -1,0 +1,251 @@
+"""The explicit integrators' loop, compiled: steps, error control, chart resets, drift checks
+and step-collapse checks run here, and control returns to Python only when a step passes an
+output time, the constraints have drifted past their tolerance, the run is over, or something
+failed.
+
+The state is ``y = (q, v)``: the coordinates and the velocities the body type integrates
+(:meth:`mbd3d.body.BodyType.velocities`: the angular velocity in body axes for spatial bodies,
+which a chart reset leaves unchanged). A chart reset therefore changes ``q`` and the rates part
+of the first stage ``f`` only, and the method goes on with its step: it is not restarted.
+
+``system`` is the model as the loop takes it (built by :func:`mbd3d.stepping.system`)::
+
+    (spatial, n, python_accelerations, python_parts, dense, before, driver_rows, after,
+     c0, row_scale, jac_rows, jac_cols, no_forces)
+
+with ``before``/``after`` the arguments of :mod:`.accelerations` around the per-call ones.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import objmode
+
+from mbd3d.compiled import callbacks, jit, jit_calling_python
+from mbd3d.compiled.accelerations import (NOT_FINITE, SOLVED, padded, planar_accelerations,
+                                          spatial_accelerations)
+from mbd3d.compiled.bodies import (body_vectors, planar_frames, spatial_frames,
+                                   spatial_rates, spatial_reset_charts,
+                                   spatial_velocity_derivative)
+from mbd3d.compiled.rows import constraint_rows
+from mbd3d.compiled.runge_kutta import (DOP853_INTERPOLANT, dop853_coefficients, error_norm,
+                                        polynomial_coefficients, stage_state, step_factor)
+
+#: why :func:`advance` returned (bit flags, except the failures): a step passed the output
+#: time, the constraints drifted, the step collapsed, the step count to check for stiffness
+#: was reached, the budget of steps per call was spent (so that Python sees interrupts and
+#: draws progress)
+OUTPUT, DRIFTED, COLLAPSED, CHECK_STIFFNESS, PAUSED = 1, 2, 4, 64, 128
+#: failures: the step became too small for the floating-point spacing of t, a singular
+#: matrix, a non-finite state
+STEP_TOO_SMALL, SINGULAR, DIVERGED = 8, 16, 32
+#: counters in ``stats``
+STEPS, RHS_EVALUATIONS, CHART_RESETS, REJECTED = 0, 1, 2, 3
+
+
+@jit_calling_python
+def _callback_parts(key, t, q, qd, charts):
+    with objmode(extra="float64[::1]", drivers="float64[:, ::1]", phi="float64[:, ::1]"):
+        extra, drivers, phi = callbacks.parts(key, t, q, qd, charts)
+    return extra, drivers, phi
+
+
+@jit_calling_python
+def _callback_accelerations(key, t, q, qd, charts):
+    with objmode(x="float64[::1]", status="int64"):
+        x, status = callbacks.accelerations(key, t, q, qd, charts)
+    return x, status
+
+
+@jit_calling_python
+def _callback_solve(key, values, rhs):
+    with objmode(x="float64[::1]", status="int64"):
+        x, status = callbacks.solve(key, values, rhs)
+    return x, status
+
+
+@jit
+def _python_parts(system, key, t, q, qd, charts):
+    """Force elements' generalized forces, drivers' ``(f, f', f'')`` and rotation motions."""
+    if system[3]:
+        return _callback_parts(key, t, q, qd, charts)
+    return system[12].copy(), np.zeros((3, 0)), np.zeros((0, 3))
+
+
+@jit
+def derivative(system, key, t, y, charts, out):
+    """``out = dy/dt`` at ``(t, y)``; returns the solve's status (0: solved)."""
+    spatial, n = system[0], system[1]
+    q = y[:n]
+    qd = spatial_rates(q, y[n:]) if spatial else y[n:].copy()
+    extra, drivers, phi = _python_parts(system, key, t, q, qd, charts)
+    if system[2]:
+        x, status = _callback_accelerations(key, t, q, qd, charts)
+    else:
+        f2 = drivers[2].copy()
+        if spatial:
+            x, status, values, rhs = spatial_accelerations(q, qd, charts, extra, *system[5], phi,
+                                                           system[6], f2, *system[7])
+        else:
+            x, status, values, rhs = planar_accelerations(q, qd, extra, *system[5], phi,
+                                                          system[6], f2, *system[7])
+        if status == SOLVED and not system[4]:
+            x, status = _callback_solve(key, values, rhs)
+    if status != SOLVED:
+        return status
+    out[:n] = qd
+    if spatial:
+        out[n:] = spatial_velocity_derivative(q, qd, x[:n])
+    else:
+        out[n:] = x[:n]
+    return SOLVED
+
+
+@jit
+def drift(system, key, t, y, charts):
+    """Largest position and velocity constraint residual at ``(t, y)``, each row relative to
+    its scale (lengths in units of the model's length)."""
+    spatial, n = system[0], system[1]
+    before, after = system[5], system[7]
+    m = before[12]
+    if m == 0:
+        return 0.0
+    q = y[:n]
+    qd = spatial_rates(q, y[n:]) if spatial else y[n:].copy()
+    _, drivers, phi = _python_parts(system, key, t, q, qd, charts)
+    nc = 6 if spatial else 3
+    Q = padded(q, nc)
+    if spatial:
+        A, axes, omega, kappa, _, _ = spatial_frames(Q, Q, charts, False)
+    else:
+        A, axes, omega, kappa = planar_frames(Q, Q, False)
+    s, J, v, a = body_vectors(A, axes, omega, kappa, before[10], before[11], False)
+    C, data, _, nu = constraint_rows(before[3], before[4], before[5], before[6], before[7],
+                                     before[8], before[9], phi, m, Q, Q, s, J, v, a, after[0],
+                                     after[1], True, True, False, True)
+    c0, row_scale, jac_rows, jac_cols = system[8], system[9], system[10], system[11]
+    driver_rows = system[6]
+    for k in range(driver_rows.shape[0]):
+        C[driver_rows[k]] -= drivers[0, k]
+        nu[driver_rows[k]] = drivers[1, k]
+    velocity = -nu
+    for p in range(jac_rows.shape[0]):
+        velocity[jac_rows[p]] += data[p] * qd[jac_cols[p]]
+    largest = 0.0
+    for r in range(m):
+        largest = max(largest, abs(C[r] - c0[r]) / row_scale[r], abs(velocity[r]) / row_scale[r])
+    return largest
+
+
+@jit
+def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
+            charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
+            dense, collapse, check_at, budget):
+    """Step from ``(t, y)`` with first stage ``f`` and next step ``h`` until a step passes
+    ``t_output``, ends at ``t_bound``, leaves the constraints drifted past
+    ``constraint_tol``, collapses (a step below ``collapse`` times the longest of ``recent``),
+    or fails; also after step number ``check_at`` and after ``budget`` steps. ``y``, ``f``, ``charts``, ``recent``, ``stats``, ``drift_stats`` (largest
+    drift, last drift), ``K`` and ``y_old`` are updated in place; with ``OUTPUT``, ``dense``
+    holds the last step's dense-output coefficients.
+
+    Returns ``(status, t, t_old, step, h)``: the flags of why it returned, the time reached,
+    the last step's start and length, the next step. On a failure ``t`` is the time of the
+    failing evaluation and ``y_old`` its state.
+    """
+    A, B, C, E, E_low, P, A_extra, C_extra, D, dense_kind, error_order = tableau
+    spatial, n = system[0], system[1]
+    stages = B.shape[0]
+    n_recent = recent.shape[0]
+    t_old = t
+    step = 0.0
+    first = stats[STEPS]
+    while True:
+        if spatial and spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit):
+            # v and its derivative are unchanged; the rates of g are those of the new chart
+            f[:n] = spatial_rates(y[:n], y[n:])
+            stats[CHART_RESETS] += 1
+        min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+        h_abs = min(h, max_step)
+        if h_abs < min_step:
+            h_abs = min_step
+        rejected = False
+        while True:
+            if h_abs < min_step:
+                y_old[:] = y
+                return STEP_TOO_SMALL, t, t_old, step, h_abs
+            step = h_abs
+            t_new = t + step
+            if t_new > t_bound:
+                t_new = t_bound
+                step = t_new - t
+            K[0] = f
+            for s in range(1, stages):
+                ys = stage_state(y, K, A[s], s, step)
+                status = derivative(system, key, t + C[s] * step, ys, charts, K[s])
+                stats[RHS_EVALUATIONS] += 1
+                if status != SOLVED:
+                    y_old[:] = ys
+                    return SINGULAR if status != NOT_FINITE else DIVERGED, t + C[s] * step, \
+                        t, step, h_abs
+            y_new = stage_state(y, K, B, stages, step)
+            status = derivative(system, key, t_new, y_new, charts, K[stages])
+            stats[RHS_EVALUATIONS] += 1
+            if status != SOLVED:
+                y_old[:] = y_new
+                return SINGULAR if status != NOT_FINITE else DIVERGED, t_new, t, step, h_abs
+            scale = np.empty(2 * n)
+            for i in range(2 * n):
+                scale[i] = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+            error = error_norm(K, E, E_low, scale, step, dense_kind)
+            if error < 1.0:
+                factor = step_factor(error, error_order)
+                if rejected:
+                    factor = min(1.0, factor)
+                h = step * factor
+                break
+            h_abs = step * step_factor(error, error_order)
+            rejected = True
+            stats[REJECTED] += 1
+        t_old = t
+        y_old[:] = y
+        f_old = f.copy()
+        y[:] = y_new
+        f[:] = K[stages]
+        t = t_new
+        stats[STEPS] += 1
+        flags = 0
+        # a step far shorter than the recent ones: the index-1 accelerations grow without
+        # bound at a singular position, and Python checks the Jacobian there
+        longest = 0.0
+        for k in range(n_recent):
+            longest = max(longest, recent[k])
+        recent[stats[STEPS] % n_recent] = step
+        if step < collapse * longest:
+            flags |= COLLAPSED
+        residual = drift(system, key, t, y, charts)
+        drift_stats[0] = max(drift_stats[0], residual)
+        drift_stats[1] = residual
+        if residual > constraint_tol:
+            flags |= DRIFTED
+        if stats[STEPS] == check_at:
+            flags |= CHECK_STIFFNESS
+        if stats[STEPS] - first >= budget:
+            flags |= PAUSED
+        if t >= t_output or t >= t_bound:
+            flags |= OUTPUT
+            if dense_kind == DOP853_INTERPOLANT:
+                # the interpolant's three extra stages
+                for r in range(C_extra.shape[0]):
+                    s = stages + 1 + r
+                    ys = stage_state(y_old, K, A_extra[r], s, step)
+                    status = derivative(system, key, t_old + C_extra[r] * step, ys, charts, K[s])
+                    stats[RHS_EVALUATIONS] += 1
+                    if status != SOLVED:
+                        y_old[:] = ys
+                        return SINGULAR if status != NOT_FINITE else DIVERGED, \
+                            t_old + C_extra[r] * step, t_old, step, h
+                dense[:] = dop853_coefficients(K, D, y_old, y, f_old, f, step)
+            else:
+                dense[:] = polynomial_coefficients(K, P, stages + 1)
+        if flags:
+            return flags, t, t_old, step, h
