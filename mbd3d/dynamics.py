@@ -32,7 +32,6 @@ from mbd3d.linalg import SingularMatrix, factor_model_augmented, jacobian_scalin
 from mbd3d.position import singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
-from mbd3d.spatial import CHART_LIMIT
 
 __all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS",
            "GENERALIZED_ALPHA"]
@@ -425,7 +424,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             while out.done < k_max:
                 flags, t_now, t_old, step, h = stepping.advance(
                     system, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
-                    atol_y, max_step, charts, constraint_tol, CHART_LIMIT, recent, counters,
+                    atol_y, max_step, charts, constraint_tol, _STEP_CHART_LIMIT, recent, counters,
                     drift, K, y_old, dense, 0.0 if redundant else STEP_COLLAPSE, check_at,
                     _STEPS_PER_CALL)
                 stats.update(steps=int(counters[stepping.STEPS]),
@@ -478,6 +477,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
 #: accepted steps the compiled loop takes before it returns to Python anyway, so that an
 #: interrupt (Ctrl-C) and the progress bar are seen during a long stretch without outputs
 _STEPS_PER_CALL = 2000
+#: |g| above which the explicit integrators move a body's chart between steps: zero, so that
+#: every step starts from g = 0, where the Rodrigues parameters are nearly linear in the
+#: rotation. With the usual limit (a quarter turn) a tumbling body's g grew through each chart
+#: in three steps whose error estimates grew faster than the step control predicts, and one
+#: step in three was rejected; a reset costs one 3x3 product per body, not a restart.
+_STEP_CHART_LIMIT = 0.0
 #: what the compiled loop returns when it failed
 _FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
 

@@ -138,6 +138,28 @@ def drift(system, key, t, y, charts):
 
 
 @jit
+def error_scale(spatial, n, y, y_new, atol, rtol):
+    """What each component's local error is measured against: ``atol + rtol max(|y|,
+    |y_new|)``, except for the Rodrigues parameters of spatial bodies, whose error is measured
+    as the orientation error it is: ``dg = (1 + g.g) dq`` with ``dq`` the error of a unit
+    quaternion's components (half the angle), so ``(atol + rtol) (1 + g.g)``, largest ``g.g``
+    of the step. A chart reset then changes nothing in the norm, and a tolerance means for the
+    orientation what it means for a quaternion integration (components of size one), instead
+    of tightening as ``g`` passes through zero after every reset."""
+    scale = np.empty(2 * n)
+    for i in range(2 * n):
+        scale[i] = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+    if spatial:
+        for b in range(n // 6):
+            o = 6 * b + 3
+            size = max(y[o] ** 2 + y[o + 1] ** 2 + y[o + 2] ** 2,
+                       y_new[o] ** 2 + y_new[o + 1] ** 2 + y_new[o + 2] ** 2)
+            for i in range(3):
+                scale[o + i] = (atol[o + i] + rtol) * (1.0 + size)
+    return scale
+
+
+@jit
 def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
             charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
             dense, collapse, check_at, budget):
@@ -193,9 +215,7 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
             if status != SOLVED:
                 y_old[:] = y_new
                 return SINGULAR if status != NOT_FINITE else DIVERGED, t_new, t, step, h_abs
-            scale = np.empty(2 * n)
-            for i in range(2 * n):
-                scale[i] = atol[i] + max(abs(y[i]), abs(y_new[i])) * rtol
+            scale = error_scale(spatial, n, y, y_new, atol, rtol)
             error = error_norm(K, E, E_low, scale, step, dense_kind)
             if error < 1.0:
                 factor = step_factor(error, error_order)
