@@ -74,7 +74,9 @@ class _Core:
         table, pattern = model.row_table, model._augmented_pattern
         nb = model.n_bodies
         self.spatial = model.dim == 3
-        self.dense = pattern.layout == "dense"
+        self.layout = {"dense": kernel.DENSE, "banded": kernel.BANDED,
+                       "sparse": kernel.SPARSE}[pattern.layout]
+        banded = pattern.layout == "banded"
         self.no_forces = np.zeros(model.n_coordinates)
         self.no_drivers = np.zeros(0)
         # writable contiguous copies: the compiled functions are typed (and cached) for those
@@ -88,10 +90,14 @@ class _Core:
                        table.vector_bodies, np.ascontiguousarray(table.vector_local),
                        table.n_rows)
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
-        self.after = (model._jac_destination, len(model._jac_take),
+        self.after = (model._jac_destination, len(model._jac_take), self.layout,
                       np.array(pattern.rows, dtype=np.int64),
-                      np.array(pattern.cols, dtype=np.int64), np.array(pattern.entry_scale),
-                      np.array(pattern.scale), float(pattern.pivot_tolerance), self.dense)
+                      np.array(pattern.cols, dtype=np.int64),
+                      np.array(pattern.flat if banded else [], dtype=np.int64),
+                      pattern.kl if banded else 0, pattern.ku if banded else 0,
+                      np.array(pattern.perm if banded else [], dtype=np.int64),
+                      np.array(pattern.entry_scale), np.array(pattern.scale),
+                      float(pattern.pivot_tolerance))
         self._model = model
 
     def system(self, redundant: bool) -> tuple:
@@ -101,7 +107,8 @@ class _Core:
         model = self._model
         python_parts = bool(model.force_groups or len(model.driver_rows)
                             or model.rotation_motions)
-        return (model.dim == 3, model.n_coordinates, bool(redundant), python_parts, self.dense,
+        return (model.dim == 3, model.n_coordinates, bool(redundant), python_parts,
+                self.layout != kernel.SPARSE,
                 self.before, self.driver_rows, self.after, np.array(model.c0),
                 np.array(model.row_scale, dtype=float),
                 np.array(model._jac_rows, dtype=np.int64),
@@ -113,8 +120,8 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     """``(qdd, lam)`` stacked (n + m,) from the augmented equations at ``(t, q, qd)``, or None
     when the state is not finite.
 
-    Everything but the force elements, the drivers' motions (Python objects) and the banded
-    solve of a large model is one compiled call (:mod:`mbd3d.compiled.accelerations`): the
+    Everything but the force elements, the drivers' motions (Python objects) and the SuperLU
+    solve of a large model with a wide band is one compiled call (:mod:`mbd3d.compiled.accelerations`): the
     one place this system is assembled and solved.
 
     Raises
@@ -145,4 +152,4 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         return None
     if status == kernel.SINGULAR:
         raise SingularMatrix("smallest pivot below tolerance")
-    return x if core.dense else model._augmented_pattern.solve(values, rhs)
+    return x if core.layout != kernel.SPARSE else model._augmented_pattern.solve(values, rhs)

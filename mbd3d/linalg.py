@@ -21,13 +21,13 @@ from typing import Sequence
 
 import numpy as np
 import scipy.linalg as la
-from scipy.linalg.lapack import dgbsv as _gbsv, dgbtrf as _gbtrf, dgbtrs as _gbtrs, \
+from scipy.linalg.lapack import dgbtrf as _gbtrf, dgbtrs as _gbtrs, \
     dgecon as _gecon, dgetrf as _getrf, dgetrs as _getrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mbd3d.compiled.dense import solve_pattern
+from mbd3d.compiled.dense import solve_banded_pattern, solve_pattern
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
            "jacobian_scaling", "augmented_scaling",
@@ -299,7 +299,7 @@ class _FixedPattern:
 
     def _lay_out(self, rows: np.ndarray, cols: np.ndarray, size: int, sparse: bool,
                  scale: np.ndarray) -> None:
-        self.rows, self.cols, self.size = rows, cols, size
+        self.rows, self.cols, self.size = rows.astype(np.int64), cols.astype(np.int64), size
         # the matrix is factored as D A D with the model's fixed powers of two D = diag(scale)
         # (see the module doc); entry_scale multiplies the values in the pattern's order
         self.scale = _power_of_two(scale)
@@ -309,7 +309,7 @@ class _FixedPattern:
             self.flat = rows + cols * size  # Fortran order, as LAPACK takes it
             return
         structure = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
-        self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True)
+        self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True).astype(np.int64)
         inverse = np.empty_like(self.perm)
         inverse[self.perm] = np.arange(size)
         self.inverse = inverse
@@ -328,7 +328,7 @@ class _FixedPattern:
         self.layout = "banded"
         self.kl, self.ku = kl, ku
         self.band_rows = 2 * kl + ku + 1
-        self.flat = (kl + ku + prow - pcol) + pcol * self.band_rows
+        self.flat = ((kl + ku + prow - pcol) + pcol * self.band_rows).astype(np.int64)
 
     def _permuted_csc(self, values: np.ndarray, extra=None) -> sp.csc_matrix:
         """The permuted matrix in CSC form, plus ``extra`` (n, n) in the original order."""
@@ -372,8 +372,8 @@ class _FixedPattern:
 
     def solve(self, values: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Solve ``A x = b`` once for the matrix with entries ``values``: what :meth:`factor`
-        then ``solve`` give, in one call (the compiled dense LU of
-        :func:`mbd3d.compiled.dense.solve_pattern`, or LAPACK's ``gbsv`` in band storage).
+        then ``solve`` give, in one call (the compiled LU of :mod:`mbd3d.compiled.dense`,
+        dense or in band storage).
 
         Raises
         ------
@@ -387,13 +387,12 @@ class _FixedPattern:
                 raise SingularMatrix("smallest pivot below tolerance")
             return x
         if self.layout == "banded":
-            kl, ku, perm = self.kl, self.ku, self.perm
-            lu, _, y, _ = _gbsv(kl, ku, self._scatter(values * self.entry_scale, self.band_rows),
-                                (d * b)[perm], overwrite_ab=1)
-            _check_pivots(np.abs(lu[kl + ku]), self.pivot_tolerance)
-            x = np.empty_like(y)
-            x[perm] = y
-            return d * x
+            x, regular = solve_banded_pattern(self.flat, self.kl, self.ku, self.perm,
+                                              self.entry_scale, d, values, b,
+                                              self.pivot_tolerance)
+            if not regular:
+                raise SingularMatrix("smallest pivot below tolerance")
+            return x
         return self.factor(values).solve(b)
 
     def _scatter(self, values: np.ndarray, n_rows: int) -> np.ndarray:

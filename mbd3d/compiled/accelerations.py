@@ -19,10 +19,12 @@ from mbd3d.compiled import jit
 from mbd3d.compiled.bodies import (body_vectors, planar_frames, planar_mass_blocks,
                                    spatial_frames, spatial_mass_blocks,
                                    spatial_quadratic_velocity)
-from mbd3d.compiled.dense import solve_pattern
+from mbd3d.compiled.dense import solve_banded_pattern, solve_pattern
 from mbd3d.compiled.rows import constraint_rows
 
 SOLVED, SINGULAR, NOT_FINITE = 0, 1, 2
+#: layouts of the augmented matrix (see mbd3d.linalg): solved here, or by the caller (SuperLU)
+DENSE, BANDED, SPARSE = 0, 1, 2
 
 
 @jit
@@ -47,8 +49,8 @@ def _finite(x: np.ndarray) -> bool:
 @jit
 def _solve(Q, Qd, A, axes, omega, kappa, blocks, forces, code, bi, bj, first_row, slots,
            coordinate, motion, vector_bodies, vector_local, n_rows, phi, driver_rows,
-           driver_acceleration, destination, nnz, rows, cols, entry_scale, scale,
-           pivot_tolerance, dense):
+           driver_acceleration, destination, nnz, layout, rows, cols, flat, kl, ku, perm,
+           entry_scale, scale, pivot_tolerance):
     s, J, v, a = body_vectors(A, axes, omega, kappa, vector_bodies, vector_local, True)
     _, data, gamma, _ = constraint_rows(code, bi, bj, first_row, slots, coordinate, motion,
                                         phi, n_rows, Q, Qd, s, J, v, a, destination, nnz,
@@ -61,19 +63,23 @@ def _solve(Q, Qd, A, axes, omega, kappa, blocks, forces, code, bi, bj, first_row
     values[n_blocks:n_blocks + nnz] = data
     values[n_blocks + nnz:] = data
     rhs = np.concatenate((forces, gamma))
-    if not dense:
+    if layout == DENSE:
+        x, regular = solve_pattern(rows, cols, entry_scale, scale, values, rhs, pivot_tolerance)
+    elif layout == BANDED:
+        x, regular = solve_banded_pattern(flat, kl, ku, perm, entry_scale, scale, values, rhs,
+                                          pivot_tolerance)
+    else:
         return np.empty(0), SOLVED, values, rhs
-    x, regular = solve_pattern(rows, cols, entry_scale, scale, values, rhs, pivot_tolerance)
     return x, SOLVED if regular else SINGULAR, values, rhs
 
 
 @jit
 def planar_accelerations(q, qd, extra, mass, inertia, weight, code, bi, bj, first_row, slots,
                          coordinate, motion, vector_bodies, vector_local, n_rows, phi,
-                         driver_rows, driver_acceleration, destination, nnz, rows, cols,
-                         entry_scale, scale, pivot_tolerance, dense):
-    """``(x, status, values, rhs)``: ``x = (qdd, lam)`` for a dense model (empty for a sparse
-    one), and the augmented matrix's entries in the pattern's order with its right-hand side.
+                         driver_rows, driver_acceleration, destination, nnz, layout, rows, cols,
+                         flat, kl, ku, perm, entry_scale, scale, pivot_tolerance):
+    """``(x, status, values, rhs)``: ``x = (qdd, lam)`` (empty for the ``SPARSE`` layout), and
+    the augmented matrix's entries in the pattern's order with its right-hand side.
     ``extra`` (n,): generalized forces of the force elements; ``weight`` (n,): gravity."""
     if not (_finite(q) and _finite(qd)):
         return np.empty(0), NOT_FINITE, np.empty(0), np.empty(0)
@@ -82,14 +88,16 @@ def planar_accelerations(q, qd, extra, mass, inertia, weight, code, bi, bj, firs
     return _solve(Q, Qd, A, axes, omega, kappa, planar_mass_blocks(mass, inertia),
                   weight + extra, code, bi, bj, first_row, slots, coordinate, motion,
                   vector_bodies, vector_local, n_rows, phi, driver_rows, driver_acceleration,
-                  destination, nnz, rows, cols, entry_scale, scale, pivot_tolerance, dense)
+                  destination, nnz, layout, rows, cols, flat, kl, ku, perm, entry_scale, scale,
+                  pivot_tolerance)
 
 
 @jit
 def spatial_accelerations(q, qd, charts, extra, mass, inertia, weight, code, bi, bj,
                           first_row, slots, coordinate, motion, vector_bodies, vector_local,
                           n_rows, phi, driver_rows, driver_acceleration, destination, nnz,
-                          rows, cols, entry_scale, scale, pivot_tolerance, dense):
+                          layout, rows, cols, flat, kl, ku, perm, entry_scale, scale,
+                          pivot_tolerance):
     """As :func:`planar_accelerations`, for spatial bodies relative to ``charts``; the
     quadratic velocity forces are added to ``weight + extra``."""
     if not (_finite(q) and _finite(qd)):
@@ -101,4 +109,5 @@ def spatial_accelerations(q, qd, charts, extra, mass, inertia, weight, code, bi,
     return _solve(Q, Qd, A, axes, omega, kappa, spatial_mass_blocks(Gb, mass, inertia), forces,
                   code, bi, bj, first_row, slots, coordinate, motion, vector_bodies,
                   vector_local, n_rows, phi, driver_rows, driver_acceleration, destination,
-                  nnz, rows, cols, entry_scale, scale, pivot_tolerance, dense)
+                  nnz, layout, rows, cols, flat, kl, ku, perm, entry_scale, scale,
+                  pivot_tolerance)

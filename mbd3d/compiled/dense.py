@@ -90,3 +90,98 @@ def solve_pattern(rows: np.ndarray, cols: np.ndarray, entry_scale: np.ndarray,
         return np.zeros(n), False
     x = lu_solve(A, piv, scale * b)
     return scale * x, True
+
+
+@jit
+def band_factor(ab: np.ndarray, n: int, kl: int, ku: int, pivot_tolerance: float):
+    """Factor in place a matrix in LAPACK's band storage ``ab`` (flat, column-major, ``2 kl +
+    ku + 1`` rows: ``A[i, j]`` at row ``kl + ku + i - j`` of column ``j``, the first ``kl``
+    rows room for fill-in) by LU with partial pivoting (the algorithm of LAPACK's ``gbtf2``).
+    Returns ``(piv, regular)``."""
+    rows = 2 * kl + ku + 1
+    kv = kl + ku
+    piv = np.empty(n, dtype=np.int64)
+    last = 0  # last column touched by the row interchanges so far
+    for j in range(n):
+        below = min(kl, n - 1 - j)
+        column = j * rows
+        p = 0
+        big = abs(ab[column + kv])
+        for i in range(1, below + 1):
+            if abs(ab[column + kv + i]) > big:
+                big = abs(ab[column + kv + i])
+                p = i
+        piv[j] = j + p
+        if ab[column + kv + p] == 0.0:
+            continue
+        last = max(last, min(j + ku + p, n - 1))
+        if p != 0:
+            for c in range(j, last + 1):
+                a = c * rows + kv + j - c
+                b = a + p
+                ab[a], ab[b] = ab[b], ab[a]
+        pivot = ab[column + kv]
+        for i in range(1, below + 1):
+            ab[column + kv + i] /= pivot
+        for c in range(j + 1, last + 1):
+            top = c * rows + kv + j - c
+            value = ab[top]
+            if value != 0.0:
+                for i in range(1, below + 1):
+                    ab[top + i] -= ab[column + kv + i] * value
+    smallest = np.inf
+    largest = 0.0
+    regular = True
+    for j in range(n):
+        size = abs(ab[j * rows + kv])
+        if not size < np.inf:
+            regular = False
+        smallest = min(smallest, size)
+        largest = max(largest, size)
+    if n and not smallest > pivot_tolerance * largest:
+        regular = False
+    return piv, regular
+
+
+@jit
+def band_solve(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
+               ) -> np.ndarray:
+    """``x`` with ``A x = b`` from the factors of :func:`band_factor` (LAPACK's ``gbtrs``)."""
+    rows = 2 * kl + ku + 1
+    kv = kl + ku
+    x = b.copy()
+    for j in range(n - 1):
+        p = piv[j]
+        if p != j:
+            x[p], x[j] = x[j], x[p]
+        below = min(kl, n - 1 - j)
+        for i in range(1, below + 1):
+            x[j + i] -= ab[j * rows + kv + i] * x[j]
+    for j in range(n - 1, -1, -1):
+        x[j] /= ab[j * rows + kv]
+        for i in range(max(0, j - kv), j):
+            x[i] -= ab[j * rows + kv + i - j] * x[j]
+    return x
+
+
+@jit
+def solve_banded_pattern(flat: np.ndarray, kl: int, ku: int, perm: np.ndarray,
+                         entry_scale: np.ndarray, scale: np.ndarray, values: np.ndarray,
+                         b: np.ndarray, pivot_tolerance: float):
+    """As :func:`solve_pattern` for a pattern permuted to a small bandwidth: the entries go to
+    band storage at ``flat`` and the unknowns are taken in the order ``perm``."""
+    n = scale.shape[0]
+    ab = np.zeros((2 * kl + ku + 1) * n)
+    for p in range(flat.shape[0]):
+        ab[flat[p]] = values[p] * entry_scale[p]
+    piv, regular = band_factor(ab, n, kl, ku, pivot_tolerance)
+    if not regular:
+        return np.zeros(n), False
+    permuted = np.empty(n)
+    for i in range(n):
+        permuted[i] = scale[perm[i]] * b[perm[i]]
+    y = band_solve(ab, n, kl, ku, piv, permuted)
+    x = np.empty(n)
+    for i in range(n):
+        x[perm[i]] = scale[perm[i]] * y[i]
+    return x, True
