@@ -397,6 +397,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         record(q, qd)
         watch.tick(t[0], 0)
         system = model._core.system(redundant)
+        work = stepping.system_workspace(system)
         # atol in the model's units: positions in units of its length, angles in radians,
         # rates per second, so that a micrometre mechanism is integrated as accurately
         atol_y = atol * np.tile(model.coordinate_scale, 2)
@@ -410,7 +411,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         drift = np.zeros(2)
         with callbacks.Run(model, redundant_accelerations) as key:
             def first_stage(tt: float) -> None:
-                status = stepping.derivative(system, key, tt, y, charts, f)
+                status = stepping.derivative(system, key, tt, y, charts, f, work)
                 counters[stepping.RHS_EVALUATIONS] += 1
                 if status != 0:
                     raise failure(stepping.SINGULAR if status == 1 else stepping.DIVERGED,
@@ -418,7 +419,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
 
             first_stage(t[0])
             h = _initial_step(system, key, tableau, t[0], y, f, charts, rtol, atol_y,
-                              min(max_step, t[-1] - t[0]), counters)
+                              min(max_step, t[-1] - t[0]), counters, work)
             t_now = t[0]
             check_at = _STIFFNESS_CHECK_STEPS if len(t) > 1 else -1
             while out.done < k_max:
@@ -426,7 +427,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                     system, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
                     atol_y, max_step, charts, constraint_tol, _STEP_CHART_LIMIT, recent, counters,
                     drift, K, y_old, dense, 0.0 if redundant else STEP_COLLAPSE, check_at,
-                    _STEPS_PER_CALL)
+                    _STEPS_PER_CALL, work)
                 stats.update(steps=int(counters[stepping.STEPS]),
                              rhs_evaluations=int(counters[stepping.RHS_EVALUATIONS]),
                              chart_resets=int(counters[stepping.CHART_RESETS]),
@@ -488,7 +489,7 @@ _FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
 
 
 def _initial_step(system, key, tableau, t0: float, y: np.ndarray, f: np.ndarray, charts,
-                  rtol: float, atol: np.ndarray, interval: float, counters) -> float:
+                  rtol: float, atol: np.ndarray, interval: float, counters, work) -> float:
     """The first step (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4): from the sizes of
     the state, its derivative and a difference of derivatives, so that the first step's error
     is near the tolerance."""
@@ -497,7 +498,7 @@ def _initial_step(system, key, tableau, t0: float, y: np.ndarray, f: np.ndarray,
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, interval)
     f1 = np.empty_like(f)
-    status = stepping.derivative(system, key, t0 + h0, y + h0 * f, charts, f1)
+    status = stepping.derivative(system, key, t0 + h0, y + h0 * f, charts, f1, work)
     counters[stepping.RHS_EVALUATIONS] += 1
     if status != 0:
         return min(h0, interval)

@@ -112,7 +112,8 @@ class _Core:
                 self.before, self.driver_rows, self.after, np.array(model.c0),
                 np.array(model.row_scale, dtype=float),
                 np.array(model._jac_rows, dtype=np.int64),
-                np.array(model._jac_cols, dtype=np.int64), self.no_forces)
+                np.array(model._jac_cols, dtype=np.int64), self.no_forces, np.zeros((3, 0)),
+                np.zeros((0, 3)))
 
 
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
@@ -138,7 +139,8 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
             group.apply(model, t, fr, Q)
         extra = Q[:model.n_bodies].ravel()
     phi = motion_phases(model, t)
-    f2 = driver_values(model, t)[2] if len(core.driver_rows) else core.no_drivers
+    f2 = (np.ascontiguousarray(driver_values(model, t)[2]) if len(core.driver_rows)
+          else core.no_drivers)
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     if core.spatial:

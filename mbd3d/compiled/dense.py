@@ -53,10 +53,10 @@ def lu_factor(A: np.ndarray, pivot_tolerance: float):
 
 
 @jit
-def lu_solve(LU: np.ndarray, piv: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``x`` with ``A x = b`` from the factors of :func:`lu_factor`."""
+def lu_solve_into(LU: np.ndarray, piv: np.ndarray, x: np.ndarray) -> None:
+    """Overwrite ``x`` (holding ``b``) with the solution of ``A x = b`` from the factors of
+    :func:`lu_factor`."""
     n = LU.shape[0]
-    x = b.copy()
     for k in range(n):
         p = piv[k]
         if p != k:
@@ -71,25 +71,39 @@ def lu_solve(LU: np.ndarray, piv: np.ndarray, b: np.ndarray) -> np.ndarray:
         for j in range(i + 1, n):
             total -= LU[i, j] * x[j]
         x[i] = total / LU[i, i]
-    return x
+
+
+@jit
+def solve_pattern_into(rows, cols, entry_scale, scale, values, b, pivot_tolerance, matrix, x):
+    """Solve ``A x = b`` for the matrix with ``values`` at ``(rows, cols)``, factored as
+    ``D A D`` with ``D = diag(scale)`` (the model's units; see :mod:`mbd3d.linalg`), in the
+    scratch ``matrix`` (n, n); returns whether the matrix is regular."""
+    n = scale.shape[0]
+    matrix[:, :] = 0.0
+    for p in range(rows.shape[0]):
+        matrix[rows[p], cols[p]] = values[p] * entry_scale[p]
+    piv, regular = lu_factor(matrix, pivot_tolerance)
+    if not regular:
+        x[:] = 0.0
+        return False
+    for i in range(n):
+        x[i] = scale[i] * b[i]
+    lu_solve_into(matrix, piv, x)
+    for i in range(n):
+        x[i] *= scale[i]
+    return True
 
 
 @jit
 def solve_pattern(rows: np.ndarray, cols: np.ndarray, entry_scale: np.ndarray,
                   scale: np.ndarray, values: np.ndarray, b: np.ndarray,
                   pivot_tolerance: float):
-    """Solve ``A x = b`` for the matrix with ``values`` at ``(rows, cols)``, factored as
-    ``D A D`` with ``D = diag(scale)`` (the model's units; see :mod:`mbd3d.linalg`).
-    Returns ``(x, regular)``."""
+    """``(x, regular)`` of :func:`solve_pattern_into`."""
     n = scale.shape[0]
-    A = np.zeros((n, n))
-    for p in range(rows.shape[0]):
-        A[rows[p], cols[p]] = values[p] * entry_scale[p]
-    piv, regular = lu_factor(A, pivot_tolerance)
-    if not regular:
-        return np.zeros(n), False
-    x = lu_solve(A, piv, scale * b)
-    return scale * x, True
+    x = np.empty(n)
+    regular = solve_pattern_into(rows, cols, entry_scale, scale, values, b, pivot_tolerance,
+                                 np.empty((n, n)), x)
+    return x, regular
 
 
 @jit
@@ -144,12 +158,12 @@ def band_factor(ab: np.ndarray, n: int, kl: int, ku: int, pivot_tolerance: float
 
 
 @jit
-def band_solve(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
-               ) -> np.ndarray:
-    """``x`` with ``A x = b`` from the factors of :func:`band_factor` (LAPACK's ``gbtrs``)."""
+def band_solve_into(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray,
+                    x: np.ndarray) -> None:
+    """Overwrite ``x`` (holding ``b``) with the solution of ``A x = b`` from the factors of
+    :func:`band_factor` (LAPACK's ``gbtrs``)."""
     rows = 2 * kl + ku + 1
     kv = kl + ku
-    x = b.copy()
     for j in range(n - 1):
         p = piv[j]
         if p != j:
@@ -161,27 +175,47 @@ def band_solve(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray, b: np.
         x[j] /= ab[j * rows + kv]
         for i in range(max(0, j - kv), j):
             x[i] -= ab[j * rows + kv + i - j] * x[j]
+
+
+@jit
+def band_solve(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
+               ) -> np.ndarray:
+    """``x`` with ``A x = b`` from the factors of :func:`band_factor`."""
+    x = b.copy()
+    band_solve_into(ab, n, kl, ku, piv, x)
     return x
+
+
+@jit
+def solve_banded_pattern_into(flat, kl, ku, perm, entry_scale, scale, values, b,
+                              pivot_tolerance, ab, permuted, x):
+    """As :func:`solve_pattern_into` for a pattern permuted to a small bandwidth: the entries
+    go to the band storage ``ab`` at ``flat`` and the unknowns are taken in the order
+    ``perm`` (``permuted``: scratch of the size of ``x``)."""
+    n = scale.shape[0]
+    ab[:] = 0.0
+    for p in range(flat.shape[0]):
+        ab[flat[p]] = values[p] * entry_scale[p]
+    piv, regular = band_factor(ab, n, kl, ku, pivot_tolerance)
+    if not regular:
+        x[:] = 0.0
+        return False
+    for i in range(n):
+        permuted[i] = scale[perm[i]] * b[perm[i]]
+    band_solve_into(ab, n, kl, ku, piv, permuted)
+    for i in range(n):
+        x[perm[i]] = scale[perm[i]] * permuted[i]
+    return True
 
 
 @jit
 def solve_banded_pattern(flat: np.ndarray, kl: int, ku: int, perm: np.ndarray,
                          entry_scale: np.ndarray, scale: np.ndarray, values: np.ndarray,
                          b: np.ndarray, pivot_tolerance: float):
-    """As :func:`solve_pattern` for a pattern permuted to a small bandwidth: the entries go to
-    band storage at ``flat`` and the unknowns are taken in the order ``perm``."""
+    """``(x, regular)`` of :func:`solve_banded_pattern_into`."""
     n = scale.shape[0]
-    ab = np.zeros((2 * kl + ku + 1) * n)
-    for p in range(flat.shape[0]):
-        ab[flat[p]] = values[p] * entry_scale[p]
-    piv, regular = band_factor(ab, n, kl, ku, pivot_tolerance)
-    if not regular:
-        return np.zeros(n), False
-    permuted = np.empty(n)
-    for i in range(n):
-        permuted[i] = scale[perm[i]] * b[perm[i]]
-    y = band_solve(ab, n, kl, ku, piv, permuted)
     x = np.empty(n)
-    for i in range(n):
-        x[perm[i]] = scale[perm[i]] * y[i]
-    return x, True
+    regular = solve_banded_pattern_into(flat, kl, ku, perm, entry_scale, scale, values, b,
+                                        pivot_tolerance, np.empty((2 * kl + ku + 1) * n),
+                                        np.empty(n), x)
+    return x, regular

@@ -8,10 +8,10 @@ The state is ``y = (q, v)``: the coordinates and the velocities the body type in
 which a chart reset leaves unchanged). A chart reset therefore changes ``q`` and the rates part
 of the first stage ``f`` only, and the method goes on with its step: it is not restarted.
 
-``system`` is the model as the loop takes it (built by :func:`mbd3d.stepping.system`)::
+``system`` is the model as the loop takes it (built by ``Model._core.system``)::
 
-    (spatial, n, python_accelerations, python_parts, dense, before, driver_rows, after,
-     c0, row_scale, jac_rows, jac_cols, no_forces)
+    (spatial, n, python_accelerations, python_parts, solved_here, before, driver_rows, after,
+     c0, row_scale, jac_rows, jac_cols, no_forces, no_drivers, no_motions)
 
 with ``before``/``after`` the arguments of :mod:`.accelerations` around the per-call ones.
 """
@@ -22,12 +22,12 @@ import numpy as np
 from numba import objmode
 
 from mbd3d.compiled import callbacks, jit, jit_calling_python
-from mbd3d.compiled.accelerations import (NOT_FINITE, SOLVED, padded, planar_accelerations,
-                                          spatial_accelerations)
-from mbd3d.compiled.bodies import (body_vectors, planar_frames, spatial_frames,
-                                   spatial_rates, spatial_reset_charts,
-                                   spatial_velocity_derivative)
-from mbd3d.compiled.rows import constraint_rows
+from mbd3d.compiled.accelerations import (NOT_FINITE, SOLVED, accelerations_into, padded_into,
+                                          workspace)
+from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into, spatial_frames_into,
+                                   spatial_rates_into, spatial_reset_charts,
+                                   spatial_velocity_derivative_into)
+from mbd3d.compiled.rows import constraint_rows_into
 from mbd3d.compiled.runge_kutta import (DOP853_INTERPOLANT, dop853_coefficients, error_norm,
                                         polynomial_coefficients, stage_state, step_factor)
 
@@ -69,40 +69,48 @@ def _python_parts(system, key, t, q, qd, charts):
     """Force elements' generalized forces, drivers' ``(f, f', f'')`` and rotation motions."""
     if system[3]:
         return _callback_parts(key, t, q, qd, charts)
-    return system[12].copy(), np.zeros((3, 0)), np.zeros((0, 3))
+    return system[12], system[13], system[14]
 
 
 @jit
-def derivative(system, key, t, y, charts, out):
-    """``out = dy/dt`` at ``(t, y)``; returns the solve's status (0: solved)."""
+def system_workspace(system):
+    """The workspace of :func:`derivative` and :func:`drift` for ``system``."""
+    before, after = system[5], system[7]
+    return workspace(system[0], before[0].shape[0], before[10].shape[0], before[12], after[1],
+                     after[2], after[6], after[7])
+
+
+@jit
+def derivative(system, key, t, y, charts, out, work):
+    """``out = dy/dt`` at ``(t, y)`` in the workspace ``work``; returns the solve's status
+    (0: solved)."""
     spatial, n = system[0], system[1]
     q = y[:n]
-    qd = spatial_rates(q, y[n:]) if spatial else y[n:].copy()
+    qd = out[:n]
+    if spatial:
+        spatial_rates_into(q, y[n:], qd)
+    else:
+        qd[:] = y[n:]
     extra, drivers, phi = _python_parts(system, key, t, q, qd, charts)
     if system[2]:
         x, status = _callback_accelerations(key, t, q, qd, charts)
     else:
-        f2 = drivers[2].copy()
-        if spatial:
-            x, status, values, rhs = spatial_accelerations(q, qd, charts, extra, *system[5], phi,
-                                                           system[6], f2, *system[7])
-        else:
-            x, status, values, rhs = planar_accelerations(q, qd, extra, *system[5], phi,
-                                                          system[6], f2, *system[7])
+        status = accelerations_into(work, spatial, q, qd, charts, extra, *system[5], phi,
+                                    system[6], drivers[2], *system[7])
+        x = work[23]
         if status == SOLVED and not system[4]:
-            x, status = _callback_solve(key, values, rhs)
+            x, status = _callback_solve(key, work[19], work[18])
     if status != SOLVED:
         return status
-    out[:n] = qd
     if spatial:
-        out[n:] = spatial_velocity_derivative(q, qd, x[:n])
+        spatial_velocity_derivative_into(q, qd, x[:n], out[n:])
     else:
         out[n:] = x[:n]
     return SOLVED
 
 
 @jit
-def drift(system, key, t, y, charts):
+def drift(system, key, t, y, charts, work):
     """Largest position and velocity constraint residual at ``(t, y)``, each row relative to
     its scale (lengths in units of the model's length)."""
     spatial, n = system[0], system[1]
@@ -110,30 +118,37 @@ def drift(system, key, t, y, charts):
     m = before[12]
     if m == 0:
         return 0.0
+    (Q, _, A, axes, omega, kappa, Gb, omega_bar, s, J, v, a, C, data, _, nu, row_work,
+     _, _, _, _, _, _, _) = work
     q = y[:n]
-    qd = spatial_rates(q, y[n:]) if spatial else y[n:].copy()
-    _, drivers, phi = _python_parts(system, key, t, q, qd, charts)
-    nc = 6 if spatial else 3
-    Q = padded(q, nc)
+    qd = np.empty(n)
     if spatial:
-        A, axes, omega, kappa, _, _ = spatial_frames(Q, Q, charts, False)
+        spatial_rates_into(q, y[n:], qd)
     else:
-        A, axes, omega, kappa = planar_frames(Q, Q, False)
-    s, J, v, a = body_vectors(A, axes, omega, kappa, before[10], before[11], False)
-    C, data, _, nu = constraint_rows(before[3], before[4], before[5], before[6], before[7],
-                                     before[8], before[9], phi, m, Q, Q, s, J, v, a, after[0],
-                                     after[1], True, True, False, True)
+        qd[:] = y[n:]
+    _, drivers, phi = _python_parts(system, key, t, q, qd, charts)
+    padded_into(q, Q)
+    if spatial:
+        spatial_frames_into(Q, Q, charts, False, A, axes, omega, kappa, Gb, omega_bar)
+    else:
+        planar_frames_into(Q, Q, False, A, axes, omega, kappa)
+    body_vectors_into(A, axes, omega, kappa, before[10], before[11], False, s, J, v, a)
+    constraint_rows_into(before[3], before[4], before[5], before[6], before[7], before[8],
+                         before[9], phi, m, Q, Q, s, J, v, a, after[0], True, True, False,
+                         True, C, data, C, nu, row_work)
     c0, row_scale, jac_rows, jac_cols = system[8], system[9], system[10], system[11]
     driver_rows = system[6]
     for k in range(driver_rows.shape[0]):
         C[driver_rows[k]] -= drivers[0, k]
         nu[driver_rows[k]] = drivers[1, k]
-    velocity = -nu
-    for p in range(jac_rows.shape[0]):
-        velocity[jac_rows[p]] += data[p] * qd[jac_cols[p]]
     largest = 0.0
     for r in range(m):
-        largest = max(largest, abs(C[r] - c0[r]) / row_scale[r], abs(velocity[r]) / row_scale[r])
+        largest = max(largest, abs(C[r] - c0[r]) / row_scale[r])
+        nu[r] = -nu[r]
+    for p in range(jac_rows.shape[0]):
+        nu[jac_rows[p]] += data[p] * qd[jac_cols[p]]
+    for r in range(m):
+        largest = max(largest, abs(nu[r]) / row_scale[r])
     return largest
 
 
@@ -162,7 +177,7 @@ def error_scale(spatial, n, y, y_new, atol, rtol):
 @jit
 def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
             charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
-            dense, collapse, check_at, budget):
+            dense, collapse, check_at, budget, work):
     """Step from ``(t, y)`` with first stage ``f`` and next step ``h`` until a step passes
     ``t_output``, ends at ``t_bound``, leaves the constraints drifted past
     ``constraint_tol``, collapses (a step below ``collapse`` times the longest of ``recent``),
@@ -181,10 +196,14 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
     t_old = t
     step = 0.0
     first = stats[STEPS]
+    ys = np.empty(2 * n)
+    y_new = np.empty(2 * n)
+    rates = np.empty(n)
     while True:
         if spatial and spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit):
             # v and its derivative are unchanged; the rates of g are those of the new chart
-            f[:n] = spatial_rates(y[:n], y[n:])
+            spatial_rates_into(y[:n], y[n:], rates)
+            f[:n] = rates
             stats[CHART_RESETS] += 1
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         h_abs = min(h, max_step)
@@ -202,15 +221,15 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
                 step = t_new - t
             K[0] = f
             for s in range(1, stages):
-                ys = stage_state(y, K, A[s], s, step)
-                status = derivative(system, key, t + C[s] * step, ys, charts, K[s])
+                stage_state(y, K, A[s], s, step, ys)
+                status = derivative(system, key, t + C[s] * step, ys, charts, K[s], work)
                 stats[RHS_EVALUATIONS] += 1
                 if status != SOLVED:
                     y_old[:] = ys
                     return SINGULAR if status != NOT_FINITE else DIVERGED, t + C[s] * step, \
                         t, step, h_abs
-            y_new = stage_state(y, K, B, stages, step)
-            status = derivative(system, key, t_new, y_new, charts, K[stages])
+            stage_state(y, K, B, stages, step, y_new)
+            status = derivative(system, key, t_new, y_new, charts, K[stages], work)
             stats[RHS_EVALUATIONS] += 1
             if status != SOLVED:
                 y_old[:] = y_new
@@ -242,7 +261,7 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
         recent[stats[STEPS] % n_recent] = step
         if step < collapse * longest:
             flags |= COLLAPSED
-        residual = drift(system, key, t, y, charts)
+        residual = drift(system, key, t, y, charts, work)
         drift_stats[0] = max(drift_stats[0], residual)
         drift_stats[1] = residual
         if residual > constraint_tol:
@@ -257,8 +276,9 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
                 # the interpolant's three extra stages
                 for r in range(C_extra.shape[0]):
                     s = stages + 1 + r
-                    ys = stage_state(y_old, K, A_extra[r], s, step)
-                    status = derivative(system, key, t_old + C_extra[r] * step, ys, charts, K[s])
+                    stage_state(y_old, K, A_extra[r], s, step, ys)
+                    status = derivative(system, key, t_old + C_extra[r] * step, ys, charts, K[s],
+                                        work)
                     stats[RHS_EVALUATIONS] += 1
                     if status != SOLVED:
                         y_old[:] = ys

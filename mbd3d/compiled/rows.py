@@ -56,12 +56,37 @@ def _rotation_vectors(s, J, v, a, fi, gi, phi, velocities, u, uJ, uv, ua, w, wv)
 
 
 @jit
+def row_work_size(dim: int, n_rot: int) -> int:
+    """Length of the scratch array of :func:`constraint_rows_into`."""
+    return 7 * dim + dim * n_rot
+
+
+@jit
 def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
                     Q, Qd, s, J, v, a, dest, nnz, value, jacobian, gamma, rate):
     """Evaluate every instance: returns ``c (m,)``, the Jacobian values at positions ``dest``
     (``nnz``,), ``gamma (m,)`` and ``-C_t`` of time-dependent rows (m,), with zero-length
-    arrays for the parts not asked for. ``c`` holds ``c(q)`` only: the caller subtracts the
-    rows' constants and prescribed motions.
+    arrays for the parts not asked for (see :func:`constraint_rows_into`)."""
+    dim = s.shape[1]
+    C = np.empty(n_rows if value else 0)
+    data = np.empty(nnz if jacobian else 0)
+    G = np.empty(n_rows if gamma else 0)
+    nu = np.empty(n_rows if rate else 0)
+    work = np.empty(row_work_size(dim, Q.shape[1] - dim))
+    constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows, Q,
+                         Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G, nu,
+                         work)
+    return C, data, G, nu
+
+
+@jit
+def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
+                         Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G,
+                         nu, work):
+    """Evaluate every instance into ``C`` (m,) (``c(q)`` only: the caller subtracts the rows'
+    constants and prescribed motions), ``data`` (the Jacobian values at positions ``dest``),
+    ``G`` (``gamma``, m) and ``nu`` (``-C_t`` of time-dependent rows, zero elsewhere), each
+    when asked for; ``work``: scratch of :func:`row_work_size`.
 
     ``Q``, ``Qd`` (bodies + ground, n_coords): coordinates and rates (``Qd`` is read only for
     ``gamma``); ``phi`` (k_motion, 3): ``(f, f', f'')`` of the rotation drivers' motions.
@@ -69,18 +94,22 @@ def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_r
     dim = s.shape[1]
     nc = Q.shape[1]
     n_rot = nc - dim
-    C = np.zeros(n_rows if value else 0)
-    data = np.zeros(nnz if jacobian else 0)
-    G = np.zeros(n_rows if gamma else 0)
-    nu = np.zeros(n_rows if rate else 0)
-    d = np.empty(dim)
-    dd = np.empty(dim)
-    u = np.empty(dim)
-    uJ = np.empty((dim, n_rot))
-    uv = np.empty(dim)
-    ua = np.empty(dim)
-    w = np.empty(dim)
-    wv = np.empty(dim)
+    if value:
+        C[:] = 0.0
+    if jacobian:
+        data[:] = 0.0
+    if gamma:
+        G[:] = 0.0
+    if rate:
+        nu[:] = 0.0
+    d = work[0:dim]
+    dd = work[dim:2 * dim]
+    u = work[2 * dim:3 * dim]
+    uv = work[3 * dim:4 * dim]
+    ua = work[4 * dim:5 * dim]
+    w = work[5 * dim:6 * dim]
+    wv = work[6 * dim:7 * dim]
+    uJ = work[7 * dim:7 * dim + dim * n_rot].reshape((dim, n_rot))
     si = sj = 0
     for e in range(kind.shape[0]):
         k, i, j, row = kind[e], bi[e], bj[e], first_row[e]
@@ -217,4 +246,3 @@ def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_r
                 G[row] = -dot1 + 2.0 * f1 * mixed + fj_u * f1 * f1 + fj_w * f2
             if rate:
                 nu[row] = fj_w * f1
-    return C, data, G, nu

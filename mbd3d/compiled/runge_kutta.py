@@ -90,10 +90,10 @@ def rms(x: np.ndarray, scale: np.ndarray) -> float:
 
 
 @jit
-def stage_state(y: np.ndarray, K: np.ndarray, a: np.ndarray, stages: int, h: float
-                ) -> np.ndarray:
-    """``y + h sum_j a_j K_j`` over the first ``stages`` stages."""
-    out = y.copy()
+def stage_state(y: np.ndarray, K: np.ndarray, a: np.ndarray, stages: int, h: float,
+                out: np.ndarray) -> np.ndarray:
+    """``out = y + h sum_j a_j K_j`` over the first ``stages`` stages; returns ``out``."""
+    out[:] = y
     for j in range(stages):
         c = h * a[j]
         if c != 0.0:
