@@ -25,6 +25,7 @@ import numpy as np
 from mbd3d import constraints
 from mbd3d.compiled import callbacks, integration as stepping
 from mbd3d.compiled.runge_kutta import TABLEAUS, interpolate, rms
+from mbd3d.compiled.structures import workspace
 from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, initial_guess, solve_velocity
@@ -396,8 +397,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         # index-1 accelerations jump, and generalized-alpha is the method to use.
         record(q, qd)
         watch.tick(t[0], 0)
-        system = model._core.system(redundant)
-        work = stepping.system_workspace(system)
+        arrays = model._core.arrays(python_accelerations=redundant)
+        work = workspace(spatial, arrays)
+        derivative, advance = ((stepping.spatial_derivative, stepping.spatial_advance)
+                               if spatial else
+                               (stepping.planar_derivative, stepping.planar_advance))
         # atol in the model's units: positions in units of its length, angles in radians,
         # rates per second, so that a micrometre mechanism is integrated as accurately
         atol_y = atol * np.tile(model.coordinate_scale, 2)
@@ -411,20 +415,20 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         drift = np.zeros(2)
         with callbacks.Run(model, redundant_accelerations) as key:
             def first_stage(tt: float) -> None:
-                status = stepping.derivative(system, key, tt, y, charts, f, work)
+                status = derivative(arrays, key, tt, y, charts, f, work)
                 counters[stepping.RHS_EVALUATIONS] += 1
                 if status != 0:
                     raise failure(stepping.SINGULAR if status == 1 else stepping.DIVERGED,
                                   tt, y)
 
             first_stage(t[0])
-            h = _initial_step(system, key, tableau, t[0], y, f, charts, rtol, atol_y,
+            h = _initial_step(spatial, arrays, key, tableau, t[0], y, f, charts, rtol, atol_y,
                               min(max_step, t[-1] - t[0]), counters, work)
             t_now = t[0]
             check_at = _STIFFNESS_CHECK_STEPS if len(t) > 1 else -1
             while out.done < k_max:
-                flags, t_now, t_old, step, h = stepping.advance(
-                    system, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
+                flags, t_now, t_old, step, h = advance(
+                    arrays, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
                     atol_y, max_step, charts, constraint_tol, _STEP_CHART_LIMIT, recent, counters,
                     drift, K, y_old, dense, 0.0 if redundant else STEP_COLLAPSE, check_at,
                     _STEPS_PER_CALL, work)
@@ -488,8 +492,9 @@ _STEP_CHART_LIMIT = 0.0
 _FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
 
 
-def _initial_step(system, key, tableau, t0: float, y: np.ndarray, f: np.ndarray, charts,
-                  rtol: float, atol: np.ndarray, interval: float, counters, work) -> float:
+def _initial_step(spatial: bool, arrays, key, tableau, t0: float, y: np.ndarray,
+                  f: np.ndarray, charts, rtol: float, atol: np.ndarray, interval: float,
+                  counters, work) -> float:
     """The first step (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4): from the sizes of
     the state, its derivative and a difference of derivatives, so that the first step's error
     is near the tolerance."""
@@ -498,7 +503,8 @@ def _initial_step(system, key, tableau, t0: float, y: np.ndarray, f: np.ndarray,
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, interval)
     f1 = np.empty_like(f)
-    status = stepping.derivative(system, key, t0 + h0, y + h0 * f, charts, f1, work)
+    derivative = stepping.spatial_derivative if spatial else stepping.planar_derivative
+    status = derivative(arrays, key, t0 + h0, y + h0 * f, charts, f1, work)
     counters[stepping.RHS_EVALUATIONS] += 1
     if status != 0:
         return min(h0, interval)

@@ -7,7 +7,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from mbd3d.body import Frames, rotate_rows
-from mbd3d.compiled import accelerations as kernel
+from mbd3d.compiled import accelerations as kernel, structures
 from mbd3d.constraints import driver_values, frames, motion_phases
 from mbd3d.linalg import SingularMatrix
 
@@ -68,52 +68,59 @@ def potential_energy(model, q: np.ndarray, charts: np.ndarray | None = None) -> 
 
 
 class _Core:
-    """A model's arrays in the form the compiled augmented solve takes them, fixed at build."""
+    """A model's arrays in the form the compiled core takes them (built once; the
+    :class:`~mbd3d.compiled.structures.ModelArrays` records are made when first asked for, so
+    that a model stays picklable)."""
 
     def __init__(self, model):
         table, pattern = model.row_table, model._augmented_pattern
         nb = model.n_bodies
         self.spatial = model.dim == 3
-        self.layout = {"dense": kernel.DENSE, "banded": kernel.BANDED,
-                       "sparse": kernel.SPARSE}[pattern.layout]
+        self.layout = {"dense": structures.DENSE, "banded": structures.BANDED,
+                       "sparse": structures.SPARSE}[pattern.layout]
         banded = pattern.layout == "banded"
-        self.no_forces = np.zeros(model.n_coordinates)
-        self.no_drivers = np.zeros(0)
-        # writable contiguous copies: the compiled functions are typed (and cached) for those
         inertia = np.array(model.inertia)
         if not self.spatial:
             from mbd3d.planar.body import inertia_tensors
             inertia = inertia_tensors(inertia)
-        self.before = (np.array(model.mass), inertia,
-                       np.array(model._weight[:nb].ravel()), table.code, table.bi, table.bj,
-                       table.first_row, table.slots, table.coordinate, table.motion,
-                       table.vector_bodies, np.ascontiguousarray(table.vector_local),
-                       table.n_rows)
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
-        self.after = (model._jac_destination, len(model._jac_take), self.layout,
-                      np.array(pattern.rows, dtype=np.int64),
-                      np.array(pattern.cols, dtype=np.int64),
-                      np.array(pattern.flat if banded else [], dtype=np.int64),
-                      pattern.kl if banded else 0, pattern.ku if banded else 0,
-                      np.array(pattern.perm if banded else [], dtype=np.int64),
-                      np.array(pattern.entry_scale), np.array(pattern.scale),
-                      float(pattern.pivot_tolerance))
-        self._model = model
+        self.python_parts = bool(model.force_groups or len(model.driver_rows)
+                                 or model.rotation_motions)
+        # writable contiguous copies: the compiled functions are typed (and cached) for those
+        self._fields = dict(
+            n=model.n_coordinates, solved_here=self.layout != structures.SPARSE,
+            python_parts=self.python_parts,
+            mass=np.array(model.mass), inertia=inertia, weight=np.array(model._weight[:nb].ravel()),
+            code=table.code, bi=table.bi, bj=table.bj, first_row=table.first_row,
+            slots=table.slots, coordinate=table.coordinate, motion=table.motion,
+            vector_bodies=table.vector_bodies, vector_local=np.ascontiguousarray(table.vector_local),
+            n_rows=table.n_rows, driver_rows=self.driver_rows,
+            destination=model._jac_destination, nnz=len(model._jac_take), layout=self.layout,
+            rows=np.array(pattern.rows, dtype=np.int64), cols=np.array(pattern.cols, dtype=np.int64),
+            flat=np.array(pattern.flat if banded else [], dtype=np.int64),
+            kl=pattern.kl if banded else 0, ku=pattern.ku if banded else 0,
+            perm=np.array(pattern.perm if banded else [], dtype=np.int64),
+            entry_scale=np.array(pattern.entry_scale), scale=np.array(pattern.scale),
+            pivot_tolerance=float(pattern.pivot_tolerance),
+            c0=np.array(model.c0), row_scale=np.array(model.row_scale, dtype=float),
+            jac_rows=np.array(model._jac_rows, dtype=np.int64),
+            jac_cols=np.array(model._jac_cols, dtype=np.int64),
+            no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((3, 0)),
+            no_motions=np.zeros((0, 3)))
+        self._records: dict[bool, structures.ModelArrays] = {}
 
-    def system(self, redundant: bool) -> tuple:
-        """The model as the compiled integrator loop takes it (see
-        :mod:`mbd3d.compiled.integration`); ``redundant``: accelerations from Python's
-        augmented-Lagrangian solve."""
-        model = self._model
-        python_parts = bool(model.force_groups or len(model.driver_rows)
-                            or model.rotation_motions)
-        return (model.dim == 3, model.n_coordinates, bool(redundant), python_parts,
-                self.layout != kernel.SPARSE,
-                self.before, self.driver_rows, self.after, np.array(model.c0),
-                np.array(model.row_scale, dtype=float),
-                np.array(model._jac_rows, dtype=np.int64),
-                np.array(model._jac_cols, dtype=np.int64), self.no_forces, np.zeros((3, 0)),
-                np.zeros((0, 3)))
+    def arrays(self, python_accelerations: bool = False) -> "structures.ModelArrays":
+        """The model as the compiled functions take it; ``python_accelerations``: the
+        accelerations come from Python's augmented-Lagrangian solve (redundant rows)."""
+        key = bool(python_accelerations)
+        if key not in self._records:
+            fields = dict(self._fields, python_accelerations=key)
+            self._records[key] = structures.ModelArrays(
+                *(fields[name] for name in structures.MODEL_FIELDS))
+        return self._records[key]
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_records": {}}
 
 
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
@@ -122,8 +129,8 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     when the state is not finite.
 
     Everything but the force elements, the drivers' motions (Python objects) and the SuperLU
-    solve of a large model with a wide band is one compiled call (:mod:`mbd3d.compiled.accelerations`): the
-    one place this system is assembled and solved.
+    solve of a large model with a wide band is one compiled call
+    (:mod:`mbd3d.compiled.accelerations`): the one place this system is assembled and solved.
 
     Raises
     ------
@@ -131,7 +138,7 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         When the matrix is singular (dependent constraint rows).
     """
     core = model._core
-    extra = core.no_forces
+    extra = core._fields["no_forces"]
     if model.force_groups:
         fr = frames(model, q, qd, charts)
         Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
@@ -140,18 +147,17 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         extra = Q[:model.n_bodies].ravel()
     phi = motion_phases(model, t)
     f2 = (np.ascontiguousarray(driver_values(model, t)[2]) if len(core.driver_rows)
-          else core.no_drivers)
-    q = np.asarray(q, dtype=float)
-    qd = np.asarray(qd, dtype=float)
-    if core.spatial:
-        x, status, values, rhs = kernel.spatial_accelerations(
-            q, qd, model.charts0 if charts is None else charts, extra, *core.before, phi,
-            core.driver_rows, f2, *core.after)
-    else:
-        x, status, values, rhs = kernel.planar_accelerations(
-            q, qd, extra, *core.before, phi, core.driver_rows, f2, *core.after)
+          else core._fields["no_drivers"][2])
+    charts = (model.charts0 if charts is None else charts) if core.spatial else _NO_CHARTS
+    solve = kernel.spatial_accelerations if core.spatial else kernel.planar_accelerations
+    x, status, values, rhs = solve(
+        core.arrays(), np.asarray(q, dtype=float), np.asarray(qd, dtype=float),
+        np.asarray(charts, dtype=float), extra, phi, f2)
     if status == kernel.NOT_FINITE:
         return None
     if status == kernel.SINGULAR:
         raise SingularMatrix("smallest pivot below tolerance")
-    return x if core.layout != kernel.SPARSE else model._augmented_pattern.solve(values, rhs)
+    return x if core.layout != structures.SPARSE else model._augmented_pattern.solve(values, rhs)
+
+
+_NO_CHARTS = np.zeros((0, 3, 3))

@@ -8,12 +8,9 @@ The state is ``y = (q, v)``: the coordinates and the velocities the body type in
 which a chart reset leaves unchanged). A chart reset therefore changes ``q`` and the rates part
 of the first stage ``f`` only, and the method goes on with its step: it is not restarted.
 
-``system`` is the model as the loop takes it (built by ``Model._core.system``)::
-
-    (spatial, n, python_accelerations, python_parts, solved_here, before, driver_rows, after,
-     c0, row_scale, jac_rows, jac_cols, no_forces, no_drivers, no_motions)
-
-with ``before``/``after`` the arguments of :mod:`.accelerations` around the per-call ones.
+``model`` is the model as the loop takes it (a
+:class:`~mbd3d.compiled.structures.ModelArrays`) and ``work`` the scratch of one evaluation
+(:func:`~mbd3d.compiled.structures.workspace`).
 """
 
 from __future__ import annotations
@@ -22,8 +19,7 @@ import numpy as np
 from numba import objmode
 
 from mbd3d.compiled import callbacks, jit, jit_calling_python
-from mbd3d.compiled.accelerations import (NOT_FINITE, SOLVED, accelerations_into, padded_into,
-                                          workspace)
+from mbd3d.compiled.accelerations import NOT_FINITE, SOLVED, accelerations_into, padded_into
 from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into, spatial_frames_into,
                                    spatial_rates_into, spatial_reset_charts,
                                    spatial_velocity_derivative_into)
@@ -65,41 +61,32 @@ def _callback_solve(key, values, rhs):
 
 
 @jit
-def _python_parts(system, key, t, q, qd, charts):
+def _python_parts(model, key, t, q, qd, charts):
     """Force elements' generalized forces, drivers' ``(f, f', f'')`` and rotation motions."""
-    if system[3]:
+    if model.python_parts:
         return _callback_parts(key, t, q, qd, charts)
-    return system[12], system[13], system[14]
+    return model.no_forces, model.no_drivers, model.no_motions
 
 
 @jit
-def system_workspace(system):
-    """The workspace of :func:`derivative` and :func:`drift` for ``system``."""
-    before, after = system[5], system[7]
-    return workspace(system[0], before[0].shape[0], before[10].shape[0], before[12], after[1],
-                     after[2], after[6], after[7])
-
-
-@jit
-def derivative(system, key, t, y, charts, out, work):
+def derivative(spatial, model, key, t, y, charts, out, work):
     """``out = dy/dt`` at ``(t, y)`` in the workspace ``work``; returns the solve's status
     (0: solved)."""
-    spatial, n = system[0], system[1]
+    n = model.n
     q = y[:n]
     qd = out[:n]
     if spatial:
         spatial_rates_into(q, y[n:], qd)
     else:
         qd[:] = y[n:]
-    extra, drivers, phi = _python_parts(system, key, t, q, qd, charts)
-    if system[2]:
+    extra, drivers, phi = _python_parts(model, key, t, q, qd, charts)
+    if model.python_accelerations:
         x, status = _callback_accelerations(key, t, q, qd, charts)
     else:
-        status = accelerations_into(work, spatial, q, qd, charts, extra, *system[5], phi,
-                                    system[6], drivers[2], *system[7])
-        x = work[23]
-        if status == SOLVED and not system[4]:
-            x, status = _callback_solve(key, work[19], work[18])
+        status = accelerations_into(spatial, model, work, q, qd, charts, extra, phi, drivers[2])
+        x = work.x
+        if status == SOLVED and not model.solved_here:
+            x, status = _callback_solve(key, work.values, work.rhs)
     if status != SOLVED:
         return status
     if spatial:
@@ -110,34 +97,37 @@ def derivative(system, key, t, y, charts, out, work):
 
 
 @jit
-def drift(system, key, t, y, charts, work):
+def drift(spatial, model, key, t, y, charts, work):
     """Largest position and velocity constraint residual at ``(t, y)``, each row relative to
     its scale (lengths in units of the model's length)."""
-    spatial, n = system[0], system[1]
-    before, after = system[5], system[7]
-    m = before[12]
+    n = model.n
+    m = model.n_rows
     if m == 0:
         return 0.0
-    (Q, _, A, axes, omega, kappa, Gb, omega_bar, s, J, v, a, C, data, _, nu, row_work,
-     _, _, _, _, _, _, _) = work
     q = y[:n]
     qd = np.empty(n)
     if spatial:
         spatial_rates_into(q, y[n:], qd)
     else:
         qd[:] = y[n:]
-    _, drivers, phi = _python_parts(system, key, t, q, qd, charts)
+    _, drivers, phi = _python_parts(model, key, t, q, qd, charts)
+    yes = m > 0  # run-time flags (see accelerations_into)
+    no = not yes
+    Q, A, axes, omega, kappa = work.Q, work.A, work.axes, work.omega, work.kappa
+    s, J, v, a, C, data, nu = work.s, work.J, work.v, work.a, work.C, work.data, work.nu
     padded_into(q, Q)
     if spatial:
-        spatial_frames_into(Q, Q, charts, False, A, axes, omega, kappa, Gb, omega_bar)
+        spatial_frames_into(Q, Q, charts, no, A, axes, omega, kappa, work.Gb, work.omega_bar)
     else:
-        planar_frames_into(Q, Q, False, A, axes, omega, kappa)
-    body_vectors_into(A, axes, omega, kappa, before[10], before[11], False, s, J, v, a)
-    constraint_rows_into(before[3], before[4], before[5], before[6], before[7], before[8],
-                         before[9], phi, m, Q, Q, s, J, v, a, after[0], True, True, False,
-                         True, C, data, C, nu, row_work)
-    c0, row_scale, jac_rows, jac_cols = system[8], system[9], system[10], system[11]
-    driver_rows = system[6]
+        planar_frames_into(Q, Q, no, A, axes, omega, kappa)
+    body_vectors_into(A, axes, omega, kappa, model.vector_bodies, model.vector_local, no, s,
+                      J, v, a)
+    constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
+                         model.coordinate, model.motion, phi, m, Q, Q, s, J, v, a,
+                         model.destination, yes, yes, no, yes, C, data, C, nu, work.row_work,
+                         work.row_jacobian)
+    c0, row_scale, jac_rows, jac_cols = model.c0, model.row_scale, model.jac_rows, model.jac_cols
+    driver_rows = model.driver_rows
     for k in range(driver_rows.shape[0]):
         C[driver_rows[k]] -= drivers[0, k]
         nu[driver_rows[k]] = drivers[1, k]
@@ -175,7 +165,7 @@ def error_scale(spatial, n, y, y_new, atol, rtol):
 
 
 @jit
-def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
+def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
             charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
             dense, collapse, check_at, budget, work):
     """Step from ``(t, y)`` with first stage ``f`` and next step ``h`` until a step passes
@@ -185,12 +175,12 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
     drift, last drift), ``K`` and ``y_old`` are updated in place; with ``OUTPUT``, ``dense``
     holds the last step's dense-output coefficients.
 
-    Returns ``(status, t, t_old, step, h)``: the flags of why it returned, the time reached,
+    ``spatial`` is compiled as a constant. Returns ``(status, t, t_old, step, h)``: the flags of why it returned, the time reached,
     the last step's start and length, the next step. On a failure ``t`` is the time of the
     failing evaluation and ``y_old`` its state.
     """
     A, B, C, E, E_low, P, A_extra, C_extra, D, dense_kind, error_order = tableau
-    spatial, n = system[0], system[1]
+    n = model.n
     stages = B.shape[0]
     n_recent = recent.shape[0]
     t_old = t
@@ -200,11 +190,12 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
     y_new = np.empty(2 * n)
     rates = np.empty(n)
     while True:
-        if spatial and spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit):
-            # v and its derivative are unchanged; the rates of g are those of the new chart
-            spatial_rates_into(y[:n], y[n:], rates)
-            f[:n] = rates
-            stats[CHART_RESETS] += 1
+        if spatial:
+            if spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit):
+                # v and its derivative are unchanged; the rates of g are those of the new chart
+                spatial_rates_into(y[:n], y[n:], rates)
+                f[:n] = rates
+                stats[CHART_RESETS] += 1
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         h_abs = min(h, max_step)
         if h_abs < min_step:
@@ -222,14 +213,14 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
             K[0] = f
             for s in range(1, stages):
                 stage_state(y, K, A[s], s, step, ys)
-                status = derivative(system, key, t + C[s] * step, ys, charts, K[s], work)
+                status = derivative(spatial, model, key, t + C[s] * step, ys, charts, K[s], work)
                 stats[RHS_EVALUATIONS] += 1
                 if status != SOLVED:
                     y_old[:] = ys
                     return SINGULAR if status != NOT_FINITE else DIVERGED, t + C[s] * step, \
                         t, step, h_abs
             stage_state(y, K, B, stages, step, y_new)
-            status = derivative(system, key, t_new, y_new, charts, K[stages], work)
+            status = derivative(spatial, model, key, t_new, y_new, charts, K[stages], work)
             stats[RHS_EVALUATIONS] += 1
             if status != SOLVED:
                 y_old[:] = y_new
@@ -261,7 +252,7 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
         recent[stats[STEPS] % n_recent] = step
         if step < collapse * longest:
             flags |= COLLAPSED
-        residual = drift(system, key, t, y, charts, work)
+        residual = drift(spatial, model, key, t, y, charts, work)
         drift_stats[0] = max(drift_stats[0], residual)
         drift_stats[1] = residual
         if residual > constraint_tol:
@@ -277,7 +268,7 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
                 for r in range(C_extra.shape[0]):
                     s = stages + 1 + r
                     stage_state(y_old, K, A_extra[r], s, step, ys)
-                    status = derivative(system, key, t_old + C_extra[r] * step, ys, charts, K[s],
+                    status = derivative(spatial, model, key, t_old + C_extra[r] * step, ys, charts, K[s],
                                         work)
                     stats[RHS_EVALUATIONS] += 1
                     if status != SOLVED:
@@ -289,3 +280,37 @@ def advance(system, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max
                 dense[:] = polynomial_coefficients(K, P, stages + 1)
         if flags:
             return flags, t, t_old, step, h
+
+
+# Entry points from Python, one per body type: ``spatial`` reaches the functions above as a
+# constant, so that a planar model compiles no spatial code and the reverse.
+@jit
+def planar_derivative(model, key, t, y, charts, out, work):
+    """:func:`derivative` of a planar model."""
+    return derivative(False, model, key, t, y, charts, out, work)
+
+
+@jit
+def spatial_derivative(model, key, t, y, charts, out, work):
+    """:func:`derivative` of a spatial model."""
+    return derivative(True, model, key, t, y, charts, out, work)
+
+
+@jit
+def planar_advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
+                   charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
+                   dense, collapse, check_at, budget, work):
+    """:func:`advance` of a planar model."""
+    return advance(False, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol,
+                   max_step, charts, constraint_tol, chart_limit, recent, stats, drift_stats, K,
+                   y_old, dense, collapse, check_at, budget, work)
+
+
+@jit
+def spatial_advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
+                    charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
+                    dense, collapse, check_at, budget, work):
+    """:func:`advance` of a spatial model."""
+    return advance(True, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol,
+                   max_step, charts, constraint_tol, chart_limit, recent, stats, drift_stats, K,
+                   y_old, dense, collapse, check_at, budget, work)

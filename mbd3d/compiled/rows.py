@@ -58,7 +58,7 @@ def _rotation_vectors(s, J, v, a, fi, gi, phi, velocities, u, uJ, uv, ua, w, wv)
 @jit
 def row_work_size(dim: int, n_rot: int) -> int:
     """Length of the scratch array of :func:`constraint_rows_into`."""
-    return 7 * dim + dim * n_rot
+    return 7 * dim
 
 
 @jit
@@ -75,18 +75,18 @@ def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_r
     work = np.empty(row_work_size(dim, Q.shape[1] - dim))
     constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows, Q,
                          Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G, nu,
-                         work)
+                         work, np.empty((dim, Q.shape[1] - dim)))
     return C, data, G, nu
 
 
 @jit
 def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
                          Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G,
-                         nu, work):
+                         nu, work, uJ):
     """Evaluate every instance into ``C`` (m,) (``c(q)`` only: the caller subtracts the rows'
     constants and prescribed motions), ``data`` (the Jacobian values at positions ``dest``),
     ``G`` (``gamma``, m) and ``nu`` (``-C_t`` of time-dependent rows, zero elsewhere), each
-    when asked for; ``work``: scratch of :func:`row_work_size`.
+    when asked for; ``work``: scratch of :func:`row_work_size`, ``uJ`` of (dim, n_rot).
 
     ``Q``, ``Qd`` (bodies + ground, n_coords): coordinates and rates (``Qd`` is read only for
     ``gamma``); ``phi`` (k_motion, 3): ``(f, f', f'')`` of the rotation drivers' motions.
@@ -109,7 +109,6 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi
     ua = work[4 * dim:5 * dim]
     w = work[5 * dim:6 * dim]
     wv = work[6 * dim:7 * dim]
-    uJ = work[7 * dim:7 * dim + dim * n_rot].reshape((dim, n_rot))
     si = sj = 0
     for e in range(kind.shape[0]):
         k, i, j, row = kind[e], bi[e], bj[e], first_row[e]
