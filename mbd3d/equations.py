@@ -3,6 +3,8 @@ quadratic velocity forces, energies."""
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -108,6 +110,10 @@ class _Core:
             no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((3, 0)),
             no_motions=np.zeros((0, 3)))
         self._records: dict[bool, structures.ModelArrays] = {}
+        self._scratch = threading.local()
+        self.no_forces = self._fields["no_forces"]
+        self.no_drivers = np.zeros(0)
+        self.no_motions = self._fields["no_motions"]
 
     def arrays(self, python_accelerations: bool = False) -> "structures.ModelArrays":
         """The model as the compiled functions take it; ``python_accelerations``: the
@@ -119,8 +125,26 @@ class _Core:
                 *(fields[name] for name in structures.MODEL_FIELDS))
         return self._records[key]
 
+    def workspace(self) -> "structures.Workspace":
+        """Scratch arrays for the compiled evaluations of this thread (each thread has its
+        own: nothing in them outlives a call, so results never depend on them)."""
+        work = getattr(self._scratch, "work", None)
+        if work is None:
+            work = self._scratch.work = structures.workspace(self.spatial, self.record)
+        return work
+
+    @property
+    def record(self) -> "structures.ModelArrays":
+        """:meth:`arrays` of the accelerations solved in compiled code."""
+        records = self._records
+        return records[False] if False in records else self.arrays()
+
     def __getstate__(self) -> dict:
-        return {**self.__dict__, "_records": {}}
+        return {key: value for key, value in self.__dict__.items()
+                if key not in ("_records", "_scratch")}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _records={}, _scratch=threading.local())
 
 
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
@@ -138,26 +162,31 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         When the matrix is singular (dependent constraint rows).
     """
     core = model._core
-    extra = core._fields["no_forces"]
+    extra = core.no_forces
     if model.force_groups:
         fr = frames(model, q, qd, charts)
         Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
         for group in model.force_groups:
             group.apply(model, t, fr, Q)
         extra = Q[:model.n_bodies].ravel()
-    phi = motion_phases(model, t)
+    phi = motion_phases(model, t) if model.rotation_motions else core.no_motions
     f2 = (np.ascontiguousarray(driver_values(model, t)[2]) if len(core.driver_rows)
-          else core._fields["no_drivers"][2])
-    charts = (model.charts0 if charts is None else charts) if core.spatial else _NO_CHARTS
-    solve = kernel.spatial_accelerations if core.spatial else kernel.planar_accelerations
-    x, status, values, rhs = solve(
-        core.arrays(), np.asarray(q, dtype=float), np.asarray(qd, dtype=float),
-        np.asarray(charts, dtype=float), extra, phi, f2)
+          else core.no_drivers)
+    if core.spatial:
+        x, status = kernel.spatial_accelerations(
+            core.record, core.workspace(), q, qd, model.charts0 if charts is None else charts,
+            extra, phi, f2)
+    else:
+        x, status = kernel.planar_accelerations(core.record, core.workspace(), q, qd,
+                                                _NO_CHARTS, extra, phi, f2)
     if status == kernel.NOT_FINITE:
         return None
     if status == kernel.SINGULAR:
         raise SingularMatrix("smallest pivot below tolerance")
-    return x if core.layout != structures.SPARSE else model._augmented_pattern.solve(values, rhs)
+    if core.layout == structures.SPARSE:
+        n_values = len(x) - model.n_coordinates - model.n_constraints
+        return model._augmented_pattern.solve(x[:n_values], x[n_values:])
+    return x
 
 
 _NO_CHARTS = np.zeros((0, 3, 3))

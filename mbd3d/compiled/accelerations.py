@@ -11,8 +11,8 @@ for band storage itself (SuperLU).
 
 Every intermediate array lives in a :class:`~mbd3d.compiled.structures.Workspace`: the
 integrator loop makes one per run segment and evaluates thousands of right-hand sides without
-allocating; a single call (:func:`planar_accelerations`, :func:`spatial_accelerations`) makes
-its own. ``spatial`` reaches the functions as a constant from these entry points, so that a
+allocating, and a single call (:func:`planar_accelerations`, :func:`spatial_accelerations`)
+takes one too. ``spatial`` reaches the functions as a constant from these entry points, so that a
 planar model compiles no spatial code and the reverse.
 
 ``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state.
@@ -129,22 +129,25 @@ def accelerations_into(spatial, model, work, q, qd, charts, extra, phi, driver_a
 
 
 @jit
-def _accelerations(spatial, model, q, qd, charts, extra, phi, driver_acceleration):
-    work = workspace(spatial, model)
+def _accelerations(spatial, model, work, q, qd, charts, extra, phi, driver_acceleration):
     status = accelerations_into(spatial, model, work, q, qd, charts, extra, phi,
                                 driver_acceleration)
-    return work.x, status, work.values, work.rhs
+    if model.layout == SPARSE:
+        # the matrix's entries in the pattern's order and the right-hand side, stacked, for
+        # the caller's solve
+        return np.concatenate((work.values, work.rhs)), status
+    return work.x.copy(), status
 
 
 @jit
-def planar_accelerations(model, q, qd, charts, extra, phi, driver_acceleration):
-    """``(x, status, values, rhs)`` of :func:`accelerations_into` for a planar model in a
-    workspace of its own: ``x = (qdd, lam)`` (not solved for the ``SPARSE`` layout), the
-    augmented matrix's entries in the pattern's order and its right-hand side."""
-    return _accelerations(False, model, q, qd, charts, extra, phi, driver_acceleration)
+def planar_accelerations(model, work, q, qd, charts, extra, phi, driver_acceleration):
+    """``(x, status)`` of :func:`accelerations_into` for a planar model, in the workspace
+    ``work``: ``x = (qdd, lam)`` (a new array), or for the ``SPARSE`` layout the augmented
+    matrix's entries in the pattern's order followed by its right-hand side."""
+    return _accelerations(False, model, work, q, qd, charts, extra, phi, driver_acceleration)
 
 
 @jit
-def spatial_accelerations(model, q, qd, charts, extra, phi, driver_acceleration):
+def spatial_accelerations(model, work, q, qd, charts, extra, phi, driver_acceleration):
     """As :func:`planar_accelerations`, for a spatial model."""
-    return _accelerations(True, model, q, qd, charts, extra, phi, driver_acceleration)
+    return _accelerations(True, model, work, q, qd, charts, extra, phi, driver_acceleration)
