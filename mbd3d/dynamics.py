@@ -379,6 +379,10 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 consistent_accelerations(model, t_fail, q, qd, chart(), fallback=False)
             except (SingularJacobianError, IntegrationError) as error:
                 return error
+        try:  # a motion that is not finite there is named
+            constraints.driver_values(model, t_fail), constraints.motion_phases(model, t_fail)
+        except ModelError as error:
+            return error
         return IntegrationError(f"forward dynamics of '{model.name}': the state became "
                                 f"non-finite at t = {t_fail:.6g} s (the integration diverged)",
                                 time=t_fail)

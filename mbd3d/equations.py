@@ -10,7 +10,8 @@ import scipy.sparse as sp
 
 from mbd3d.body import Frames, rotate_rows
 from mbd3d.compiled import accelerations as kernel, structures
-from mbd3d.constraints import driver_values, frames, motion_phases
+from mbd3d.compiled.motions import table as motion_table
+from mbd3d.constraints import _motion_values, driver_values, frames, motion_phases
 from mbd3d.linalg import SingularMatrix
 
 __all__ = ["mass_matrix", "mass_times", "generalized_forces", "kinetic_energy",
@@ -86,8 +87,12 @@ class _Core:
             from mbd3d.planar.body import inertia_tensors
             inertia = inertia_tensors(inertia)
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
-        self.python_parts = bool(model.force_groups or len(model.driver_rows)
-                                 or model.rotation_motions)
+        terms = [m.terms() for m in model.driver_motions + model.rotation_motions]
+        #: parts only Python can evaluate: force elements, motions given as functions
+        self.python_parts = bool(model.force_groups) or any(t is None for t in terms)
+        driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
+        rotation_table = motion_table([] if self.python_parts
+                                      else terms[len(model.driver_rows):])
         # writable contiguous copies: the compiled functions are typed (and cached) for those
         self._fields = dict(
             n=model.n_coordinates, solved_here=self.layout != structures.SPARSE,
@@ -97,6 +102,10 @@ class _Core:
             slots=table.slots, coordinate=table.coordinate, motion=table.motion,
             vector_bodies=table.vector_bodies, vector_local=np.ascontiguousarray(table.vector_local),
             n_rows=table.n_rows, driver_rows=self.driver_rows,
+            **dict(zip(("driver_first", "driver_kinds", "driver_starts", "driver_params"),
+                       driver_table)),
+            **dict(zip(("rotation_first", "rotation_kinds", "rotation_starts",
+                        "rotation_params"), rotation_table)),
             destination=model._jac_destination, nnz=len(model._jac_take), layout=self.layout,
             rows=np.array(pattern.rows, dtype=np.int64), cols=np.array(pattern.cols, dtype=np.int64),
             flat=np.array(pattern.flat if banded else [], dtype=np.int64),
@@ -107,12 +116,11 @@ class _Core:
             c0=np.array(model.c0), row_scale=np.array(model.row_scale, dtype=float),
             jac_rows=np.array(model._jac_rows, dtype=np.int64),
             jac_cols=np.array(model._jac_cols, dtype=np.int64),
-            no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((3, 0)),
+            no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((0, 3)),
             no_motions=np.zeros((0, 3)))
         self._records: dict[bool, structures.ModelArrays] = {}
         self._scratch = threading.local()
         self.no_forces = self._fields["no_forces"]
-        self.no_drivers = np.zeros(0)
         self.no_motions = self._fields["no_motions"]
 
     def arrays(self, python_accelerations: bool = False) -> "structures.ModelArrays":
@@ -152,8 +160,8 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     """``(qdd, lam)`` stacked (n + m,) from the augmented equations at ``(t, q, qd)``, or None
     when the state is not finite.
 
-    Everything but the force elements, the drivers' motions (Python objects) and the SuperLU
-    solve of a large model with a wide band is one compiled call
+    Everything but the force elements and motions given as Python functions, and the SuperLU
+    solve of a large model with a wide band, is one compiled call
     (:mod:`mbd3d.compiled.accelerations`): the one place this system is assembled and solved.
 
     Raises
@@ -162,24 +170,26 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         When the matrix is singular (dependent constraint rows).
     """
     core = model._core
-    extra = core.no_forces
-    if model.force_groups:
-        fr = frames(model, q, qd, charts)
-        Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
-        for group in model.force_groups:
-            group.apply(model, t, fr, Q)
-        extra = Q[:model.n_bodies].ravel()
-    phi = motion_phases(model, t) if model.rotation_motions else core.no_motions
-    f2 = (np.ascontiguousarray(driver_values(model, t)[2]) if len(core.driver_rows)
-          else core.no_drivers)
+    extra, phi, drivers = core.no_forces, core.no_motions, core.no_motions
+    if core.python_parts:
+        if model.force_groups:
+            fr = frames(model, q, qd, charts)
+            Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+            for group in model.force_groups:
+                group.apply(model, t, fr, Q)
+            extra = Q[:model.n_bodies].ravel()
+        phi = motion_phases(model, t)
+        drivers = _motion_values(model.driver_motions, model.driver_names, t)
     if core.spatial:
         x, status = kernel.spatial_accelerations(
-            core.record, core.workspace(), q, qd, model.charts0 if charts is None else charts,
-            extra, phi, f2)
+            core.record, core.workspace(), float(t), q, qd,
+            model.charts0 if charts is None else charts, extra, phi, drivers)
     else:
-        x, status = kernel.planar_accelerations(core.record, core.workspace(), q, qd,
-                                                _NO_CHARTS, extra, phi, f2)
+        x, status = kernel.planar_accelerations(core.record, core.workspace(), float(t), q, qd,
+                                                _NO_CHARTS, extra, phi, drivers)
     if status == kernel.NOT_FINITE:
+        # a motion that is not finite is named (ModelError); else the state diverged
+        driver_values(model, t), motion_phases(model, t)
         return None
     if status == kernel.SINGULAR:
         raise SingularMatrix("smallest pivot below tolerance")

@@ -6,17 +6,21 @@ none is obtained by finite differences.
 
 Units are those of the driven quantity: rad for angles, m for translations, per second and per
 second squared for the derivatives.
+
+The built-in motions are sums of terms whose formulas are compiled
+(:mod:`mbd3d.compiled.motions`), so that the compiled core evaluates drivers without calling
+Python; :class:`Function` is evaluated by Python.
 """
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from typing import Callable, Sequence
 
 import numpy as np
 
 from mbd3d.checks import finite_scalar
+from mbd3d.compiled import motions as compiled
 from mbd3d.errors import ModelError
 
 __all__ = [
@@ -41,6 +45,12 @@ class Motion(ABC):
     def evaluate(self, t: float) -> tuple[float, float, float]:
         """Return ``(f(t), f'(t), f''(t))``."""
 
+    def terms(self) -> list[tuple[int, np.ndarray]] | None:
+        """The motion as a sum of terms ``(kind, parameters)`` of
+        :mod:`mbd3d.compiled.motions`, which the compiled core evaluates without calling
+        Python; None for a motion only Python can evaluate (:class:`Function`)."""
+        return None
+
     def __call__(self, t: float) -> float:
         return self.evaluate(t)[0]
 
@@ -58,81 +68,95 @@ class _Sum(Motion):
         a, b = (p.evaluate(t) for p in self.parts)
         return a[0] + b[0], a[1] + b[1], a[2] + b[2]
 
+    def terms(self) -> list[tuple[int, np.ndarray]] | None:
+        first, second = (p.terms() for p in self.parts)
+        return None if first is None or second is None else first + second
+
     def __repr__(self) -> str:
         return f"{self.parts[0]!r} + {self.parts[1]!r}"
 
 
-class Constant(Motion):
+class _Term(Motion):
+    """A motion of one compiled term (:mod:`mbd3d.compiled.motions`)."""
+
+    _kind: int
+    _params: np.ndarray
+
+    def evaluate(self, t: float) -> tuple[float, float, float]:
+        f, f1, f2 = compiled.term_values(self._kind, self._params, float(t))
+        return float(f), float(f1), float(f2)
+
+    def terms(self) -> list[tuple[int, np.ndarray]]:
+        return [(self._kind, self._params)]
+
+
+class Constant(_Term):
     """``f(t) = value``."""
+
+    _kind = compiled.CONSTANT
 
     def __init__(self, value: float):
         self.value = finite_scalar(value, "Constant value")
-
-    def evaluate(self, t: float) -> tuple[float, float, float]:
-        return self.value, 0.0, 0.0
+        self._params = np.array([self.value])
 
     def __repr__(self) -> str:
         return f"Constant({self.value})"
 
 
-class Ramp(Motion):
+class Ramp(_Term):
     """``f(t) = initial + rate * t``: constant speed, e.g. a crank turning at ``rate`` rad/s."""
+
+    _kind = compiled.RAMP
 
     def __init__(self, initial: float, rate: float):
         self.initial = finite_scalar(initial, "Ramp initial")
         self.rate = finite_scalar(rate, "Ramp rate")
-
-    def evaluate(self, t: float) -> tuple[float, float, float]:
-        return self.initial + self.rate * t, self.rate, 0.0
+        self._params = np.array([self.initial, self.rate])
 
     def __repr__(self) -> str:
         return f"Ramp(initial={self.initial}, rate={self.rate})"
 
 
-class Harmonic(Motion):
+class Harmonic(_Term):
     """``f(t) = offset + amplitude * sin(frequency * t + phase)``, frequency in rad/s."""
+
+    _kind = compiled.HARMONIC
 
     def __init__(self, amplitude: float, frequency: float, phase: float = 0.0, offset: float = 0.0):
         self.amplitude = finite_scalar(amplitude, "Harmonic amplitude")
         self.frequency = finite_scalar(frequency, "Harmonic frequency")
         self.phase = finite_scalar(phase, "Harmonic phase")
         self.offset = finite_scalar(offset, "Harmonic offset")
-
-    def evaluate(self, t: float) -> tuple[float, float, float]:
-        arg = self.frequency * t + self.phase
-        s, c = math.sin(arg), math.cos(arg)
-        a, w = self.amplitude, self.frequency
-        return self.offset + a * s, a * w * c, -a * w * w * s
+        self._params = np.array([self.amplitude, self.frequency, self.phase, self.offset])
 
     def __repr__(self) -> str:
         return (f"Harmonic(amplitude={self.amplitude}, frequency={self.frequency}, "
                 f"phase={self.phase}, offset={self.offset})")
 
 
-class Polynomial(Motion):
+class Polynomial(_Term):
     """``f(t) = c0 + c1 t + c2 t^2 + ...`` with coefficients in ascending powers."""
 
     def __init__(self, coefficients: Sequence[float]):
         coefficients = [finite_scalar(c, "Polynomial coefficient") for c in coefficients]
         if not coefficients:
             raise ModelError("Polynomial needs at least one coefficient")
-        self.poly = np.polynomial.Polynomial(coefficients)
-        self._d1 = self.poly.deriv(1)
-        self._d2 = self.poly.deriv(2)
+        self._params = np.array(coefficients)
 
-    def evaluate(self, t: float) -> tuple[float, float, float]:
-        return float(self.poly(t)), float(self._d1(t)), float(self._d2(t))
+    _kind = compiled.POLYNOMIAL
 
     def __repr__(self) -> str:
-        return f"Polynomial({list(self.poly.coef)})"
+        return f"Polynomial({self._params.tolist()})"
 
 
-class SmoothStep(Motion):
+class SmoothStep(_Term):
     """Quintic step from ``start`` (for ``t <= t0``) to ``end`` (for ``t >= t1``).
 
     Velocity and acceleration are zero at both ends, so a driver using it starts and stops
     without a jump in the driving effort.
     """
+
+    _kind = compiled.SMOOTH_STEP
 
     def __init__(self, t0: float, t1: float, start: float, end: float):
         self.t0 = finite_scalar(t0, "SmoothStep t0")
@@ -141,21 +165,7 @@ class SmoothStep(Motion):
             raise ModelError(f"SmoothStep needs t1 > t0, got t0={self.t0}, t1={self.t1}")
         self.start = finite_scalar(start, "SmoothStep start")
         self.end = finite_scalar(end, "SmoothStep end")
-
-    def evaluate(self, t: float) -> tuple[float, float, float]:
-        span = self.t1 - self.t0
-        if t <= self.t0:
-            return self.start, 0.0, 0.0
-        if t >= self.t1:
-            return self.end, 0.0, 0.0
-        s = (t - self.t0) / span
-        height = self.end - self.start
-        # 10 s^3 - 15 s^4 + 6 s^5: the lowest-order step with zero slope and curvature at both ends
-        shape = s**3 * (10.0 - 15.0 * s + 6.0 * s * s)
-        d_shape = 30.0 * s * s * (1.0 - s) ** 2
-        dd_shape = 60.0 * s * (1.0 - s) * (1.0 - 2.0 * s)
-        return (self.start + height * shape, height * d_shape / span,
-                height * dd_shape / span**2)
+        self._params = np.array([self.t0, self.t1, self.start, self.end])
 
     def __repr__(self) -> str:
         return f"SmoothStep(t0={self.t0}, t1={self.t1}, start={self.start}, end={self.end})"

@@ -61,3 +61,29 @@ def test_spring_actuator_adds_tension():
                           damping=1.0, actuator=lambda t: m * 9.81))
     res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 5))
     np.testing.assert_allclose(res.body("mass").position[:, 1], -1.0, atol=1e-10)
+
+
+def test_polynomial_values_equal_numpys():
+    coefficients = [1.0, -2.0, 0.5, 0.25, -0.125]
+    motion = mb.Polynomial(coefficients)
+    p = np.polynomial.Polynomial(coefficients)
+    for t in (-1.3, 0.0, 0.7, 2.5):
+        np.testing.assert_allclose(motion.evaluate(t), (p(t), p.deriv(1)(t), p.deriv(2)(t)),
+                                   rtol=1e-14, atol=1e-14)
+
+
+def test_compiled_and_python_motions_drive_the_same_motion():
+    # the same crank motion as a Harmonic (evaluated in the compiled core) and as a Function
+    # of math.sin and math.cos (evaluated by Python at every right-hand side)
+    from mbd3d.mechanisms import slider_crank
+
+    a, w, phase = 0.4, 3.0, 0.2
+    function = mb.Function(lambda t: a * math.sin(w * t + phase),
+                           lambda t: a * w * math.cos(w * t + phase),
+                           lambda t: -a * w * w * math.sin(w * t + phase))
+    t = np.linspace(0.0, 1.0, 11)
+    runs = [mb.forward_dynamics(slider_crank(crank_motion=motion), t, rtol=1e-10, atol=1e-12)
+            for motion in (mb.Harmonic(a, w, phase=phase), function)]
+    assert runs[0].model._core.python_parts is False and runs[1].model._core.python_parts
+    np.testing.assert_allclose(runs[0].q, runs[1].q, atol=1e-12)
+    np.testing.assert_allclose(runs[0].lam, runs[1].lam, rtol=1e-9, atol=1e-9)

@@ -4,10 +4,10 @@
     [Cq 0   ] [lam] = [Qd     ]
 
 from the state ``(q, qd)``: frames, body vectors, constraint rows, mass blocks, the quadratic
-velocity and gravity forces, and the LU solve, dense or in band storage. The caller adds the
-forces of force elements (``extra``), the drivers' ``f''`` and the rotation drivers' motions,
-which come from Python objects, and solves the system of a model whose bandwidth is too large
-for band storage itself (SuperLU).
+velocity and gravity forces, the drivers' motions, and the LU solve, dense or in band
+storage. Parts of a model that are Python objects (force elements, user motions) are
+evaluated by the caller and passed in; the caller also solves the system of a model whose
+bandwidth is too large for band storage (SuperLU).
 
 Every intermediate array lives in a :class:`~mbd3d.compiled.structures.Workspace`: the
 integrator loop makes one per run segment and evaluates thousands of right-hand sides without
@@ -27,6 +27,7 @@ from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into,
                                    planar_mass_blocks_into, spatial_frames_into,
                                    spatial_mass_blocks_into, spatial_quadratic_velocity_into)
 from mbd3d.compiled.dense import solve_banded_pattern_into, solve_pattern_into
+from mbd3d.compiled.motions import motion_values_into
 from mbd3d.compiled.rows import constraint_rows_into
 from mbd3d.compiled.structures import BANDED, DENSE, SPARSE, workspace  # noqa: F401
 
@@ -60,18 +61,35 @@ def _finite(x: np.ndarray) -> bool:
 
 
 @jit
-def accelerations_into(spatial, model, work, q, qd, charts, extra, phi, driver_acceleration):
-    """Solve the augmented equations at ``(q, qd)`` of ``model`` (:class:`ModelArrays`) in
+def motions_at(model, work, t: float) -> bool:
+    """``(f, f', f'')`` of the drivers' motions into ``work.drivers`` and of the rotation
+    drivers' into ``work.phi`` at ``t``; returns whether all are finite."""
+    motion_values_into(model.driver_first, model.driver_kinds, model.driver_starts,
+                       model.driver_params, t, work.drivers)
+    motion_values_into(model.rotation_first, model.rotation_kinds, model.rotation_starts,
+                       model.rotation_params, t, work.phi)
+    return _finite(work.drivers.ravel()) and _finite(work.phi.ravel())
+
+
+@jit
+def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers):
+    """Solve the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`) in
     ``work`` (:class:`Workspace`); returns the status.
 
     ``x = (qdd, lam)`` is ``work.x``; the matrix entries in the pattern's order
     ``work.values`` and the right-hand side ``work.rhs`` are what the caller solves for the
-    ``SPARSE`` layout. ``extra`` (n,): generalized forces of the force elements; ``phi``
-    (k, 3): the rotation drivers' motions; ``driver_acceleration``: ``f''`` of the drivers;
-    ``charts``: reference rotations of spatial bodies.
+    ``SPARSE`` layout. For a model with parts that are Python objects (``python_parts``) the
+    caller gives ``extra`` (n,), the generalized forces of the force elements, and the
+    motions ``(f, f', f'')`` of the rotation drivers ``phi`` (k, 3) and of the drivers
+    ``drivers`` (n_drivers, 3); otherwise the motions are evaluated here. ``charts``:
+    reference rotations of spatial bodies.
     """
     if not (_finite(q) and _finite(qd)):
         return NOT_FINITE
+    if not model.python_parts:
+        if not motions_at(model, work, t):
+            return NOT_FINITE
+        phi, drivers = work.phi, work.drivers
     n = q.shape[0]
     # flags as run-time values: constants would be typed as literals, and every combination
     # compiled again in each callee
@@ -101,7 +119,7 @@ def accelerations_into(spatial, model, work, q, qd, charts, extra, phi, driver_a
                          work.row_work, work.row_jacobian)
     driver_rows = model.driver_rows
     for k in range(driver_rows.shape[0]):
-        gamma[driver_rows[k]] += driver_acceleration[k]
+        gamma[driver_rows[k]] += drivers[k, 2]
     for i in range(model.n_rows):
         rhs[n + i] = gamma[i]
     values = work.values
@@ -129,9 +147,8 @@ def accelerations_into(spatial, model, work, q, qd, charts, extra, phi, driver_a
 
 
 @jit
-def _accelerations(spatial, model, work, q, qd, charts, extra, phi, driver_acceleration):
-    status = accelerations_into(spatial, model, work, q, qd, charts, extra, phi,
-                                driver_acceleration)
+def _accelerations(spatial, model, work, t, q, qd, charts, extra, phi, drivers):
+    status = accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers)
     if model.layout == SPARSE:
         # the matrix's entries in the pattern's order and the right-hand side, stacked, for
         # the caller's solve
@@ -140,14 +157,14 @@ def _accelerations(spatial, model, work, q, qd, charts, extra, phi, driver_accel
 
 
 @jit
-def planar_accelerations(model, work, q, qd, charts, extra, phi, driver_acceleration):
+def planar_accelerations(model, work, t, q, qd, charts, extra, phi, drivers):
     """``(x, status)`` of :func:`accelerations_into` for a planar model, in the workspace
     ``work``: ``x = (qdd, lam)`` (a new array), or for the ``SPARSE`` layout the augmented
     matrix's entries in the pattern's order followed by its right-hand side."""
-    return _accelerations(False, model, work, q, qd, charts, extra, phi, driver_acceleration)
+    return _accelerations(False, model, work, t, q, qd, charts, extra, phi, drivers)
 
 
 @jit
-def spatial_accelerations(model, work, q, qd, charts, extra, phi, driver_acceleration):
+def spatial_accelerations(model, work, t, q, qd, charts, extra, phi, drivers):
     """As :func:`planar_accelerations`, for a spatial model."""
-    return _accelerations(True, model, work, q, qd, charts, extra, phi, driver_acceleration)
+    return _accelerations(True, model, work, t, q, qd, charts, extra, phi, drivers)

@@ -37,8 +37,8 @@ class Run:
 
 def parts(key: int, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray):
     """Generalized forces of the force elements (n,), ``(f, f', f'')`` of the drivers
-    (3, n_drivers) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``."""
-    from mbd3d.constraints import driver_values, frames, motion_phases
+    (n_drivers, 3) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``."""
+    from mbd3d.constraints import _motion_values, frames, motion_phases
 
     model = _runs[key].model
     extra = np.zeros(model.n_coordinates)
@@ -48,8 +48,7 @@ def parts(key: int, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray)
         for group in model.force_groups:
             group.apply(model, t, fr, Q)
         extra = np.ascontiguousarray(Q[:model.n_bodies].ravel())
-    drivers = (np.ascontiguousarray(driver_values(model, t)) if len(model.driver_rows)
-               else np.zeros((3, 0)))
+    drivers = _motion_values(model.driver_motions, model.driver_names, t)
     return extra, drivers, np.ascontiguousarray(motion_phases(model, t))
 
 

@@ -19,7 +19,8 @@ import numpy as np
 from numba import objmode
 
 from mbd3d.compiled import callbacks, jit, jit_calling_python
-from mbd3d.compiled.accelerations import NOT_FINITE, SOLVED, accelerations_into, padded_into
+from mbd3d.compiled.accelerations import (NOT_FINITE, SOLVED, accelerations_into, motions_at,
+                                          padded_into)
 from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into, spatial_frames_into,
                                    spatial_rates_into, spatial_reset_charts,
                                    spatial_velocity_derivative_into)
@@ -62,7 +63,9 @@ def _callback_solve(key, values, rhs):
 
 @jit
 def _python_parts(model, key, t, q, qd, charts):
-    """Force elements' generalized forces, drivers' ``(f, f', f'')`` and rotation motions."""
+    """Force elements' generalized forces and the motions ``(f, f', f'')`` of the drivers and
+    of the rotation drivers, from Python for a model with parts that are Python objects
+    (placeholders otherwise: the compiled functions evaluate them)."""
     if model.python_parts:
         return _callback_parts(key, t, q, qd, charts)
     return model.no_forces, model.no_drivers, model.no_motions
@@ -83,7 +86,7 @@ def derivative(spatial, model, key, t, y, charts, out, work):
     if model.python_accelerations:
         x, status = _callback_accelerations(key, t, q, qd, charts)
     else:
-        status = accelerations_into(spatial, model, work, q, qd, charts, extra, phi, drivers[2])
+        status = accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers)
         x = work.x
         if status == SOLVED and not model.solved_here:
             x, status = _callback_solve(key, work.values, work.rhs)
@@ -111,6 +114,9 @@ def drift(spatial, model, key, t, y, charts, work):
     else:
         qd[:] = y[n:]
     _, drivers, phi = _python_parts(model, key, t, q, qd, charts)
+    if not model.python_parts:
+        motions_at(model, work, t)
+        drivers, phi = work.drivers, work.phi
     yes = m > 0  # run-time flags (see accelerations_into)
     no = not yes
     Q, A, axes, omega, kappa = work.Q, work.A, work.axes, work.omega, work.kappa
@@ -129,8 +135,8 @@ def drift(spatial, model, key, t, y, charts, work):
     c0, row_scale, jac_rows, jac_cols = model.c0, model.row_scale, model.jac_rows, model.jac_cols
     driver_rows = model.driver_rows
     for k in range(driver_rows.shape[0]):
-        C[driver_rows[k]] -= drivers[0, k]
-        nu[driver_rows[k]] = drivers[1, k]
+        C[driver_rows[k]] -= drivers[k, 0]
+        nu[driver_rows[k]] = drivers[k, 1]
     largest = 0.0
     for r in range(m):
         largest = max(largest, abs(C[r] - c0[r]) / row_scale[r])

@@ -12,7 +12,7 @@ import numpy as np
 from numba.core import types
 from numba.experimental import structref
 
-from mbd3d.compiled import jit
+from mbd3d.compiled import DISABLED, jit
 from mbd3d.compiled.rows import row_work_size
 
 __all__ = ["ModelArrays", "Workspace", "workspace", "MODEL_FIELDS", "WORKSPACE_FIELDS",
@@ -41,7 +41,8 @@ class WorkspaceType(_Record):
 
 #: the fixed arrays of a model (see mbd3d.equations._Core, which fills them):
 #: kinematics and mass, the row table of the primitives (mbd3d.primitives.RowTable), the
-#: drivers' rows, where the Jacobian values go and the augmented matrix's pattern
+#: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
+#: (tables of mbd3d.compiled.motions, used unless python_parts), the augmented matrix's pattern
 #: (mbd3d.linalg), the rows' constants and scales, and empty arrays for the parts of a model
 #: that are not Python objects
 MODEL_FIELDS = (
@@ -50,6 +51,8 @@ MODEL_FIELDS = (
     "code", "bi", "bj", "first_row", "slots", "coordinate", "motion", "vector_bodies",
     "vector_local", "n_rows",
     "driver_rows", "destination", "nnz",
+    "driver_first", "driver_kinds", "driver_starts", "driver_params",
+    "rotation_first", "rotation_kinds", "rotation_starts", "rotation_params",
     "layout", "rows", "cols", "flat", "kl", "ku", "perm", "entry_scale", "scale",
     "pivot_tolerance",
     "c0", "row_scale", "jac_rows", "jac_cols",
@@ -62,20 +65,38 @@ WORKSPACE_FIELDS = (
     "s", "J", "v", "a",
     "C", "data", "gamma", "nu", "row_work", "row_jacobian",
     "blocks", "rhs", "values", "matrix", "band", "permuted", "x",
+    "drivers", "phi",
 )
 
 
-class ModelArrays(structref.StructRefProxy):
-    """A model's fixed arrays, as the compiled functions take them (fields
-    :data:`MODEL_FIELDS`)."""
+if not DISABLED:
+    class ModelArrays(structref.StructRefProxy):
+        """A model's fixed arrays, as the compiled functions take them (fields
+        :data:`MODEL_FIELDS`)."""
 
+    class Workspace(structref.StructRefProxy):
+        """Scratch arrays of one evaluation (fields :data:`WORKSPACE_FIELDS`)."""
 
-class Workspace(structref.StructRefProxy):
-    """Scratch arrays of one evaluation (fields :data:`WORKSPACE_FIELDS`)."""
+    structref.define_proxy(ModelArrays, ModelArraysType, list(MODEL_FIELDS))
+    structref.define_proxy(Workspace, WorkspaceType, list(WORKSPACE_FIELDS))
+else:
+    # interpreted (NUMBA_DISABLE_JIT=1): plain records with the same fields
+    class _Plain:
+        fields: tuple = ()
 
+        def __init__(self, *values):
+            for name, value in zip(self.fields, values, strict=True):
+                setattr(self, name, value)
 
-structref.define_proxy(ModelArrays, ModelArraysType, list(MODEL_FIELDS))
-structref.define_proxy(Workspace, WorkspaceType, list(WORKSPACE_FIELDS))
+    class ModelArrays(_Plain):
+        """A model's fixed arrays (fields :data:`MODEL_FIELDS`)."""
+
+        fields = MODEL_FIELDS
+
+    class Workspace(_Plain):
+        """Scratch arrays of one evaluation (fields :data:`WORKSPACE_FIELDS`)."""
+
+        fields = WORKSPACE_FIELDS
 
 
 @jit
@@ -101,4 +122,5 @@ def workspace(spatial: bool, model):
         np.empty((n_bodies, nc, nc)), np.empty(size), np.empty(n_bodies * nc * nc + 2 * nnz),
         np.empty((size, size) if dense else (0, 0)),
         np.empty((2 * model.kl + model.ku + 1) * size if banded else 0), np.empty(size),
-        np.empty(size))
+        np.empty(size), np.empty((model.driver_rows.shape[0], 3)),
+        np.empty((model.rotation_first.shape[0] - 1, 3)))
