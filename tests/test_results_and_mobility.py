@@ -185,7 +185,8 @@ def test_ctrl_c_stops_a_long_stretch_of_compiled_steps():
         res = mb.forward_dynamics(model, [0.0, 1.0, 1000.0], rtol=1e-10, atol=1e-12)
     finally:
         timer.cancel()
-    assert res.status == "interrupted" and len(res) == 2
+    # interpreted (NUMBA_DISABLE_JIT=1) the first second may not be reached yet
+    assert res.status == "interrupted" and len(res) in (1, 2)
     assert time.perf_counter() - start < 30.0
 
 
