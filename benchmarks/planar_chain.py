@@ -157,13 +157,17 @@ def compare_with_peers(n_links: int, factory=pendulum_chain, spatial: bool = Fal
         "wall [s]": [r["wall"] for r in rows],
         "mbd3d best / this": [best / r["wall"] for r in rows],
     }, precision=3))
+    # issue #23's targets: half MuJoCo's time in the plane, 0.3 of it in space, and ahead of
+    # Exudyn's generalized-alpha
+    targets = {"MuJoCo RK4": 0.3 if spatial else 0.5}
     print(f"({n_links} links, tip at t = 1 s to {TOLERANCE:g} m; medians of 3 rounds in which "
-          "the engines ran in turn; target: mbd3d / peer <= 1.0)")
+          "the engines ran in turn)")
     for r in rows:
         if not r["engine"].startswith("mbd3d"):
             ratio = best / r["wall"]
-            print(f"mbd3d / {r['engine']}: {ratio:.2f} (target <= 1.0: "
-                  f"{'met' if ratio <= 1.0 else 'missed'})")
+            target = targets.get(r["engine"], 1.0)
+            print(f"mbd3d / {r['engine']}: {ratio:.2f} (target <= {target}: "
+                  f"{'met' if ratio <= target else 'missed'})")
     return rows
 
 
