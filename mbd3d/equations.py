@@ -129,7 +129,7 @@ class _Core:
         key = bool(python_accelerations)
         if key not in self._records:
             fields = dict(self._fields, python_accelerations=key)
-            self._records[key] = structures.ModelArrays(
+            self._records[key] = structures.model_arrays(
                 *(fields[name] for name in structures.MODEL_FIELDS))
         return self._records[key]
 

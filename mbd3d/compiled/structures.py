@@ -15,7 +15,7 @@ from numba.experimental import structref
 from mbd3d.compiled import DISABLED, jit
 from mbd3d.compiled.rows import row_work_size
 
-__all__ = ["ModelArrays", "Workspace", "workspace", "MODEL_FIELDS", "WORKSPACE_FIELDS",
+__all__ = ["ModelArrays", "Workspace", "model_arrays", "workspace", "MODEL_FIELDS", "WORKSPACE_FIELDS",
            "DENSE", "BANDED", "SPARSE"]
 
 #: layouts of the augmented matrix (see mbd3d.linalg): solved in compiled code, or by the
@@ -97,6 +97,13 @@ else:
         """Scratch arrays of one evaluation (fields :data:`WORKSPACE_FIELDS`)."""
 
         fields = WORKSPACE_FIELDS
+
+
+@jit
+def model_arrays(*fields):
+    """A :class:`ModelArrays` of ``fields`` in the order of :data:`MODEL_FIELDS` (built by a
+    compiled, cached function: the proxy's own constructor is compiled in every process)."""
+    return ModelArrays(*fields)
 
 
 @jit
