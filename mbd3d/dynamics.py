@@ -30,7 +30,7 @@ from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, St
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, initial_guess, solve_velocity
 from mbd3d.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
-from mbd3d.position import singular_error, solve_position
+from mbd3d.position import LARGEST_DENSE_ANALYSIS, singular_error, solve_position
 from mbd3d.observers import Observer, Watch
 from mbd3d.results import Results, ResultsBuffer, run_keeping_results
 
@@ -127,8 +127,6 @@ _SIMPLIFIED_NEWTON_ITERATIONS = 6
 #: of an explicit integrator is put down to a singular position: the index-1 accelerations
 #: grow without bound there, and the steps shrink until they underflow
 NEARLY_SINGULAR = 1e-4
-#: largest Jacobian (rows x columns) whose singular values are computed to explain a failure
-_LARGEST_SVD = 4_000_000
 
 
 #: an accepted step this many times shorter than the longest of the recent ones is a collapse,
@@ -199,7 +197,7 @@ def _singular_here(model, t: float, q: np.ndarray, charts, what: str) -> Excepti
     """A :class:`SingularJacobianError` naming the joints when the constraint Jacobian at
     ``q`` is (nearly) singular, else None (also when the model is too large to tell)."""
     if not (np.all(np.isfinite(q)) and model.n_constraints
-            and model.n_constraints * model.n_coordinates <= _LARGEST_SVD):
+            and model.n_constraints * model.n_coordinates <= LARGEST_DENSE_ANALYSIS):
         return None
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts),
                               sparse=False)

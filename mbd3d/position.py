@@ -18,8 +18,8 @@ import scipy.sparse as sp
 from mbd3d import constraints
 from mbd3d.equations import mass_matrix
 from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
-from mbd3d.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
-                          jacobian_scaling, ranked_rows, solve_augmented,
+from mbd3d.linalg import (PIVOT_TOLERANCE, Factorization, SingularMatrix, augmented_scaling,
+                          dependent_rows, jacobian_scaling, ranked_rows, solve_augmented,
                           solve_augmented_lagrangian, summarize)
 
 #: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
@@ -45,9 +45,24 @@ def hold_indices(model, hold: Iterable[str | int] | None) -> np.ndarray:
     return np.array(sorted(set(out)), dtype=np.intp)
 
 
+#: largest Jacobian (rows x columns) whose dependent rows are found by a dense SVD
+LARGEST_DENSE_ANALYSIS = 4_000_000
+
+
 def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJacobianError:
     """A :class:`SingularJacobianError` naming the joints whose rows depend on each other,
     the most involved first (a long list is cut to its head and a count)."""
+    if Cq.shape[0] * Cq.shape[1] > LARGEST_DENSE_ANALYSIS:
+        # the dependent rows come from a dense SVD, out of reach here (a 10,000-link chain's
+        # Jacobian would take 14 GB)
+        return SingularJacobianError(
+            f"{what}: the constraint Jacobian is singular or nearly so at t = {t:.6g} s (a "
+            f"pivot of the augmented matrix fell below {PIVOT_TOLERANCE:g} of the largest, in "
+            f"the model's units). The model is too large ({Cq.shape[0]} x {Cq.shape[1]}) to "
+            "find the dependent rows by singular value decomposition; run its kinematic "
+            "analysis or mb.mobility on a smaller version of it. Forward dynamics passes "
+            "singular positions with method='generalized-alpha'.", joints=[], time=t,
+            results=results)
     scaling = jacobian_scaling(model) if Cq.shape[0] == model.n_constraints else None
     rank, groups = dependent_rows(Cq, scaling=scaling)
     rows = ranked_rows(groups, model.n_constraints)
