@@ -22,6 +22,14 @@ from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
 
+def inertia_tensors(inertia: np.ndarray) -> np.ndarray:
+    """Planar inertias about the normal (b,) as the tensors ``diag(0, 0, J)`` (b, 3, 3) the
+    compiled core takes."""
+    tensors = np.zeros((len(inertia), 3, 3))
+    tensors[:, 2, 2] = inertia
+    return tensors
+
+
 class PlanarBody(BodyType):
     """Kinematics of planar rigid bodies, batched over bodies (see :class:`mbd3d.body.BodyType`)."""
 
@@ -65,7 +73,7 @@ class PlanarBody(BodyType):
         return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
     def mass_blocks(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
-        return planar_mass_blocks(mass, inertia)
+        return planar_mass_blocks(mass, inertia_tensors(inertia))
 
     def quadratic_velocity(self, fr: Frames, mass: np.ndarray, inertia: np.ndarray) -> np.ndarray:
         return np.zeros((len(mass), 3))
