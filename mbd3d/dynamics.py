@@ -5,14 +5,16 @@ At every right-hand side evaluation the accelerations and multipliers come from
     [M  Cq^T] [qdd]   [Qe + Qv]
     [Cq 0   ] [lam] = [Qd     ]
 
-(the one place this solve is written: :func:`forward_accelerations`). The state ``(q, qd)`` is
-integrated by one of SciPy's ``OdeSolver`` classes, stepped one step at a time. Because the
-index-1 equations only hold the constraints at acceleration level, position and velocity drift;
-after every accepted step whose residual exceeds ``constraint_tol`` the state is projected back
-onto ``C = 0`` and ``Cq qd = -Ct`` (mass-weighted least change: Newton-Raphson for positions, one
-linear solve for velocities) and the integrator restarts from the projected state with its last
-step size. Output times are interpolated with the integrator's dense output and projected the
-same way, so every reported state satisfies the constraints.
+(assembled and solved in one place, :mod:`mbd3d.compiled.accelerations`). The state is
+integrated by the compiled explicit pairs of :mod:`mbd3d.compiled.runge_kutta` in the loop of
+:mod:`mbd3d.compiled.integration`, which returns here at output times and when the
+constraints have drifted. Because the index-1 equations only hold the constraints at
+acceleration level, position and velocity drift; after an accepted step whose residual
+exceeds ``constraint_tol`` the state is projected back onto ``C = 0`` and ``Cq qd = -Ct``
+(mass-weighted least change: Newton-Raphson for positions, one linear solve for velocities)
+and the method goes on from the projected state with its step size (only its first stage is
+evaluated again). Output times are interpolated with the method's dense output and projected
+the same way, so every reported state satisfies the constraints.
 """
 
 from __future__ import annotations
@@ -47,11 +49,11 @@ _REFUSED = {name: (f"{name} is a multistep method: every projection onto the con
                    "projections with SciPy's). Use 'generalized-alpha' for stiff models, or "
                    "RK45/DOP853 otherwise.")
             for name in ("BDF", "LSODA")}
-_REFUSED["Radau"] = ("Radau is no longer offered: SciPy's implementation had to be restarted, "
-                     "with a new finite-difference Jacobian, at every projection onto the "
-                     "constraints, and was slower than 'generalized-alpha' (the implicit "
-                     "method for stiff models) and the explicit pairs everywhere measured. Use "
-                     "'generalized-alpha' for stiff models, or RK45/DOP853.")
+_REFUSED["Radau"] = ("Radau is no longer offered: the explicit integrators now run in mbd3d's "
+                     "own compiled loop, and SciPy's Radau, driven from outside it, had to be "
+                     "restarted with a new finite-difference Jacobian at every projection and "
+                     "chart reset. Use 'generalized-alpha' (implicit, for stiff models and "
+                     "singular positions), or RK45/DOP853.")
 #: the implicit index-3 integrator of :mod:`mbd3d.implicit`
 GENERALIZED_ALPHA = "generalized-alpha"
 
@@ -183,9 +185,7 @@ def _stiffness_message(model, method: str, t: float, average_step: float, spacin
     if not elements or average_step > 10 * 3.0 / elements[0][0]:
         return None
     culprit = (f"{elements[0][1]} makes the model stiff: explicit steps above about "
-               f"{3.0 / elements[0][0]:.1e} s are unstable"
-               + (", and Radau, restarted after every projection onto the constraints, does "
-                  "not get far past that either" if method == "Radau" else ""))
+               f"{3.0 / elements[0][0]:.1e} s are unstable")
     return (f"forward dynamics of '{model.name}' ({method}) is crawling at t = {t:.6g} s: its "
             f"steps average {average_step:.1e} s, {spacing / average_step:.0e} times shorter "
             f"than the output spacing of {spacing:.3g} s. The {culprit}. Use "
@@ -264,9 +264,10 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     q0, qd0 : (n,) array_like, optional
         Initial guesses of coordinates and rates (default the bodies' guesses). They are first
         made consistent: positions by Newton-Raphson, velocities by mass-weighted projection.
-    method : {"RK45", "DOP853", "RK23", "Radau", "generalized-alpha"}
+    method : {"RK45", "DOP853", "RK23", "generalized-alpha"}
         "RK45" (Dormand-Prince, as MATLAB's ode45) for general use, "DOP853" for tight
-        tolerances: SciPy's explicit pairs on the index-1 equations with projection.
+        tolerances, "RK23" (Bogacki-Shampine) for loose ones: compiled explicit pairs on the
+        index-1 equations with projection.
         "generalized-alpha": the implicit index-3 method of :mod:`mbd3d.implicit`, for stiff
         models (stiff springs), long runs, redundant constraints and mechanisms that pass
         singular configurations; second order, so it needs small steps for many digits.
