@@ -38,17 +38,18 @@ def skew(a: np.ndarray) -> np.ndarray:
     return out
 
 
-def _batched(kernel, g: np.ndarray) -> np.ndarray:
-    """A compiled per-row kernel applied to ``g`` (..., 3), giving (..., 3, 3)."""
+def _batched(kind: int, g: np.ndarray) -> np.ndarray:
+    """The compiled per-row matrices ``kind`` of ``g`` (..., 3), giving (..., 3, 3)."""
     g = np.asarray(g, dtype=float)
-    return kernel(np.ascontiguousarray(g.reshape(-1, 3))).reshape(g.shape[:-1] + (3, 3))
+    return compiled.matrices(kind, np.ascontiguousarray(g.reshape(-1, 3))).reshape(
+        g.shape[:-1] + (3, 3))
 
 
 def from_rodrigues(g: np.ndarray) -> np.ndarray:
     """``A(g) = I + 2 / (1 + s) (g~ + g~^2)`` ([1.1] of the formula sheet), ``s = g.g``
     (evaluated as ``((1 - s) I + 2 (g g^T + g~)) / (1 + s)``, :mod:`mbd3d.compiled.rotations`).
     """
-    return _batched(compiled.rodrigues_matrices, g)
+    return _batched(compiled.RODRIGUES, g)
 
 
 def to_quaternion(A: np.ndarray) -> np.ndarray:
@@ -134,12 +135,12 @@ def axis_angle(axis: Any, angle: float) -> np.ndarray:
 
 def g_bar(g: np.ndarray) -> np.ndarray:
     """``G_bar(g) = 2 / (1 + s) (I - g~)``: body angular velocity ``omega_bar = G_bar g_dot``."""
-    return _batched(compiled.g_bar_matrices, g)
+    return _batched(compiled.G_BAR, g)
 
 
 def g_bar_inverse(g: np.ndarray) -> np.ndarray:
     """``G_bar^-1 = (I + g~ + g g^T) / 2`` ([2.4] of the formula sheet)."""
-    return _batched(compiled.g_bar_inverse_matrices, g)
+    return _batched(compiled.G_BAR_INVERSE, g)
 
 
 def compose_rodrigues(ga: np.ndarray, gb: np.ndarray) -> np.ndarray:

@@ -14,6 +14,20 @@ from mbd3d.compiled import jit
 
 
 @jit
+def pivots_regular(sizes: np.ndarray, pivot_tolerance: float) -> bool:
+    """Whether the pivots' sizes ``|U_kk|`` make a regular matrix: all finite and the
+    smallest above ``pivot_tolerance`` times the largest."""
+    smallest = np.inf
+    largest = 0.0
+    for size in sizes:
+        if not size < np.inf:  # inf or NaN
+            return False
+        smallest = min(smallest, size)
+        largest = max(largest, size)
+    return sizes.shape[0] == 0 or smallest > pivot_tolerance * largest
+
+
+@jit
 def lu_factor(A: np.ndarray, pivot_tolerance: float):
     """Factor ``A`` (n, n) in place into ``L U`` (row interchanges ``piv``); returns
     ``(piv, regular)``."""
@@ -38,18 +52,10 @@ def lu_factor(A: np.ndarray, pivot_tolerance: float):
                 if factor != 0.0:
                     for j in range(k + 1, n):
                         A[i, j] -= factor * A[k, j]
-    smallest = np.inf
-    largest = 0.0
-    regular = True
+    sizes = np.empty(n)
     for k in range(n):
-        size = abs(A[k, k])
-        if not size < np.inf:  # inf or NaN
-            regular = False
-        smallest = min(smallest, size)
-        largest = max(largest, size)
-    if n and not smallest > pivot_tolerance * largest:
-        regular = False
-    return piv, regular
+        sizes[k] = abs(A[k, k])
+    return piv, pivots_regular(sizes, pivot_tolerance)
 
 
 @jit
@@ -143,18 +149,10 @@ def band_factor(ab: np.ndarray, n: int, kl: int, ku: int, pivot_tolerance: float
             if value != 0.0:
                 for i in range(1, below + 1):
                     ab[top + i] -= ab[column + kv + i] * value
-    smallest = np.inf
-    largest = 0.0
-    regular = True
+    sizes = np.empty(n)
     for j in range(n):
-        size = abs(ab[j * rows + kv])
-        if not size < np.inf:
-            regular = False
-        smallest = min(smallest, size)
-        largest = max(largest, size)
-    if n and not smallest > pivot_tolerance * largest:
-        regular = False
-    return piv, regular
+        sizes[j] = abs(ab[j * rows + kv])
+    return piv, pivots_regular(sizes, pivot_tolerance)
 
 
 @jit

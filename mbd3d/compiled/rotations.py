@@ -64,28 +64,20 @@ def g_bar_inverse_matrix(g: np.ndarray, G: np.ndarray) -> None:
     G[2, 2] = 0.5 * (1.0 + z * z)
 
 
-@jit
-def rodrigues_matrices(g: np.ndarray) -> np.ndarray:
-    """``A(g)`` of every row of ``g`` (k, 3): (k, 3, 3)."""
-    out = np.empty((g.shape[0], 3, 3))
-    for k in range(g.shape[0]):
-        rodrigues_matrix(g[k], out[k])
-    return out
+#: the per-row matrices of :func:`matrices`
+RODRIGUES, G_BAR, G_BAR_INVERSE = 0, 1, 2
 
 
 @jit
-def g_bar_matrices(g: np.ndarray) -> np.ndarray:
-    """``G_bar(g)`` of every row of ``g`` (k, 3): (k, 3, 3)."""
+def matrices(kind: int, g: np.ndarray) -> np.ndarray:
+    """``A(g)``, ``G_bar(g)`` or ``G_bar(g)^-1`` (``kind``) of every row of ``g`` (k, 3):
+    (k, 3, 3)."""
     out = np.empty((g.shape[0], 3, 3))
     for k in range(g.shape[0]):
-        g_bar_matrix(g[k], out[k])
-    return out
-
-
-@jit
-def g_bar_inverse_matrices(g: np.ndarray) -> np.ndarray:
-    """``G_bar(g)^-1`` of every row of ``g`` (k, 3): (k, 3, 3)."""
-    out = np.empty((g.shape[0], 3, 3))
-    for k in range(g.shape[0]):
-        g_bar_inverse_matrix(g[k], out[k])
+        if kind == RODRIGUES:
+            rodrigues_matrix(g[k], out[k])
+        elif kind == G_BAR:
+            g_bar_matrix(g[k], out[k])
+        else:
+            g_bar_inverse_matrix(g[k], out[k])
     return out
