@@ -84,8 +84,7 @@ def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
 
 
 def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
-                                    charts: np.ndarray, evaluated: tuple | None = None
-                                    ) -> tuple[np.ndarray, np.ndarray] | None:
+                                    charts: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The mass-weighted projection of :func:`project_state` for a state that has drifted
     only slightly (a step of the explicit integrators), from one factorization.
 
@@ -95,11 +94,10 @@ def _project_with_one_factorization(model, t: float, q: np.ndarray, qd: np.ndarr
     magnitude, where :func:`project_state` would refactor at every Newton iterate and again
     for the velocities. ``None`` when the iterations do not settle (the caller then falls
     back to :func:`project_state`, which reports singular positions by name).
-    ``evaluated``: ``(fr, C, jac_data)`` at ``q`` when the caller has them (the drift check).
     """
     n = model.n_coordinates
     zeros = np.zeros(n)
-    fr, C, jac_data = evaluated or _constraints_at(model, t, q, charts)
+    fr, C, jac_data = _constraints_at(model, t, q, charts)
     try:
         lu = factor_model_augmented(
             model, model.body_type.mass_blocks(fr, model.mass, model.inertia), jac_data)
@@ -229,16 +227,6 @@ def _constraints_at(model, t, q, charts) -> tuple:
     fr = constraints.frames(model, q, charts=charts)
     C, jac_data, _ = constraints.evaluate(model, t, fr)
     return fr, C, jac_data
-
-
-def _drift(model, t, q, qd, charts) -> tuple[float, tuple]:
-    """Largest position or velocity constraint residual, relative to the rows' scales (lengths
-    in units of the model's length, per second for velocities), and what was evaluated for it
-    (``(frames, C, Jacobian values)``, which a projection from ``q`` starts from)."""
-    evaluated = fr, C, jac_data = _constraints_at(model, t, q, charts)
-    v = constraints.jacobian_times(model, jac_data, qd) - constraints.velocity_rhs(model, t, fr)
-    return max(constraints.largest_relative(model, C),
-               constraints.largest_relative(model, v)), evaluated
 
 
 def _is_number(value) -> bool:
