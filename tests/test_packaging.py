@@ -22,6 +22,16 @@ def test_library_folders_install_inside_the_mbd3d_namespace():
     assert (REPO / "mbd3d" / "py.typed").exists()
 
 
+def test_every_subpackage_is_installed():
+    """A sub-package missing from pyproject's list imports from the checkout and fails after
+    pip install (mbd3d.compiled once did)."""
+    listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = {"mbd3d." + ".".join(init.parent.relative_to(REPO / "mbd3d").parts)
+             for init in (REPO / "mbd3d").glob("*/**/__init__.py")}
+    assert found <= listed, sorted(found - listed)
+
+
 def test_nothing_in_the_repository_reads_the_developers_notes_beside_it():
     """Users clone the repository alone: the notes folder beside the developers' clone is not
     theirs."""
