@@ -28,7 +28,7 @@ from mbd3d import constraints
 from mbd3d.compiled import callbacks, integration as stepping
 from mbd3d.compiled.runge_kutta import TABLEAUS, interpolate, rms
 from mbd3d.compiled.structures import workspace
-from mbd3d.equations import generalized_forces
+from mbd3d.equations import augmented_accelerations, generalized_forces
 from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, initial_guess, solve_velocity
@@ -71,8 +71,15 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     SingularJacobianError
         When the augmented matrix is singular (names the dependent joints and the time).
     """
-    qdd, lam, _ = consistent_accelerations(model, t, q, qd, charts, fallback=False)
-    return qdd, lam
+    try:
+        x = augmented_accelerations(model, t, q, qd, charts)
+    except SingularMatrix:
+        return consistent_accelerations(model, t, q, qd, charts, fallback=False)[:2]
+    if x is None:
+        raise IntegrationError(f"forward dynamics of '{model.name}': the state is not finite "
+                               f"at t = {t:.6g} s (the integration diverged)", time=t)
+    n = model.n_coordinates
+    return x[:n], x[n:]
 
 
 def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,

@@ -12,6 +12,7 @@ from mbd3d.body import Frames, rotate_rows
 from mbd3d.compiled import accelerations as kernel, structures
 from mbd3d.compiled.motions import table as motion_table
 from mbd3d.constraints import _motion_values, driver_values, frames, motion_phases
+from mbd3d.errors import ModelError
 from mbd3d.linalg import SingularMatrix
 
 __all__ = ["mass_matrix", "mass_times", "generalized_forces", "kinetic_energy",
@@ -199,6 +200,7 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     SingularMatrix
         When the matrix is singular (dependent constraint rows).
     """
+    q, qd = _coordinates(model, q, "q"), _coordinates(model, qd, "qd")
     core = model._core
     extra, phi, drivers = core.no_forces, core.no_motions, core.no_motions
     if core.python_parts:
@@ -233,3 +235,20 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
 
 
 _NO_CHARTS = np.zeros((0, 3, 3))
+
+
+def _coordinates(model, x, name: str) -> np.ndarray:
+    """``x`` as the contiguous float array (n,) the compiled core takes."""
+    if (type(x) is np.ndarray and x.dtype == np.float64 and x.shape == (model.n_coordinates,)
+            and x.flags.c_contiguous):
+        return x
+    try:
+        array = np.ascontiguousarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{name} must be an array of {model.n_coordinates} numbers "
+                         f"(the coordinates of '{model.name}'), got {x!r}") from None
+    if array.shape != (model.n_coordinates,):
+        raise ModelError(f"{name} must have shape ({model.n_coordinates},) for "
+                         f"'{model.name}' ({', '.join(model.coordinate_labels[:3])}, ...), "
+                         f"got shape {array.shape}")
+    return array

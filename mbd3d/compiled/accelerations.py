@@ -79,6 +79,9 @@ def forces_into(model, work, t: float, rhs) -> bool:
     """Add the generalized forces of the force elements at ``t`` to ``rhs`` (n,) from the
     frames and coordinates in ``work``; False when a spring's points coincide or an actuator
     is not finite."""
+    if (model.spring_bodies.shape[0] + model.rotary_bodies.shape[0]
+            + model.point_bodies.shape[0] + model.torque_bodies.shape[0]) == 0:
+        return True
     motion_values_into(model.spring_first, model.spring_kinds, model.spring_starts,
                        model.spring_params, t, work.spring_actuation)
     motion_values_into(model.rotary_first, model.rotary_kinds, model.rotary_starts,
