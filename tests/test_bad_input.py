@@ -356,3 +356,15 @@ def test_a_stiff_model_under_an_explicit_method_is_named_early():
         explicit = mb.forward_dynamics(model, times, method="RK45")
     implicit = mb.forward_dynamics(model, times, method="generalized-alpha", step=1e-5)
     assert implicit.stats["steps"] < explicit.stats["steps"] / 10
+
+
+def test_forward_accelerations_names_a_state_of_the_wrong_size():
+    from mbd3d.mechanisms import slider_crank
+
+    model = slider_crank(crank_speed=None)
+    with pytest.raises(mb.ModelError, match=r"q must have shape \(9,\) for 'slider-crank'"):
+        mb.forward_accelerations(model, 0.0, [0.0, 0.0, 0.0], np.zeros(9))
+    with pytest.raises(mb.ModelError, match="qd must be an array of 9 numbers"):
+        mb.forward_accelerations(model, 0.0, model.q0, "fast")
+    qdd, lam = mb.forward_accelerations(model, 0, list(model.q0), [0] * 9)  # lists and ints
+    assert qdd.shape == (9,) and lam.shape == (8,)
