@@ -89,14 +89,11 @@ class _Core:
             inertia = inertia_tensors(inertia)
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
         terms = [m.terms() for m in model.driver_motions + model.rotation_motions]
-        force_tables = [group.table(model) for group in model.force_groups]
-        #: parts only Python can evaluate: force elements or motions given as functions
-        self.python_parts = (any(t is None for t in terms)
-                             or any(t is None for t in force_tables))
+        #: parts only Python can evaluate: force elements, motions given as functions
+        self.python_parts = bool(model.force_groups) or any(t is None for t in terms)
         driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
         rotation_table = motion_table([] if self.python_parts
                                       else terms[len(model.driver_rows):])
-        forces = _force_fields(model, [] if self.python_parts else force_tables)
         # writable contiguous copies: the compiled functions are typed (and cached) for those
         self._fields = dict(
             n=model.n_coordinates, solved_here=self.layout != structures.SPARSE,
@@ -110,7 +107,6 @@ class _Core:
                        driver_table)),
             **dict(zip(("rotation_first", "rotation_kinds", "rotation_starts",
                         "rotation_params"), rotation_table)),
-            **forces,
             destination=model._jac_destination, nnz=len(model._jac_take), layout=self.layout,
             rows=np.array(pattern.rows, dtype=np.int64), cols=np.array(pattern.cols, dtype=np.int64),
             flat=np.array(pattern.flat if banded else [], dtype=np.int64),
@@ -160,32 +156,6 @@ class _Core:
         self.__dict__.update(state, _records={}, _scratch=threading.local())
 
 
-def _force_fields(model, tables: list[dict]) -> dict:
-    """The force elements' fields of :class:`ModelArrays` from their groups' tables (each
-    kind at most one group), empty for the kinds the model has not."""
-    dim = model.dim
-    fields = {
-        "spring_bodies": np.zeros((0, 2), dtype=np.int64),
-        "spring_points": np.zeros((0, 2, dim)), "spring_values": np.zeros((0, 3)),
-        "rotary_bodies": np.zeros((0, 2), dtype=np.int64), "rotary_values": np.zeros((0, 3)),
-        "rotary_vectors": np.zeros((0, 3, 3)),
-        "point_bodies": np.zeros(0, dtype=np.int64), "point_points": np.zeros((0, dim)),
-        "point_forces": np.zeros((0, dim)), "point_body_frame": np.zeros(0, dtype=np.int64),
-        "torque_bodies": np.zeros(0, dtype=np.int64), "torque_values": np.zeros((0, 3)),
-        "torque_body_frame": np.zeros(0, dtype=np.int64)}
-    actuators = {"spring": [], "rotary": []}
-    for table in tables:
-        table = dict(table)
-        terms = table.pop("actuators", None)
-        if terms is not None:
-            actuators["spring" if "spring_bodies" in table else "rotary"] = terms
-        fields.update({key: np.ascontiguousarray(value) for key, value in table.items()})
-    for kind, terms in actuators.items():
-        fields.update(zip((f"{kind}_first", f"{kind}_kinds", f"{kind}_starts",
-                           f"{kind}_params"), motion_table(terms)))
-    return fields
-
-
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
                             charts: np.ndarray | None = None) -> np.ndarray | None:
     """``(qdd, lam)`` stacked (n + m,) from the augmented equations at ``(t, q, qd)``, or None
@@ -220,11 +190,8 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         x, status = kernel.planar_accelerations(core.record, core.workspace(), float(t), q, qd,
                                                 _NO_CHARTS, extra, phi, drivers)
     if status == kernel.NOT_FINITE:
-        # a motion or force that cannot be evaluated is named (ModelError); else the state
-        # diverged
+        # a motion that is not finite is named (ModelError); else the state diverged
         driver_values(model, t), motion_phases(model, t)
-        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)):
-            generalized_forces(model, t, frames(model, q, qd, charts))
         return None
     if status == kernel.SINGULAR:
         raise SingularMatrix("smallest pivot below tolerance")

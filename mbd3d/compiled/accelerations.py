@@ -15,8 +15,7 @@ allocating, and a single call (:func:`planar_accelerations`, :func:`spatial_acce
 takes one too. ``spatial`` reaches the functions as a constant from these entry points, so that a
 planar model compiles no spatial code and the reverse.
 
-``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state (or a force or
-motion that cannot be evaluated there: the caller evaluates it in Python for the message).
+``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state.
 """
 
 from __future__ import annotations
@@ -28,8 +27,6 @@ from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into,
                                    planar_mass_blocks_into, spatial_frames_into,
                                    spatial_mass_blocks_into, spatial_quadratic_velocity_into)
 from mbd3d.compiled.dense import solve_banded_pattern_into, solve_pattern_into
-from mbd3d.compiled.forces import (point_forces_into, rotary_forces_into, spring_forces_into,
-                                   torques_into)
 from mbd3d.compiled.motions import motion_values_into
 from mbd3d.compiled.rows import constraint_rows_into
 from mbd3d.compiled.structures import BANDED, DENSE, SPARSE, workspace  # noqa: F401
@@ -75,39 +72,6 @@ def motions_at(model, work, t: float) -> bool:
 
 
 @jit
-def forces_into(model, work, t: float, rhs) -> bool:
-    """Add the generalized forces of the force elements at ``t`` to ``rhs`` (n,) from the
-    frames and coordinates in ``work``; False when a spring's points coincide or an actuator
-    is not finite."""
-    if (model.spring_bodies.shape[0] + model.rotary_bodies.shape[0]
-            + model.point_bodies.shape[0] + model.torque_bodies.shape[0]) == 0:
-        return True
-    motion_values_into(model.spring_first, model.spring_kinds, model.spring_starts,
-                       model.spring_params, t, work.spring_actuation)
-    motion_values_into(model.rotary_first, model.rotary_kinds, model.rotary_starts,
-                       model.rotary_params, t, work.rotary_actuation)
-    if not (_finite(work.spring_actuation.ravel()) and _finite(work.rotary_actuation.ravel())):
-        return False
-    out = work.forces
-    out[:, :] = 0.0
-    A, axes, omega, Q, Qd = work.A, work.axes, work.omega, work.Q, work.Qd
-    if spring_forces_into(A, axes, omega, Q, Qd, model.spring_bodies, model.spring_points,
-                          model.spring_values, work.spring_actuation, out) >= 0:
-        return False
-    rotary_forces_into(A, axes, omega, Q, Qd, model.rotary_bodies, model.rotary_values,
-                       model.rotary_vectors, work.rotary_actuation, out)
-    point_forces_into(A, axes, model.point_bodies, model.point_points, model.point_forces,
-                      model.point_body_frame, out)
-    torques_into(A, axes, model.torque_bodies, model.torque_values, model.torque_body_frame,
-                 out)
-    nc = out.shape[1]
-    for b in range(out.shape[0] - 1):
-        for c in range(nc):
-            rhs[b * nc + c] += out[b, c]
-    return True
-
-
-@jit
 def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers):
     """Solve the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`) in
     ``work`` (:class:`Workspace`); returns the status.
@@ -145,8 +109,6 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
     else:
         planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
         planar_mass_blocks_into(model.mass, model.inertia, blocks)
-    if not model.python_parts and not forces_into(model, work, t, rhs):
-        return NOT_FINITE
     s, J, v, a = work.s, work.J, work.v, work.a
     body_vectors_into(A, axes, omega, kappa, model.vector_bodies, model.vector_local, yes, s,
                       J, v, a)

@@ -42,8 +42,7 @@ class WorkspaceType(_Record):
 #: the fixed arrays of a model (see mbd3d.equations._Core, which fills them):
 #: kinematics and mass, the row table of the primitives (mbd3d.primitives.RowTable), the
 #: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
-#: (tables of mbd3d.compiled.motions, used unless python_parts), the force elements and their
-#: actuators' motions (mbd3d.compiled.forces, unless python_parts), the augmented matrix's pattern
+#: (tables of mbd3d.compiled.motions, used unless python_parts), the augmented matrix's pattern
 #: (mbd3d.linalg), the rows' constants and scales, and empty arrays for the parts of a model
 #: that are not Python objects
 MODEL_FIELDS = (
@@ -54,11 +53,6 @@ MODEL_FIELDS = (
     "driver_rows", "destination", "nnz",
     "driver_first", "driver_kinds", "driver_starts", "driver_params",
     "rotation_first", "rotation_kinds", "rotation_starts", "rotation_params",
-    "spring_bodies", "spring_points", "spring_values", "rotary_bodies", "rotary_values",
-    "rotary_vectors", "point_bodies", "point_points", "point_forces", "point_body_frame",
-    "torque_bodies", "torque_values", "torque_body_frame",
-    "spring_first", "spring_kinds", "spring_starts", "spring_params",
-    "rotary_first", "rotary_kinds", "rotary_starts", "rotary_params",
     "layout", "rows", "cols", "flat", "kl", "ku", "perm", "entry_scale", "scale",
     "pivot_tolerance",
     "c0", "row_scale", "jac_rows", "jac_cols",
@@ -71,7 +65,7 @@ WORKSPACE_FIELDS = (
     "s", "J", "v", "a",
     "C", "data", "gamma", "nu", "row_work", "row_jacobian",
     "blocks", "rhs", "values", "matrix", "band", "permuted", "x",
-    "drivers", "phi", "forces", "spring_actuation", "rotary_actuation",
+    "drivers", "phi",
 )
 
 
@@ -136,6 +130,4 @@ def workspace(spatial: bool, model):
         np.empty((size, size) if dense else (0, 0)),
         np.empty((2 * model.kl + model.ku + 1) * size if banded else 0), np.empty(size),
         np.empty(size), np.empty((model.driver_rows.shape[0], 3)),
-        np.empty((model.rotation_first.shape[0] - 1, 3)), np.empty((b, nc)),
-        np.empty((model.spring_first.shape[0] - 1, 3)),
-        np.empty((model.rotary_first.shape[0] - 1, 3)))
+        np.empty((model.rotation_first.shape[0] - 1, 3)))
