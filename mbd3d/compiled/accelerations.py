@@ -68,7 +68,16 @@ def motions_at(model, work, t: float) -> bool:
                        model.driver_params, t, work.drivers)
     motion_values_into(model.rotation_first, model.rotation_kinds, model.rotation_starts,
                        model.rotation_params, t, work.phi)
-    return _finite(work.drivers.ravel()) and _finite(work.phi.ravel())
+    return _finite_rows(work.drivers) and _finite_rows(work.phi)
+
+
+@jit
+def _finite_rows(x: np.ndarray) -> bool:
+    for i in range(x.shape[0]):
+        for j in range(x.shape[1]):
+            if not abs(x[i, j]) < np.inf:
+                return False
+    return True
 
 
 @jit
@@ -87,7 +96,8 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
     if not (_finite(q) and _finite(qd)):
         return NOT_FINITE
     if not model.python_parts:
-        if not motions_at(model, work, t):
+        if (model.driver_rows.shape[0] or model.rotation_first.shape[0] > 1) and \
+                not motions_at(model, work, t):
             return NOT_FINITE
         phi, drivers = work.phi, work.drivers
     n = q.shape[0]
