@@ -35,14 +35,6 @@ SOLVED, SINGULAR, NOT_FINITE = 0, 1, 2
 
 
 @jit
-def padded(x: np.ndarray, n_coords: int) -> np.ndarray:
-    """``x`` (n,) as rows of ``n_coords`` with a zero row for the ground last."""
-    out = np.empty((x.shape[0] // n_coords + 1, n_coords))
-    padded_into(x, out)
-    return out
-
-
-@jit
 def padded_into(x: np.ndarray, out: np.ndarray) -> None:
     """Write ``x`` (n,) into the rows of ``out`` (bodies + ground, n_coords), ground zero."""
     n_coords = out.shape[1]

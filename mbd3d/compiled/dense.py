@@ -176,15 +176,6 @@ def band_solve_into(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray,
 
 
 @jit
-def band_solve(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray, b: np.ndarray
-               ) -> np.ndarray:
-    """``x`` with ``A x = b`` from the factors of :func:`band_factor`."""
-    x = b.copy()
-    band_solve_into(ab, n, kl, ku, piv, x)
-    return x
-
-
-@jit
 def solve_banded_pattern_into(flat, kl, ku, perm, entry_scale, scale, values, b,
                               pivot_tolerance, ab, permuted, x):
     """As :func:`solve_pattern_into` for a pattern permuted to a small bandwidth: the entries

@@ -73,15 +73,6 @@ def motion_values_into(first: np.ndarray, kinds: np.ndarray, starts: np.ndarray,
         out[m, 2] = f2
 
 
-@jit
-def motion_values(first: np.ndarray, kinds: np.ndarray, starts: np.ndarray, params: np.ndarray,
-                  t: float) -> np.ndarray:
-    """``(f, f', f'')`` of every motion of the table at ``t``, (k, 3)."""
-    out = np.empty((first.shape[0] - 1, 3))
-    motion_values_into(first, kinds, starts, params, t, out)
-    return out
-
-
 def table(terms_of_motions: list) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(first, kinds, starts, params)`` of motions given as lists of ``(kind, parameters)``."""
     first, kinds, starts, params = [0], [], [0], []
