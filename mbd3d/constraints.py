@@ -16,7 +16,8 @@ from mbd3d.errors import ModelError
 from mbd3d.primitives import evaluate_rows
 
 __all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
-           "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs", "driver_values", "motion_phases"]
+           "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs",
+           "driver_values", "motion_phases"]
 
 
 def frames(model, q: np.ndarray, qd: np.ndarray | None = None,

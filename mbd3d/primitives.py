@@ -144,7 +144,8 @@ class Rotation:
     direction in that plane; with ``theta`` the angle from ``f_i`` to ``f_j`` about the hinge,
     ``C = sin(theta - phi)``: no turn counting, any number of revolutions, and ``lam`` is minus
     the driving torque about the hinge. The time dependence sits inside the row, so this class
-    supplies its own ``-C_t`` and time terms of ``Qd`` from ``(f, f', f'')`` of its motion. With ``u = A_i (g cos(phi) - f sin(phi))`` and
+    supplies its own ``-C_t`` and time terms of ``Qd`` from ``(f, f', f'')`` of its motion.
+    With ``u = A_i (g cos(phi) - f sin(phi))`` and
     ``w = A_i (f cos(phi) + g sin(phi))``: ``-C_t = (f_j . w) phi'`` and
     ``Qd = gamma_dot1(u, f_j) + 2 phi' (f_j . (omega_i x w) + w . (omega_j x f_j))
     + (f_j . u) phi'^2 + (f_j . w) phi''``. ``u`` and ``w`` and everything derived from them

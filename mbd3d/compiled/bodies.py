@@ -76,12 +76,15 @@ def spatial_frames_into(Q, Qd, charts, velocities, A, axes, omega, kappa, Gb, om
         g_bar_matrix(Q[k, 3:6], Gb[k])
         for i in range(3):
             for j in range(3):
-                axes[k, i, j] = A[k, i, 0] * Gb[k, 0, j] + A[k, i, 1] * Gb[k, 1, j] + A[k, i, 2] * Gb[k, 2, j]
+                axes[k, i, j] = (A[k, i, 0] * Gb[k, 0, j] + A[k, i, 1] * Gb[k, 1, j]
+                                 + A[k, i, 2] * Gb[k, 2, j])
         if velocities:
             for i in range(3):
-                omega_bar[k, i] = Gb[k, i, 0] * Qd[k, 3] + Gb[k, i, 1] * Qd[k, 4] + Gb[k, i, 2] * Qd[k, 5]
+                omega_bar[k, i] = (Gb[k, i, 0] * Qd[k, 3] + Gb[k, i, 1] * Qd[k, 4]
+                                   + Gb[k, i, 2] * Qd[k, 5])
             for i in range(3):
-                omega[k, i] = A[k, i, 0] * omega_bar[k, 0] + A[k, i, 1] * omega_bar[k, 1] + A[k, i, 2] * omega_bar[k, 2]
+                omega[k, i] = (A[k, i, 0] * omega_bar[k, 0] + A[k, i, 1] * omega_bar[k, 1]
+                               + A[k, i, 2] * omega_bar[k, 2])
             kappa[k] = 2.0 * (x * Qd[k, 3] + y * Qd[k, 4] + z * Qd[k, 5]) * f
         else:
             for i in range(3):

@@ -177,11 +177,12 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
     """Step from ``(t, y)`` with first stage ``f`` and next step ``h`` until a step passes
     ``t_output``, ends at ``t_bound``, leaves the constraints drifted past
     ``constraint_tol``, collapses (a step below ``collapse`` times the longest of ``recent``),
-    or fails; also after step number ``check_at`` and after ``budget`` steps. ``y``, ``f``, ``charts``, ``recent``, ``stats``, ``drift_stats`` (largest
-    drift, last drift), ``K`` and ``y_old`` are updated in place; with ``OUTPUT``, ``dense``
-    holds the last step's dense-output coefficients.
+    or fails; also after step number ``check_at`` and after ``budget`` steps. ``y``, ``f``,
+    ``charts``, ``recent``, ``stats``, ``drift_stats`` (largest drift, last drift), ``K``
+    and ``y_old`` are updated in place; with ``OUTPUT``, ``dense`` holds the last step's
+    dense-output coefficients. ``spatial`` is compiled as a constant.
 
-    ``spatial`` is compiled as a constant. Returns ``(status, t, t_old, step, h)``: the flags of why it returned, the time reached,
+    Returns ``(status, t, t_old, step, h)``: the flags of why it returned, the time reached,
     the last step's start and length, the next step. On a failure ``t`` is the time of the
     failing evaluation and ``y_old`` its state.
     """
@@ -274,8 +275,8 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
                 for r in range(C_extra.shape[0]):
                     s = stages + 1 + r
                     stage_state(y_old, K, A_extra[r], s, step, ys)
-                    status = derivative(spatial, model, key, t_old + C_extra[r] * step, ys, charts, K[s],
-                                        work)
+                    status = derivative(spatial, model, key, t_old + C_extra[r] * step, ys,
+                                        charts, K[s], work)
                     stats[RHS_EVALUATIONS] += 1
                     if status != SOLVED:
                         y_old[:] = ys

@@ -15,8 +15,8 @@ from numba.experimental import structref
 from mbd3d.compiled import DISABLED, jit
 from mbd3d.compiled.rows import row_work_size
 
-__all__ = ["ModelArrays", "Workspace", "model_arrays", "workspace", "MODEL_FIELDS", "WORKSPACE_FIELDS",
-           "DENSE", "BANDED", "SPARSE"]
+__all__ = ["ModelArrays", "Workspace", "model_arrays", "workspace", "MODEL_FIELDS",
+           "WORKSPACE_FIELDS", "DENSE", "BANDED", "SPARSE"]
 
 #: layouts of the augmented matrix (see mbd3d.linalg): solved in compiled code, or by the
 #: caller (SuperLU)
