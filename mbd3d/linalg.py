@@ -27,7 +27,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mbd3d.compiled.dense import solve_banded_pattern, solve_pattern
+from mbd3d.compiled.dense import pivots_regular, solve_banded_pattern, solve_pattern
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
            "jacobian_scaling", "augmented_scaling",
@@ -155,13 +155,10 @@ class BandedFactorization:
 
 
 def _check_pivots(pivots: np.ndarray, pivot_tolerance: float) -> np.ndarray:
-    if pivots.size:
-        # a NaN pivot makes both comparisons false, an infinite one fails the first; the
-        # ufuncs' reduce directly, without the Python wrappers of ndarray.min and max (this
-        # runs at every right-hand side)
-        smallest, largest = np.minimum.reduce(pivots), np.maximum.reduce(pivots)
-        if not (largest < np.inf and smallest > pivot_tolerance * largest):
-            raise SingularMatrix("smallest pivot below tolerance")
+    """``pivots`` (their sizes) if they make a regular matrix by the compiled core's test
+    (:func:`mbd3d.compiled.dense.pivots_regular`), else raise :class:`SingularMatrix`."""
+    if not pivots_regular(np.ascontiguousarray(pivots, dtype=float), pivot_tolerance):
+        raise SingularMatrix("smallest pivot below tolerance")
     return pivots
 
 
