@@ -81,8 +81,9 @@ class _Core:
         nb = model.n_bodies
         self.spatial = model.dim == 3
         self.layout = {"dense": structures.DENSE, "banded": structures.BANDED,
-                       "sparse": structures.SPARSE}[pattern.layout]
+                       "sparse": structures.SPARSE, "range": structures.RANGE}[pattern.layout]
         banded = pattern.layout == "banded"
+        range_space = pattern.range_space if pattern.layout == "range" else None
         inertia = np.array(model.inertia)
         if not self.spatial:
             from mbd3d.planar.body import inertia_tensors
@@ -116,6 +117,7 @@ class _Core:
             perm=np.array(pattern.perm if banded else [], dtype=np.int64),
             entry_scale=np.array(pattern.entry_scale), scale=np.array(pattern.scale),
             pivot_tolerance=float(pattern.pivot_tolerance),
+            **_range_space_fields(range_space),
             c0=np.array(model.c0), row_scale=np.array(model.row_scale, dtype=float),
             jac_rows=np.array(model._jac_rows, dtype=np.int64),
             jac_cols=np.array(model._jac_cols, dtype=np.int64),
@@ -156,6 +158,18 @@ class _Core:
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state, _records={}, _scratch=threading.local())
+
+
+def _range_space_fields(pattern) -> dict:
+    """The fields of :class:`~mbd3d.compiled.structures.ModelArrays` for the range-space solve
+    (empty arrays for a model solved otherwise)."""
+    empty = np.zeros(0, dtype=np.int64)
+    if pattern is None:
+        return dict(range_slot=empty, range_body_start=np.zeros(1, dtype=np.int64),
+                    range_positions=empty, range_row_position=empty, range_bandwidth=0)
+    return dict(range_slot=pattern.slot, range_body_start=pattern.body_start,
+                range_positions=pattern.positions, range_row_position=pattern.row_position,
+                range_bandwidth=pattern.bandwidth)
 
 
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,

@@ -28,11 +28,13 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from mbd3d.compiled.dense import pivots_regular, solve_banded_pattern, solve_pattern
+from mbd3d.compiled.range_space import range_space_factor, range_space_solve_factored
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
            "jacobian_scaling", "augmented_scaling",
            "ranked_rows", "summarize", "augmented_matrix", "solve_augmented", "solve_model_augmented",
-           "factor_model_augmented", "AugmentedPattern", "PenaltyPattern", "penalty_scale",
+           "factor_model_augmented", "AugmentedPattern", "RangeSpacePattern",
+           "RangeSpaceFactorization", "PenaltyPattern", "penalty_scale",
            "penalty_matrix", "solve_augmented_lagrangian"]
 
 #: relative size of the smallest LU pivot below which a matrix counts as singular
@@ -265,6 +267,9 @@ def augmented_matrix(M, Cq):
 #: most this: a chain's augmented matrix has ``kl, ku`` of 5 to 12 whatever its length, where
 #: SuperLU's ordering and bookkeeping per call cost several times the arithmetic
 BANDED_WORK_LIMIT = 4096
+#: the range-space solve (:class:`RangeSpacePattern`) is used for a banded pattern when
+#: ``k^2``, its work per constraint row for ``S``'s half-bandwidth ``k``, is at most this
+RANGE_SPACE_WORK_LIMIT = 1024
 
 
 class _FixedPattern:
@@ -359,7 +364,7 @@ class _FixedPattern:
                 A += extra.toarray() if sp.issparse(extra) else extra
             return _Scaled(self.scale, Factorization(A, pivot_tolerance=self.pivot_tolerance,
                                                      overwrite=True))
-        if self.layout == "banded":
+        if self.layout in ("banded", "range"):  # "range" here: with ``extra``
             ab = self._scatter(values, self.band_rows)
             if extra is None or self._add_to_band(ab, extra):
                 return _Scaled(self.scale, _Permuted(self, BandedFactorization(
@@ -442,7 +447,13 @@ class _Permuted:
 
 
 class AugmentedPattern(_FixedPattern):
-    """Where the mass blocks and the Jacobian values go in ``[M Cq^T; Cq 0]``, fixed per model."""
+    """Where the mass blocks and the Jacobian values go in ``[M Cq^T; Cq 0]``, fixed per model.
+
+    A fourth layout, "range", is that of a banded model whose constraint rows, ordered by
+    reverse Cuthill-McKee, make ``Cq M^-1 Cq^T`` a narrow band (:class:`RangeSpacePattern`):
+    :meth:`factor`, :meth:`solve` and the compiled core then solve through it
+    (:class:`RangeSpaceFactorization`).
+    """
 
     def __init__(self, model):
         n, m = model.n_coordinates, model.n_constraints
@@ -451,6 +462,123 @@ class AugmentedPattern(_FixedPattern):
         self._lay_out(np.concatenate([block_rows, n + jr, jc]),
                       np.concatenate([block_cols, jc, n + jr]), n + m, model.sparse,
                       augmented_scaling(model))
+        self.range_space = None
+        if self.layout == "banded" and m:
+            pattern = RangeSpacePattern(model.n_bodies, model.n_coords_per_body, m, jr, jc)
+            if pattern.bandwidth ** 2 <= RANGE_SPACE_WORK_LIMIT:
+                self.range_space = pattern
+                self.layout = "range"
+                self.blocks_size = model.n_bodies * model.n_coords_per_body ** 2
+                self.block_shape = (model.n_bodies, model.n_coords_per_body,
+                                    model.n_coords_per_body)
+
+    def factor(self, values: np.ndarray, extra=None):
+        if self.layout != "range" or extra is not None:
+            return super().factor(values, extra)
+        return RangeSpaceFactorization(self.range_space, values[:self.blocks_size].reshape(
+            self.block_shape), values[self.blocks_size:self.blocks_size + self.range_space.nnz],
+            self.pivot_tolerance)
+
+    def solve(self, values: np.ndarray, b: np.ndarray) -> np.ndarray:
+        if self.layout != "range":
+            return super().solve(values, b)
+        return self.factor(values).solve(b)
+
+
+class RangeSpaceFactorization:
+    """Factors of ``[M Cq^T; Cq 0]`` through ``S = Cq M^-1 Cq^T`` (see
+    :mod:`mbd3d.compiled.range_space`), reusable for several right-hand sides.
+
+    Raises
+    ------
+    SingularMatrix
+        When a pivot of ``S`` falls below ``pivot_tolerance`` times its diagonal entry.
+    """
+
+    sparse = False
+
+    def __init__(self, pattern: "RangeSpacePattern", blocks: np.ndarray, jac_data: np.ndarray,
+                 pivot_tolerance: float = PIVOT_TOLERANCE):
+        self.pattern = pattern
+        self.nc = blocks.shape[1]
+        m = len(pattern.row_position)
+        self.blocks = np.array(blocks, dtype=float)  # becomes the factors
+        self.jacobian = np.empty(pattern.body_start[-1] * self.nc)
+        self.band = np.empty((pattern.bandwidth + 1) * m)
+        if not range_space_factor(self.nc, self.blocks, np.ascontiguousarray(jac_data,
+                                                                             dtype=float),
+                                  pattern.slot, pattern.body_start, pattern.positions,
+                                  pattern.bandwidth, pivot_tolerance, self.jacobian, self.band,
+                                  np.empty(m)):
+            raise SingularMatrix("a pivot of Cq M^-1 Cq^T below tolerance")
+
+    def solve(self, b: np.ndarray, transpose: bool = False) -> np.ndarray:
+        """The solution of ``A x = b`` (``A`` is symmetric: ``transpose`` changes nothing)."""
+        pattern = self.pattern
+        x = np.empty(len(b))
+        range_space_solve_factored(self.nc, self.blocks, pattern.body_start, pattern.positions,
+                                   pattern.row_position, pattern.bandwidth,
+                                   np.ascontiguousarray(b, dtype=float), self.jacobian,
+                                   self.band, np.empty(len(pattern.row_position)),
+                                   np.empty(self.blocks.shape[0] * self.nc), x)
+        return x
+
+
+class RangeSpacePattern:
+    """The structure of ``S = Cq M^-1 Cq^T`` for :mod:`mbd3d.compiled.range_space`.
+
+    Two constraint rows are coupled in ``S`` when they act on a common body. The rows are
+    ordered by reverse Cuthill-McKee on that coupling, which makes ``S`` of a chain a band of
+    half-width ``bandwidth`` (2 to 5 rows for a chain of revolutes or ball joints) whatever
+    its length.
+
+    Attributes
+    ----------
+    rows, cols : ndarray of int
+        The Jacobian's entries (the model's CSR order).
+    slot : ndarray of int
+        Where each entry goes in the per-body copies of the rows: body ``b``'s rows are rows
+        ``body_start[b]`` to ``body_start[b + 1]`` of an array of ``n_coords_per_body``
+        columns (flattened).
+    positions : ndarray of int
+        The position in ``S``'s ordering of each of those rows, increasing within a body.
+    row_position : ndarray of int
+        The position of each constraint row.
+    """
+
+    def __init__(self, n_bodies: int, n_coords_per_body: int, n_rows: int, rows: np.ndarray,
+                 cols: np.ndarray):
+        nc = n_coords_per_body
+        self.rows = np.ascontiguousarray(rows, dtype=np.int64)
+        self.cols = np.ascontiguousarray(cols, dtype=np.int64)
+        self.nnz = len(rows)
+        body = self.cols // nc
+        # one (body, row) pair per row acting on a body, sorted by body then row
+        pairs, pair_of_entry = np.unique(body * n_rows + self.rows, return_inverse=True)
+        pair_body, pair_row = pairs // n_rows, pairs % n_rows
+        self.body_start = np.searchsorted(pair_body, np.arange(n_bodies + 1)).astype(np.int64)
+        # rows coupled through a body: every pair of rows of one body
+        counts = np.diff(self.body_start)
+        sizes = counts * counts
+        start = np.repeat(self.body_start[:-1], sizes)
+        offset = np.arange(int(sizes.sum())) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+        width = np.repeat(counts, sizes)
+        first, second = start + offset // width, start + offset % width
+        coupling = sp.csr_matrix((np.ones(len(first)), (pair_row[first], pair_row[second])),
+                                 shape=(n_rows, n_rows))
+        order = reverse_cuthill_mckee(coupling, symmetric_mode=True).astype(np.int64)
+        self.row_position = np.empty(n_rows, dtype=np.int64)
+        self.row_position[order] = np.arange(n_rows)
+        position = self.row_position[pair_row]
+        offsets = position[first] - position[second]
+        self.bandwidth = int(np.max(np.abs(offsets), initial=0))
+        # each body's rows in the order of S: the compiled loops then visit S's lower
+        # triangle without tests
+        order = np.lexsort((position, pair_body))
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        self.positions = position[order]
+        self.slot = (rank[pair_of_entry.ravel()] * nc + self.cols % nc).astype(np.int64)
 
 
 class PenaltyPattern(_FixedPattern):

@@ -55,10 +55,13 @@ def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJaco
     if Cq.shape[0] * Cq.shape[1] > LARGEST_DENSE_ANALYSIS:
         # the dependent rows come from a dense SVD, out of reach here (a 10,000-link chain's
         # Jacobian would take 14 GB)
+        test = (f"a pivot of Cq M^-1 Cq^T fell below {PIVOT_TOLERANCE:g} of its diagonal "
+                "entry" if model._augmented_pattern.layout == "range" else
+                f"a pivot of the augmented matrix fell below {PIVOT_TOLERANCE:g} of the "
+                "largest, in the model's units")
         return SingularJacobianError(
-            f"{what}: the constraint Jacobian is singular or nearly so at t = {t:.6g} s (a "
-            f"pivot of the augmented matrix fell below {PIVOT_TOLERANCE:g} of the largest, in "
-            f"the model's units). The model is too large ({Cq.shape[0]} x {Cq.shape[1]}) to "
+            f"{what}: the constraint Jacobian is singular or nearly so at t = {t:.6g} s "
+            f"({test}). The model is too large ({Cq.shape[0]} x {Cq.shape[1]}) to "
             "find the dependent rows by singular value decomposition; run its kinematic "
             "analysis or mb.mobility on a smaller version of it. Forward dynamics passes "
             "singular positions with method='generalized-alpha'.", joints=[], time=t,

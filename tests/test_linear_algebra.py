@@ -1,5 +1,6 @@
-"""The three layouts of the augmented and iteration matrices (dense, banded, SuperLU) solve the
-same equations: checked by the residual of the equations themselves and against each other."""
+"""The layouts of the augmented and iteration matrices (dense, banded, SuperLU, and the
+range-space solve through ``Cq M^-1 Cq^T``) solve the same equations: checked by the residual
+of the equations themselves and against each other."""
 
 import numpy as np
 import pytest
@@ -15,6 +16,8 @@ def _build(factory, n_links, layout, monkeypatch):
     with monkeypatch.context() as patch:
         if layout == "sparse":
             patch.setattr(linalg, "BANDED_WORK_LIMIT", -1)
+        if layout == "banded":
+            patch.setattr(linalg, "RANGE_SPACE_WORK_LIMIT", -1)
         model = factory(n_links, sparse=layout != "dense")
     assert model._augmented_pattern.layout == layout
     return model
@@ -24,7 +27,7 @@ def _build(factory, n_links, layout, monkeypatch):
 def test_every_layout_solves_the_augmented_equations(factory, n_links, monkeypatch):
     rng = np.random.default_rng(7)
     models = {layout: _build(factory, n_links, layout, monkeypatch)
-              for layout in ("dense", "banded", "sparse")}
+              for layout in ("dense", "banded", "sparse", "range")}
     model = models["dense"]
     q = mb.solve_position(model, model.q0 + 0.05 * rng.normal(size=model.n_coordinates))
     qd = mb.solve_velocity(model, q, qd_guess=rng.normal(size=model.n_coordinates))
@@ -41,9 +44,19 @@ def test_every_layout_solves_the_augmented_equations(factory, n_links, monkeypat
         assert np.abs(M @ qdd + Cq.T @ lam - Qe).max() < 1e-12 * scale, layout
         assert np.abs(Cq @ qdd - Qd).max() < 1e-12 * (np.abs(Qd).max() + 1.0), layout
         solutions[layout] = np.concatenate([qdd, lam])
-    for layout in ("banded", "sparse"):
+    for layout in ("banded", "sparse", "range"):
         np.testing.assert_allclose(solutions[layout], solutions["dense"], rtol=0,
                                    atol=1e-10 * np.abs(solutions["dense"]).max())
+    # the factors kept for several right-hand sides (the projections of forward dynamics)
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    _, jac_data, _ = constraints.evaluate(model, 0.0, fr)
+    rhs = rng.normal(size=(2, model.n_coordinates + model.n_constraints))
+    K = linalg.augmented_matrix(M, Cq)
+    for layout, each in models.items():
+        factors = linalg.factor_model_augmented(each, blocks, jac_data)
+        for b in rhs:
+            np.testing.assert_allclose(K @ factors.solve(b), b, rtol=0,
+                                       atol=1e-10 * np.abs(b).max(), err_msg=layout)
 
 
 def test_banded_factors_give_the_determinant_and_refuse_singular_matrices():
@@ -101,3 +114,65 @@ def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):
     np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-10)
     np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
                                atol=1e-8 * np.abs(runs[0].lam).max())
+
+
+def _band_storage(S: np.ndarray, k: int) -> np.ndarray:
+    """The lower band storage of mbd3d.compiled.range_space: ``S[i, j]`` at ``j (k+1) + i-j``."""
+    m = S.shape[0]
+    band = np.zeros((k + 1) * m)
+    for j in range(m):
+        for i in range(j, min(m, j + k + 1)):
+            band[j * (k + 1) + i - j] = S[i, j]
+    return band
+
+
+def test_band_cholesky_solves_and_refuses_dependent_rows():
+    """The banded Cholesky of Cq M^-1 Cq^T against NumPy's, and its local pivot test: a row
+    that is a combination of the rows before it is refused, however small or large the
+    matrix's other entries."""
+    from mbd3d.compiled.range_space import band_cholesky, band_cholesky_solve
+
+    rng = np.random.default_rng(11)
+    m, k = 30, 3
+    B = np.zeros((m, m + k))  # rows of two neighbouring entries: S = B B^T has bandwidth 1
+    for i in range(m):
+        B[i, i:i + 2] = rng.normal(size=2)
+    S = B @ B.T
+    band = _band_storage(S, k)
+    assert band_cholesky(band, m, k, np.diag(S).copy(), 1e-12)
+    b = rng.normal(size=m)
+    x = b.copy()
+    band_cholesky_solve(band, m, k, x)
+    np.testing.assert_allclose(x, np.linalg.solve(S, b), rtol=1e-10)
+    L = np.linalg.cholesky(S)
+    np.testing.assert_allclose(band[::k + 1], np.diag(L), rtol=1e-12)
+
+    # row 20 = row 19 (times 3): dependent; rows far away scaled by 1e8 do not hide it, nor
+    # make the rest look singular
+    B[20] = 3.0 * B[19]
+    B[:5] *= 1e8
+    S = B @ B.T
+    assert not band_cholesky(_band_storage(S, k), m, k, np.diag(S).copy(), 1e-12)
+    B[20, 21] += 1e-3  # independent again (by 1e-3 of its size; S's bandwidth now 2)
+    S = B @ B.T
+    assert band_cholesky(_band_storage(S, k), m, k, np.diag(S).copy(), 1e-12)
+
+
+def test_a_long_chain_is_not_singular_for_its_length():
+    """The range-space solve's pivot test compares each pivot with its own row's diagonal:
+    a 3000-link spatial chain at rest (3 km long) is as regular as a 3-link one, and its
+    accelerations satisfy the equations of motion."""
+    model = spatial_chain(3000)
+    assert model._augmented_pattern.layout == "range"
+    q = model.q0
+    qd = np.zeros(model.n_coordinates)
+    qdd, lam = mb.forward_accelerations(model, 0.0, q, qd)
+    fr = constraints.frames(model, q, qd)
+    M = mass_matrix(model, fr)
+    Cq = constraints.jacobian(model, 0.0, q, fr, sparse=True)
+    Qe = generalized_forces(model, 0.0, fr)
+    assert np.abs(M @ qdd + Cq.T @ lam - Qe).max() < 1e-10 * np.abs(Cq.T @ lam).max()
+    assert np.abs(Cq @ qdd - constraints.acceleration_rhs(model, 0.0, q, qd, fr)).max() < 1e-10
+    # released at rest, the chain would fall freely but for its pin, whose pull decays
+    # geometrically along the chain: the far links start falling at g
+    assert qdd[model.n_coordinates - 6 + 2] == pytest.approx(-9.81, rel=1e-9)

@@ -4,8 +4,8 @@
     [Cq 0   ] [lam] = [Qd     ]
 
 from the state ``(q, qd)``: frames, body vectors, constraint rows, mass blocks, the quadratic
-velocity and gravity forces, the drivers' motions, and the LU solve, dense or in band
-storage. Parts of a model that are Python objects (force elements, user motions) are
+velocity and gravity forces, the drivers' motions, and the solve: LU, dense or in band
+storage, or through ``Cq M^-1 Cq^T`` (:mod:`mbd3d.compiled.range_space`). Parts of a model that are Python objects (force elements, user motions) are
 evaluated by the caller and passed in; the caller also solves the system of a model whose
 bandwidth is too large for band storage (SuperLU).
 
@@ -28,8 +28,9 @@ from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into,
                                    spatial_mass_blocks_into, spatial_quadratic_velocity_into)
 from mbd3d.compiled.dense import solve_banded_pattern_into, solve_pattern_into
 from mbd3d.compiled.motions import motion_values_into
+from mbd3d.compiled.range_space import range_space_solve_into
 from mbd3d.compiled.rows import constraint_rows_into
-from mbd3d.compiled.structures import BANDED, DENSE, SPARSE, workspace  # noqa: F401
+from mbd3d.compiled.structures import BANDED, DENSE, RANGE, SPARSE, workspace  # noqa: F401
 
 SOLVED, SINGULAR, NOT_FINITE = 0, 1, 2
 
@@ -104,11 +105,14 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
     weight = model.weight
     for i in range(n):
         rhs[i] = weight[i] + extra[i]
+    # nc: coordinates per body, a compile-time constant (a literal where it is passed on)
     if spatial:
+        nc = 6
         spatial_frames_into(Q, Qd, charts, yes, A, axes, omega, kappa, work.Gb, work.omega_bar)
         spatial_mass_blocks_into(work.Gb, model.mass, model.inertia, blocks)
         spatial_quadratic_velocity_into(work.Gb, work.omega_bar, kappa, model.inertia, rhs)
     else:
+        nc = 3
         planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
         planar_mass_blocks_into(model.mass, model.inertia, blocks)
     s, J, v, a = work.s, work.J, work.v, work.a
@@ -124,8 +128,14 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
         gamma[driver_rows[k]] += drivers[k, 2]
     for i in range(model.n_rows):
         rhs[n + i] = gamma[i]
+    if model.layout == RANGE:
+        regular = range_space_solve_into(
+            nc, blocks, data, model.range_slot,
+            model.range_body_start, model.range_positions, model.range_row_position,
+            model.range_bandwidth, model.pivot_tolerance, rhs, work.range_jacobian,
+            work.range_band, work.range_diagonal, work.range_vector, work.range_forces, work.x)
+        return SOLVED if regular else SINGULAR
     values = work.values
-    nc = blocks.shape[1]
     n_blocks = blocks.size
     for b in range(blocks.shape[0]):
         for i in range(nc):

@@ -16,11 +16,11 @@ from mbd3d.compiled import DISABLED, jit
 from mbd3d.compiled.rows import row_work_size
 
 __all__ = ["ModelArrays", "Workspace", "model_arrays", "workspace", "MODEL_FIELDS",
-           "WORKSPACE_FIELDS", "DENSE", "BANDED", "SPARSE"]
+           "WORKSPACE_FIELDS", "DENSE", "BANDED", "SPARSE", "RANGE"]
 
-#: layouts of the augmented matrix (see mbd3d.linalg): solved in compiled code, or by the
-#: caller (SuperLU)
-DENSE, BANDED, SPARSE = 0, 1, 2
+#: layouts of the augmented matrix (see mbd3d.linalg): solved in compiled code (RANGE:
+#: through Cq M^-1 Cq^T, mbd3d.compiled.range_space), or by the caller (SuperLU)
+DENSE, BANDED, SPARSE, RANGE = 0, 1, 2, 3
 
 
 class _Record(types.StructRef):
@@ -43,8 +43,9 @@ class WorkspaceType(_Record):
 #: kinematics and mass, the row table of the primitives (mbd3d.primitives.RowTable), the
 #: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
 #: (tables of mbd3d.compiled.motions, used unless python_parts), the augmented matrix's pattern
-#: (mbd3d.linalg), the rows' constants and scales, and empty arrays for the parts of a model
-#: that are not Python objects
+#: (mbd3d.linalg) and the structure of Cq M^-1 Cq^T (mbd3d.linalg.RangeSpacePattern), the
+#: rows' constants and scales, and empty arrays for the parts of a model that are not Python
+#: objects
 MODEL_FIELDS = (
     "n", "python_accelerations", "python_parts", "solved_here",
     "mass", "inertia", "weight",
@@ -55,6 +56,8 @@ MODEL_FIELDS = (
     "rotation_first", "rotation_kinds", "rotation_starts", "rotation_params",
     "layout", "rows", "cols", "flat", "kl", "ku", "perm", "entry_scale", "scale",
     "pivot_tolerance",
+    "range_slot", "range_body_start", "range_positions", "range_row_position",
+    "range_bandwidth",
     "c0", "row_scale", "jac_rows", "jac_cols",
     "no_forces", "no_drivers", "no_motions",
 )
@@ -65,6 +68,7 @@ WORKSPACE_FIELDS = (
     "s", "J", "v", "a",
     "C", "data", "gamma", "nu", "row_work", "row_jacobian",
     "blocks", "rhs", "values", "matrix", "band", "permuted", "x",
+    "range_jacobian", "range_band", "range_diagonal", "range_vector", "range_forces",
     "drivers", "phi",
 )
 
@@ -117,17 +121,24 @@ def workspace(spatial: bool, model):
     n_rows = model.n_rows
     nnz = model.nnz
     size = n_bodies * nc + n_rows
-    dense = model.layout == DENSE
-    banded = model.layout == BANDED
+    # sizes that depend on the layout and body type, computed before the call: a call of
+    # more than 30 arguments with conditionals inside is more than Numba's bytecode reader takes
+    dense_size = size if model.layout == DENSE else 0
+    band_size = (2 * model.kl + model.ku + 1) * size if model.layout == BANDED else 0
+    chart_bodies = b if spatial else 0
+    range_rows = n_rows if model.layout == RANGE else 0
+    range_jacobian = model.range_body_start[-1] * nc if range_rows else 0
+    range_band = (model.range_bandwidth + 1) * range_rows
+    range_forces = n_bodies * nc if range_rows else 0
     return Workspace(
         np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)), np.empty((b, 3, n_rot)),
-        np.empty((b, 3)), np.empty(b), np.empty((b if spatial else 0, 3, 3)), np.empty((b, 3)),
+        np.empty((b, 3)), np.empty(b), np.empty((chart_bodies, 3, 3)), np.empty((b, 3)),
         np.empty((n_vectors, dim)), np.empty((n_vectors, dim, n_rot)),
         np.empty((n_vectors, dim)), np.empty((n_vectors, dim)),
         np.empty(n_rows), np.empty(nnz), np.empty(n_rows), np.empty(n_rows),
         np.empty(row_work_size(dim, n_rot)), np.empty((dim, n_rot)),
         np.empty((n_bodies, nc, nc)), np.empty(size), np.empty(n_bodies * nc * nc + 2 * nnz),
-        np.empty((size, size) if dense else (0, 0)),
-        np.empty((2 * model.kl + model.ku + 1) * size if banded else 0), np.empty(size),
-        np.empty(size), np.empty((model.driver_rows.shape[0], 3)),
+        np.empty((dense_size, dense_size)), np.empty(band_size), np.empty(size),
+        np.empty(size), np.empty(range_jacobian), np.empty(range_band), np.empty(range_rows),
+        np.empty(range_rows), np.empty(range_forces), np.empty((model.driver_rows.shape[0], 3)),
         np.empty((model.rotation_first.shape[0] - 1, 3)))
