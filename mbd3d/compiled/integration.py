@@ -38,6 +38,8 @@ OUTPUT, DRIFTED, COLLAPSED, CHECK_STIFFNESS, PAUSED = 1, 2, 4, 64, 128
 STEP_TOO_SMALL, SINGULAR, DIVERGED = 8, 16, 32
 #: counters in ``stats``
 STEPS, RHS_EVALUATIONS, CHART_RESETS, REJECTED = 0, 1, 2, 3
+#: a trial step whose stages could not be evaluated is retried this many times shorter
+_FAILED_STEP_FACTOR = 0.25
 
 
 @jit_calling_python
@@ -208,8 +210,14 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
         if h_abs < min_step:
             h_abs = min_step
         rejected = False
+        failure = SOLVED  # the status of the last trial step's failing evaluation
+        t_failure = t
         while True:
             if h_abs < min_step:
+                if failure != SOLVED:
+                    # every step length failed: the state itself is singular or diverged
+                    return SINGULAR if failure != NOT_FINITE else DIVERGED, t_failure, t, \
+                        step, h_abs
                 y_old[:] = y
                 return STEP_TOO_SMALL, t, t_old, step, h_abs
             step = h_abs
@@ -218,20 +226,26 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
                 t_new = t_bound
                 step = t_new - t
             K[0] = f
-            for s in range(1, stages):
-                stage_state(y, K, A[s], s, step, ys)
-                status = derivative(spatial, model, key, t + C[s] * step, ys, charts, K[s], work)
+            status = SOLVED
+            for s in range(1, stages + 1):
+                last = s == stages  # the step's end, whose derivative is the next first stage
+                t_stage = t_new if last else t + C[s] * step
+                state = y_new if last else ys
+                stage_state(y, K, B if last else A[s], s, step, state)
+                status = derivative(spatial, model, key, t_stage, state, charts, K[s], work)
                 stats[RHS_EVALUATIONS] += 1
                 if status != SOLVED:
-                    y_old[:] = ys
-                    return SINGULAR if status != NOT_FINITE else DIVERGED, t + C[s] * step, \
-                        t, step, h_abs
-            stage_state(y, K, B, stages, step, y_new)
-            status = derivative(spatial, model, key, t_new, y_new, charts, K[stages], work)
-            stats[RHS_EVALUATIONS] += 1
+                    failure, t_failure = status, t_stage
+                    y_old[:] = state
+                    break
             if status != SOLVED:
-                y_old[:] = y_new
-                return SINGULAR if status != NOT_FINITE else DIVERGED, t_new, t, step, h_abs
+                # a trial step too long for the motion can leave the stages so far off that
+                # the matrix is singular or the state not finite there: a rejected step, not
+                # the end of the run, which only ends if the shortest step fails too
+                h_abs = step * _FAILED_STEP_FACTOR
+                rejected = True
+                stats[REJECTED] += 1
+                continue
             scale = error_scale(spatial, n, y, y_new, atol, rtol)
             error = error_norm(K, E, E_low, scale, step, dense_kind)
             if error < 1.0:
