@@ -4,8 +4,9 @@ For N = 1, 10, 100, 1000, 10000 links (1 m, 1 kg bars pinned end to end, horizon
 falling under gravity) it prints medians of one constraint Jacobian evaluation, one augmented
 solve (accelerations and multipliers from [M Cq^T; Cq 0], including the evaluation of
 everything in it), and a forward-dynamics run at rtol 1e-6 with DOP853 (``--method``
-to pick another; one simulated second up to 1000 links, 0.02 s above): per step, per step and body, and the fitted exponent of the
-costs in N from 100 links up.
+to pick another; one simulated second up to 1000 links, 0.1 s above): its wall time and
+steps, the cost of a step (that of the run's second half, free of the setup), per step and
+body, and the fitted exponent of the costs in N from 100 links up.
 
 With --peers (needs ``pip install -e ".[peers]"``) it then finds, for each engine, the
 cheapest setting that gets the tip of the last link at t = 1 s right to 1e-6 m (against
@@ -44,7 +45,8 @@ def no_initial_rates(model) -> None:
 
 
 def measure(n_links: int, factory=pendulum_chain, rates: Callable = no_initial_rates,
-            simulate: bool = True, sparse: bool | None = None, method: str = "DOP853") -> dict:
+            simulate: bool = True, sparse: bool | None = None, method: str = "DOP853",
+            long_span: float = 0.1) -> dict:
     """Costs of one chain size (see the module docstring)."""
     model = factory(n_links, sparse=sparse)
     q = model.q0.copy()
@@ -58,22 +60,34 @@ def measure(n_links: int, factory=pendulum_chain, rates: Callable = no_initial_r
                                       repeat),
     }
     if simulate:
-        span = 1.0 if n_links <= 1000 else 0.02
-        runs = [mb.forward_dynamics(model, [0.0, span], qd0=rates(model), method=method,
-                                    rtol=1e-6, atol=1e-8)
-                for _ in range(3 if n_links <= 1000 else 1)]
-        wall = float(np.median([r.stats["wall_time"] for r in runs]))
-        steps = runs[0].stats["steps"]
-        row.update(span=span, run_s=wall, steps=steps, step_ms=1e3 * wall / steps,
-                   step_us_per_body=1e6 * wall / steps / n_links)
+        span = 1.0 if n_links <= 1000 else long_span
+
+        def run(until: float) -> tuple[float, int]:
+            runs = [mb.forward_dynamics(model, [0.0, until], qd0=rates(model), method=method,
+                                        rtol=1e-6, atol=1e-8)
+                    for _ in range(3 if n_links <= 1000 else 1)]
+            return (float(np.median([r.stats["wall_time"] for r in runs])),
+                    runs[0].stats["steps"])
+
+        wall, steps = run(span)
+        # the cost of a step is that of the second half of the run: the first half also pays
+        # for the setup (the initial position and velocity solves, the first step's choice),
+        # which would weigh on a run of a few steps and bend the fitted exponent
+        half_wall, half_steps = run(span / 2)
+        step_s = (wall - half_wall) / max(steps - half_steps, 1)
+        row.update(span=span, run_s=wall, steps=steps, step_ms=1e3 * step_s,
+                   step_us_per_body=1e6 * step_s / n_links)
     return row
 
 
 def report(title: str, factory, sizes, simulate: bool,
-           rates: Callable = no_initial_rates, method: str = "DOP853") -> list[dict]:
-    """Measure chains of the given sizes built by ``factory`` and print the table."""
+           rates: Callable = no_initial_rates, method: str = "DOP853",
+           long_span: float = 0.1) -> list[dict]:
+    """Measure chains of the given sizes built by ``factory`` and print the table
+    (``long_span``: the simulated time above 1000 links)."""
     print(f"{title}; {machine()}")
-    rows = [measure(n, factory, rates, simulate, method=method) for n in sizes]
+    rows = [measure(n, factory, rates, simulate, method=method, long_span=long_span)
+            for n in sizes]
     table = {
         "N": [r["N"] for r in rows],
         "Jacobian [ms]": [r["jacobian_ms"] for r in rows],
