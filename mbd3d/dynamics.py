@@ -340,7 +340,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     bt = model.body_type
     spatial = model.dim == 3
     # the reference rotations of the integration, moved in place by the compiled loop
-    charts = np.array(model.charts0) if spatial else np.zeros((1, 3, 3))
+    charts = np.array(model.charts0) if spatial else None
     redundant = False  # set at the start: the constraint rows depend on each other
 
     def chart() -> np.ndarray | None:
@@ -398,9 +398,6 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         watch.tick(t[0], 0)
         arrays = model._core.arrays(python_accelerations=redundant)
         work = workspace(spatial, arrays)
-        derivative, advance = ((stepping.spatial_derivative, stepping.spatial_advance)
-                               if spatial else
-                               (stepping.planar_derivative, stepping.planar_advance))
         # atol in the model's units: positions in units of its length, angles in radians,
         # rates per second, so that a micrometre mechanism is integrated as accurately
         atol_y = atol * np.tile(model.coordinate_scale, 2)
@@ -414,19 +411,19 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         drift = np.zeros(2)
         with callbacks.Run(model, redundant_accelerations) as key:
             def first_stage(tt: float) -> None:
-                status = derivative(arrays, key, tt, y, charts, f, work)
+                status = stepping.derivative(arrays, key, tt, y, charts, f, work)
                 counters[stepping.RHS_EVALUATIONS] += 1
                 if status != 0:
                     raise failure(stepping.SINGULAR if status == 1 else stepping.DIVERGED,
                                   tt, y)
 
             first_stage(t[0])
-            h = _initial_step(spatial, arrays, key, tableau, t[0], y, f, charts, rtol, atol_y,
+            h = _initial_step(arrays, key, tableau, t[0], y, f, charts, rtol, atol_y,
                               min(max_step, t[-1] - t[0]), counters, work)
             t_now = t[0]
             check_at = _STIFFNESS_CHECK_STEPS if len(t) > 1 else -1
             while out.done < k_max:
-                flags, t_now, t_old, step, h = advance(
+                flags, t_now, t_old, step, h = stepping.advance(
                     arrays, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
                     atol_y, max_step, charts, constraint_tol, _STEP_CHART_LIMIT, recent, counters,
                     drift, K, y_old, dense, 0.0 if redundant else STEP_COLLAPSE, check_at,
@@ -491,7 +488,7 @@ _STEP_CHART_LIMIT = 0.0
 _FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
 
 
-def _initial_step(spatial: bool, arrays, key, tableau, t0: float, y: np.ndarray,
+def _initial_step(arrays, key, tableau, t0: float, y: np.ndarray,
                   f: np.ndarray, charts, rtol: float, atol: np.ndarray, interval: float,
                   counters, work) -> float:
     """The first step (Hairer, Norsett and Wanner, *Solving ODEs I*, II.4): from the sizes of
@@ -502,8 +499,7 @@ def _initial_step(spatial: bool, arrays, key, tableau, t0: float, y: np.ndarray,
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, interval)
     f1 = np.empty_like(f)
-    derivative = stepping.spatial_derivative if spatial else stepping.planar_derivative
-    status = derivative(arrays, key, t0 + h0, y + h0 * f, charts, f1, work)
+    status = stepping.derivative(arrays, key, t0 + h0, y + h0 * f, charts, f1, work)
     counters[stepping.RHS_EVALUATIONS] += 1
     if status != 0:
         return min(h0, interval)

@@ -188,23 +188,21 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     """
     q, qd = _coordinates(model, q, "q"), _coordinates(model, qd, "qd")
     core = model._core
-    extra, phi, drivers = core.no_forces, core.no_motions, core.no_motions
-    if core.python_parts:
+    # a planar model has no charts (and its compiled functions no spatial code)
+    charts = (model.charts0 if charts is None else charts) if core.spatial else None
+    if not core.python_parts:
+        x, status = kernel.accelerations(core.workspace(), float(t), q, qd, charts)
+    else:
+        extra = core.no_forces
         if model.force_groups:
             fr = frames(model, q, qd, charts)
             Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
             for group in model.force_groups:
                 group.apply(model, t, fr, Q)
             extra = Q[:model.n_bodies].ravel()
-        phi = motion_phases(model, t)
-        drivers = _motion_values(model.driver_motions, model.driver_names, t)
-    if core.spatial:
-        x, status = kernel.spatial_accelerations(
-            core.record, core.workspace(), float(t), q, qd,
-            model.charts0 if charts is None else charts, extra, phi, drivers)
-    else:
-        x, status = kernel.planar_accelerations(core.record, core.workspace(), float(t), q, qd,
-                                                _NO_CHARTS, extra, phi, drivers)
+        x, status = kernel.accelerations_with_parts(
+            core.workspace(), float(t), q, qd, charts, extra,
+            motion_phases(model, t), _motion_values(model.driver_motions, model.driver_names, t))
     if status == kernel.NOT_FINITE:
         # a motion that is not finite is named (ModelError); else the state diverged
         driver_values(model, t), motion_phases(model, t)
@@ -216,8 +214,6 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
         return model._augmented_pattern.solve(x[:n_values], x[n_values:])
     return x
 
-
-_NO_CHARTS = np.zeros((0, 3, 3))
 
 
 def _coordinates(model, x, name: str) -> np.ndarray:

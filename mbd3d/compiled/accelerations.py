@@ -11,9 +11,9 @@ bandwidth is too large for band storage (SuperLU).
 
 Every intermediate array lives in a :class:`~mbd3d.compiled.structures.Workspace`: the
 integrator loop makes one per run segment and evaluates thousands of right-hand sides without
-allocating, and a single call (:func:`planar_accelerations`, :func:`spatial_accelerations`)
-takes one too. ``spatial`` reaches the functions as a constant from these entry points, so that a
-planar model compiles no spatial code and the reverse.
+allocating, and a single call (:func:`accelerations`, :func:`accelerations_with_parts`) takes
+one too. A planar model passes
+``charts=None``, and compiles no spatial code.
 
 ``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state.
 """
@@ -74,7 +74,7 @@ def _finite_rows(x: np.ndarray) -> bool:
 
 
 @jit
-def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers):
+def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
     """Solve the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`) in
     ``work`` (:class:`Workspace`); returns the status.
 
@@ -84,7 +84,8 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
     caller gives ``extra`` (n,), the generalized forces of the force elements, and the
     motions ``(f, f', f'')`` of the rotation drivers ``phi`` (k, 3) and of the drivers
     ``drivers`` (n_drivers, 3); otherwise the motions are evaluated here. ``charts``:
-    reference rotations of spatial bodies.
+    reference rotations of a spatial model's bodies, None for a planar model (which then
+    compiles no spatial code: Numba drops the branches decided by ``charts is None``).
     """
     if not (_finite(q) and _finite(qd)):
         return NOT_FINITE
@@ -106,7 +107,7 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
     for i in range(n):
         rhs[i] = weight[i] + extra[i]
     # nc: coordinates per body, a compile-time constant (a literal where it is passed on)
-    if spatial:
+    if charts is not None:
         nc = 6
         spatial_frames_into(Q, Qd, charts, yes, A, axes, omega, kappa, work.Gb, work.omega_bar)
         spatial_mass_blocks_into(work.Gb, model.mass, model.inertia, blocks)
@@ -159,8 +160,13 @@ def accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drive
 
 
 @jit
-def _accelerations(spatial, model, work, t, q, qd, charts, extra, phi, drivers):
-    status = accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers)
+def accelerations_with_parts(work, t, q, qd, charts, extra, phi, drivers):
+    """``(x, status)`` of :func:`accelerations_into` for the model of the workspace ``work``
+    (:func:`~mbd3d.compiled.structures.workspace`): ``x = (qdd, lam)`` (a new array), or for
+    the ``SPARSE`` layout the augmented matrix's entries in the pattern's order followed by
+    its right-hand side."""
+    model = work.model
+    status = accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers)
     if model.layout == SPARSE:
         # the matrix's entries in the pattern's order and the right-hand side, stacked, for
         # the caller's solve
@@ -169,14 +175,9 @@ def _accelerations(spatial, model, work, t, q, qd, charts, extra, phi, drivers):
 
 
 @jit
-def planar_accelerations(model, work, t, q, qd, charts, extra, phi, drivers):
-    """``(x, status)`` of :func:`accelerations_into` for a planar model, in the workspace
-    ``work``: ``x = (qdd, lam)`` (a new array), or for the ``SPARSE`` layout the augmented
-    matrix's entries in the pattern's order followed by its right-hand side."""
-    return _accelerations(False, model, work, t, q, qd, charts, extra, phi, drivers)
-
-
-@jit
-def spatial_accelerations(model, work, t, q, qd, charts, extra, phi, drivers):
-    """As :func:`planar_accelerations`, for a spatial model."""
-    return _accelerations(True, model, work, t, q, qd, charts, extra, phi, drivers)
+def accelerations(work, t, q, qd, charts):
+    """:func:`accelerations_with_parts` of a model without parts that are Python objects
+    (three arguments fewer to hand over at each call from Python)."""
+    model = work.model
+    return accelerations_with_parts(work, t, q, qd, charts, model.no_forces, model.no_motions,
+                                    model.no_motions)

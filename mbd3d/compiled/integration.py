@@ -74,13 +74,14 @@ def _python_parts(model, key, t, q, qd, charts):
 
 
 @jit
-def derivative(spatial, model, key, t, y, charts, out, work):
+def derivative(model, key, t, y, charts, out, work):
     """``out = dy/dt`` at ``(t, y)`` in the workspace ``work``; returns the solve's status
-    (0: solved)."""
+    (0: solved). ``charts``: the reference rotations of a spatial model's bodies, None for a
+    planar model (see :func:`advance`)."""
     n = model.n
     q = y[:n]
     qd = out[:n]
-    if spatial:
+    if charts is not None:
         spatial_rates_into(q, y[n:], qd)
     else:
         qd[:] = y[n:]
@@ -88,13 +89,13 @@ def derivative(spatial, model, key, t, y, charts, out, work):
     if model.python_accelerations:
         x, status = _callback_accelerations(key, t, q, qd, charts)
     else:
-        status = accelerations_into(spatial, model, work, t, q, qd, charts, extra, phi, drivers)
+        status = accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers)
         x = work.x
         if status == SOLVED and not model.solved_here:
             x, status = _callback_solve(key, work.values, work.rhs)
     if status != SOLVED:
         return status
-    if spatial:
+    if charts is not None:
         spatial_velocity_derivative_into(q, qd, x[:n], out[n:])
     else:
         out[n:] = x[:n]
@@ -102,7 +103,7 @@ def derivative(spatial, model, key, t, y, charts, out, work):
 
 
 @jit
-def drift(spatial, model, key, t, y, charts, work):
+def drift(model, key, t, y, charts, work):
     """Largest position and velocity constraint residual at ``(t, y)``, each row relative to
     its scale (lengths in units of the model's length)."""
     n = model.n
@@ -111,7 +112,7 @@ def drift(spatial, model, key, t, y, charts, work):
         return 0.0
     q = y[:n]
     qd = np.empty(n)
-    if spatial:
+    if charts is not None:
         spatial_rates_into(q, y[n:], qd)
     else:
         qd[:] = y[n:]
@@ -124,7 +125,7 @@ def drift(spatial, model, key, t, y, charts, work):
     Q, A, axes, omega, kappa = work.Q, work.A, work.axes, work.omega, work.kappa
     s, J, v, a, C, data, nu = work.s, work.J, work.v, work.a, work.C, work.data, work.nu
     padded_into(q, Q)
-    if spatial:
+    if charts is not None:
         spatial_frames_into(Q, Q, charts, no, A, axes, omega, kappa, work.Gb, work.omega_bar)
     else:
         planar_frames_into(Q, Q, no, A, axes, omega, kappa)
@@ -173,7 +174,7 @@ def error_scale(spatial, n, y, y_new, atol, rtol):
 
 
 @jit
-def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
+def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
             charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
             dense, collapse, check_at, budget, work):
     """Step from ``(t, y)`` with first stage ``f`` and next step ``h`` until a step passes
@@ -182,7 +183,12 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
     or fails; also after step number ``check_at`` and after ``budget`` steps. ``y``, ``f``,
     ``charts``, ``recent``, ``stats``, ``drift_stats`` (largest drift, last drift), ``K``
     and ``y_old`` are updated in place; with ``OUTPUT``, ``dense`` holds the last step's
-    dense-output coefficients. ``spatial`` is compiled as a constant.
+    dense-output coefficients.
+
+    ``charts`` (bodies, 3, 3): the reference rotations of a spatial model's bodies, None for a
+    planar model. Numba compiles a function once per type of its arguments and drops the
+    branches an argument's type decides (``charts is None``): a planar model compiles no
+    spatial code, and the reverse.
 
     Returns ``(status, t, t_old, step, h)``: the flags of why it returned, the time reached,
     the last step's start and length, the next step. On a failure ``t`` is the time of the
@@ -198,8 +204,9 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
     ys = np.empty(2 * n)
     y_new = np.empty(2 * n)
     rates = np.empty(n)
+    spatial = charts is not None  # a run-time flag, where no spatial-only code depends on it
     while True:
-        if spatial:
+        if charts is not None:
             if spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit):
                 # v and its derivative are unchanged; the rates of g are those of the new chart
                 spatial_rates_into(y[:n], y[n:], rates)
@@ -232,7 +239,7 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
                 t_stage = t_new if last else t + C[s] * step
                 state = y_new if last else ys
                 stage_state(y, K, B if last else A[s], s, step, state)
-                status = derivative(spatial, model, key, t_stage, state, charts, K[s], work)
+                status = derivative(model, key, t_stage, state, charts, K[s], work)
                 stats[RHS_EVALUATIONS] += 1
                 if status != SOLVED:
                     failure, t_failure = status, t_stage
@@ -273,7 +280,7 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
         recent[stats[STEPS] % n_recent] = step
         if step < collapse * longest:
             flags |= COLLAPSED
-        residual = drift(spatial, model, key, t, y, charts, work)
+        residual = drift(model, key, t, y, charts, work)
         drift_stats[0] = max(drift_stats[0], residual)
         drift_stats[1] = residual
         if residual > constraint_tol:
@@ -289,7 +296,7 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
                 for r in range(C_extra.shape[0]):
                     s = stages + 1 + r
                     stage_state(y_old, K, A_extra[r], s, step, ys)
-                    status = derivative(spatial, model, key, t_old + C_extra[r] * step, ys,
+                    status = derivative(model, key, t_old + C_extra[r] * step, ys,
                                         charts, K[s], work)
                     stats[RHS_EVALUATIONS] += 1
                     if status != SOLVED:
@@ -301,37 +308,3 @@ def advance(spatial, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, a
                 dense[:] = polynomial_coefficients(K, P, stages + 1)
         if flags:
             return flags, t, t_old, step, h
-
-
-# Entry points from Python, one per body type: ``spatial`` reaches the functions above as a
-# constant, so that a planar model compiles no spatial code and the reverse.
-@jit
-def planar_derivative(model, key, t, y, charts, out, work):
-    """:func:`derivative` of a planar model."""
-    return derivative(False, model, key, t, y, charts, out, work)
-
-
-@jit
-def spatial_derivative(model, key, t, y, charts, out, work):
-    """:func:`derivative` of a spatial model."""
-    return derivative(True, model, key, t, y, charts, out, work)
-
-
-@jit
-def planar_advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
-                   charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
-                   dense, collapse, check_at, budget, work):
-    """:func:`advance` of a planar model."""
-    return advance(False, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol,
-                   max_step, charts, constraint_tol, chart_limit, recent, stats, drift_stats, K,
-                   y_old, dense, collapse, check_at, budget, work)
-
-
-@jit
-def spatial_advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
-                    charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
-                    dense, collapse, check_at, budget, work):
-    """:func:`advance` of a spatial model."""
-    return advance(True, model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol,
-                   max_step, charts, constraint_tol, chart_limit, recent, stats, drift_stats, K,
-                   y_old, dense, collapse, check_at, budget, work)

@@ -62,9 +62,11 @@ MODEL_FIELDS = (
     "no_forces", "no_drivers", "no_motions",
 )
 
-#: the scratch arrays of one evaluation of the augmented equations
+#: the model the scratch arrays are sized for (so that a call from Python passes one record,
+#: not two: each costs about half a microsecond to hand over), and the scratch arrays of one
+#: evaluation of the augmented equations
 WORKSPACE_FIELDS = (
-    "Q", "Qd", "A", "axes", "omega", "kappa", "Gb", "omega_bar",
+    "model", "Q", "Qd", "A", "axes", "omega", "kappa", "Gb", "omega_bar",
     "s", "J", "v", "a",
     "C", "data", "gamma", "nu", "row_work", "row_jacobian",
     "blocks", "rhs", "values", "matrix", "band", "permuted", "x",
@@ -131,7 +133,7 @@ def workspace(spatial: bool, model):
     range_band = (model.range_bandwidth + 1) * range_rows
     range_forces = n_bodies * nc if range_rows else 0
     return Workspace(
-        np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)), np.empty((b, 3, n_rot)),
+        model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)), np.empty((b, 3, n_rot)),
         np.empty((b, 3)), np.empty(b), np.empty((chart_bodies, 3, 3)), np.empty((b, 3)),
         np.empty((n_vectors, dim)), np.empty((n_vectors, dim, n_rot)),
         np.empty((n_vectors, dim)), np.empty((n_vectors, dim)),
