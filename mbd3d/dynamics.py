@@ -28,7 +28,7 @@ from mbd3d import constraints
 from mbd3d.compiled import callbacks, integration as stepping
 from mbd3d.compiled.runge_kutta import TABLEAUS, interpolate, rms
 from mbd3d.compiled.structures import workspace
-from mbd3d.equations import augmented_accelerations
+from mbd3d.equations import augmented_accelerations, generalized_forces
 from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
 from mbd3d.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
 from mbd3d.kinematics import check_times, initial_guess, solve_velocity
@@ -374,8 +374,9 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                 consistent_accelerations(model, t_fail, q, qd, chart(), fallback=False)
             except (SingularJacobianError, IntegrationError) as error:
                 return error
-        try:  # a motion that is not finite there is named
+        try:  # a motion or force that cannot be evaluated there is named
             constraints.driver_values(model, t_fail), constraints.motion_phases(model, t_fail)
+            generalized_forces(model, t_fail, constraints.frames(model, q, qd, chart()))
         except ModelError as error:
             return error
         return IntegrationError(f"forward dynamics of '{model.name}': the state became "

@@ -90,11 +90,17 @@ class _Core:
             inertia = inertia_tensors(inertia)
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
         terms = [m.terms() for m in model.driver_motions + model.rotation_motions]
-        #: parts only Python can evaluate: force elements, motions given as functions
-        self.python_parts = bool(model.force_groups) or any(t is None for t in terms)
+        force_tables = [group.table(model) for group in model.force_groups]
+        #: parts only Python can evaluate: force elements or motions given as functions
+        self.python_parts = (any(t is None for t in terms)
+                             or any(t is None for t in force_tables))
         driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
         rotation_table = motion_table([] if self.python_parts
                                       else terms[len(model.driver_rows):])
+        #: the fields of the records of the force elements and of the range-space solve (None:
+        #: none); made into records with the model's (see arrays), so that it stays picklable
+        self._forces = _force_fields(model, [] if self.python_parts else force_tables)
+        self._range_space = _range_space_fields(range_space)
         # writable contiguous copies: the compiled functions are typed (and cached) for those
         self._fields = dict(
             n=model.n_coordinates, solved_here=self.layout != structures.SPARSE,
@@ -117,7 +123,6 @@ class _Core:
             perm=np.array(pattern.perm if banded else [], dtype=np.int64),
             entry_scale=np.array(pattern.entry_scale), scale=np.array(pattern.scale),
             pivot_tolerance=float(pattern.pivot_tolerance),
-            **_range_space_fields(range_space),
             c0=np.array(model.c0), row_scale=np.array(model.row_scale, dtype=float),
             jac_rows=np.array(model._jac_rows, dtype=np.int64),
             jac_cols=np.array(model._jac_cols, dtype=np.int64),
@@ -133,7 +138,13 @@ class _Core:
         accelerations come from Python's augmented-Lagrangian solve (redundant rows)."""
         key = bool(python_accelerations)
         if key not in self._records:
-            fields = dict(self._fields, python_accelerations=key)
+            forces, range_space = self._forces, self._range_space
+            fields = dict(self._fields, python_accelerations=key, forces=None if forces is None
+                          else structures.force_arrays(*(forces[name] for name in
+                                                         structures.FORCE_FIELDS)),
+                          range_space=None if range_space is None
+                          else structures.range_space_arrays(*(range_space[name] for name in
+                                                               structures.RANGE_FIELDS)))
             self._records[key] = structures.model_arrays(
                 *(fields[name] for name in structures.MODEL_FIELDS))
         return self._records[key]
@@ -160,16 +171,42 @@ class _Core:
         self.__dict__.update(state, _records={}, _scratch=threading.local())
 
 
-def _range_space_fields(pattern) -> dict:
-    """The fields of :class:`~mbd3d.compiled.structures.ModelArrays` for the range-space solve
-    (empty arrays for a model solved otherwise)."""
-    empty = np.zeros(0, dtype=np.int64)
+def _range_space_fields(pattern) -> dict | None:
+    """The fields of the model's :class:`~mbd3d.compiled.structures.RangeSpaceArrays`, or
+    None for a model solved otherwise."""
     if pattern is None:
-        return dict(range_slot=empty, range_body_start=np.zeros(1, dtype=np.int64),
-                    range_positions=empty, range_row_position=empty, range_bandwidth=0)
-    return dict(range_slot=pattern.slot, range_body_start=pattern.body_start,
-                range_positions=pattern.positions, range_row_position=pattern.row_position,
-                range_bandwidth=pattern.bandwidth)
+        return None
+    return dict(slot=pattern.slot, body_start=pattern.body_start, positions=pattern.positions,
+                row_position=pattern.row_position, bandwidth=pattern.bandwidth)
+
+
+def _force_fields(model, tables: list[dict]) -> dict | None:
+    """The fields of the model's :class:`~mbd3d.compiled.structures.ForceArrays` from its
+    force groups' tables (each kind at most one group, empty for the kinds the model has not),
+    or None without any."""
+    if not tables:
+        return None
+    dim = model.dim
+    fields = {
+        "spring_bodies": np.zeros((0, 2), dtype=np.int64),
+        "spring_points": np.zeros((0, 2, dim)), "spring_values": np.zeros((0, 3)),
+        "rotary_bodies": np.zeros((0, 2), dtype=np.int64), "rotary_values": np.zeros((0, 3)),
+        "rotary_vectors": np.zeros((0, 3, 3)),
+        "point_bodies": np.zeros(0, dtype=np.int64), "point_points": np.zeros((0, dim)),
+        "point_forces": np.zeros((0, dim)), "point_body_frame": np.zeros(0, dtype=np.int64),
+        "torque_bodies": np.zeros(0, dtype=np.int64), "torque_values": np.zeros((0, 3)),
+        "torque_body_frame": np.zeros(0, dtype=np.int64)}
+    actuators = {"spring": [], "rotary": []}
+    for table in tables:
+        table = dict(table)
+        terms = table.pop("actuators", None)
+        if terms is not None:
+            actuators["spring" if "spring_bodies" in table else "rotary"] = terms
+        fields.update({key: np.ascontiguousarray(value) for key, value in table.items()})
+    for kind, terms in actuators.items():
+        fields.update(zip((f"{kind}_first", f"{kind}_kinds", f"{kind}_starts",
+                           f"{kind}_params"), motion_table(terms)))
+    return fields
 
 
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
@@ -204,8 +241,11 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
             core.workspace(), float(t), q, qd, charts, extra,
             motion_phases(model, t), _motion_values(model.driver_motions, model.driver_names, t))
     if status == kernel.NOT_FINITE:
-        # a motion that is not finite is named (ModelError); else the state diverged
+        # a motion or force that cannot be evaluated is named (ModelError); else the state
+        # diverged
         driver_values(model, t), motion_phases(model, t)
+        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)):
+            generalized_forces(model, t, frames(model, q, qd, charts))
         return None
     if status == kernel.SINGULAR:
         raise SingularMatrix("smallest pivot below tolerance")

@@ -24,6 +24,8 @@ import numpy as np
 from mbd3d.body import Body
 from mbd3d.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
+from mbd3d.compiled import forces as kernel
+from mbd3d.compiled.motions import CONSTANT
 from mbd3d.motion import Motion
 
 if TYPE_CHECKING:
@@ -77,6 +79,12 @@ class _CompiledForces(ABC):
         """Potential energy stored in the elements [J] (zero for non-conservative ones)."""
         return 0.0
 
+    def table(self, model: "Model") -> dict | None:
+        """The group's data for the compiled core (fields of
+        :class:`mbd3d.compiled.structures.ModelArrays`, and ``"actuators"``: the compiled terms
+        of its actuators' motions), or None when a value is a Python function."""
+        return None
+
     #: whether :meth:`tangent` is implemented (else implicit integrators difference
     #: :meth:`apply` over the elements' bodies)
     analytic_tangent = False
@@ -89,10 +97,16 @@ class _CompiledForces(ABC):
 
 
 class _Value:
-    """A force value given as a constant, ``f(t)`` or ``f(t, state)``, evaluated uniformly."""
+    """A force value given as a constant, ``f(t)`` or ``f(t, state)``, evaluated uniformly.
+
+    ``constant`` holds the value when it is one, ``terms`` the motion's compiled terms when it
+    is a built-in :class:`Motion` (both None otherwise): what the compiled core can evaluate
+    without calling Python."""
 
     def __init__(self, value: Any, what: str, size: int | None):
         self.needs_state = False
+        self.constant = None
+        self.terms = value.terms() if isinstance(value, Motion) else None
         if isinstance(value, Motion):
             self._fn = lambda t, state: value.evaluate(t)[0]
         elif callable(value):
@@ -108,6 +122,7 @@ class _Value:
         else:
             const = (finite_vector(value, size, what) if size is not None
                      else finite_scalar(value, what))
+            self.constant = const
             self._fn = lambda t, state: const
 
     def __call__(self, t: float, state: "ForceState | None") -> Any:
@@ -161,17 +176,26 @@ class _PointForces(_CompiledForces):
             u = np.zeros(dim) if e.point is None else ctx.vector(e.point, f"force '{e.name}': point")
             fn = _Value(e.force, f"force '{e.name}': force", dim)
             self.items.append((e, u, fn))
+        self._points = np.array([u for _, u, _ in self.items]).reshape(-1, dim)
+        self._body_frame = np.array([e.frame == "body" for e in elements], dtype=np.int64)
 
     def apply(self, model, t, fr, Q):
-        bt = model.body_type
-        for e, u, fn in self.items:
-            idx = np.array([model.padded_index(e.body)])
-            state = _state(model, fr, idx, u) if fn.needs_state else None
-            F = _checked(fn(t, state), (model.dim,), f"force '{e.name}'", t)
-            if e.frame == "body":
-                F = bt.vector(fr, idx, F[None])[0]
-            J = bt.point_jacobian(fr, idx, u[None])[0]
-            Q[idx[0]] += J.T @ F
+        bodies = np.array([model.padded_index(e.body) for e, _, _ in self.items], dtype=np.int64)
+        forces = np.empty((len(self.items), model.dim))
+        for k, (e, u, fn) in enumerate(self.items):
+            state = _state(model, fr, bodies[k:k + 1], u) if fn.needs_state else None
+            forces[k] = _checked(fn(t, state), (model.dim,), f"force '{e.name}'", t)
+        kernel.point_forces_into(fr.A, fr.axes, bodies, self._points, forces,
+                                 self._body_frame, Q)
+
+    def table(self, model):
+        if any(fn.constant is None for _, _, fn in self.items):
+            return None
+        return {"point_bodies": np.array([model.padded_index(e.body) for e, _, _ in self.items],
+                                         dtype=np.int64),
+                "point_points": self._points,
+                "point_forces": np.array([fn.constant for _, _, fn in self.items]),
+                "point_body_frame": self._body_frame}
 
 
 def _state(model, fr, idx, u) -> ForceState:
@@ -210,16 +234,29 @@ class _Torques(_CompiledForces):
         size = None if ctx.dim == 2 else 3
         self.items = [(e, _Value(e.torque, f"torque '{e.name}'", size)) for e in elements]
         self.shape = () if ctx.dim == 2 else (3,)
+        # body axes turn a spatial torque; a planar one is about the normal either way
+        self._body_frame = np.array([e.frame == "body" and ctx.dim == 3 for e in elements],
+                                    dtype=np.int64)
 
     def apply(self, model, t, fr, Q):
-        bt = model.body_type
-        for e, fn in self.items:
-            idx = np.array([model.padded_index(e.body)])
-            state = _state(model, fr, idx, np.zeros(model.dim)) if fn.needs_state else None
+        bodies = np.array([model.padded_index(e.body) for e, _ in self.items], dtype=np.int64)
+        torques = np.zeros((len(self.items), 3))
+        for k, (e, fn) in enumerate(self.items):
+            state = (_state(model, fr, bodies[k:k + 1], np.zeros(model.dim)) if fn.needs_state
+                     else None)
             n = _checked(fn(t, state), self.shape, f"torque '{e.name}'", t)
-            if e.frame == "body" and model.dim == 3:
-                n = bt.rotate(fr, idx, n[None])[0]
-            Q[idx[0]] += bt.torque_generalized(fr, idx, n[None])[0]
+            torques[k, 3 - n.size:] = n  # planar: about the normal, (0, 0, n)
+        kernel.torques_into(fr.A, fr.axes, bodies, torques, self._body_frame, Q)
+
+    def table(self, model):
+        if any(fn.constant is None for _, fn in self.items):
+            return None
+        torques = np.zeros((len(self.items), 3))
+        for k, (_, fn) in enumerate(self.items):
+            torques[k, 3 - np.size(fn.constant):] = fn.constant
+        return {"torque_bodies": np.array([model.padded_index(e.body) for e, _ in self.items],
+                                          dtype=np.int64),
+                "torque_values": torques, "torque_body_frame": self._body_frame}
 
 
 class _SpringGroup(_CompiledForces):
@@ -247,10 +284,26 @@ class _SpringGroup(_CompiledForces):
                           np.array([model.padded_index(e.body_j) for e in self.elements]))
         return self._rows
 
-    def _actuation(self, t: float) -> np.ndarray:
-        out = np.zeros(len(self.elements))
+    def _actuator_terms(self) -> list | None:
+        """The compiled terms of every element's actuator (none: an empty sum), or None when
+        one is a Python function."""
+        terms: list = [[] for _ in self.elements]
         for n, fn in self.actuators:
-            out[n] = float(_checked(fn(t, None), (), f"spring '{self.elements[n].name}' actuator", t))
+            if fn.terms is not None:
+                terms[n] = fn.terms
+            elif fn.constant is not None:
+                terms[n] = [(CONSTANT, np.array([fn.constant]))]
+            else:
+                return None
+        return terms
+
+    def _actuation(self, t: float) -> np.ndarray:
+        """The actuators' tensions or torques at ``t`` in the first column of (k, 3), the
+        layout of motion values the compiled forces take."""
+        out = np.zeros((len(self.elements), 3))
+        for n, fn in self.actuators:
+            out[n, 0] = float(_checked(fn(t, None), (), f"spring '{self.elements[n].name}' "
+                                       "actuator", t))
         return out
 
 
@@ -293,6 +346,12 @@ class SpringDamper(ForceElement):
         return _SpringDampers(elements, ctx)
 
 
+def coincident_points(name: str, t: float) -> ModelError:
+    """The error of a spring whose two points coincide: its force has no direction."""
+    return ModelError(f"spring '{name}': its two points coincide at t = {t:g} s; the force "
+                      "direction is undefined (give the spring a non-zero length)")
+
+
 def resolve_point(ctx: "BuildContext", body: Body, local: Any, drawing: Any, what: str
                   ) -> np.ndarray:
     """Body-frame point from either a body-frame ``local`` or a global ``drawing`` point."""
@@ -322,6 +381,8 @@ class _SpringDampers(_SpringGroup):
                     raise ModelError(f"spring '{e.name}': free_length must be >= 0, got {length}")
             ui.append(pi), uj.append(pj), l0.append(length)
         self.u_i, self.u_j, self.l0 = np.array(ui), np.array(uj), np.array(l0)
+        self._points = np.ascontiguousarray(np.stack([self.u_i, self.u_j], axis=1))
+        self._values = np.ascontiguousarray(np.stack([self.k, self.c, self.l0], axis=1))
 
     def _length(self, model, fr):
         bt = model.body_type
@@ -330,22 +391,21 @@ class _SpringDampers(_SpringGroup):
         return d, np.sqrt(np.einsum("kd,kd->k", d, d))
 
     def apply(self, model, t, fr, Q):
-        bt = model.body_type
-        bi, bj = self._indices(model)
-        d, length = self._length(model, fr)
-        if np.any(length < 1e-12):
-            bad = self.elements[int(np.argmin(length))].name
-            raise ModelError(f"spring '{bad}': its two points coincide at t = {t:g} s; the force "
-                             "direction is undefined (give the spring a non-zero length)")
-        e = d / length[:, None]
-        d_dot = bt.point_velocity(fr, bj, self.u_j) - bt.point_velocity(fr, bi, self.u_i)
-        rate = np.einsum("kd,kd->k", e, d_dot)
-        tension = self.k * (length - self.l0) + self.c * rate + self._actuation(t)
-        force_on_i = tension[:, None] * e
-        Qi = np.einsum("kdn,kd->kn", bt.point_jacobian(fr, bi, self.u_i), force_on_i)
-        Qj = np.einsum("kdn,kd->kn", bt.point_jacobian(fr, bj, self.u_j), -force_on_i)
-        np.add.at(Q, bi, Qi)
-        np.add.at(Q, bj, Qj)
+        failed = kernel.spring_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd,
+                                           self._bodies(model), self._points,
+                                           self._values, self._actuation(t), Q)
+        if failed >= 0:
+            raise coincident_points(self.elements[failed].name, t)
+
+    def _bodies(self, model) -> np.ndarray:
+        return np.stack(self._indices(model), axis=1).astype(np.int64)
+
+    def table(self, model):
+        terms = self._actuator_terms()
+        if terms is None:
+            return None
+        return {"spring_bodies": self._bodies(model), "spring_points": self._points,
+                "spring_values": self._values, "actuators": terms}
 
     def potential(self, model, fr) -> float:
         _, length = self._length(model, fr)
@@ -365,7 +425,7 @@ class _SpringDampers(_SpringGroup):
         e = d / length[:, None]
         d_dot = bt.point_velocity(fr, bj, self.u_j) - bt.point_velocity(fr, bi, self.u_i)
         tension = (self.k * (length - self.l0) + self.c * np.einsum("kd,kd->k", e, d_dot)
-                   + self._actuation(t))
+                   + self._actuation(t)[:, 0])
         along = np.einsum("kd,ke->kde", e, e)
         H = ((self.k + velocity_weight * self.c)[:, None, None] * along
              + (tension / length)[:, None, None] * (np.eye(e.shape[1]) - along))
@@ -447,6 +507,9 @@ class _RotationalSprings(_SpringGroup):
         for n, a in enumerate(free):
             self.phi0[n] = (drawing[n] if a is None
                             else ctx.scalar(a, f"spring '{elements[n].name}': free_angle"))
+        self._values = np.ascontiguousarray(np.stack([self.k, self.c, self.phi0], axis=1))
+        self._vectors = (np.zeros((0, 3, 3)) if self.planar else
+                         np.ascontiguousarray(np.stack([self.f_i, self.g_i, self.f_j], axis=1)))
 
     def _angle(self, bt, fr, bi, bj) -> np.ndarray:
         if self.planar:
@@ -461,19 +524,18 @@ class _RotationalSprings(_SpringGroup):
         return stretch if self.planar else np.angle(np.exp(1j * stretch))
 
     def apply(self, model, t, fr, Q):
-        bt = model.body_type
-        bi, bj = self._indices(model)
-        if self.planar:
-            rate = fr.Qd[bj, 2] - fr.Qd[bi, 2]
-            axis = None
-        else:
-            axis = bt.rotate(fr, bi, np.cross(self.f_i, self.g_i))
-            rate = np.einsum("kd,kd->k", bt.angular_velocity(fr, bj) - bt.angular_velocity(fr, bi),
-                             axis)
-        torque = -self.k * self._stretch(bt, fr, bi, bj) - self.c * rate + self._actuation(t)
-        vector = torque if axis is None else torque[:, None] * axis
-        np.add.at(Q, bj, bt.torque_generalized(fr, bj, vector))
-        np.add.at(Q, bi, bt.torque_generalized(fr, bi, -vector))
+        kernel.rotary_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, self._bodies(model),
+                                  self._values, self._vectors, self._actuation(t), Q)
+
+    def _bodies(self, model) -> np.ndarray:
+        return np.stack(self._indices(model), axis=1).astype(np.int64)
+
+    def table(self, model):
+        terms = self._actuator_terms()
+        if terms is None:
+            return None
+        return {"rotary_bodies": self._bodies(model), "rotary_values": self._values,
+                "rotary_vectors": self._vectors, "actuators": terms}
 
     def potential(self, model, fr) -> float:
         bi, bj = self._indices(model)

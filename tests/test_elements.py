@@ -134,3 +134,42 @@ def test_slider_driven_crank_follows_the_law_of_cosines(driver):
     phi = np.arccos((r * r + x * x - l * l) / (2 * r * x))
     np.testing.assert_allclose(res.body("crank").angle, phi, atol=1e-12)
     np.testing.assert_allclose(res.body("slider").position[:, 0], x, atol=1e-13)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_forces_in_the_compiled_core_equal_forces_called_from_python(dim):
+    """Every kind of force element with constant values and a built-in motion as actuator
+    (evaluated inside the compiled loop), against the same elements with the values given as
+    Python functions (evaluated by Python at every right-hand side)."""
+    from mbd3d.mechanisms import frame_along
+
+    def build(python: bool):
+        value = (lambda v: (lambda t: v)) if python else (lambda v: v)
+        b = mb.ModelBuilder(dim=dim, gravity=(0.0, -9.81) if dim == 2 else (0.0, -9.81, 0.0))
+        kw = {} if dim == 2 else {"orientation": frame_along(np.array([1.0, 0.0, 0.0]))}
+        pos = (lambda *x: x[:dim])
+        arm = b.add_body("arm", mass=1.0, inertia=0.1 if dim == 2 else (0.05, 0.1, 0.1),
+                         position=pos(0.5, 0.0, 0.0), **kw)
+        tip = b.add_body("tip", mass=0.5, inertia=0.02 if dim == 2 else (0.01, 0.02, 0.02),
+                         position=pos(1.5, 0.0, 0.0), **kw)
+        axis = {} if dim == 2 else {"axis": (0.0, 0.0, 1.0)}
+        b.add(Revolute("hinge", b.ground, arm, at=pos(0.0, 0.0, 0.0), **axis))
+        elbow = b.add(Revolute("elbow", arm, tip, at=pos(1.0, 0.0, 0.0), **axis))
+        b.add(mb.SpringDamper("spring", b.ground, tip, at_i=pos(0.0, 1.0, 0.0),
+                              at_j=pos(1.5, 0.0, 0.0), stiffness=40.0, damping=0.5,
+                              actuator=(lambda t: 2.0 * math.sin(3.0 * t)) if python
+                              else mb.Harmonic(2.0, 3.0)))
+        joint = {"joint": elbow} if dim == 3 else {"body_i": arm, "body_j": tip}
+        b.add(mb.RotationalSpringDamper("torsion", stiffness=3.0, damping=0.1,
+                                        actuator=value(0.4), **joint))
+        b.add(mb.PointForce("push", tip, value(np.array(pos(0.0, 5.0, 1.0))),
+                            point=pos(0.2, 0.0, 0.0), frame="body"))
+        b.add(mb.Torque("twist", arm, value(0.7 if dim == 2 else np.array([0.1, 0.2, 0.7]))))
+        return b.build()
+
+    t = np.linspace(0.0, 1.0, 11)
+    runs = [mb.forward_dynamics(build(python), t, rtol=1e-11, atol=1e-13)
+            for python in (False, True)]
+    assert not runs[0].model._core.python_parts and runs[1].model._core.python_parts
+    np.testing.assert_allclose(runs[0].q, runs[1].q, atol=1e-11)
+    np.testing.assert_allclose(runs[0].lam, runs[1].lam, rtol=1e-8, atol=1e-8)

@@ -11,9 +11,12 @@ kernels and keeps no NumPy twin of their formulas.
 debugging and coverage; they are then slow but give the same numbers.
 
 Modules: :mod:`.rotations` (Rodrigues parameters), :mod:`.bodies` (frames, body vectors, mass
-blocks, quadratic velocity forces, the integrated velocities), :mod:`.rows` (the constraint
-primitives), :mod:`.dense` (LU with the pivot test of :mod:`mbd3d.linalg`) and
-:mod:`.accelerations` (the augmented equations in one call).
+blocks, quadratic velocity forces, the integrated velocities, chart resets), :mod:`.rows` (the
+constraint primitives), :mod:`.motions` (prescribed motions), :mod:`.forces` (force elements),
+:mod:`.dense` (dense and banded LU with the pivot test of :mod:`mbd3d.linalg`),
+:mod:`.structures` (the records passed around), :mod:`.accelerations` (the augmented
+equations in one call), :mod:`.runge_kutta` and :mod:`.integration` (the explicit integrators
+and their loop), and :mod:`.callbacks` (what the loop asks of Python).
 """
 
 from __future__ import annotations

@@ -15,7 +15,8 @@ allocating, and a single call (:func:`accelerations`, :func:`accelerations_with_
 one too. A planar model passes
 ``charts=None``, and compiles no spatial code.
 
-``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state.
+``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state (or a force or
+motion that cannot be evaluated there: the caller evaluates it in Python for the message).
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from mbd3d.compiled.bodies import (body_vectors_into, planar_frames_into,
                                    planar_mass_blocks_into, spatial_frames_into,
                                    spatial_mass_blocks_into, spatial_quadratic_velocity_into)
 from mbd3d.compiled.dense import solve_banded_pattern_into, solve_pattern_into
+from mbd3d.compiled.forces import (point_forces_into, rotary_forces_into, spring_forces_into,
+                                   torques_into)
 from mbd3d.compiled.motions import motion_values_into
 from mbd3d.compiled.range_space import range_space_solve_into
 from mbd3d.compiled.rows import constraint_rows_into
@@ -74,6 +77,41 @@ def _finite_rows(x: np.ndarray) -> bool:
 
 
 @jit
+def forces_into(forces, work, t: float, rhs) -> bool:
+    """Add the generalized forces of the force elements ``forces``
+    (:class:`~mbd3d.compiled.structures.ForceArrays`) at ``t`` to ``rhs`` (n,), from the
+    frames and coordinates in ``work``; False when a spring's points coincide or an actuator
+    is not finite. ``forces`` is None for a model without compiled force elements: Numba then
+    compiles nothing of this (the branch is decided by the argument's type), so that such
+    models pay neither run time nor compile time for it."""
+    if forces is None:
+        return True
+    motion_values_into(forces.spring_first, forces.spring_kinds, forces.spring_starts,
+                       forces.spring_params, t, work.spring_actuation)
+    motion_values_into(forces.rotary_first, forces.rotary_kinds, forces.rotary_starts,
+                       forces.rotary_params, t, work.rotary_actuation)
+    if not (_finite_rows(work.spring_actuation) and _finite_rows(work.rotary_actuation)):
+        return False
+    out = work.forces
+    out[:, :] = 0.0
+    A, axes, omega, Q, Qd = work.A, work.axes, work.omega, work.Q, work.Qd
+    if spring_forces_into(A, axes, omega, Q, Qd, forces.spring_bodies, forces.spring_points,
+                          forces.spring_values, work.spring_actuation, out) >= 0:
+        return False
+    rotary_forces_into(A, axes, omega, Q, Qd, forces.rotary_bodies, forces.rotary_values,
+                       forces.rotary_vectors, work.rotary_actuation, out)
+    point_forces_into(A, axes, forces.point_bodies, forces.point_points, forces.point_forces,
+                      forces.point_body_frame, out)
+    torques_into(A, axes, forces.torque_bodies, forces.torque_values, forces.torque_body_frame,
+                 out)
+    nc = out.shape[1]
+    for b in range(out.shape[0] - 1):
+        for c in range(nc):
+            rhs[b * nc + c] += out[b, c]
+    return True
+
+
+@jit
 def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
     """Solve the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`) in
     ``work`` (:class:`Workspace`); returns the status.
@@ -116,6 +154,8 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
         nc = 3
         planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
         planar_mass_blocks_into(model.mass, model.inertia, blocks)
+    if not forces_into(model.forces, work, t, rhs):
+        return NOT_FINITE
     s, J, v, a = work.s, work.J, work.v, work.a
     body_vectors_into(A, axes, omega, kappa, model.vector_bodies, model.vector_local, yes, s,
                       J, v, a)
@@ -129,13 +169,41 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
         gamma[driver_rows[k]] += drivers[k, 2]
     for i in range(model.n_rows):
         rhs[n + i] = gamma[i]
-    if model.layout == RANGE:
-        regular = range_space_solve_into(
-            nc, blocks, data, model.range_slot,
-            model.range_body_start, model.range_positions, model.range_row_position,
-            model.range_bandwidth, model.pivot_tolerance, rhs, work.range_jacobian,
-            work.range_band, work.range_diagonal, work.range_vector, work.range_forces, work.x)
-        return SOLVED if regular else SINGULAR
+    return SOLVED if _solve_into(nc, model.range_space, model, work) else SINGULAR
+
+
+@jit
+def _solve_into(nc, range_space, model, work) -> bool:
+    """Solve the augmented system whose mass blocks, Jacobian values and right-hand side
+    :func:`accelerations_into` left in ``work``, for the model's layout; returns whether the
+    matrix is regular (the ``SPARSE`` layout: the caller solves). ``range_space``: the
+    model's :class:`~mbd3d.compiled.structures.RangeSpaceArrays`, None unless its layout is
+    ``RANGE`` (Numba then compiles none of that solve)."""
+    blocks, data, rhs = work.blocks, work.data, work.rhs
+    if range_space is not None:
+        return range_space_solve_into(
+            nc, blocks, data, range_space.slot, range_space.body_start, range_space.positions,
+            range_space.row_position, range_space.bandwidth, model.pivot_tolerance, rhs,
+            work.range_jacobian, work.range_band, work.range_diagonal, work.range_vector,
+            work.range_forces, work.x)
+    values = work.values
+    n_blocks = blocks.size
+    for b in range(blocks.shape[0]):
+        for i in range(nc):
+            for j in range(nc):
+                values[(b * nc + i) * nc + j] = blocks[b, i, j]
+    nnz = model.nnz
+    for i in range(nnz):
+        values[n_blocks + i] = data[i]
+        values[n_blocks + nnz + i] = data[i]
+    if model.layout == DENSE:
+        return solve_pattern_into(model.rows, model.cols, model.entry_scale, model.scale,
+                                  values, rhs, model.pivot_tolerance, work.matrix, work.x)
+    if model.layout == BANDED:
+        return solve_banded_pattern_into(model.flat, model.kl, model.ku, model.perm,
+                                         model.entry_scale, model.scale, values, rhs,
+                                         model.pivot_tolerance, work.band, work.permuted, work.x)
+    return True
     values = work.values
     n_blocks = blocks.size
     for b in range(blocks.shape[0]):
@@ -160,24 +228,31 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
 
 
 @jit
-def accelerations_with_parts(work, t, q, qd, charts, extra, phi, drivers):
-    """``(x, status)`` of :func:`accelerations_into` for the model of the workspace ``work``
-    (:func:`~mbd3d.compiled.structures.workspace`): ``x = (qdd, lam)`` (a new array), or for
-    the ``SPARSE`` layout the augmented matrix's entries in the pattern's order followed by
-    its right-hand side."""
-    model = work.model
-    status = accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers)
+def _result(model, work, status):
+    """``(x, status)`` after :func:`accelerations_into`: ``x = (qdd, lam)`` (a new array), or
+    for the ``SPARSE`` layout the augmented matrix's entries in the pattern's order followed
+    by its right-hand side, for the caller's solve."""
     if model.layout == SPARSE:
-        # the matrix's entries in the pattern's order and the right-hand side, stacked, for
-        # the caller's solve
         return np.concatenate((work.values, work.rhs)), status
     return work.x.copy(), status
 
 
 @jit
+def accelerations_with_parts(work, t, q, qd, charts, extra, phi, drivers):
+    """``(x, status)`` of :func:`accelerations_into` for the model of the workspace ``work``
+    (:func:`~mbd3d.compiled.structures.workspace`) with parts that are Python objects (see
+    :func:`accelerations_into` for ``extra``, ``phi`` and ``drivers``); ``x`` as in
+    :func:`_result`."""
+    model = work.model
+    return _result(model, work, accelerations_into(model, work, t, q, qd, charts, extra, phi,
+                                                   drivers))
+
+
+@jit
 def accelerations(work, t, q, qd, charts):
-    """:func:`accelerations_with_parts` of a model without parts that are Python objects
+    """As :func:`accelerations_with_parts`, for a model without parts that are Python objects
     (three arguments fewer to hand over at each call from Python)."""
     model = work.model
-    return accelerations_with_parts(work, t, q, qd, charts, model.no_forces, model.no_motions,
-                                    model.no_motions)
+    return _result(model, work, accelerations_into(model, work, t, q, qd, charts,
+                                                   model.no_forces, model.no_motions,
+                                                   model.no_motions))
