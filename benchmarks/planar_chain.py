@@ -31,7 +31,7 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 import mbd3d as mb  # noqa: E402
 import peers  # noqa: E402
-from mbd3d import constraints  # noqa: E402
+from mbd3d.model import constraints  # noqa: E402
 from mbd3d.mechanisms import pendulum_chain  # noqa: E402
 from measure import cheapest, fitted_exponent, interleaved_medians, machine, median_time  # noqa: E402,E501
 
@@ -186,7 +186,7 @@ def compare_with_peers(n_links: int, factory=pendulum_chain, spatial: bool = Fal
 
 
 def crossover(sizes=(2, 4, 8, 12, 16, 24)) -> None:
-    """Dense vs banded augmented solve around the threshold (mbd3d.model.SPARSE_THRESHOLD)."""
+    """Dense vs banded augmented solve around the threshold (mbd3d.model.builder.SPARSE_THRESHOLD)."""
     dense = [measure(n, simulate=False, sparse=False)["solve_ms"] for n in sizes]
     banded = [measure(n, simulate=False, sparse=True)["solve_ms"] for n in sizes]
     print(mb.format_table({"N": list(sizes), "unknowns n+m": [5 * n for n in sizes],

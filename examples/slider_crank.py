@@ -25,7 +25,7 @@ import os
 import numpy as np
 
 import mbd3d as mb
-from mbd3d.files import check_output_folder
+from mbd3d.io.files import check_output_folder
 from mbd3d.mechanisms import slider_crank
 from mbd3d.viewer import check_destination, record
 

@@ -20,7 +20,7 @@ import numpy as np
 import trimesh
 
 import mbd3d as mb
-from mbd3d import rotations
+from mbd3d.numerics import rotations
 from mbd3d.joints import Spherical
 from mbd3d.viewer import check_destination, record
 

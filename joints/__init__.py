@@ -1,6 +1,6 @@
 """The joint and driver library of mbd3d.
 
-Every joint is a composition of the constraint primitives of :mod:`mbd3d.primitives`, written
+Every joint is a composition of the constraint primitives of :mod:`mbd3d.model.primitives`, written
 against the body kinematics, so the same classes serve every body type that supports them.
 
 - :class:`Revolute`: pin (point coincidence).

@@ -6,11 +6,11 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.body import Body
-from mbd3d.element import ConstraintElement
+from mbd3d.model.body import Body
+from mbd3d.model.element import ConstraintElement
 from mbd3d.errors import ModelError
-from mbd3d.model import BuildContext
-from mbd3d.element import PrimitiveSpec
+from mbd3d.model.builder import BuildContext
+from mbd3d.model.element import PrimitiveSpec
 
 
 def perpendicular(v: np.ndarray) -> np.ndarray:

@@ -11,11 +11,11 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.body import Body
-from mbd3d.element import ConstraintElement, PrimitiveSpec
+from mbd3d.model.body import Body
+from mbd3d.model.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
-from mbd3d.model import BuildContext
-from mbd3d.motion import Motion, as_motion
+from mbd3d.model.builder import BuildContext
+from mbd3d.model.motion import Motion, as_motion
 
 from mbd3d.joints.base import Axes
 from mbd3d.joints.prismatic import Prismatic

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from mbd3d.element import PrimitiveSpec
-from mbd3d.model import BuildContext
+from mbd3d.model.element import PrimitiveSpec
+from mbd3d.model.builder import BuildContext
 
 from mbd3d.joints.base import Axes, Joint, perpendicular_rows
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from mbd3d.body import Body
-from mbd3d.element import PrimitiveSpec
-from mbd3d.model import BuildContext
+from mbd3d.model.body import Body
+from mbd3d.model.element import PrimitiveSpec
+from mbd3d.model.builder import BuildContext
 
 from mbd3d.joints.base import Axes, Joint, perpendicular_rows
 

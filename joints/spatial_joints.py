@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.body import Body
-from mbd3d.element import PrimitiveSpec
+from mbd3d.model.body import Body
+from mbd3d.model.element import PrimitiveSpec
 from mbd3d.errors import ModelError
-from mbd3d.model import BuildContext
+from mbd3d.model.builder import BuildContext
 
 from mbd3d.joints.base import Axes, Joint, perpendicular, perpendicular_rows, require_spatial
 

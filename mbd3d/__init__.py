@@ -19,21 +19,21 @@ from mbd3d._checkout import map_siblings as _map_siblings
 
 _map_siblings(__path__[0])
 
-from mbd3d import rotations  # noqa: E402 (the sub-packages are found from here on)
-from mbd3d.body import Body
-from mbd3d.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
-from mbd3d.equations import kinetic_energy, potential_energy
+from mbd3d.numerics import rotations  # noqa: E402 (the sub-packages are found from here on)
+from mbd3d.model.body import Body
+from mbd3d.analyses.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
+from mbd3d.model.equations import kinetic_energy, potential_energy
 from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
                           NotFullyDrivenError, OverDrivenError, SingularJacobianError,
                           StiffnessWarning)
-from mbd3d.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
-from mbd3d.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
-from mbd3d.mobility import MobilityReport, mobility
-from mbd3d.observers import Observer, ProgressBar
-from mbd3d.model import Model, ModelBuilder
-from mbd3d.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
-from mbd3d.position import solve_position
-from mbd3d.results import Results, format_table
+from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
+from mbd3d.analyses.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
+from mbd3d.analyses.mobility import MobilityReport, mobility
+from mbd3d.io.observers import Observer, ProgressBar
+from mbd3d.model.builder import Model, ModelBuilder
+from mbd3d.model.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
+from mbd3d.analyses.position import solve_position
+from mbd3d.io.results import Results, format_table
 
 __version__ = "0.1.0"
 

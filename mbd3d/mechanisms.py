@@ -11,9 +11,9 @@ import math
 import numpy as np
 
 from mbd3d.errors import ModelError
-from mbd3d.forces import Torque
-from mbd3d.model import Model, ModelBuilder
-from mbd3d.motion import Motion, Ramp
+from mbd3d.model.forces import Torque
+from mbd3d.model.builder import Model, ModelBuilder
+from mbd3d.model.motion import Motion, Ramp
 
 __all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions",
            "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "frame_along"]
@@ -218,7 +218,7 @@ def spatial_four_bar(*, all_revolute: bool = False, crank_speed: float | None = 
     degree of freedom. With ``all_revolute=True`` the same linkage is built with four revolutes
     (crank and rocker axes as above, coupler pins parallel to them): a spatial four-bar of
     revolutes only moves when its axes meet Bennett's conditions, so this one is rigid, and
-    :func:`mbd3d.mobility` reports 0 degrees of freedom with 2 redundant rows.
+    :func:`mbd3d.analyses.mobility` reports 0 degrees of freedom with 2 redundant rows.
     """
     from mbd3d.joints import Revolute, RotationDriver, Spherical, Universal
 

@@ -37,8 +37,8 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 from mbd3d.errors import MBDError
-from mbd3d.files import atomic_write
-from mbd3d.results import Results, _import_pandas, format_table
+from mbd3d.io.files import atomic_write
+from mbd3d.io.results import Results, _import_pandas, format_table
 
 __all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable"]
 
@@ -79,7 +79,7 @@ class Analysis:
                                f"are {', '.join(n for n in accepted if n not in ('model', 'times', 'progress', 'observers'))}")
         method = self.options.get("method")
         if self.kind == "forward dynamics" and method is not None:
-            from mbd3d.dynamics import GENERALIZED_ALPHA, METHODS  # noqa: PLC0415
+            from mbd3d.analyses.dynamics import GENERALIZED_ALPHA, METHODS  # noqa: PLC0415
             if method not in METHODS and method != GENERALIZED_ALPHA:
                 raise MBDError(f"Analysis: method must be one of {', '.join(METHODS)}, "
                                f"{GENERALIZED_ALPHA}; got {method!r}")

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.body import BodyType, Frames
-from mbd3d.compiled.bodies import planar_frames, planar_mass_blocks
-from mbd3d.checks import finite_scalar, finite_vector
+from mbd3d.model.body import BodyType, Frames
+from mbd3d.numerics.compiled.bodies import planar_frames, planar_mass_blocks
+from mbd3d.model.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
 
@@ -31,7 +31,7 @@ def inertia_tensors(inertia: np.ndarray) -> np.ndarray:
 
 
 class PlanarBody(BodyType):
-    """Kinematics of planar rigid bodies, batched over bodies (see :class:`mbd3d.body.BodyType`)."""
+    """Kinematics of planar rigid bodies, batched over bodies (see :class:`mbd3d.model.body.BodyType`)."""
 
     dim = 2
     n_coords = 3

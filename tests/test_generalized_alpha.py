@@ -1,4 +1,4 @@
-"""The implicit index-3 generalized-alpha integrator (mbd3d.implicit), against references
+"""The implicit index-3 generalized-alpha integrator (mbd3d.analyses.implicit), against references
 independent of it: minimal-coordinate equations solved by SciPy, closed-form oscillators,
 the explicit integrators on the same model, and its own order of convergence."""
 
@@ -197,10 +197,10 @@ def test_spring_damper_tangent_equals_finite_differences_at_free_length(dim):
     """The iteration matrix's analytic spring-damper tangent against central differences of
     the generalized forces, for turned bodies at rest with the spring at its free length (where
     the terms the tangent leaves out vanish); the damper part is exact at any state."""
-    from mbd3d import constraints
-    from mbd3d.equations import generalized_forces
-    from mbd3d.implicit import _force_tangent
-    from mbd3d.rotations import axis_angle
+    from mbd3d.model import constraints
+    from mbd3d.model.equations import generalized_forces
+    from mbd3d.analyses.implicit import _force_tangent
+    from mbd3d.numerics.rotations import axis_angle
     rng = np.random.default_rng(7)
     b = mb.ModelBuilder(dim=dim)
     pose = {"angle": 0.7} if dim == 2 else {"orientation": axis_angle(rng.normal(size=3), 0.9)}

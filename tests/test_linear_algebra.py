@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
-from mbd3d import constraints, linalg
-from mbd3d.equations import generalized_forces, mass_matrix
+from mbd3d.model import constraints
+from mbd3d.numerics import linalg
+from mbd3d.model.equations import generalized_forces, mass_matrix
 from mbd3d.mechanisms import pendulum_chain, spatial_chain
 
 
@@ -117,7 +118,7 @@ def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):
 
 
 def _band_storage(S: np.ndarray, k: int) -> np.ndarray:
-    """The lower band storage of mbd3d.compiled.range_space: ``S[i, j]`` at ``j (k+1) + i-j``."""
+    """The lower band storage of mbd3d.numerics.compiled.range_space: ``S[i, j]`` at ``j (k+1) + i-j``."""
     m = S.shape[0]
     band = np.zeros((k + 1) * m)
     for j in range(m):
@@ -130,7 +131,7 @@ def test_band_cholesky_solves_and_refuses_dependent_rows():
     """The banded Cholesky of Cq M^-1 Cq^T against NumPy's, and its local pivot test: a row
     that is a combination of the rows before it is refused, however small or large the
     matrix's other entries."""
-    from mbd3d.compiled.range_space import band_cholesky, band_cholesky_solve
+    from mbd3d.numerics.compiled.range_space import band_cholesky, band_cholesky_solve
 
     rng = np.random.default_rng(11)
     m, k = 30, 3

@@ -10,7 +10,7 @@ import trimesh
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
-from mbd3d.mass_properties import mesh_properties
+from mbd3d.model.mass_properties import mesh_properties
 
 
 def box_inertia(m, a, b, c):

@@ -24,7 +24,7 @@ def test_library_folders_install_inside_the_mbd3d_namespace():
 
 def test_every_subpackage_is_installed():
     """A sub-package missing from pyproject's list imports from the checkout and fails after
-    pip install (mbd3d.compiled once did)."""
+    pip install (mbd3d.numerics.compiled once did)."""
     listed = set(tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
                  ["packages"])
     found = {"mbd3d." + ".".join(init.parent.relative_to(REPO / "mbd3d").parts)

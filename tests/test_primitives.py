@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
-from mbd3d import constraints
+from mbd3d.model import constraints
 from mbd3d.joints import Distance, Fixed, PointOnLine, Prismatic, Revolute, RotationDriver
 
 

@@ -8,9 +8,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbd3d as mb
-from mbd3d import constraints
-from mbd3d.equations import generalized_forces, mass_matrix
-from mbd3d.linalg import augmented_scaling
+from mbd3d.model import constraints
+from mbd3d.model.equations import generalized_forces, mass_matrix
+from mbd3d.numerics.linalg import augmented_scaling
 from mbd3d.mechanisms import pendulum_chain
 from test_examples import load
 
@@ -173,7 +173,7 @@ def test_iftomm_a04_bricard_redundant_constraint_found_and_motion_computed(capsy
         np.testing.assert_allclose(implicit_body.position, explicit_body.position, atol=5e-6)
         np.testing.assert_allclose(implicit_body.rotation, explicit_body.rotation, atol=5e-6)
     # minimum-norm multipliers, in the model's dimensionless units (rows over their scale,
-    # coordinates times theirs, see mbd3d.linalg): no component along the dependency of the
+    # coordinates times theirs, see mbd3d.numerics.linalg): no component along the dependency of the
     # rows, and the equations of motion hold with them
     model = explicit.model
     weights = augmented_scaling(model)[model.n_coordinates:]
@@ -222,7 +222,7 @@ def test_a_collapsed_explicit_step_is_put_down_to_a_singular_position_only_where
     taken there is reported as a singular position with its joints; for a simple pendulum,
     whose Jacobian is regular, the failure stays an IntegrationError."""
     from mbd3d.joints import Revolute
-    from mbd3d.dynamics import _step_failure
+    from mbd3d.analyses.dynamics import _step_failure
 
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     first = b.add_body("first", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))

@@ -154,7 +154,7 @@ def test_reactions_need_multipliers():
 def test_interrupt_keeps_the_results_so_far(monkeypatch):
     model = pendulum_chain(2)
     calls = {"n": 0}
-    import mbd3d.dynamics as dynamics
+    import mbd3d.analyses.dynamics as dynamics
     real = dynamics.project_state
 
     def interrupted(*args):  # Ctrl-C while an output is being stored
@@ -204,7 +204,7 @@ def test_mobility_of_a_fully_driven_and_a_free_mechanism():
 def test_free_coordinates_and_directions_complete_the_jacobian(build):
     """Holding the reported free coordinates leaves a square regular system (they can be
     driven), and the free directions are orthonormal velocities the constraints allow."""
-    from mbd3d import constraints
+    from mbd3d.model import constraints
     model = build()
     report = mb.mobility(model)
     Cq = constraints.jacobian(model, 0.0, model.q0, sparse=False)
@@ -239,7 +239,7 @@ def test_mobility_finds_the_redundancy_of_a_double_parallelogram():
 
 def _per_state(res):
     """Residuals and energies one state at a time, through the solvers' own functions."""
-    from mbd3d import constraints
+    from mbd3d.model import constraints
     model = res.model
     out = []
     for k, t in enumerate(res.t):

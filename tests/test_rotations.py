@@ -9,7 +9,7 @@ import quaternion as npq
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
-from mbd3d import rotations as rot
+from mbd3d.numerics import rotations as rot
 
 rng = np.random.default_rng(42)
 RANDOM = Rotation.random(50, random_state=7)

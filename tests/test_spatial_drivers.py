@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
-from mbd3d import constraints
+from mbd3d.model import constraints
 from mbd3d.mechanisms import slider_crank, slider_crank_positions
 from mbd3d.joints import CoordinateDriver, Prismatic, Revolute, RotationDriver, Spherical, Universal
 

@@ -35,10 +35,10 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from mbd3d import files
+from mbd3d.io import files
 from mbd3d.errors import ModelError
-from mbd3d.observers import Observer
-from mbd3d.results import Results
+from mbd3d.io.observers import Observer
+from mbd3d.io.results import Results
 from mbd3d.viewer.scene import Scene, _rerun
 
 __all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable",
@@ -62,7 +62,7 @@ def _application_id(model_name: str) -> str:
 
 def check_output_path(path: str | os.PathLike, overwrite: bool) -> str:
     """The absolute path of a new ``.rrd`` file, or a :class:`RecordingError` saying why it
-    cannot be written there (see :func:`mbd3d.files.check_output_path`)."""
+    cannot be written there (see :func:`mbd3d.io.files.check_output_path`)."""
     try:
         return files.check_output_path(path, overwrite, "the recording")
     except files.OutputError as exc:

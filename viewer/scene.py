@@ -14,9 +14,9 @@ import numpy as np
 
 from mbd3d.joints import CoordinateDriver, Prismatic, RotationDriver, TranslationDriver
 from mbd3d.errors import ModelError
-from mbd3d.forces import SpringDamper
-from mbd3d.results import Results
-from mbd3d.mass_properties import load_mesh
+from mbd3d.model.forces import SpringDamper
+from mbd3d.io.results import Results
+from mbd3d.model.mass_properties import load_mesh
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
                            initial_points, model_size)
 

@@ -15,9 +15,9 @@ import numpy as np
 import trimesh
 
 from mbd3d.joints import Prismatic
-from mbd3d.body import Body
-from mbd3d.forces import SpringDamper
-from mbd3d.model import Model
+from mbd3d.model.body import Body
+from mbd3d.model.forces import SpringDamper
+from mbd3d.model.builder import Model
 
 __all__ = ["attachment_points", "body_shape", "model_size", "initial_frames", "initial_points",
            "color_of", "GROUND_COLOR"]

@@ -1,0 +1,419 @@
+"""Implicit index-3 generalized-alpha integration with augmented-Lagrangian Newton iterations.
+
+The generalized-alpha method of Chung and Hulbert (1993), applied to the index-3 equations of
+motion as Arnold and Bruls (2007) do::
+
+    M(q) qdd + Cq^T lam = Qe(t, q, qd)        C(q, t) = 0
+
+at every step ``t_n -> t_n + h``. With ``a`` the method's acceleration-like variable,
+
+    (1 - alpha_m) a_{n+1} + alpha_m a_n = (1 - alpha_f) qdd_{n+1} + alpha_f qdd_n
+    q_{n+1}  = q_n + h qd_n + h^2 (1/2 - beta) a_n + h^2 beta a_{n+1}
+    qd_{n+1} = qd_n + h (1 - gamma) a_n + h gamma a_{n+1}
+
+so that ``qdd_{n+1} = beta' (q_{n+1} - q_hat)`` and ``qd_{n+1} = qd_hat + gamma' (q_{n+1} -
+q_hat)`` are affine in the new positions. The one unknown is ``q_{n+1}``; the constraints are
+enforced at position level by the method of multipliers (the index-3 augmented Lagrangian of
+Bayo, Garcia de Jalon and Serna; Cuadrado et al.'s ALI3-P): Newton iterations on
+
+    r(q) = M qdd + Cq^T (lam + p C(q)) - Qe = 0,   lam <- lam + p C after each iteration,
+
+with the iteration matrix ``beta' M + gamma' D + K + p Cq^T Cq`` (``D``, ``K`` the tangent of the
+applied forces, by finite differences when the model has force elements). That matrix stays
+positive definite where ``Cq`` loses rank, so the method passes singular configurations (the
+IFToMM N-four-bar) and handles redundant constraints (Bricard's mechanism) without special
+cases, and its sparsity is that of the mechanism (banded for a chain). The reported
+velocities are projected onto ``Cq qd = -Ct`` with the same factors (mass-orthogonal), so
+position and velocity drift stay at the Newton tolerance however long the run.
+
+The iteration matrix is factored at every Newton iterate (two per step are typical): its
+penalty part outweighs the mass matrix by the penalty ratio and must follow the configuration,
+or the large constraint forces leak into the free directions. The spectral radius at infinity
+``rho_inf`` (1: no numerical damping; 0: asymptotic annihilation) sets the coefficients; the
+method is second order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d.model import constraints
+from mbd3d.model.checks import finite_scalar
+from mbd3d.model.equations import augmented_accelerations, generalized_forces, mass_matrix, mass_times
+from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, penalty_scale,
+                          solve_augmented_lagrangian, solve_model_augmented)
+from mbd3d.io.observers import Watch
+from mbd3d.analyses.passages import PassageWatch
+from mbd3d.analyses.kinematics import initial_guess, solve_velocity
+from mbd3d.analyses.position import singular_error, solve_position
+from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
+
+__all__ = ["GeneralizedAlpha", "consistent_accelerations", "rows_dependent",
+           "integrate_generalized_alpha"]
+
+
+@dataclass(frozen=True)
+class GeneralizedAlpha:
+    """Coefficients of the generalized-alpha method for a spectral radius ``rho_inf`` in [0, 1]
+    (Chung and Hulbert 1993: second order, unconditionally stable, least low-frequency
+    damping for the high-frequency damping asked)."""
+
+    rho_inf: float
+
+    def __post_init__(self):
+        if not (np.isfinite(self.rho_inf) and 0.0 <= self.rho_inf <= 1.0):
+            raise ModelError(f"rho_inf must be between 0 and 1, got {self.rho_inf!r}")
+
+    @property
+    def alpha_m(self) -> float:
+        return (2.0 * self.rho_inf - 1.0) / (self.rho_inf + 1.0)
+
+    @property
+    def alpha_f(self) -> float:
+        return self.rho_inf / (self.rho_inf + 1.0)
+
+    @property
+    def gamma(self) -> float:
+        return 0.5 + self.alpha_f - self.alpha_m
+
+    @property
+    def beta(self) -> float:
+        return 0.25 * (self.gamma + 0.5) ** 2
+
+
+def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, charts=None,
+                             lam: np.ndarray | None = None, redundant: bool = False,
+                             fallback: bool = True) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``qdd`` and ``lam`` of the augmented equations, also where ``Cq`` loses rank.
+
+    The augmented matrix is factored by LU as in :func:`mbd3d.forward_accelerations`; where it
+    is singular (a singular configuration, redundant constraints) the augmented-Lagrangian
+    iteration gives the accelerations of the consistent equations and the multipliers without
+    a component in the null space of ``Cq^T`` (minimum-norm from ``lam = 0``). With
+    ``redundant`` (rows known to be dependent) the LU is skipped: rounding can lift its
+    smallest pivot above the singularity threshold, and the solution would be noise. Without
+    ``fallback`` a singular matrix raises instead (the explicit integrators' rule).
+
+    Returns
+    -------
+    qdd, lam : ndarray
+    regular : bool
+        False when the augmented matrix was singular (multipliers not unique).
+    """
+    n = model.n_coordinates
+    if not redundant:
+        try:
+            x = augmented_accelerations(model, t, q, qd, charts)
+        except SingularMatrix:
+            if not fallback:
+                raise singular_error(model, constraints.jacobian(model, t, q, constraints.frames(
+                    model, q, charts=charts)), t, f"forward dynamics of '{model.name}'") from None
+        else:
+            if x is None:
+                raise IntegrationError(f"forward dynamics of '{model.name}': the state is not "
+                                       f"finite at t = {t:.6g} s (the integration diverged)",
+                                       time=t)
+            return x[:n], x[n:], True
+    fr = constraints.frames(model, q, qd, charts)
+    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
+    Qe = generalized_forces(model, t, fr)
+    M = mass_matrix(model, fr)
+    Cq = constraints.jacobian_matrix(model, jac_data)
+    try:
+        qdd, lam, _ = solve_augmented_lagrangian(M, Cq, Qe, gamma, lam=lam,
+                                                 scaling=augmented_scaling(model))
+    except SingularMatrix:
+        raise singular_error(model, Cq, t, f"forward dynamics of '{model.name}'") from None
+    return qdd, lam, False
+
+
+def rows_dependent(model, t: float, q: np.ndarray, charts=None) -> bool:
+    """Whether the augmented matrix ``[M Cq^T; Cq 0]`` is singular at ``q``: constraint rows
+    that depend on each other (redundant constraints, or a singular configuration)."""
+    fr = constraints.frames(model, q, charts=charts)
+    _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    try:
+        solve_model_augmented(model, blocks, jac_data,
+                              np.zeros(model.n_coordinates + model.n_constraints))
+    except SingularMatrix:
+        return True
+    return False
+
+
+def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
+    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements, or None
+    when there are none (gravity does not depend on the state; the spatial bodies' quadratic
+    velocity terms are left out of the iteration matrix, which only slows convergence). Groups with an analytic tangent
+    (spring-dampers) give it directly; the others are differenced forward, only over the
+    coordinates of the bodies they act on."""
+    if not model.force_groups:
+        return None
+    n, nc, nb = model.n_coordinates, model.n_coords_per_body, model.n_bodies
+    fr = constraints.frames(model, q, qd, charts)
+    rows, cols, values = [], [], []
+    for group in model.force_groups:
+        if group.analytic_tangent:
+            r, c, v = group.tangent(model, t, fr, gamma_prime)
+            keep = (r < n) & (c < n)  # the ground block (last) is not a coordinate
+            rows.append(r[keep]), cols.append(c[keep]), values.append(v[keep])
+    differenced = [g for g in model.force_groups if not g.analytic_tangent]
+    if differenced:
+        def forces(*state):
+            Q = np.zeros((nb + 1, nc))
+            for group in differenced:
+                group.apply(model, t, constraints.frames(model, *state, charts), Q)
+            return Q[:nb].ravel()
+        bodies = sorted({int(model.padded_index(body)) for group in differenced
+                         for element in group.elements for _, body in element.bodies()
+                         if not body.is_ground})
+        f0 = forces(q, qd)
+        for j in (b * nc + k for b in bodies for k in range(nc)):
+            for vector, weight in ((q, 1.0), (qd, gamma_prime)):
+                h = 1.5e-8 * max(1.0, abs(vector[j]))
+                shifted = vector.copy()
+                shifted[j] += h
+                column = -(forces(*((shifted, qd) if vector is q else (q, shifted))) - f0) / h
+                nonzero = np.flatnonzero(column)
+                rows.append(nonzero), cols.append(np.full(len(nonzero), j))
+                values.append(weight * column[nonzero])
+    if not values:
+        return None  # elements acting on the ground only
+    T = sp.coo_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+    return T.tocsr() if model.sparse else T.toarray()
+
+
+def _penalty(model, blocks: np.ndarray, jac_data: np.ndarray, beta_prime: float,
+             relative_penalty: float) -> np.ndarray:
+    """The penalties ``p`` (one per row) of the augmented Lagrangian: ``relative_penalty``
+    times the mass term ``beta' M`` per squared unit of ``Cq``, taken in the model's
+    dimensionless units (coordinates over their scale ``s``, rows over theirs ``r``, masses
+    over ``m L^2``; see linalg.penalty_scale), so that the ratio means the same for a
+    mechanism of any size: ``p_i = p~ m L^2 / r_i^2``."""
+    s, r = model.coordinate_scale, model.row_scale
+    mass_unit = model.mass_scale * model.length_scale ** 2
+    scaled = jac_data * s[model._jac_cols] / r[model._jac_rows]
+    row_norms = np.bincount(model._jac_rows, weights=scaled * scaled,
+                            minlength=model.n_constraints)
+    mass_diagonal = np.einsum("kii->ki", blocks).ravel() * s * s / mass_unit
+    scaled_penalty = relative_penalty * beta_prime * penalty_scale(mass_diagonal, row_norms)
+    return scaled_penalty * mass_unit / (r * r)
+
+
+class _IterationMatrix:
+    """Factors of ``beta' M + gamma' D + K + p Cq^T Cq`` at one Newton iterate, from the mass
+    blocks and Jacobian values the iteration has evaluated there."""
+
+    def __init__(self, model, blocks, jac_data, beta_prime, penalty, tangent):
+        self.penalty = penalty
+        values = model._penalty_pattern.values(beta_prime, blocks, penalty, jac_data)
+        self.lu = model._penalty_pattern.factor(values, tangent)
+        # the conditioning of Cq in the metric of M, free of the step (see mbd3d.analyses.passages)
+        self.indicator = (self.lu.log_abs_determinant - model.n_coordinates * np.log(beta_prime)
+                          - float(np.sum(np.linalg.slogdet(blocks)[1])))
+
+
+def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
+                                rho_inf: float,
+                                constraint_tol: float, max_step: float, hold, observers,
+                                progress, newton_tol: float = 1e-10,
+                                relative_penalty: float = 1e8,
+                                max_newton_iterations: int = 30) -> Results:
+    """Generalized-alpha integration over the output times ``t``; see
+    :func:`mbd3d.forward_dynamics` (``method="generalized-alpha"``) for the parameters.
+
+    The step is fixed: shortened only to land on output times, or for one step to a
+    quarter when Newton does not converge (near a singular configuration).
+    """
+    coefficients = GeneralizedAlpha(rho_inf)
+    am, af = coefficients.alpha_m, coefficients.alpha_f
+    beta, gamma = coefficients.beta, coefficients.gamma
+    if step is None:
+        raise ModelError("method='generalized-alpha' needs a fixed step [s], e.g. step=1e-3 "
+                         "(the error of this second-order method scales with step^2)")
+    step = finite_scalar(step, "step (the fixed time step of generalized-alpha) [s]",
+                         positive=True)
+    n = model.n_coordinates
+    projection_tol = constraint_tol * 1e-3
+    stats = {"method": "generalized-alpha", "rho_inf": rho_inf, "steps": 0,
+             "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
+             "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
+    k_max = len(t)
+    out = ResultsBuffer(model, "forward dynamics", t, stats)
+
+    redundant = False  # set at the start: the constraint rows depend on each other
+    passages = PassageWatch(model)
+    stats["singular_passages"] = passages.passages
+
+    def record(q, qd, chart, lam_guess):
+        tk = t[out.done]
+        # from lam = 0 where the rows depend on each other: the minimum-norm multipliers
+        qdd, lam, regular = consistent_accelerations(model, tk, q, qd, chart,
+                                                     None if redundant else lam_guess,
+                                                     redundant)
+        if not regular:
+            stats["singular_outputs"].append(float(tk))
+        out.store(q, qd, qdd, lam, chart)
+        return qdd, lam
+
+    def project_velocity(tt, q, qd, chart, lu, penalty):
+        """Mass-orthogonal projection onto ``Cq qd = -Ct`` with the iteration matrix's
+        factors: each pass cuts the violation by the penalty ratio."""
+        fr = constraints.frames(model, q, charts=chart)
+        C, jac_data, _ = constraints.evaluate(model, tt, fr)
+        nu = constraints.velocity_rhs(model, tt, fr)
+        violation = constraints.jacobian_times(model, jac_data, qd) - nu
+        stats["max_drift"] = max(stats["max_drift"],
+                                 constraints.largest_relative(model, C),
+                                 constraints.largest_relative(model, violation))
+        for _ in range(8):
+            if constraints.largest_relative(model, violation) <= projection_tol:
+                break
+            qd = qd - lu.solve(constraints.jacobian_transpose_times(model, jac_data,
+                                                                     penalty * violation))
+            violation = constraints.jacobian_times(model, jac_data, qd) - nu
+        return qd
+
+    def newton(tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
+        """One step: the new state and the iteration matrix, or None when Newton does not
+        converge."""
+        shift = (af * qdd_n - am * a_n) / (1.0 - am)
+        q_hat = q_n + h * qd_n + h * h * (0.5 - beta) * a_n + h * h * beta * shift
+        qd_hat = qd_n + h * (1.0 - gamma) * a_n + h * gamma * shift
+        beta_prime = (1.0 - am) / (h * h * beta * (1.0 - af))
+        gamma_prime = gamma / (h * beta)
+        q = q_hat + qdd_n / beta_prime  # predictor: unchanged accelerations
+        lam = lam_n.copy()
+        previous = np.inf
+        for iteration in range(max_newton_iterations):
+            qdd = beta_prime * (q - q_hat)
+            qd = qd_hat + gamma_prime * (q - q_hat)
+            if iteration == 0:
+                # the applied forces' tangent varies slowly: once per step is enough
+                tangent = _force_tangent(model, tt, q, qd, chart, gamma_prime)
+            fr = constraints.frames(model, q, qd, chart)
+            C, jac_data, _ = constraints.evaluate(model, tt, fr)
+            blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+            penalty = _penalty(model, blocks, jac_data, beta_prime, relative_penalty)
+            Mqdd = mass_times(blocks, qdd)
+            if iteration:
+                lam = lam + penalty * C  # method of multipliers, C at the new iterate
+            lam_effective = lam + penalty * C
+            r = (Mqdd + constraints.jacobian_transpose_times(model, jac_data, lam_effective)
+                 - generalized_forces(model, tt, fr))
+            # factors at every iterate (full Newton): the constraint force p C Cq^T is
+            # normal to the free directions only at the configuration where Cq is
+            # evaluated, and it is large (p is the penalty ratio times the mass term); with
+            # factors kept from the predictor, its part along the free directions of the old
+            # factors passed the convergence test as a tangential force error (a velocity
+            # oscillation of 1e-2 rad/s on a slider-crank at h = 1e-3, 200 times the method's
+            # own error). The geometric stiffness d(Cq^T lam)/dq is left out (Gauss-Newton on
+            # the penalty term, as in ALI3-P): tried, with lam or lam + p C, it made the
+            # free slider-crank at h = 5e-4 reject thousands of steps where it rejects none
+            # without it (p C is far larger than lam between iterates, so neither is the
+            # curvature the next iterate sees)
+            try:
+                S = _IterationMatrix(model, blocks, jac_data, beta_prime, penalty, tangent)
+            except SingularMatrix:
+                raise IntegrationError(
+                    f"forward dynamics of '{model.name}': the generalized-alpha iteration "
+                    f"matrix is numerically singular at t = {tt:.6g} s. Its pivots span the "
+                    "penalty ratio times the spread of the bodies' masses and inertias: check "
+                    "for bodies many orders of magnitude lighter than the others (or give "
+                    "them mass).", time=tt) from None
+            stats["factorizations"] += 1
+            dq = -S.lu.solve(r)
+            if not np.all(np.isfinite(dq)):
+                return None
+            q = q + dq
+            stats["newton_iterations"] += 1
+            # relative to the coordinates' scale (the model's length for positions)
+            size = float(np.max(np.abs(dq) / (model.coordinate_scale + np.abs(q))))
+            rate = size / previous if iteration else np.inf
+            # near a singular configuration the multipliers converge only linearly (rate
+            # a / (a + p s^2) along a small singular value s): judge the remaining error
+            # by the observed rate, as for any linearly convergent iteration
+            remaining = size * rate / (1.0 - rate) if rate < 1.0 else np.inf
+            if (min(size, remaining) <= newton_tol
+                    and constraints.largest_relative(model, C) <= projection_tol):
+                qdd = beta_prime * (q - q_hat)
+                qd = qd_hat + gamma_prime * (q - q_hat)
+                a = shift + (1.0 - af) / (1.0 - am) * qdd
+                return (q, qd, qdd, a, lam_effective), S
+            if iteration >= 2 and rate > 0.9:
+                return None  # diverging or stalled: shorten the step
+            previous = size
+        return None
+
+    def loop() -> None:
+        nonlocal redundant
+        chart = model.charts0
+        guess = initial_guess(model, t[0], q0, chart, f"forward dynamics of '{model.name}'",
+                              "q0")
+        q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
+        redundant = rows_dependent(model, t[0], q, chart)
+        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
+        qdd, lam = record(q, qd, chart, None)
+        a = qdd.copy()
+        watch.tick(t[0], 0)
+        tt = float(t[0])
+        h = min(step, max_step)
+        while out.done < k_max:
+            target = float(t[out.done])
+            h_try = min(h, target - tt)
+            if target - (tt + h_try) < 1e-9 * max(h, 1e-300):
+                h_try = target - tt
+            elif target - (tt + h_try) < 0.05 * h:
+                h_try = 0.5 * (target - tt)  # two even steps instead of a sliver
+            result = newton(tt + h_try, h_try, q, qd, qdd, a, lam, chart)
+            if result is None:
+                stats["rejected_steps"] += 1
+                h = 0.25 * h_try
+                if h < 1e-14 * max(1.0, abs(tt)):
+                    raise IntegrationError(
+                        f"forward dynamics of '{model.name}': generalized-alpha Newton "
+                        f"iterations do not converge at t = {tt:.6g} s even with a step of "
+                        f"{h_try:.3g} s. Check the model's stiffness and masses, or try a "
+                        "smaller step.", time=tt)
+                continue
+            (q_new, qd_new, qdd_new, a_new, lam_new), S = result
+            tt += h_try
+            stats["steps"] += 1
+            q, qd, qdd, a, lam = q_new, qd_new, qdd_new, a_new, lam_new
+            passages.step(tt, S.indicator, q, chart)
+            if not np.all(np.isfinite(q)) or not np.all(np.isfinite(qd)):
+                raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
+                                       f"non-finite at t = {tt:.6g} s", time=tt)
+            # back to the nominal step after a recovery, doubling: jumping straight back
+            # from a quarter step, the free slider-crank at h = 1e-3 (crank at 80 rad/s)
+            # cycled between rejection and return with the predictor's error growing every
+            # cycle, to 1e18 m at t = 0.113 s, where no step converged any more
+            h = min(step, max_step, 2.0 * h)
+            if tt >= target - 1e-12 * max(1.0, abs(target)):
+                tt = target
+                # the reported velocities are projected onto Cq qd = -Ct; the recursion keeps
+                # its own, because projecting them inside it costs the method its order
+                record(q, project_velocity(tt, q, qd, chart, S.lu, S.penalty), chart, lam)
+            watch.tick(tt, stats["steps"])
+            q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart)
+            if moved:
+                # new orientation coordinates: restart the recursion from consistent
+                # accelerations in the new charts (as at the initial time)
+                stats["chart_resets"] += 1
+                q, qd, chart = q_moved, qd_moved, chart_new
+                qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, lam, redundant)
+                a = qdd.copy()
+
+    def run() -> None:
+        try:
+            loop()
+        finally:
+            passages.close()  # a passage still open at the end (or at a failure)
+
+    watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)
+    return run_keeping_results(run, out.partial, watch)

@@ -1,0 +1,276 @@
+"""Position analysis: Newton-Raphson on ``C(q, t) = 0``, the one place it is implemented.
+
+Each iteration solves ``Cq dq = -C``. When the constraints do not fix every coordinate (assembly
+of a mechanism for forward dynamics) the step is the mass-weighted least-change one,
+``min dq^T M dq`` subject to ``Cq dq = -C``, so the guess moves as little as the constraints
+allow and coordinates the user asks to ``hold`` stay where they are. A backtracking line search on
+``|C|`` makes it converge from guesses tens of degrees off; the guess picks the assembly branch
+(elbow up or down).
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d.model import constraints
+from mbd3d.model.equations import mass_matrix
+from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
+from mbd3d.numerics.linalg import (PIVOT_TOLERANCE, Factorization, SingularMatrix, augmented_scaling,
+                          dependent_rows, jacobian_scaling, ranked_rows, solve_augmented,
+                          solve_augmented_lagrangian, summarize)
+
+#: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
+#: inconsistent (a lock-up), not redundant
+MAX_AUGMENTED_LAGRANGIAN = 50
+
+__all__ = ["solve_position", "hold_indices", "singular_error"]
+
+
+def hold_indices(model, hold: Iterable[str | int] | None) -> np.ndarray:
+    """Indices in ``q`` of coordinates given as ``"body.coordinate"`` names or integers."""
+    out = []
+    for item in hold or ():
+        if isinstance(item, (int, np.integer)):
+            if not 0 <= item < model.n_coordinates:
+                raise ModelError(f"hold: coordinate index {item} out of range 0..{model.n_coordinates - 1}")
+            out.append(int(item))
+        else:
+            try:
+                out.append(model.coordinate_index(str(item)))
+            except ModelError as exc:
+                raise ModelError(f"hold: {exc}") from None
+    return np.array(sorted(set(out)), dtype=np.intp)
+
+
+#: largest Jacobian (rows x columns) whose dependent rows are found by a dense SVD
+LARGEST_DENSE_ANALYSIS = 4_000_000
+
+
+def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJacobianError:
+    """A :class:`SingularJacobianError` naming the joints whose rows depend on each other,
+    the most involved first (a long list is cut to its head and a count)."""
+    if Cq.shape[0] * Cq.shape[1] > LARGEST_DENSE_ANALYSIS:
+        # the dependent rows come from a dense SVD, out of reach here (a 10,000-link chain's
+        # Jacobian would take 14 GB)
+        test = (f"a pivot of Cq M^-1 Cq^T fell below {PIVOT_TOLERANCE:g} of its diagonal "
+                "entry" if model._augmented_pattern.layout == "range" else
+                f"a pivot of the augmented matrix fell below {PIVOT_TOLERANCE:g} of the "
+                "largest, in the model's units")
+        return SingularJacobianError(
+            f"{what}: the constraint Jacobian is singular or nearly so at t = {t:.6g} s "
+            f"({test}). The model is too large ({Cq.shape[0]} x {Cq.shape[1]}) to "
+            "find the dependent rows by singular value decomposition; run its kinematic "
+            "analysis or mb.mobility on a smaller version of it. Forward dynamics passes "
+            "singular positions with method='generalized-alpha'.", joints=[], time=t,
+            results=results)
+    scaling = jacobian_scaling(model) if Cq.shape[0] == model.n_constraints else None
+    rank, groups = dependent_rows(Cq, scaling=scaling)
+    rows = ranked_rows(groups, model.n_constraints)
+    joints = model.joints_of_rows(rows)
+    if rank < Cq.shape[0]:
+        state = (f"singular at t = {t:.6g} s (numerical rank {rank} of {Cq.shape[0]} rows)")
+    else:  # nearly singular: every row counts, but one combination of them hardly does
+        A = Cq.toarray() if sp.issparse(Cq) else np.asarray(Cq)
+        if scaling is not None:
+            A = scaling[0][:, None] * A * scaling[1][None, :]
+        s = np.linalg.svd(A, compute_uv=False)
+        state = (f"nearly singular at t = {t:.6g} s (its smallest singular value is "
+                 f"{s[-1] / s[0]:.1e} of its largest, in the model's units)")
+    return SingularJacobianError(
+        f"{what}: the constraint Jacobian is {state}. Dependent rows: "
+        f"{summarize([model.row_labels[r] for r in rows], 8)}; joints involved, most first: "
+        f"{summarize(joints)}. This is a lock-up or toggle position of the mechanism, or "
+        "redundant constraints. Forward dynamics passes singular positions with "
+        "method='generalized-alpha'.", joints=joints, time=t, results=results)
+
+
+def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
+    try:
+        q = np.array(q, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what} must be {model.n_coordinates} numbers (one per coordinate), "
+                         f"got {q!r}") from None
+    if q.size != model.n_coordinates:
+        raise ModelError(f"{what} must have {model.n_coordinates} entries (one per coordinate), "
+                         f"got {q.size}")
+    bad = np.flatnonzero(~np.isfinite(q))
+    if bad.size:
+        raise ModelError(f"{what} is not finite at {', '.join(model.coordinate_labels[k] for k in bad[:5])}")
+    return q
+
+
+def _least_change_step(model, q, charts, J, C, m, held):
+    """Mass-weighted least-change ``dq`` with ``J dq = -C`` when ``J`` has dependent rows
+    (None if even the penalty matrix is singular). Where the linearised rows are slightly
+    inconsistent (a drifted state of a redundant mechanism: second-order small) the best
+    iterate is still a descent step; at a lock-up it is not, and the line search then stops
+    the iteration with the joints named."""
+    M = mass_matrix(model, constraints.frames(model, q, charts=charts))
+    try:
+        dq, _, _ = solve_augmented_lagrangian(M, J, np.zeros(len(q)), -C,
+                                              max_iterations=MAX_AUGMENTED_LAGRANGIAN,
+                                              scaling=augmented_scaling(model, held))
+    except SingularMatrix:
+        return None
+    return dq if np.all(np.isfinite(dq)) else None
+
+
+def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
+                   tol: float = 1e-12, max_iterations: int = 50,
+                   hold: Iterable[str | int] | None = None,
+                   charts: np.ndarray | None = None, redundant: bool = False) -> np.ndarray:
+    """Solve ``C(q, t) = 0`` by Newton-Raphson from ``q_guess``.
+
+    Parameters
+    ----------
+    model : Model
+    q_guess : (n,) array_like, optional
+        Starting point; default ``model.q0`` (the bodies' initial guesses).
+    t : float
+        Time [s] (drivers are evaluated at ``t``).
+    tol : float
+        Convergence when every row satisfies ``|C| <= tol``, relative to the model's scale:
+        length rows in units of ``model.length_scale``, angle rows in radians. Each kind is
+        raised to the rounding level of the coordinates it sums, ``100 eps (1 + max |R| /
+        L)`` for lengths and ``100 eps (1 + max |angle|)`` for angles, when that is larger.
+    max_iterations : int
+    hold : iterable of str or int, optional
+        Coordinates kept at their guessed values, e.g. ``["crank.theta"]``.
+    charts : ndarray, optional
+        Spatial models: the reference rotations ``q_guess`` is relative to (default the model's
+        initial charts). The result is relative to the same charts.
+    redundant : bool
+        The rows are known to depend on each other (see :func:`mbd3d.analyses.mobility`): every step
+        is the mass-weighted least-change one by the augmented Lagrangian, never an LU of the
+        dependent rows (which rounding can let through with an arbitrary null-space part).
+
+    Returns
+    -------
+    q : ndarray (n,)
+
+    Raises
+    ------
+    AssemblyError
+        No convergence: the message names the constraint rows with the largest residual.
+    SingularJacobianError
+        The Jacobian is singular at the iterate (names the joints involved).
+    """
+    q = _check_finite(model, model.q0 if q_guess is None else q_guess, "q_guess")
+    held = hold_indices(model, hold)
+    q_held = q[held].copy()
+    m, n = model.n_constraints, model.n_coordinates
+    m_total = m + len(held)
+    if m > n and not len(held):
+        # more equations than coordinates: only redundant rows can be satisfied together,
+        # so every step is the least-change one (a lock-up shows as a stalled iteration)
+        redundant = True
+    elif m_total > n:
+        raise AssemblyError(
+            f"position analysis of '{model.name}': {m} constraint equations"
+            f"{f' and {len(held)} held coordinates' if len(held) else ''} for {n} coordinates; "
+            "there are redundant constraints (see mbd3d.analyses.mobility) or too many held coordinates",
+            time=t)
+
+    def full_residual(qq):
+        C = constraints.residual(model, t, qq, constraints.frames(model, qq, charts=charts))
+        return np.concatenate([C, qq[held] - q_held]) if len(held) else C
+
+    def full_jacobian(qq):
+        Cq = constraints.jacobian(model, t, qq, constraints.frames(model, qq, charts=charts))
+        if not len(held):
+            return Cq
+        H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))
+        return sp.vstack([Cq, H], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H.toarray()])
+
+    # Residuals are judged relative to the model's scale: length rows (and held positions)
+    # in units of its length, angle rows in radians, so that a micrometre mechanism converges
+    # as tightly as a metre one. The rounding floor of each kind comes from the coordinates
+    # that kind sums: positions for lengths, angles for angles (which keep counting turns),
+    # so that a wild angle cannot loosen the test of the points.
+    scale = np.concatenate([model.row_scale, model.coordinate_scale[held]])
+    is_length = np.concatenate([model.length_rows, model.position_coordinates[held]])
+    positions = model.position_coordinates
+    eps100 = 100 * np.finfo(float).eps
+
+    def relative(C):
+        return C / scale
+
+    def worst_and_limit(C, qq):
+        size = np.abs(relative(C))
+        floor_length = eps100 * (1.0 + float(np.max(np.abs(qq[positions]), initial=0.0))
+                                 / model.length_scale)
+        floor_angle = eps100 * (1.0 + float(np.max(np.abs(qq[~positions]), initial=0.0)))
+        limit = np.where(is_length, max(tol, floor_length), max(tol, floor_angle))
+        return float(np.max(size / limit, initial=0.0)), float(np.max(size, initial=0.0))
+
+    C = full_residual(q)
+    norm = float(np.linalg.norm(relative(C)))
+    history = []
+    M = None
+    for iteration in range(max_iterations + 1):
+        ratio, worst = worst_and_limit(C, q)
+        history.append(worst)
+        if ratio <= 1.0:
+            return q
+        if iteration == max_iterations:
+            break
+        J = full_jacobian(q)
+        try:
+            if redundant:
+                raise SingularMatrix("dependent rows")
+            if m_total == n:
+                dq = Factorization(J, scaling=jacobian_scaling(model, held)).solve(-C)
+            else:
+                if M is None:
+                    M = mass_matrix(model, constraints.frames(model, q, charts=charts))
+                dq, _ = solve_augmented(M, J, np.zeros(n), -C, augmented_scaling(model, held))
+        except SingularMatrix:
+            # dependent rows: redundant constraints (solvable, least change) or a lock-up
+            # (no solution); the augmented Lagrangian tells them apart by converging or not
+            dq = _least_change_step(model, q, charts, J, C, m, held)
+            if dq is None:
+                raise singular_error(model, J[:m] if not sp.issparse(J) else J.tocsr()[:m], t,
+                                     f"position analysis of '{model.name}'") from None
+        # backtracking: accept the first step that reduces |C| (full steps near the solution)
+        step = 1.0
+        while True:
+            q_try = q + step * dq
+            C_try = full_residual(q_try)
+            norm_try = float(np.linalg.norm(relative(C_try)))
+            if np.isfinite(norm_try) and norm_try < (1.0 - 1e-4 * step) * norm:
+                break
+            step *= 0.5
+            if step < 1e-6:
+                break
+        if step < 1e-6:
+            break
+        q, C, norm = q_try, C_try, norm_try
+
+    order = np.argsort(-np.abs(relative(C)[:m]))[:3]
+    worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e} "
+                           f"{'m' if model.length_rows[r] else 'rad'}" for r in order)
+    # the largest residual per iteration, relative: lengths in units of the model's length
+    trace = ", ".join(f"{h:.1e}" for h in history[-6:])
+    trace += f" (relative to {model.length_scale:.3g} m for lengths)"
+    if iteration < max_iterations:
+        # No descent direction: |C| has a local minimum with C != 0, where the gradient
+        # Cq^T C vanishes, so Cq is singular there. The drivers ask for a position beyond a
+        # lock-up or toggle, or the joints cannot all be assembled.
+        J = full_jacobian(q)
+        J = J.tocsr()[:m] if sp.issparse(J) else J[:m]
+        error = singular_error(model, J, t, f"position analysis of '{model.name}'")
+        raise SingularJacobianError(
+            f"position analysis of '{model.name}' is stuck at t = {t:.6g} s at a singular "
+            f"configuration (max |C| per iteration: {trace}; largest residuals: {worst_rows}). "
+            f"The mechanism cannot reach the position its drivers and joints ask for: it is at a "
+            f"lock-up or toggle position, or cannot be assembled. Joints involved, most first: "
+            f"{summarize(error.joints)}.", joints=error.joints, time=t)
+    raise AssemblyError(
+        f"position analysis of '{model.name}' did not converge at t = {t:.6g} s after "
+        f"{max_iterations} Newton-Raphson iterations (max |C| per iteration: {trace}). "
+        f"Largest residuals: {worst_rows}. Check that these joints can be assembled (lengths, "
+        "points in body frames) and give initial guesses closer to an assembled configuration.",
+        time=t)

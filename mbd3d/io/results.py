@@ -1,0 +1,647 @@
+"""One results object for every analysis: time histories, named access, reactions, export.
+
+``Results`` holds ``t``, ``q``, ``qd``, ``qdd`` and, after inverse or forward dynamics, the
+multipliers ``lam``. Everything else (body poses, point trajectories, joint reactions, driver
+efforts, energies, residuals) is derived from them on request, through the same body kinematics
+and constraint primitives the solvers use.
+
+Sign conventions. With ``M qdd + Cq^T lam = Qe`` the constraint forces are ``-Cq^T lam``. The
+reaction of a joint *on a body* is the force [N] and moment [N m] the joint exerts on that body,
+the moment taken about the joint's point on that body. A driver's effort is the generalized force
+it applies in the direction of its coordinate: ``-lam`` (a torque [N m] for a rotation driver, a
+force [N] for a translation driver).
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import dataclass
+from typing import Any, BinaryIO, Callable, Sequence
+
+import numpy as np
+
+from mbd3d.model import constraints
+
+from mbd3d.io import files, history
+from mbd3d.model.body import Body
+from mbd3d.errors import MBDError, ModelError
+from mbd3d.model.primitives import evaluate_rows
+from mbd3d.numerics.rotations import continuous_quaternions, to_quaternion
+
+__all__ = ["Results", "ResultsBuffer", "BodyHistory", "PointHistory", "Reaction", "JointHistory",
+           "format_table"]
+
+
+@dataclass(frozen=True)
+class BodyHistory:
+    """Motion of a body over time (global axes).
+
+    Attributes
+    ----------
+    position, velocity, acceleration : ndarray (k, dim)
+        Centre of mass [m], [m/s], [m/s^2].
+    rotation : ndarray (k, dim, dim)
+        Orientation: the body axes as columns, in global components.
+    angular_velocity, angular_acceleration : ndarray
+        [rad/s], [rad/s^2]: (k,) about the normal for planar bodies, (k, 3) global for spatial.
+    angle : ndarray (k,) or None
+        Planar bodies: body angle [rad], unwrapped (it keeps counting turns).
+    """
+
+    name: str
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    rotation: np.ndarray
+    angular_velocity: np.ndarray
+    angular_acceleration: np.ndarray
+    angle: np.ndarray | None = None
+
+    @property
+    def quaternion(self) -> np.ndarray:
+        """Spatial bodies: unit quaternions (k, 4), ``(w, x, y, z)``, sign kept continuous."""
+        if self.rotation.shape[-1] != 3:
+            raise ModelError(f"body '{self.name}' is planar: use .angle")
+        return continuous_quaternions(to_quaternion(self.rotation))
+
+    @property
+    def orientation(self):
+        """Spatial bodies: the orientations as a numpy-quaternion array (k,) of
+        ``np.quaternion``, the same rotations as :attr:`quaternion`, for quaternion algebra:
+        ``a.conj() * b`` is the rotation from ``a`` to ``b``, ``quaternion.slerp`` and
+        ``quaternion.squad`` interpolate between output times, and
+        ``quaternion.as_rotation_vector`` gives rotation vectors [rad]."""
+        import quaternion  # noqa: PLC0415  (numpy-quaternion; imported when asked for)
+
+        return quaternion.from_float_array(self.quaternion)
+
+    @property
+    def pose(self) -> np.ndarray:
+        """(k, 3) ``(x, y, angle)`` for planar bodies; (k, 7) ``(x, y, z, w, qx, qy, qz)``
+        for spatial ones."""
+        if self.angle is not None:
+            return np.column_stack([self.position, self.angle])
+        return np.column_stack([self.position, self.quaternion])
+
+
+@dataclass(frozen=True)
+class PointHistory:
+    """Trajectory of a body point in global axes: ``position`` [m], ``velocity`` [m/s] and
+    ``acceleration`` [m/s^2], each (k, dim).
+
+    Indexing and NumPy see the positions, the common use: ``p[:, 0]`` is the x coordinate
+    over time and ``np.asarray(p)`` the (k, dim) positions.
+
+    >>> import numpy as np, mbd3d as mb
+    >>> from mbd3d.mechanisms import slider_crank
+    >>> res = mb.kinematic_analysis(slider_crank(crank_speed=1.0), np.linspace(0.0, 1.0, 3))
+    >>> tip = res.point("crank", (0.06, 0.0))
+    >>> np.array_equal(tip[:, 1], tip.position[:, 1]), len(tip), np.asarray(tip).shape
+    (True, 3, (3, 2))
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+
+    def __getitem__(self, index):
+        return self.position[index]
+
+    def __len__(self) -> int:
+        return len(self.position)
+
+    def __array__(self, dtype=None, copy=None):
+        return np.asarray(self.position, dtype=dtype)
+
+
+@dataclass(frozen=True)
+class Reaction:
+    """Force [N] (k, dim) and moment [N m] ((k,) planar) of a joint on a body, about the joint's
+    point on that body, in the axes named by ``frame`` ("global" or "joint")."""
+
+    body: str
+    frame: str
+    force: np.ndarray
+    moment: np.ndarray
+
+
+class JointHistory:
+    """Multipliers, reactions and (for drivers) efforts of one joint or driver."""
+
+    def __init__(self, results: "Results", name: str):
+        self._results = results
+        self.name = name
+        self.element = results.model.joint(name)
+        self.rows = results.model.rows_of(name)
+
+    @property
+    def lam(self) -> np.ndarray:
+        """Lagrange multipliers of the joint's rows, (k, rows)."""
+        return self._results._require_lam()[:, self.rows]
+
+    @property
+    def effort(self) -> np.ndarray:
+        """Driver effort ``-lam``, (k,): the torque [N m] or force [N] the actuator must
+        supply in the direction of its coordinate (``element.effort_unit``)."""
+        if not self.element.is_driver:
+            raise ModelError(f"'{self.name}' is a joint, not a driver; it has reactions, not an "
+                             "effort (use .reaction(on=...))")
+        return -self.lam[:, 0]
+
+    def reaction(self, on: str | Body | None = None, frame: str = "global") -> Reaction:
+        """Force and moment this joint exerts on body ``on`` (default: its second body, j).
+
+        Parameters
+        ----------
+        on : str or Body, optional
+            ``body_i`` or ``body_j`` of the joint (the ground is allowed).
+        frame : {"global", "joint"}
+            Axes of the components; "joint" are the joint's axes attached to body i.
+        """
+        return self._results._reaction(self.name, on, frame)
+
+
+class Results:
+    """Time histories of one analysis.
+
+    Attributes
+    ----------
+    model : Model
+    analysis : str
+        "kinematic analysis", "inverse dynamics" or "forward dynamics".
+    t : ndarray (k,)
+        Times [s].
+    q, qd, qdd : ndarray (k, n)
+        Coordinates and their first and second time derivatives.
+    lam : ndarray (k, m) or None
+        Lagrange multipliers (dynamics only).
+    status : str
+        "complete", "failed" or "interrupted"; ``message`` says why when not complete.
+    stats : dict
+        Solver statistics (steps, right-hand side evaluations, projections, wall time [s]).
+    charts : ndarray (k, n_bodies + 1, 3, 3) or None
+        Spatial models: the reference rotations the coordinates of each time point are relative
+        to. Use ``body(name).rotation`` or ``.quaternion`` for orientations, never raw ``q``.
+    """
+
+    def __init__(self, model, analysis: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
+                 qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
+                 message: str = "", stats: dict | None = None, charts: np.ndarray | None = None):
+        self.model = model
+        self.analysis = analysis
+        self.t = np.asarray(t, dtype=float)
+        self.q, self.qd, self.qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
+        self.lam = None if lam is None else np.asarray(lam, dtype=float)
+        self.status = status
+        self.message = message
+        self.stats = dict(stats or {})
+        self.charts = charts
+        self._residuals: tuple[np.ndarray, np.ndarray] | None = None
+        self._energies: tuple[np.ndarray, np.ndarray] | None = None
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __repr__(self) -> str:
+        span = f"t = {self.t[0]:g}..{self.t[-1]:g} s" if len(self.t) else "no time points"
+        return (f"Results({self.analysis} of '{self.model.name}': {len(self.t)} time points, "
+                f"{span}, {self.status})")
+
+    def subset(self, start: int, stop: int | None = None) -> "Results":
+        """The time points ``start <= k < stop`` as results of their own (views, not copies)."""
+        sl = slice(start, stop)
+        return Results(self.model, self.analysis, self.t[sl], self.q[sl], self.qd[sl],
+                       self.qdd[sl], None if self.lam is None else self.lam[sl],
+                       status=self.status, message=self.message, stats=self.stats,
+                       charts=None if self.charts is None else self.charts[sl])
+
+    # -- named access ----------------------------------------------------------------------------
+    def _require_lam(self) -> np.ndarray:
+        if self.lam is None:
+            raise MBDError(f"{self.analysis} results carry no multipliers; run "
+                           "mbd3d.inverse_dynamics or mbd3d.forward_dynamics for reactions and "
+                           "driver efforts")
+        return self.lam
+
+    def _state(self, k: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """Coordinates of time point ``k`` and the charts they are relative to."""
+        return self.q[k], None if self.charts is None else self.charts[k]
+
+    def _body_charts(self, body: Body) -> np.ndarray | None:
+        """The reference rotations of one body over all times (k, 3, 3), or None."""
+        if self.charts is None:
+            return None
+        return self.charts[:, self.model.padded_index(body)]
+
+    def _body_frames(self, body: Body):
+        """Frames of one body over all times (k rows) and the matching coordinate arrays."""
+        model = self.model
+        sl = model.coordinates_of(body)
+        fr = model.body_type.frames(self.q[:, sl], self.qd[:, sl], self._body_charts(body))
+        return fr, self.qdd[:, sl]
+
+    def _body(self, body: str | Body) -> Body:
+        if isinstance(body, Body):
+            return body
+        if body == "ground":
+            return self.model.ground
+        return self.model.body(body)
+
+    def body(self, name: str) -> BodyHistory:
+        """Motion of body ``name``: centre of mass, orientation, angular velocity and
+        acceleration."""
+        b = self.model.body(name)
+        bt = self.model.body_type
+        fr, qdd = self._body_frames(b)
+        idx = np.arange(len(self.t))
+        d = self.model.dim
+        sl = self.model.coordinates_of(b)
+        return BodyHistory(name, fr.R.copy(), fr.Rd.copy(), qdd[:, :d].copy(), fr.A,
+                           bt.angular_velocity(fr, idx).copy(),
+                           bt.angular_acceleration(fr, idx, qdd),
+                           self.q[:, sl.start + 2].copy() if d == 2 else None)
+
+    def poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every body's pose at every time, as a 3D pose (what a viewer draws).
+
+        Returns
+        -------
+        position : ndarray (k, n_bodies, 3)
+            Centres of mass [m], global axes; planar bodies lie in the plane z = 0.
+        quaternion : ndarray (k, n_bodies, 4)
+            Orientations as unit quaternions ``(w, x, y, z)``; planar bodies turn about z.
+        """
+        model = self.model
+        k, nb, nc, d = len(self.t), model.n_bodies, model.n_coords_per_body, model.dim
+        Q = self.q.reshape(k, nb, nc)
+        position = np.zeros((k, nb, 3))
+        position[:, :, :d] = Q[:, :, :d]
+        if d == 2:
+            half = 0.5 * Q[:, :, 2]
+            quaternion = np.zeros((k, nb, 4))
+            quaternion[:, :, 0], quaternion[:, :, 3] = np.cos(half), np.sin(half)
+            return position, quaternion
+        charts = None if self.charts is None else self.charts[:, :nb].reshape(k * nb, 3, 3)
+        A = model.body_type.frames(Q.reshape(k * nb, nc), None, charts).A
+        return position, to_quaternion(A).reshape(k, nb, 4)
+
+    def point(self, body: str, point: Sequence[float]) -> PointHistory:
+        """Trajectory of the point ``point`` [m] (body frame) of body ``body``: its global
+        ``.position`` [m], ``.velocity`` [m/s] and ``.acceleration`` [m/s^2]; indexing the
+        history indexes the positions."""
+        b = self.model.body(body)
+        u = np.asarray(point, dtype=float).reshape(-1)
+        if u.size != self.model.dim or not np.all(np.isfinite(u)):
+            raise ModelError(f"point of body '{body}' must be {self.model.dim} finite numbers, "
+                             f"got {point!r}")
+        bt = self.model.body_type
+        fr, qdd = self._body_frames(b)
+        k = len(self.t)
+        idx = np.arange(k)
+        U = np.broadcast_to(u, (k, u.size))
+        acc = (np.einsum("kdn,kn->kd", bt.point_jacobian(fr, idx, U), qdd)
+               + bt.point_acceleration_term(fr, idx, U))
+        return PointHistory(bt.point(fr, idx, U), bt.point_velocity(fr, idx, U), acc)
+
+    def joint(self, name: str) -> JointHistory:
+        """Multipliers, reactions and efforts of joint or driver ``name``."""
+        return JointHistory(self, name)
+
+    driver = joint
+
+    @property
+    def efforts(self) -> dict[str, np.ndarray]:
+        """Effort of every driver, by name."""
+        return {e.name: self.joint(e.name).effort for e in self.model.joints if e.is_driver}
+
+    def _reaction(self, name: str, on: Any, frame: str) -> Reaction:
+        model = self.model
+        element = model.joint(name)
+        lam = self._require_lam()
+        body = element.body_j if on is None else self._body(on)
+        if body is not element.body_i and body is not element.body_j:
+            raise ModelError(f"joint '{name}' connects '{element.body_i.name}' and "
+                             f"'{element.body_j.name}'; it exerts no reaction on '{body.name}'")
+        if frame not in ("global", "joint"):
+            raise ModelError(f"frame must be 'global' or 'joint', got {frame!r}")
+        bt, nc, k = model.body_type, model.n_coords_per_body, len(self.t)
+        # Evaluate the joint's primitives for all times at once: rows 2t and 2t+1 of a stacked
+        # coordinate array hold bodies i and j at time t (zeros for the ground).
+        Q = np.zeros((2 * k, nc))
+        charts = None if self.charts is None else np.tile(np.eye(3), (2 * k, 1, 1))
+        for side, b in enumerate((element.body_i, element.body_j)):
+            if not b.is_ground:
+                Q[side::2] = self.q[:, model.coordinates_of(b)]
+                if charts is not None:
+                    charts[side::2] = self._body_charts(b)
+        fr = bt.frames(Q, charts=charts)
+        # the joint's rows read body i from row 2t and body j from row 2t + 1 at time t
+        body_map = np.full(model.n_bodies + 1, -1, dtype=np.int64)
+        body_map[model.padded_index(element.body_i)] = 0
+        body_map[model.padded_index(element.body_j)] = 1
+        n_motions = len(model.rotation_motions)
+        table = (model.row_table.subset(np.array(model._instances_of[name]))
+                 .on_bodies(body_map).repeated(k, 2, n_motions))
+        phi = (np.concatenate([constraints.motion_phases(model, tk) for tk in self.t])
+               if n_motions else np.zeros((0, 3)))
+        J = evaluate_rows(table, fr, phi, value=False)[1]  # (k * r, 2, nc)
+        rows = model.rows_of(name)
+        # constraint force on this body, -Cq^T lam, from the side of each row that is this
+        # body (a primitive may take the joint's bodies in either order)
+        target = body_map[model.padded_index(body)]
+        bi, bj = table.row_bodies()
+        J_body = (J[:, 0] * (bi % 2 == target)[:, None] + J[:, 1] * (bj % 2 == target)[:, None])
+        generalized = -np.einsum("krn,kr->kn", J_body.reshape(k, len(rows), nc), lam[:, rows])
+        side = 0 if body is element.body_i else 1
+        idx = np.arange(k) * 2 + side
+        force, moment_cm = bt.wrench(fr, idx, generalized)
+        point_i, point_j, axes = model.reaction_frame(name)
+        u = np.broadcast_to(point_i if side == 0 else point_j, (k, model.dim))
+        arm = bt.point(fr, idx, u) - fr.Q[idx, :model.dim]
+        moment = moment_cm - bt.cross(arm, force)
+        if frame == "joint":
+            A_axes = np.einsum("kab,bc->kac", fr.A[np.arange(k) * 2], axes)
+            force = np.einsum("kab,ka->kb", A_axes, force)
+            if model.dim == 3:
+                moment = np.einsum("kab,ka->kb", A_axes, moment)
+        return Reaction(body.name, frame, force, moment)
+
+    # -- checks ----------------------------------------------------------------------------------
+    def _compute_residuals(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._residuals is None:
+            self._residuals = history.residuals(self.model, self.t, self.q, self.qd, self.charts)
+        return self._residuals
+
+    def _compute_energies(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._energies is None:
+            self._energies = history.energies(self.model, self.q, self.qd, self.charts)
+        return self._energies
+
+    @property
+    def position_residual(self) -> np.ndarray:
+        """``max |C|`` at every time point [m or rad]."""
+        return self._compute_residuals()[0]
+
+    @property
+    def velocity_residual(self) -> np.ndarray:
+        """``max |Cq qd + Ct|`` at every time point [m/s or rad/s]."""
+        return self._compute_residuals()[1]
+
+    @property
+    def reactions_unique(self) -> bool:
+        """False when the constraint rows were dependent at some time point (redundant
+        constraints, a singular position): the multipliers there, hence the reactions and
+        efforts, are one of many that balance the mechanism (the minimum-norm one).
+        ``stats["singular_outputs"]`` lists those times [s]."""
+        return not self.stats.get("singular_outputs")
+
+    @property
+    def singular_passages(self) -> list:
+        """Singular positions the motion passed (generalized-alpha only; the explicit methods
+        stop at one): a list of :class:`mbd3d.analyses.passages.SingularPassage`, each with the
+        ``time`` [s] and the ``joints`` whose rows (nearly) depend on each other there."""
+        return list(self.stats.get("singular_passages", []))
+
+    @property
+    def kinetic_energy(self) -> np.ndarray:
+        """Kinetic energy [J] at every time point."""
+        return self._compute_energies()[0]
+
+    @property
+    def potential_energy(self) -> np.ndarray:
+        """Potential energy of gravity (zero at the global origin) and springs [J]."""
+        return self._compute_energies()[1]
+
+    # -- export ----------------------------------------------------------------------------------
+    def _export_columns(self) -> list[tuple[str, str, np.ndarray]]:
+        """``(name, unit, values)`` of every exported time history (see :meth:`columns`)."""
+        out: list[tuple[str, str, np.ndarray]] = []
+        planar = self.model.dim == 2
+        axes = "xy" if planar else "xyz"
+        for b in self.model.bodies:
+            h = self.body(b.name)
+            for label, unit, arr in (("", "m", h.position), ("v", "m/s", h.velocity),
+                                     ("a", "m/s^2", h.acceleration)):
+                out += [(f"{b.name}.{label}{c}", unit, arr[:, k]) for k, c in enumerate(axes)]
+            if planar:
+                out += [(f"{b.name}.angle", "rad", h.angle),
+                        (f"{b.name}.omega", "rad/s", h.angular_velocity),
+                        (f"{b.name}.alpha", "rad/s^2", h.angular_acceleration)]
+            else:
+                quaternion = h.quaternion  # computed per call: once
+                out += [(f"{b.name}.q{c}", "-", quaternion[:, k]) for k, c in enumerate("wxyz")]
+                out += [(f"{b.name}.omega_{c}", "rad/s", h.angular_velocity[:, k])
+                        for k, c in enumerate(axes)]
+                out += [(f"{b.name}.alpha_{c}", "rad/s^2", h.angular_acceleration[:, k])
+                        for k, c in enumerate(axes)]
+        if self.lam is None:
+            return out
+        for element in self.model.joints:
+            if element.is_driver:
+                out.append((f"{element.name}.effort", element.effort_unit, self.joint(
+                    element.name).effort))
+                continue
+            on = element.body_i if element.body_j.is_ground else element.body_j
+            r = self.joint(element.name).reaction(on=on)
+            out += [(f"{element.name}.F{c} on {on.name}", "N", r.force[:, k])
+                    for k, c in enumerate(axes)]
+            if planar:
+                out.append((f"{element.name}.M on {on.name}", "N m", r.moment))
+            else:
+                out += [(f"{element.name}.M{c} on {on.name}", "N m", r.moment[:, k])
+                        for k, c in enumerate(axes)]
+        return out
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """All time histories as named columns with their units, the layout of :meth:`to_csv`
+        and :meth:`to_pandas`.
+
+        ``t [s]``; for every body, the centre of mass ``body.x [m]``, its velocity
+        ``body.vx [m/s]`` and acceleration ``body.ax [m/s^2]`` (global axes), and the
+        orientation: planar ``body.angle [rad]``, ``body.omega [rad/s]``, ``body.alpha
+        [rad/s^2]``; spatial the unit quaternion ``body.qw`` ... ``body.qz`` (sign kept
+        continuous) and the angular velocity and acceleration in global axes. With multipliers
+        (dynamics), every driver's ``effort`` [N m or N] and every joint's reaction as the
+        printed tables show it: the force ``joint.Fx on body [N]`` and the moment ``joint.M on
+        body [N m]`` (about the joint's point) that the joint exerts on its moving body, global
+        axes. The raw coordinates and multipliers are in :meth:`to_npz`.
+
+        Examples
+        --------
+        >>> import numpy as np, mbd3d as mb
+        >>> from mbd3d.mechanisms import slider_crank
+        >>> res = mb.inverse_dynamics(slider_crank(crank_speed=1.0), np.linspace(0.0, 0.1, 3))
+        >>> [c for c in res.columns() if c.startswith(("slider.x", "O.F", "motor"))]
+        ['slider.x [m]', 'O.Fx on crank [N]', 'O.Fy on crank [N]', 'motor.effort [N m]']
+        """
+        cols: dict[str, np.ndarray] = {"t [s]": self.t}
+        for name, unit, values in self._export_columns():
+            cols[f"{name} [{unit}]"] = values
+        return cols
+
+    def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
+        """Write :meth:`columns` to a CSV file: a header of names with units, then one row per
+        time point, every number to full double precision.
+
+        Names are quoted by the csv module where they hold commas, quotes or line breaks, so
+        any body or joint name reads back. The file is checked before it is written and written
+        atomically (see :mod:`mbd3d.io.files`). Returns the absolute path written.
+        """
+        cols = self.columns()
+        data = np.column_stack(list(cols.values())) if len(self.t) else np.zeros((0, len(cols)))
+
+        def write(f):
+            writer = csv.writer(f, lineterminator="\n")
+            writer.writerow(cols)
+            writer.writerows([repr(float(x)) for x in row] for row in data)
+        return files.atomic_write(path, write, text=True, overwrite=overwrite,
+                                  what="the CSV file")
+
+    def to_pandas(self):
+        """The :meth:`columns` as a ``pandas.DataFrame`` indexed by time ``t [s]``.
+
+        Column names carry their units, as in the CSV; ``df.attrs["units"]`` maps each column
+        to its unit alone. Needs pandas (``pip install "mbd3d[pandas]"``).
+        """
+        pd = _import_pandas()
+        cols = self.columns()
+        t = cols.pop("t [s]")
+        df = pd.DataFrame(cols, index=pd.Index(t, name="t [s]"))
+        df.attrs["units"] = {label: label[label.rindex("[") + 1:-1] for label in df.columns}
+        df.attrs["analysis"], df.attrs["model"] = self.analysis, self.model.name
+        return df
+
+    def to_npz(self, path: str | os.PathLike | BinaryIO, overwrite: bool = True) -> str | None:
+        """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``) and their
+        labels to a compressed NumPy ``.npz`` file: a path (checked, then written atomically;
+        its absolute path is returned) or an open binary file."""
+        arrays = dict(t=self.t, q=self.q, qd=self.qd, qdd=self.qdd,
+                      coordinate_labels=np.array(self.model.coordinate_labels),
+                      row_labels=np.array(self.model.row_labels),
+                      analysis=np.array(self.analysis), status=np.array(self.status),
+                      message=np.array(self.message), model=np.array(self.model.name))
+        if self.lam is not None:
+            arrays["lam"] = self.lam
+        if self.charts is not None:
+            arrays["charts"] = self.charts
+
+        def write(f):
+            np.savez_compressed(f, **arrays)
+        if hasattr(path, "write"):
+            write(path)
+            return None
+        return files.atomic_write(path, write, text=False, overwrite=overwrite,
+                                  what="the NPZ file")
+
+
+def _import_pandas():
+    """pandas, or an error that says how to get it (it is an optional extra)."""
+    try:
+        import pandas  # noqa: PLC0415  (optional)
+    except ImportError:
+        raise MBDError('to_pandas needs pandas: pip install "mbd3d[pandas]" (or pip install '
+                       'pandas)') from None
+    return pandas
+
+
+class ResultsBuffer:
+    """Histories an analysis fills time point by time point, preallocated for all ``t``.
+
+    :meth:`partial` builds the :class:`Results` of the points stored so far, as the analysis
+    hands them to observers while it runs and keeps them when it fails.
+    """
+
+    def __init__(self, model, analysis: str, t: np.ndarray, stats: dict,
+                 with_lam: bool = True):
+        import time
+        self._clock = time.perf_counter
+        self._start = self._clock()
+        self.model, self.analysis, self.t, self.stats = model, analysis, t, stats
+        k, n = len(t), model.n_coordinates
+        self.q, self.qd, self.qdd = (np.empty((k, n)) for _ in range(3))
+        self.lam = np.empty((k, model.n_constraints)) if with_lam else None
+        self.charts = None if model.charts0 is None else np.empty((k,) + model.charts0.shape)
+        self.done = 0
+
+    def store(self, q, qd, qdd, lam=None, chart=None) -> None:
+        """The next time point's state (``chart``: its reference rotations, spatial models)."""
+        k = self.done
+        self.q[k], self.qd[k], self.qdd[k] = q, qd, qdd
+        if self.lam is not None:
+            self.lam[k] = lam
+        if self.charts is not None:
+            self.charts[k] = chart
+        self.done = k + 1
+
+    def partial(self, status: str, message: str) -> Results:
+        self.stats["wall_time"] = self._clock() - self._start
+        k = self.done
+        return Results(self.model, self.analysis, self.t[:k], self.q[:k], self.qd[:k],
+                       self.qdd[:k], None if self.lam is None else self.lam[:k], status=status,
+                       message=message, stats=self.stats,
+                       charts=None if self.charts is None else self.charts[:k])
+
+
+def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"],
+                        watch: Any = None) -> "Results":
+    """Run an analysis ``loop`` so that no computed time point is lost.
+
+    ``partial(status, message)`` builds the results of the time points done so far. On an error
+    they are attached to it (``error.results``) before it propagates; on Ctrl-C they are
+    returned with status "interrupted". ``watch`` (:class:`mbd3d.io.observers.Watch`) is started
+    before the loop and handed the final results however the loop ends, so a recording of a
+    failing run keeps everything up to the failure.
+    """
+    if watch is not None:
+        watch.start()
+    try:
+        loop()
+    except KeyboardInterrupt:
+        results = partial("interrupted", "interrupted by the user; the results end at the last "
+                                         "completed time point")
+    except Exception as exc:
+        results = partial("failed", str(exc))
+        try:
+            exc.results = results  # type: ignore[attr-defined]
+        except AttributeError:  # exception types with __slots__
+            pass
+        if watch is not None:
+            watch.finish(results, failing=True)
+        raise
+    else:
+        results = partial("complete", "")
+    if watch is not None:
+        watch.finish(results, failing=False)
+    return results
+
+
+def format_table(columns: dict[str, Sequence[float]], precision: int = 5,
+                 rows: int | None = None) -> str:
+    """A plain-text table of equally long columns (numbers or text), for printing in a terminal.
+
+    ``rows`` limits a long table to that many rows, evenly spaced, first and last included.
+
+    >>> print(format_table({"t [s]": [0.0, 0.5], "x [m]": [1.0, -0.25]}, precision=3))
+      t [s]  x [m]
+          0      1
+        0.5  -0.25
+    >>> print(format_table({"k": range(11)}, rows=3))
+       k
+       0
+       5
+      10
+    """
+    names = list(columns)
+    length = len(columns[names[0]]) if names else 0
+    shown = range(length)
+    if rows is not None and length > rows:
+        shown = np.unique(np.round(np.linspace(0, length - 1, max(rows, 2))).astype(int))
+    # adding 0.0 turns -0.0 into 0.0, which reads better in a table
+    cells = [[v if isinstance(v, str) else f"{float(v) + 0.0:.{precision}g}"
+              for v in (columns[name][k] for k in shown)] for name in names]
+    widths = [max([len(name)] + [len(c) for c in col]) + 1 for name, col in zip(names, cells)]
+    lines = ["".join(name.rjust(w + 1) for name, w in zip(names, widths))]
+    for row in zip(*cells):
+        lines.append("".join(c.rjust(w + 1) for c, w in zip(row, widths)))
+    return "\n".join(line.rstrip() for line in lines)

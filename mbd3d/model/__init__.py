@@ -1,0 +1,12 @@
+"""The model and its elements: bodies and their body types, joints' constraint primitives,
+force elements, motions, and the equations they make.
+
+Modules: :mod:`.builder` (:class:`ModelBuilder` and the built :class:`Model`), :mod:`.body`
+(bodies, the body-type interface, frames), :mod:`.spatial` (spatial bodies in Rodrigues
+parameters; planar bodies are :mod:`mbd3d.planar`), :mod:`.element` and :mod:`.primitives`
+(constraint elements and the primitives they are made of), :mod:`.constraints` (evaluating
+``C``, ``Cq`` and the velocity and acceleration right-hand sides), :mod:`.equations` (mass
+matrix, applied and quadratic velocity forces, energies, the augmented accelerations),
+:mod:`.forces` (force elements), :mod:`.motion` (prescribed motions), :mod:`.mass_properties`
+(bodies from meshes) and :mod:`.checks` (input validation).
+"""

@@ -1,0 +1,647 @@
+"""Building a model: bodies, joints, drivers and forces, then an immutable :class:`Model`.
+
+The builder collects the user's description; :meth:`ModelBuilder.build` checks it, converts joint
+data to body frames, groups the constraint primitives by type (so that each type is evaluated for
+all its instances at once), fixes the sparsity pattern of the Jacobian and returns a
+:class:`Model`. Solvers take the model and plain arrays ``(t, q, qd)`` and never modify it.
+
+Coordinates: body ``k`` owns ``q[k * n_coords:(k + 1) * n_coords]``; constraint rows are numbered
+primitive type by primitive type, and :attr:`Model.row_labels` and :meth:`Model.rows_of` map rows
+back to joints.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from mbd3d.model.body import Body, BodyType
+from mbd3d.model.checks import finite_scalar, finite_vector
+from mbd3d.model.element import ConstraintElement, PrimitiveSpec
+from mbd3d.errors import ModelError
+from mbd3d.numerics.linalg import AugmentedPattern, PenaltyPattern
+from mbd3d.model.motion import Motion
+from mbd3d.model.primitives import PRIMITIVES, RowTable
+
+__all__ = ["ModelBuilder", "Model", "BuildContext"]
+
+#: systems with more unknowns than this (coordinates + constraints) use sparse linear algebra
+#: (banded LAPACK, or SuperLU when the bandwidth is large; see mbd3d.numerics.linalg): one augmented
+#: solve of a planar or spatial chain costs the same dense and banded at 36 to 50 unknowns on
+#: the 2-core reference machine (benchmarks/planar_chain.py --crossover)
+SPARSE_THRESHOLD = 48
+
+
+def _body_type(dim: int) -> BodyType:
+    if dim == 2:
+        from mbd3d.planar.body import PlanarBody
+        return PlanarBody()
+    if dim == 3:
+        from mbd3d.model.spatial import SpatialBody
+        return SpatialBody()
+    raise ModelError(f"dim must be 2 (planar) or 3 (spatial), got {dim!r}")
+
+
+def _check_name(name: Any, what: str) -> str:
+    if not isinstance(name, str) or not name.strip():
+        raise ModelError(f"{what} name must be a non-empty string, got {name!r}")
+    return name
+
+
+def _charts(bodies: Sequence[Body]) -> np.ndarray:
+    """Reference rotations of the bodies, and the identity for the ground (last row)."""
+    charts = np.tile(np.eye(3), (len(bodies) + 1, 1, 1))
+    for b in bodies:
+        charts[b.index] = b.chart
+    return charts
+
+
+class BuildContext:
+    """Geometry helpers handed to joints and forces while a model is built.
+
+    Global points and directions of the drawing are converted to body frames with the bodies'
+    initial guesses, so global joint data are only meaningful when the guess is the drawing.
+    """
+
+    def __init__(self, body_type: BodyType, bodies: Sequence[Body], ground: Body):
+        self.body_type = body_type
+        self.dim = body_type.dim
+        self._bodies = {id(b) for b in bodies} | {id(ground)}
+        self.ground = ground
+        n = len(bodies)
+        Q = np.zeros((n + 1, body_type.n_coords))
+        for b in bodies:
+            Q[b.index] = b.q0
+        self.charts = _charts(bodies) if body_type.dim == 3 else None
+        #: frames of the drawing (the bodies' initial guesses), ground last
+        self.frames = body_type.frames(Q, charts=self.charts)
+        self._n = n
+
+    def row(self, body: Body) -> int:
+        """Row of ``body`` in :attr:`frames` (the ground is the last row)."""
+        return self._n if body.is_ground else body.index
+
+    def _row(self, body: Body) -> np.ndarray:
+        return np.array([self.row(body)])
+
+    def check_body(self, body: Any, element: str, role: str) -> Body:
+        """Return ``body`` if it is a body of this model, else raise naming ``element``."""
+        if not isinstance(body, Body):
+            raise ModelError(f"'{element}': {role} must be a body returned by add_body "
+                             f"(or builder.ground), got {body!r}")
+        if id(body) not in self._bodies:
+            raise ModelError(f"'{element}': {role} '{body.name}' belongs to another model builder")
+        return body
+
+    def vector(self, value: Any, what: str) -> np.ndarray:
+        """A finite vector of ``dim`` components."""
+        return finite_vector(value, self.dim, what)
+
+    def direction(self, value: Any, what: str) -> np.ndarray:
+        """A unit vector; a zero vector is refused."""
+        arr = self.vector(value, what)
+        norm = float(np.linalg.norm(arr))
+        if norm < 1e-12:
+            raise ModelError(f"{what} must be a non-zero direction, got {value!r}")
+        return arr / norm
+
+    def scalar(self, value: Any, what: str, positive: bool = False) -> float:
+        return finite_scalar(value, what, positive)
+
+    def rotation(self, body: Body) -> np.ndarray:
+        """Rotation matrix of ``body`` at its initial guess (global frame for the ground)."""
+        return self.frames.A[self._row(body)][0]
+
+    def to_local_point(self, body: Body, point: np.ndarray) -> np.ndarray:
+        """Body-frame coordinates of the global point ``point`` at the initial guess."""
+        R = self.frames.Q[self._row(body)][0, :self.dim]
+        return self.rotation(body).T @ (point - R)
+
+    def to_local_vector(self, body: Body, vector: np.ndarray) -> np.ndarray:
+        return self.rotation(body).T @ vector
+
+    def to_global_point(self, body: Body, u: np.ndarray) -> np.ndarray:
+        return self.body_type.point(self.frames, self._row(body), u[None])[0]
+
+    def initial_coordinate(self, body: Body, coordinate: int) -> float:
+        return float(self.frames.Q[self._row(body)][0, coordinate])
+
+
+class ModelBuilder:
+    """Collects bodies, joints, drivers and forces; :meth:`build` returns a :class:`Model`.
+
+    Parameters
+    ----------
+    dim : int
+        2 for planar mechanisms.
+    gravity : sequence of float, optional
+        Gravitational acceleration [m/s^2], global axes, e.g. ``(0, -9.81)``. Default: none.
+    name : str
+        Name of the model, used in results and messages.
+
+    Examples
+    --------
+    >>> import mbd3d as mb
+    >>> from mbd3d.joints import Revolute
+    >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    >>> bar = b.add_body("bar", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))
+    >>> _ = b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
+    >>> model = b.build()
+    >>> model.n_coordinates, model.n_constraints
+    (3, 2)
+    """
+
+    def __init__(self, dim: int = 2, gravity: Sequence[float] | None = None, name: str = "model"):
+        self.body_type = _body_type(dim)
+        self.dim = dim
+        self.name = _check_name(name, "model")
+        self.gravity = (np.zeros(dim) if gravity is None
+                        else finite_vector(gravity, dim, "gravity [m/s^2]"))
+        nc = self.body_type.n_coords
+        self.ground = Body("ground", -1, 0.0, None, np.zeros(nc), np.zeros(nc), is_ground=True)
+        self._bodies: list[Body] = []
+        self._elements: list[Any] = []
+        self._names: dict[str, str] = {"ground": "the ground"}
+        self._built = False
+
+    def _claim(self, name: str, what: str) -> None:
+        if self._built:
+            raise ModelError(f"cannot add {what} '{name}': the model was already built; "
+                             "make a new ModelBuilder")
+        if name in self._names:
+            raise ModelError(f"duplicate name '{name}' for a {what}: already used by "
+                             f"{self._names[name]}; names must be unique in a model")
+        self._names[name] = f"{what} '{name}'"
+
+    def add_body(self, name: str, *, mass: float | None = None, inertia: Any = None,
+                 position: Sequence[float], angle: float | None = None,
+                 orientation: Any = None, velocity: Sequence[float] | None = None,
+                 angular_velocity: Any = None, shape: Any = None,
+                 density: float | None = None) -> Body:
+        """Add a rigid body and return its handle.
+
+        Give either ``mass`` and ``inertia``, or a closed ``shape`` and its ``density``.
+
+        Parameters
+        ----------
+        name : str
+            Unique name of the body.
+        mass : float
+            Mass [kg], positive.
+        inertia : float or array_like
+            Centroidal inertia [kg m^2]: planar, the moment about the normal to the plane;
+            spatial, the 3x3 tensor in body axes (or its 3 principal values), positive definite.
+        shape : trimesh.Trimesh or path, optional
+            The body's geometry (a mesh or an STL/OBJ/PLY file), lengths in metres; what the
+            viewer draws. With ``density`` it also gives the mass properties and the body frame
+            is put at the mesh's centre of mass (mesh axes; for a planar body the mesh's x-y
+            plane is the plane of motion). Without, the mesh is drawn as given, in the body
+            frame.
+        density : float, optional
+            [kg/m^3] of the solid ``shape`` (uniform); replaces ``mass`` and ``inertia``.
+        position : (dim,) sequence
+            Initial guess of the centre of mass [m], global frame.
+        angle : float, optional
+            Planar: initial guess of the body angle [rad] (body x axis from the global x axis).
+        orientation : array_like, optional
+            Spatial: initial orientation, a 3x3 rotation matrix (body axes as columns, global
+            components) or a unit quaternion (w, x, y, z); see :mod:`mbd3d.numerics.rotations` for
+            axis-angle and Rodrigues parameters. Default: aligned with the global axes.
+        velocity : (dim,) sequence, optional
+            Initial velocity of the centre of mass [m/s] for forward dynamics (default zero).
+        angular_velocity : float or (3,) sequence, optional
+            Initial angular velocity [rad/s] for forward dynamics (spatial: global axes).
+
+        Returns
+        -------
+        Body
+            The handle joints and forces refer to.
+
+        Raises
+        ------
+        ModelError
+            Duplicate name, non-positive or non-finite mass, inertia or density, non-finite
+            guess, a shape that is not a closed mesh when its mass properties are asked.
+        """
+        _check_name(name, "body")
+        if self._built or name in self._names:
+            self._claim(name, "body")  # raises the duplicate / already-built error
+        mesh = None
+        if density is not None:
+            if shape is None:
+                raise ModelError(f"body '{name}': density= needs the body's shape= (a closed "
+                                 "mesh) to compute its mass properties")
+            if mass is not None or inertia is not None:
+                raise ModelError(f"body '{name}': give mass= and inertia=, or shape= with "
+                                 "density=, not both")
+            from mbd3d.model.mass_properties import mesh_properties
+            props = mesh_properties(shape, density, name)
+            mass, mesh = props.mass, props.mesh
+            inertia = props.inertia if self.dim == 3 else props.inertia[2, 2]
+        else:
+            if mass is None or inertia is None:
+                raise ModelError(f"body '{name}': give its mass= [kg] and inertia= [kg m^2], or "
+                                 "a closed shape= mesh with its density= [kg/m^3]")
+            if shape is not None:
+                from mbd3d.model.mass_properties import load_mesh
+                mesh = load_mesh(shape, f"body '{name}'")
+        mass_value = finite_scalar(mass, f"body '{name}': mass [kg]", positive=True)
+        bt = self.body_type
+        if self.dim == 3 and angle is not None:
+            raise ModelError(f"body '{name}': a spatial body takes orientation=, not angle=")
+        if self.dim == 2 and orientation is not None:
+            raise ModelError(f"body '{name}': a planar body takes angle= [rad], not orientation=")
+        inertia_value = bt.check_inertia(inertia, name)
+        q0, chart = bt.initial_state(name, position, angle if self.dim == 2 else orientation)
+        qd0 = bt.initial_rates(name, velocity, angular_velocity, q0, chart)
+        body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0, chart=chart,
+                    shape=mesh)
+        self._claim(name, "body")  # only once valid: a refused body leaves its name free
+        self._bodies.append(body)
+        return body
+
+    def add(self, element: Any) -> Any:
+        """Add a joint, driver or force element; returns it for convenience."""
+        from mbd3d.model.forces import ForceElement
+
+        if not isinstance(element, (ConstraintElement, ForceElement)):
+            raise ModelError(f"add() takes a joint, driver or force (from joints/ or mbd3d), "
+                             f"got {element!r}")
+        _check_name(element.name, type(element).__name__)
+        kind = "driver" if getattr(element, "is_driver", False) else (
+            "force" if isinstance(element, ForceElement) else "joint")
+        self._claim(element.name, kind)
+        self._elements.append(element)
+        return element
+
+    def build(self, sparse: bool | None = None) -> "Model":
+        """Check the description and return the immutable :class:`Model`.
+
+        Parameters
+        ----------
+        sparse : bool, optional
+            Force sparse (True) or dense (False) linear algebra; by default sparse when the number
+            of coordinates plus constraints exceeds ``SPARSE_THRESHOLD``.
+        """
+        from mbd3d.model.forces import ForceElement
+
+        if not self._bodies:
+            raise ModelError(f"model '{self.name}' has no bodies; add some with add_body()")
+        ctx = BuildContext(self.body_type, self._bodies, self.ground)
+        specs: list[tuple[int, PrimitiveSpec]] = []
+        constraint_elements = [e for e in self._elements if isinstance(e, ConstraintElement)]
+        for e_index, element in enumerate(constraint_elements):
+            if element.body_i is None:  # drivers of absolute coordinates act against the ground
+                element.body_i = self.ground
+            ctx.check_body(element.body_i, element.name, "body_i")
+            ctx.check_body(element.body_j, element.name, "body_j")
+            if element.body_i is element.body_j:
+                raise ModelError(f"joint '{element.name}' connects body '{element.body_i.name}' "
+                                 "to itself; a joint needs two different bodies")
+            driven = getattr(element, "joint", None)
+            if driven is not None and not any(driven is e for e in constraint_elements):
+                # without the joint the driver alone would hold one coordinate, and the
+                # "driven" body would fall off its hinge or slider
+                raise ModelError(
+                    f"driver '{element.name}' drives joint '{driven.name}', which was never "
+                    f"added to this model; add that {type(driven).__name__} with builder.add() "
+                    "before build(), or drive a joint of this model")
+            for spec in element.primitives(ctx):
+                specs.append((e_index, spec))
+        force_elements = [e for e in self._elements if isinstance(e, ForceElement)]
+        for force in force_elements:
+            for role, body in force.bodies():
+                ctx.check_body(body, force.name, role)
+        model = Model(self, ctx, constraint_elements, specs, force_elements, sparse)
+        self._built = True
+        return model
+
+
+class _Group:
+    """All instances of one primitive type, with their stacked data and row range."""
+
+    def __init__(self, cls, dim, n_bodies, items: list[tuple[int, PrimitiveSpec]], offset: int):
+        self.cls = cls
+        self.count = len(items)
+        self.rows_per = cls.rows(dim)
+        self.offset = offset
+        self.n_rows = self.count * self.rows_per
+        self.bi = np.array([n_bodies if s.body_i.is_ground else s.body_i.index for _, s in items],
+                           dtype=np.intp)
+        self.bj = np.array([n_bodies if s.body_j.is_ground else s.body_j.index for _, s in items],
+                           dtype=np.intp)
+        self.params = {}
+        for key in cls.params:
+            self.params[key] = np.array([np.asarray(s.params[key]) for _, s in items])
+        self.elements = np.array([e for e, _ in items], dtype=np.intp)
+        # primitives whose rows depend on time themselves (the spatial rotation driver)
+        self.motions = tuple(s.motion for _, s in items) if getattr(cls, "time_dependent", False) else ()
+        self.motion_names = ()
+
+
+class Model:
+    """A built, immutable multibody model. Created by :meth:`ModelBuilder.build`.
+
+    Attributes
+    ----------
+    name : str
+    dim : int
+        2 (planar).
+    body_type : BodyType
+        Kinematics of the bodies.
+    bodies : tuple of Body
+        The moving bodies, in coordinate order.
+    joints : tuple of ConstraintElement
+        Joints and drivers, in the order they were added.
+    forces : tuple of ForceElement
+    n_coordinates : int
+        Length ``n`` of ``q``.
+    n_constraints : int
+        Number ``m`` of constraint equations.
+    q0, qd0 : ndarray, shape (n,)
+        The initial guesses of coordinates and rates given with the bodies.
+    charts0 : ndarray (n_bodies + 1, 3, 3) or None
+        Spatial models: the reference rotations ``q0`` is relative to (ground last).
+    mass : ndarray, shape (n_bodies,)
+    inertia : ndarray
+        Centroidal inertias, (n_bodies,) for planar bodies.
+    gravity : ndarray, shape (dim,)
+    row_labels : list of str
+        ``"joint.component"`` for each constraint row.
+    coordinate_labels : list of str
+        ``"body.coordinate"`` for each coordinate.
+    sparse : bool
+        Whether the solvers use sparse linear algebra for this model.
+    """
+
+    def __init__(self, builder: ModelBuilder, ctx: BuildContext, elements: list,
+                 specs: list[tuple[int, PrimitiveSpec]], forces: list, sparse: bool | None):
+        bt = builder.body_type
+        self.name = builder.name
+        self.dim = builder.dim
+        self.body_type = bt
+        self.bodies = tuple(builder._bodies)
+        self.joints = tuple(elements)
+        self.forces = tuple(forces)
+        self.ground = builder.ground
+        self.gravity = builder.gravity.copy()
+        nb, nc = len(self.bodies), bt.n_coords
+        self.n_bodies = nb
+        self.n_coords_per_body = nc
+        self.n_coordinates = nb * nc
+        self.q0 = np.concatenate([b.q0 for b in self.bodies])
+        self.qd0 = np.concatenate([b.qd0 for b in self.bodies])
+        self.mass = np.array([b.mass for b in self.bodies])
+        self.inertia = np.array([b.inertia for b in self.bodies])
+        self.charts0 = ctx.charts
+        # generalized forces of gravity, constant: (n_bodies + 1, n_coords), ground row zero
+        self._weight = np.zeros((nb + 1, nc))
+        self._weight[:nb, :self.dim] = self.mass[:, None] * self.gravity[None, :]
+        self._ground_row = np.zeros(nc)  # the ground's coordinates, appended to q by frames
+        self._body_by_name = {b.name: b for b in self.bodies}
+        self._joint_by_name = {e.name: (i, e) for i, e in enumerate(self.joints)}
+        self._force_by_name = {f.name: f for f in self.forces}
+        self.coordinate_labels = [f"{b.name}.{c}" for b in self.bodies for c in bt.coordinate_names]
+
+        # group primitive instances by type, in a fixed order
+        by_kind: OrderedDict[str, list] = OrderedDict((k, []) for k in PRIMITIVES)
+        for e_index, spec in specs:
+            if spec.kind not in PRIMITIVES:
+                raise ModelError(f"joint '{self.joints[e_index].name}': unknown primitive "
+                                 f"{spec.kind!r}")
+            if spec.kind == "angle" and self.dim != 2:
+                raise ModelError(f"joint '{self.joints[e_index].name}': a relative angle about "
+                                 "the plane normal is defined for planar bodies only")
+            if spec.body_i.is_ground and spec.body_j.is_ground:
+                raise ModelError(f"joint '{self.joints[e_index].name}' connects the ground to itself")
+            by_kind[spec.kind].append((e_index, spec))
+        self.groups: list[_Group] = []
+        offset = 0
+        labels: list[str] = []
+        row_element: list[int] = []
+        row_is_length: list[bool] = []
+        c0: list[float] = []
+        driver_rows, driver_motions, driver_names = [], [], []
+        # each joint's primitive instances: their positions in the row table (row order)
+        self._instances_of: dict[str, list[int]] = {e.name: [] for e in self.joints}
+        instance = 0
+        for kind, items in by_kind.items():
+            if not items:
+                continue
+            group = _Group(PRIMITIVES[kind], self.dim, nb, items, offset)
+            self.groups.append(group)
+            for local, (e_index, spec) in enumerate(items):
+                self._instances_of[self.joints[e_index].name].append(instance)
+                instance += 1
+                r = group.rows_per
+                if len(spec.labels) != r:
+                    raise ModelError(f"joint '{self.joints[e_index].name}': primitive {kind} "
+                                     f"needs {r} row labels, got {spec.labels!r}")
+                name = self.joints[e_index].name
+                cls = PRIMITIVES[kind]
+                is_length = (cls.length_rows if cls.length_rows is not None
+                             else cls.row_is_length(spec.params, self.dim))
+                for k in range(r):
+                    labels.append(f"{name}.{spec.labels[k]}")
+                    row_element.append(e_index)
+                    row_is_length.append(is_length)
+                    c0.append(float(spec.c0) if k == 0 else 0.0)
+                if spec.motion is not None and group.motions:
+                    if not isinstance(spec.motion, Motion):
+                        raise ModelError(f"driver '{name}': motion must be an mbd3d Motion, "
+                                         f"got {spec.motion!r}")
+                    group.motion_names += (name,)
+                elif spec.motion is not None:
+                    if r != 1:
+                        raise ModelError(f"joint '{name}': only one-row primitives can be driven")
+                    if not isinstance(spec.motion, Motion):
+                        raise ModelError(f"driver '{name}': motion must be an mbd3d Motion, "
+                                         f"got {spec.motion!r}")
+                    driver_rows.append(offset)
+                    driver_motions.append(spec.motion)
+                    driver_names.append(name)
+                offset += r
+        self.n_constraints = offset
+        self._lay_out_rows()
+        self.row_labels = labels
+        self.row_element = np.array(row_element, dtype=np.intp)
+        self._set_scales(specs, np.array(row_is_length, dtype=bool))
+        self.c0 = np.array(c0)
+        self.driver_rows = np.array(driver_rows, dtype=np.intp)
+        self.driver_motions = tuple(driver_motions)
+        self.driver_names = tuple(driver_names)
+        self._rows_of = {e.name: np.flatnonzero(self.row_element == i)
+                         for i, e in enumerate(self.joints)}
+        self._reaction_frames = {e.name: e.reaction_frame(ctx) for e in self.joints}
+        self._build_jacobian_pattern()
+        if sparse is None:
+            sparse = self.n_coordinates + self.n_constraints > SPARSE_THRESHOLD
+        self.sparse = bool(sparse)
+        self._augmented_pattern = AugmentedPattern(self)
+        self._penalty_pattern = PenaltyPattern(self)
+
+        from mbd3d.model.equations import _Core
+        from mbd3d.model.forces import compile_forces
+        self.force_groups = compile_forces(self.forces, ctx)
+        for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0,
+                    self._ground_row, self._weight,
+                    *(() if self.charts0 is None else (self.charts0,))):
+            arr.setflags(write=False)
+        self._core = _Core(self)
+
+    # -- the table of all primitive instances --------------------------------------------------
+    def _lay_out_rows(self) -> None:
+        """Stack every primitive instance, in row order, into the :class:`RowTable` the
+        compiled loop evaluates in one call; the motions of rotation drivers are numbered
+        in the same order (rows of ``phi``)."""
+        instances, motions, names = [], [], []
+        for g in self.groups:
+            for local in range(g.count):
+                params = {key: value[local] for key, value in g.params.items()}
+                motion_row = -1
+                if g.motions:
+                    motion_row = len(motions)
+                    motions.append(g.motions[local])
+                    names.append(g.motion_names[local])
+                instances.append((g.cls, g.bi[local], g.bj[local], params, motion_row))
+        self.row_table = RowTable.from_instances(instances, self.dim)
+        self.rotation_motions, self.rotation_motion_names = tuple(motions), tuple(names)
+
+    # -- Jacobian sparsity pattern ---------------------------------------------------------------
+    def _build_jacobian_pattern(self) -> None:
+        nb, nc = self.n_bodies, self.n_coords_per_body
+        all_rows, all_cols = [], []
+        for g in self.groups:
+            r = g.rows_per
+            rows = g.offset + np.arange(g.count)[:, None] * r + np.arange(r)[None, :]
+            bodies = np.stack([g.bi, g.bj], axis=1)  # (k, 2)
+            cols = bodies[:, :, None] * nc + np.arange(nc)[None, None, :]
+            cols = np.where(bodies[:, :, None] == nb, -1, cols)  # ground: no columns
+            shape = (g.count, r, 2, nc)
+            all_rows.append(np.broadcast_to(rows[:, :, None, None], shape).ravel())
+            all_cols.append(np.broadcast_to(cols[:, None, :, :], shape).ravel())
+        rows = np.concatenate(all_rows) if all_rows else np.zeros(0, dtype=np.intp)
+        cols = np.concatenate(all_cols) if all_cols else np.zeros(0, dtype=np.intp)
+        take = np.flatnonzero(cols >= 0)
+        rows, cols = rows[take], cols[take]
+        order = np.lexsort((cols, rows))
+        self._jac_take = take[order]
+        self._jac_rows = rows[order]
+        self._jac_cols = cols[order]
+        counts = np.bincount(self._jac_rows, minlength=self.n_constraints)
+        self._jac_indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.intp)
+        # where the compiled loop puts entry (2 row + side) n_coords + coordinate: its position
+        # in the values of the pattern, -1 for the ground's columns
+        self._jac_destination = np.full(self.n_constraints * 2 * nc, -1, dtype=np.int64)
+        self._jac_destination[self._jac_take] = np.arange(len(take))
+
+    # -- named access ----------------------------------------------------------------------------
+    def body(self, name: str) -> Body:
+        """The body called ``name``."""
+        try:
+            return self._body_by_name[name]
+        except KeyError:
+            raise ModelError(f"model '{self.name}' has no body '{name}'; bodies: "
+                             f"{', '.join(self._body_by_name) or '(none)'}") from None
+
+    def joint(self, name: str) -> ConstraintElement:
+        """The joint or driver called ``name``."""
+        return self._joint_by_name[self._check_joint(name)][1]
+
+    def force(self, name: str) -> Any:
+        try:
+            return self._force_by_name[name]
+        except KeyError:
+            raise ModelError(f"model '{self.name}' has no force '{name}'; forces: "
+                             f"{', '.join(self._force_by_name) or '(none)'}") from None
+
+    def _check_joint(self, name: str) -> str:
+        if name not in self._joint_by_name:
+            raise ModelError(f"model '{self.name}' has no joint or driver '{name}'; known: "
+                             f"{', '.join(self._joint_by_name) or '(none)'}")
+        return name
+
+    def rows_of(self, name: str) -> np.ndarray:
+        """Constraint rows of the joint or driver ``name``."""
+        return self._rows_of[self._check_joint(name)]
+
+    def reaction_frame(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where joint or driver ``name`` acts: ``(u_i, u_j, axes)``, its point in the frames of
+        body i and body j [m] and its axes as columns in body i's frame (what reactions are
+        reported about and in)."""
+        return self._reaction_frames[self._check_joint(name)]
+
+    def padded_index(self, body: Body) -> int:
+        """Row of ``body`` in the per-body arrays of the solvers (the ground is the last row)."""
+        return self.n_bodies if body.is_ground else body.index
+
+    def coordinates_of(self, body: str | Body) -> slice:
+        """The slice of ``q`` owned by ``body``."""
+        b = self.body(body) if isinstance(body, str) else body
+        nc = self.n_coords_per_body
+        return slice(b.index * nc, (b.index + 1) * nc)
+
+    def coordinate_index(self, spec: str) -> int:
+        """Index in ``q`` of a coordinate named ``"body.coordinate"``, e.g. ``"crank.theta"``."""
+        body, _, coord = spec.rpartition(".")
+        names = self.body_type.coordinate_names
+        if not body or coord not in names:
+            raise ModelError(f"coordinate {spec!r} must be 'body.c' with c one of {names}")
+        return self.coordinates_of(body).start + names.index(coord)
+
+    def _set_scales(self, specs, row_is_length: np.ndarray) -> None:
+        """The model's characteristic length and mass, and from them the scale of every
+        coordinate and constraint row, so that tolerances, pivots and ranks mean the same for a
+        mechanism of micrometres and grams as for one of metres and tonnes.
+
+        The length is the largest of: the spread of the bodies' guessed centres of mass about
+        their centroid, the distance of every joint point from its body's centre of mass (of a
+        ground point, from the body it holds), and every body's radius of gyration. The mass
+        is the mean body mass.
+        """
+        dim, nb = self.dim, self.n_bodies
+        R = self.q0.reshape(nb, self.n_coords_per_body)[:, :dim]
+        lengths = [float(np.max(np.linalg.norm(R - R.mean(axis=0), axis=1), initial=0.0))]
+        for _, spec in specs:
+            for key, value in spec.params.items():
+                if not key.startswith("u_"):
+                    continue
+                body, other = ((spec.body_i, spec.body_j) if key.endswith("_i")
+                               else (spec.body_j, spec.body_i))
+                if not body.is_ground:  # a point in the body's frame: its offset
+                    lengths.append(float(np.linalg.norm(value)))
+                elif not other.is_ground:  # a point of the ground: its distance to the body
+                    lengths.append(float(np.linalg.norm(np.asarray(value) - R[other.index])))
+        J = self.inertia if self.inertia.ndim == 1 else np.trace(self.inertia, axis1=1, axis2=2) / 3
+        lengths.append(float(np.max(np.sqrt(J / self.mass))))
+        length = max(lengths)
+        #: characteristic length of the mechanism [m]
+        self.length_scale = length if np.isfinite(length) and length > 0 else 1.0
+        #: characteristic mass [kg]: the mean body mass
+        self.mass_scale = float(np.mean(self.mass))
+        #: scale of each constraint row: the length scale for rows that are lengths, 1 for
+        #: rows that are angles or cosines
+        self.row_scale = np.where(row_is_length, self.length_scale, 1.0)
+        #: which constraint rows are lengths [m] (the others are angles or cosines)
+        self.length_rows = row_is_length
+        per_body = np.ones(self.n_coords_per_body)
+        per_body[:dim] = self.length_scale
+        #: scale of each coordinate: the length scale for positions, 1 for angles and
+        #: Rodrigues parameters
+        self.coordinate_scale = np.tile(per_body, nb)
+        #: which coordinates are positions [m] (the others are angles or Rodrigues parameters)
+        self.position_coordinates = np.tile(np.arange(self.n_coords_per_body) < dim, nb)
+
+    def joints_of_rows(self, rows: Iterable[int]) -> list[str]:
+        """Names of the joints owning ``rows``, without repetition, in row order."""
+        seen: dict[str, None] = {}
+        for r in rows:
+            seen[self.joints[self.row_element[r]].name] = None
+        return list(seen)
+
+    def __repr__(self) -> str:
+        return (f"Model({self.name!r}: {self.n_bodies} {self.body_type.name} bodies, "
+                f"{len(self.joints)} joints/drivers, {self.n_coordinates} coordinates, "
+                f"{self.n_constraints} constraints)")

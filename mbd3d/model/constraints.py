@@ -1,0 +1,160 @@
+"""Evaluation of the constraint equations of a model: ``C``, ``Cq``, ``-Ct`` and ``Qd``.
+
+``C = c(q) - c0 - f(t)`` row by row (see :mod:`mbd3d.model.primitives`). All primitive instances are
+evaluated in one compiled loop; the Jacobian values go straight into the pattern fixed when the
+model was built (dense array, or CSR with precomputed ordering when
+``model.sparse``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d.model.body import Frames
+from mbd3d.errors import ModelError
+from mbd3d.model.primitives import evaluate_rows
+
+__all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
+           "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs",
+           "driver_values", "motion_phases"]
+
+
+def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
+           charts: np.ndarray | None = None) -> Frames:
+    """Per-body kinematic quantities of state ``(q, qd)``; the ground is the last row.
+
+    ``charts`` (spatial models): the reference rotations ``q`` is relative to, (n_bodies + 1,
+    3, 3); default the model's initial charts, which ``model.q0`` is relative to.
+    """
+    shape, ground = (model.n_bodies + 1, model.n_coords_per_body), model._ground_row
+    # one concatenation per array: this runs at every right-hand side of an integration
+    Q = np.concatenate((q, ground)).reshape(shape)
+    Qd = None if qd is None else np.concatenate((qd, ground)).reshape(shape)
+    return model.body_type.frames(Q, Qd, model.charts0 if charts is None else charts)
+
+
+def largest_relative(model, rows: np.ndarray) -> float:
+    """``max |rows|`` over constraint rows (residuals of positions or of velocities), each in
+    the model's units: lengths over its length scale, angles as they are."""
+    return float(np.max(np.abs(rows) / model.row_scale, initial=0.0))
+
+
+def driver_values(model, t: float) -> np.ndarray:
+    """``(f, f', f'')`` of every row driven by ``c(q) - f(t)``, shape (3, n_drivers).
+
+    Raises
+    ------
+    ModelError
+        If a driver's motion returns a non-finite value (names the driver and the time).
+    """
+    return _motion_values(model.driver_motions, model.driver_names, t).T
+
+
+def _motion_values(motions, names, t: float) -> np.ndarray:
+    """``(f, f', f'')`` of ``motions`` at ``t``, (k, 3), checked to be finite."""
+    out = np.empty((len(motions), 3))
+    for k, motion in enumerate(motions):
+        try:
+            out[k] = motion.evaluate(t)
+        except (TypeError, ValueError) as exc:
+            raise ModelError(f"driver '{names[k]}': its motion failed at t = {t:g} s: {exc}") from exc
+        if not np.all(np.isfinite(out[k])):
+            raise ModelError(f"driver '{names[k]}': its motion returned a non-finite value "
+                             f"(f, f', f'') = {tuple(out[k])} at t = {t:g} s")
+    return out
+
+
+def motion_phases(model, t: float) -> np.ndarray:
+    """``(f, f', f'')`` of the motions of rows whose time dependence sits inside the primitive
+    (spatial rotation drivers), (k, 3)."""
+    if not model.rotation_motions:
+        return _NO_MOTIONS
+    return _motion_values(model.rotation_motions, model.rotation_motion_names, t)
+
+
+_NO_MOTIONS = np.zeros((0, 3))
+
+
+def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,
+             gamma: bool = False, rate: bool = False
+             ) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
+    """``C``, the Jacobian values in the model's pattern, and ``Qd``, in one compiled pass over
+    all primitive instances (:func:`mbd3d.model.primitives.evaluate_rows`).
+
+    Returns ``(C (m,), jac_data (nnz,), Qd (m,))`` with ``None`` for the parts not asked for,
+    and with ``rate`` a fourth part, ``-Ct`` (m,); turn ``jac_data`` into a matrix with
+    :func:`jacobian_matrix`.
+    """
+    C, data, Qd, nu = evaluate_rows(model.row_table, fr, motion_phases(model, t), value,
+                                    jacobian, gamma, rate, model._jac_destination,
+                                    len(model._jac_take))
+    if (value or gamma or rate) and len(model.driver_rows):
+        f = driver_values(model, t)
+        if value:
+            C[model.driver_rows] -= f[0]
+        if gamma:
+            Qd[model.driver_rows] += f[2]
+        if rate:
+            nu[model.driver_rows] = f[1]
+    if value:
+        C -= model.c0
+    return (C, data, Qd, nu) if rate else (C, data, Qd)
+
+
+def jacobian_matrix(model, data: np.ndarray, sparse: bool | None = None):
+    """``Cq`` (m, n) from its values in the model's pattern: ndarray, or CSR when sparse."""
+    shape = (model.n_constraints, model.n_coordinates)
+    if model.sparse if sparse is None else sparse:
+        return sp.csr_matrix((data, model._jac_cols, model._jac_indptr), shape=shape)
+    Cq = np.zeros(shape)
+    Cq[model._jac_rows, model._jac_cols] = data
+    return Cq
+
+
+def jacobian_times(model, data: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``Cq x`` from the Jacobian values, without assembling the matrix."""
+    return np.bincount(model._jac_rows, weights=data * x[model._jac_cols],
+                       minlength=model.n_constraints)
+
+
+def jacobian_transpose_times(model, data: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``Cq^T y`` from the Jacobian values, without assembling the matrix."""
+    return np.bincount(model._jac_cols, weights=data * y[model._jac_rows],
+                       minlength=model.n_coordinates)
+
+
+def residual(model, t: float, q: np.ndarray, fr: Frames | None = None) -> np.ndarray:
+    """Constraint residual ``C(q, t)``, shape (m,) [m or rad per row]."""
+    return evaluate(model, t, frames(model, q) if fr is None else fr, True, False)[0]
+
+
+def jacobian(model, t: float, q: np.ndarray, fr: Frames | None = None,
+             sparse: bool | None = None):
+    """Constraint Jacobian ``Cq`` at time ``t`` [s] (rotation drivers' rows depend on it),
+    shape (m, n): ndarray, or CSR matrix when sparse."""
+    data = evaluate(model, t, frames(model, q) if fr is None else fr, False, True)[1]
+    return jacobian_matrix(model, data, sparse)
+
+
+def velocity_rhs(model, t: float, fr: Frames | None = None) -> np.ndarray:
+    """Right-hand side ``-Ct`` of ``Cq qd = -Ct``: ``f'(t)`` on driven rows, zero elsewhere.
+
+    Rows whose time dependence sits inside the primitive (spatial rotation drivers) need the
+    configuration ``fr``.
+    """
+    if not model.rotation_motions:
+        nu = np.zeros(model.n_constraints)
+        if len(model.driver_rows):
+            nu[model.driver_rows] = driver_values(model, t)[1]
+        return nu
+    if fr is None:
+        raise ValueError("velocity_rhs needs the configuration (fr) for this model")
+    return evaluate(model, t, fr, value=False, jacobian=False, rate=True)[3]
+
+
+def acceleration_rhs(model, t: float, q: np.ndarray, qd: np.ndarray,
+                     fr: Frames | None = None) -> np.ndarray:
+    """Right-hand side ``Qd = -(Cq qd)_q qd - 2 Cqt qd - Ctt`` of ``Cq qdd = Qd``."""
+    fr = frames(model, q, qd) if fr is None else fr
+    return evaluate(model, t, fr, False, False, True)[2]

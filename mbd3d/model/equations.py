@@ -1,0 +1,273 @@
+"""Terms of the equations of motion ``M qdd + Cq^T lam = Qe + Qv``: mass matrix, applied and
+quadratic velocity forces, energies."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import scipy.sparse as sp
+
+from mbd3d.model.body import Frames, rotate_rows
+from mbd3d.numerics.compiled import accelerations as kernel, structures
+from mbd3d.numerics.compiled.motions import table as motion_table
+from mbd3d.model.constraints import _motion_values, driver_values, frames, motion_phases
+from mbd3d.errors import ModelError
+from mbd3d.numerics.linalg import SingularMatrix
+
+__all__ = ["mass_matrix", "mass_times", "generalized_forces", "kinetic_energy",
+           "potential_energy", "augmented_accelerations"]
+
+
+def mass_matrix(model, fr: Frames, sparse: bool | None = None):
+    """Mass matrix ``M`` (n, n): block diagonal, one block per body. CSR when sparse."""
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    nb, nc = blocks.shape[0], blocks.shape[1]
+    if model.sparse if sparse is None else sparse:
+        return sp.bsr_matrix((blocks, np.arange(nb), np.arange(nb + 1)),
+                             shape=(nb * nc, nb * nc)).tocsr()
+    M = np.zeros((nb * nc, nb * nc))
+    idx = np.arange(nb)[:, None] * nc + np.arange(nc)[None, :]
+    M[idx[:, :, None], idx[:, None, :]] = blocks
+    return M
+
+
+def mass_times(blocks: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``M x`` (n,) from the per-body mass blocks (n_bodies, n_coords, n_coords), without
+    assembling ``M``."""
+    return rotate_rows(blocks, x.reshape(blocks.shape[:2])).ravel()
+
+
+def generalized_forces(model, t: float, fr: Frames) -> np.ndarray:
+    """``Qe + Qv``: gravity, force elements and the quadratic velocity vector, shape (n,)."""
+    nb = model.n_bodies
+    Q = model._weight.copy()
+    if not model.body_type.constant_mass:
+        Q[:nb] += model.body_type.quadratic_velocity(fr, model.mass, model.inertia)
+    for group in model.force_groups:
+        group.apply(model, t, fr, Q)
+    return Q[:nb].ravel()
+
+
+def kinetic_energy(model, q: np.ndarray, qd: np.ndarray, charts: np.ndarray | None = None
+                   ) -> float:
+    """``T = 1/2 qd^T M qd`` [J] (``charts``: see :func:`mbd3d.model.constraints.frames`)."""
+    fr = frames(model, q, qd, charts)
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    v = np.reshape(qd, blocks.shape[:2])
+    return float(0.5 * np.einsum("ki,kij,kj->", v, blocks, v))
+
+
+def potential_energy(model, q: np.ndarray, charts: np.ndarray | None = None) -> float:
+    """Potential energy of gravity (zero at the global origin) and of springs [J]."""
+    nb = model.n_bodies
+    R = np.reshape(q, (nb, model.n_coords_per_body))[:, :model.dim]
+    V = -float(np.sum(model.mass * (R @ model.gravity)))
+    fr = None
+    for group in model.force_groups:
+        if fr is None:
+            fr = frames(model, q, np.zeros_like(q), charts)
+        V += group.potential(model, fr)
+    return V
+
+
+class _Core:
+    """A model's arrays in the form the compiled core takes them (built once; the
+    :class:`~mbd3d.numerics.compiled.structures.ModelArrays` records are made when first asked for, so
+    that a model stays picklable)."""
+
+    def __init__(self, model):
+        table, pattern = model.row_table, model._augmented_pattern
+        nb = model.n_bodies
+        self.spatial = model.dim == 3
+        self.layout = {"dense": structures.DENSE, "banded": structures.BANDED,
+                       "sparse": structures.SPARSE, "range": structures.RANGE}[pattern.layout]
+        banded = pattern.layout == "banded"
+        range_space = pattern.range_space if pattern.layout == "range" else None
+        inertia = np.array(model.inertia)
+        if not self.spatial:
+            from mbd3d.planar.body import inertia_tensors
+            inertia = inertia_tensors(inertia)
+        self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
+        terms = [m.terms() for m in model.driver_motions + model.rotation_motions]
+        force_tables = [group.table(model) for group in model.force_groups]
+        #: parts only Python can evaluate: force elements or motions given as functions
+        self.python_parts = (any(t is None for t in terms)
+                             or any(t is None for t in force_tables))
+        driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
+        rotation_table = motion_table([] if self.python_parts
+                                      else terms[len(model.driver_rows):])
+        #: the fields of the records of the force elements and of the range-space solve (None:
+        #: none); made into records with the model's (see arrays), so that it stays picklable
+        self._forces = _force_fields(model, [] if self.python_parts else force_tables)
+        self._range_space = _range_space_fields(range_space)
+        # writable contiguous copies: the compiled functions are typed (and cached) for those
+        self._fields = dict(
+            n=model.n_coordinates, solved_here=self.layout != structures.SPARSE,
+            python_parts=self.python_parts,
+            mass=np.array(model.mass), inertia=inertia, weight=np.array(model._weight[:nb].ravel()),
+            code=table.code, bi=table.bi, bj=table.bj, first_row=table.first_row,
+            slots=table.slots, coordinate=table.coordinate, motion=table.motion,
+            vector_bodies=table.vector_bodies,
+            vector_local=np.ascontiguousarray(table.vector_local),
+            n_rows=table.n_rows, driver_rows=self.driver_rows,
+            **dict(zip(("driver_first", "driver_kinds", "driver_starts", "driver_params"),
+                       driver_table)),
+            **dict(zip(("rotation_first", "rotation_kinds", "rotation_starts",
+                        "rotation_params"), rotation_table)),
+            destination=model._jac_destination, nnz=len(model._jac_take), layout=self.layout,
+            rows=np.array(pattern.rows, dtype=np.int64),
+            cols=np.array(pattern.cols, dtype=np.int64),
+            flat=np.array(pattern.flat if banded else [], dtype=np.int64),
+            kl=pattern.kl if banded else 0, ku=pattern.ku if banded else 0,
+            perm=np.array(pattern.perm if banded else [], dtype=np.int64),
+            entry_scale=np.array(pattern.entry_scale), scale=np.array(pattern.scale),
+            pivot_tolerance=float(pattern.pivot_tolerance),
+            c0=np.array(model.c0), row_scale=np.array(model.row_scale, dtype=float),
+            jac_rows=np.array(model._jac_rows, dtype=np.int64),
+            jac_cols=np.array(model._jac_cols, dtype=np.int64),
+            no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((0, 3)),
+            no_motions=np.zeros((0, 3)))
+        self._records: dict[bool, structures.ModelArrays] = {}
+        self._scratch = threading.local()
+        self.no_forces = self._fields["no_forces"]
+        self.no_motions = self._fields["no_motions"]
+
+    def arrays(self, python_accelerations: bool = False) -> "structures.ModelArrays":
+        """The model as the compiled functions take it; ``python_accelerations``: the
+        accelerations come from Python's augmented-Lagrangian solve (redundant rows)."""
+        key = bool(python_accelerations)
+        if key not in self._records:
+            forces, range_space = self._forces, self._range_space
+            fields = dict(self._fields, python_accelerations=key, forces=None if forces is None
+                          else structures.force_arrays(*(forces[name] for name in
+                                                         structures.FORCE_FIELDS)),
+                          range_space=None if range_space is None
+                          else structures.range_space_arrays(*(range_space[name] for name in
+                                                               structures.RANGE_FIELDS)))
+            self._records[key] = structures.model_arrays(
+                *(fields[name] for name in structures.MODEL_FIELDS))
+        return self._records[key]
+
+    def workspace(self) -> "structures.Workspace":
+        """Scratch arrays for the compiled evaluations of this thread (each thread has its
+        own: nothing in them outlives a call, so results never depend on them)."""
+        work = getattr(self._scratch, "work", None)
+        if work is None:
+            work = self._scratch.work = structures.workspace(self.spatial, self.record)
+        return work
+
+    @property
+    def record(self) -> "structures.ModelArrays":
+        """:meth:`arrays` of the accelerations solved in compiled code."""
+        records = self._records
+        return records[False] if False in records else self.arrays()
+
+    def __getstate__(self) -> dict:
+        return {key: value for key, value in self.__dict__.items()
+                if key not in ("_records", "_scratch")}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _records={}, _scratch=threading.local())
+
+
+def _range_space_fields(pattern) -> dict | None:
+    """The fields of the model's :class:`~mbd3d.numerics.compiled.structures.RangeSpaceArrays`, or
+    None for a model solved otherwise."""
+    if pattern is None:
+        return None
+    return dict(slot=pattern.slot, body_start=pattern.body_start, positions=pattern.positions,
+                row_position=pattern.row_position, bandwidth=pattern.bandwidth)
+
+
+def _force_fields(model, tables: list[dict]) -> dict | None:
+    """The fields of the model's :class:`~mbd3d.numerics.compiled.structures.ForceArrays` from its
+    force groups' tables (each kind at most one group, empty for the kinds the model has not),
+    or None without any."""
+    if not tables:
+        return None
+    dim = model.dim
+    fields = {
+        "spring_bodies": np.zeros((0, 2), dtype=np.int64),
+        "spring_points": np.zeros((0, 2, dim)), "spring_values": np.zeros((0, 3)),
+        "rotary_bodies": np.zeros((0, 2), dtype=np.int64), "rotary_values": np.zeros((0, 3)),
+        "rotary_vectors": np.zeros((0, 3, 3)),
+        "point_bodies": np.zeros(0, dtype=np.int64), "point_points": np.zeros((0, dim)),
+        "point_forces": np.zeros((0, dim)), "point_body_frame": np.zeros(0, dtype=np.int64),
+        "torque_bodies": np.zeros(0, dtype=np.int64), "torque_values": np.zeros((0, 3)),
+        "torque_body_frame": np.zeros(0, dtype=np.int64)}
+    actuators = {"spring": [], "rotary": []}
+    for table in tables:
+        table = dict(table)
+        terms = table.pop("actuators", None)
+        if terms is not None:
+            actuators["spring" if "spring_bodies" in table else "rotary"] = terms
+        fields.update({key: np.ascontiguousarray(value) for key, value in table.items()})
+    for kind, terms in actuators.items():
+        fields.update(zip((f"{kind}_first", f"{kind}_kinds", f"{kind}_starts",
+                           f"{kind}_params"), motion_table(terms)))
+    return fields
+
+
+def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
+                            charts: np.ndarray | None = None) -> np.ndarray | None:
+    """``(qdd, lam)`` stacked (n + m,) from the augmented equations at ``(t, q, qd)``, or None
+    when the state is not finite.
+
+    Everything but the force elements and motions given as Python functions, and the SuperLU
+    solve of a large model with a wide band, is one compiled call
+    (:mod:`mbd3d.numerics.compiled.accelerations`): the one place this system is assembled and solved.
+
+    Raises
+    ------
+    SingularMatrix
+        When the matrix is singular (dependent constraint rows).
+    """
+    q, qd = _coordinates(model, q, "q"), _coordinates(model, qd, "qd")
+    core = model._core
+    # a planar model has no charts (and its compiled functions no spatial code)
+    charts = (model.charts0 if charts is None else charts) if core.spatial else None
+    if not core.python_parts:
+        x, status = kernel.accelerations(core.workspace(), float(t), q, qd, charts)
+    else:
+        extra = core.no_forces
+        if model.force_groups:
+            fr = frames(model, q, qd, charts)
+            Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+            for group in model.force_groups:
+                group.apply(model, t, fr, Q)
+            extra = Q[:model.n_bodies].ravel()
+        x, status = kernel.accelerations_with_parts(
+            core.workspace(), float(t), q, qd, charts, extra,
+            motion_phases(model, t), _motion_values(model.driver_motions, model.driver_names, t))
+    if status == kernel.NOT_FINITE:
+        # a motion or force that cannot be evaluated is named (ModelError); else the state
+        # diverged
+        driver_values(model, t), motion_phases(model, t)
+        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)):
+            generalized_forces(model, t, frames(model, q, qd, charts))
+        return None
+    if status == kernel.SINGULAR:
+        raise SingularMatrix("smallest pivot below tolerance")
+    if core.layout == structures.SPARSE:
+        n_values = len(x) - model.n_coordinates - model.n_constraints
+        return model._augmented_pattern.solve(x[:n_values], x[n_values:])
+    return x
+
+
+
+def _coordinates(model, x, name: str) -> np.ndarray:
+    """``x`` as the contiguous float array (n,) the compiled core takes."""
+    if (type(x) is np.ndarray and x.dtype == np.float64 and x.shape == (model.n_coordinates,)
+            and x.flags.c_contiguous):
+        return x
+    try:
+        array = np.ascontiguousarray(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{name} must be an array of {model.n_coordinates} numbers "
+                         f"(the coordinates of '{model.name}'), got {x!r}") from None
+    if array.shape != (model.n_coordinates,):
+        raise ModelError(f"{name} must have shape ({model.n_coordinates},) for "
+                         f"'{model.name}' ({', '.join(model.coordinate_labels[:3])}, ...), "
+                         f"got shape {array.shape}")
+    return array

@@ -1,0 +1,281 @@
+"""Constraint primitives: what each one means, and the table that evaluates all of a model's.
+
+Every constraint row of a model has the form ``C = c(q) - c0 - f(t)``: ``c`` one of the primitive
+functions below, ``c0`` a constant of the row (a distance, a relative angle of the drawing) and
+``f`` an optional prescribed motion (drivers). The formulas are written once, against body
+vectors, in the compiled loop of :mod:`mbd3d.numerics.compiled.rows`, so the same code serves planar and
+spatial bodies; the classes here describe each primitive to the model builder.
+
+Conventions (Haug, *Computer-Aided Kinematics and Dynamics of Mechanical Systems*, 1989; verified
+in Rodrigues coordinates by ``tests/test_spatial_primitives.py``): bodies ``i`` and ``j``,
+``d = r_j - r_i``, ``a = A v`` body vectors, and ``gamma = -(Cq qd)_q qd`` is the
+velocity-dependent right-hand side of the acceleration equation (drivers add ``f''`` separately).
+
+Each primitive class gives its ``code`` in the compiled loop, its parameters, the rows per
+instance (``rows(dim)``), whether its rows are lengths (``length_rows``: residuals are judged
+relative to the model's length scale) and the body-frame vectors it needs, as
+``(name, body "i" or "j", parameter)``. :class:`RowTable` stacks every instance of a model in
+row order; one call of :func:`evaluate_rows` evaluates them all.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mbd3d.numerics.compiled import rows as kernel
+
+__all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
+           "RelativeAngle", "Rotation", "RowTable", "evaluate_rows"]
+
+class PointCoincidence:
+    """``c = r_i - r_j``: point ``u_i`` of body i coincides with point ``u_j`` of body j.
+
+    A planar revolute joint; the point part of a spatial spherical/revolute/universal joint.
+    Reaction: the force ``-lam`` acts on body i at its point and ``+lam`` on body j.
+    """
+
+    kind = "point"
+    code = kernel.POINT
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("u_i", "u_j")
+    vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return dim
+
+
+class Dot1:
+    """``c = a_i . a_j``: body vectors kept perpendicular (Haug's dot-1).
+
+    Axis alignment is written as perpendicularity, whose gradient does not vanish at the
+    solution.
+    """
+
+    kind = "dot1"
+    code = kernel.DOT1
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = False
+    params = ("v_i", "v_j")
+    vectors = (("ai", "i", "v_i"), ("aj", "j", "v_j"))
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class Dot2:
+    """``c = a_i . (r_j - r_i)``: point j stays on a plane (3D) or line (2D) of body i.
+
+    With a motion ``f(t)`` it is a translation driver along ``a_i``.
+    """
+
+    kind = "dot2"
+    code = kernel.DOT2
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("v_i", "u_i", "u_j")
+    vectors = (("ai", "i", "v_i"), ("si", "i", "u_i"), ("sj", "j", "u_j"))
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class Distance:
+    """``c = |r_j - r_i|``: with ``c0 = L`` a massless rigid link of length L.
+
+    ``lam`` is then the compressive force in the link [N] (positive pushes the points apart).
+    """
+
+    kind = "distance"
+    code = kernel.DISTANCE
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("u_i", "u_j")
+    vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class Coordinate:
+    """``c = q_j[coordinate]``: one coordinate of body j (body i is the ground)."""
+
+    kind = "coordinate"
+    code = kernel.COORDINATE
+    #: translation coordinates are lengths, a planar angle is not (see :meth:`row_is_length`)
+    length_rows = None
+    params = ("coordinate",)
+    vectors = ()
+
+    @staticmethod
+    def row_is_length(params: dict, dim: int) -> bool:
+        return int(params["coordinate"]) < dim
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class RelativeAngle:
+    """``c = theta_j - theta_i``: rotation of body j relative to body i about the plane normal
+    (planar bodies only)."""
+
+    kind = "angle"
+    code = kernel.ANGLE
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = False
+    params = ()
+    vectors = ()
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class Rotation:
+    """Spatial rotation driver across a hinge: ``C = f_j . (g_i cos(phi) - f_i sin(phi))``,
+    ``phi = f(t)``.
+
+    ``f_i, g_i`` span body i's plane normal to the hinge, ``f_j`` is body j's reference
+    direction in that plane; with ``theta`` the angle from ``f_i`` to ``f_j`` about the hinge,
+    ``C = sin(theta - phi)``: no turn counting, any number of revolutions, and ``lam`` is minus
+    the driving torque about the hinge. The time dependence sits inside the row, so this class
+    supplies its own ``-C_t`` and time terms of ``Qd`` from ``(f, f', f'')`` of its motion.
+    With ``u = A_i (g cos(phi) - f sin(phi))`` and
+    ``w = A_i (f cos(phi) + g sin(phi))``: ``-C_t = (f_j . w) phi'`` and
+    ``Qd = gamma_dot1(u, f_j) + 2 phi' (f_j . (omega_i x w) + w . (omega_j x f_j))
+    + (f_j . u) phi'^2 + (f_j . w) phi''``. ``u`` and ``w`` and everything derived from them
+    are linear in ``f_i`` and ``g_i``, so they are combined from those two vectors' parts.
+    """
+
+    kind = "rotation"
+    code = kernel.ROTATION
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = False
+    params = ("f_i", "g_i", "f_j")
+    vectors = (("fi", "i", "f_i"), ("gi", "i", "g_i"), ("fj", "j", "f_j"))
+    time_dependent = True
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+PRIMITIVES = {cls.kind: cls for cls in
+              (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation)}
+
+
+class RowTable:
+    """Every primitive instance of a model in row order, as the arrays of the compiled loop.
+
+    Attributes
+    ----------
+    code, bi, bj, first_row, coordinate, motion : ndarray (k,) of int
+        Primitive code, bodies i and j (rows of the frames, the ground last), first row,
+        coordinate of a :class:`Coordinate` and row of a :class:`Rotation`'s motion in
+        ``phi`` (-1 for the others).
+    slots : ndarray (k, 3) of int
+        Rows of each instance's vectors (in the order of its class's ``vectors``) in the
+        vector table ``vector_bodies`` (V,), ``vector_local`` (V, dim).
+    n_rows : int
+    """
+
+    def __init__(self, code, bi, bj, first_row, slots, coordinate, motion, vector_bodies,
+                 vector_local, n_rows: int):
+        self.code, self.bi, self.bj, self.first_row = code, bi, bj, first_row
+        self.slots, self.coordinate, self.motion = slots, coordinate, motion
+        self.vector_bodies, self.vector_local, self.n_rows = vector_bodies, vector_local, n_rows
+
+    @classmethod
+    def from_instances(cls, instances: list, dim: int) -> "RowTable":
+        """``instances``: ``(primitive class, bi, bj, params, motion row)`` in row order."""
+        k = len(instances)
+        code, bi, bj, first_row, coordinate, motion = (np.zeros(k, dtype=np.int64)
+                                                        for _ in range(6))
+        slots = np.full((k, 3), -1, dtype=np.int64)
+        bodies, local = [], []
+        row = 0
+        for e, (prim, i, j, params, motion_row) in enumerate(instances):
+            code[e], bi[e], bj[e], first_row[e], motion[e] = prim.code, i, j, row, motion_row
+            coordinate[e] = int(params.get("coordinate", 0))
+            for n, (_, side, key) in enumerate(prim.vectors):
+                slots[e, n] = len(bodies)
+                bodies.append(i if side == "i" else j)
+                local.append(np.asarray(params[key], dtype=float))
+            row += prim.rows(dim)
+        return cls(code, bi, bj, first_row, slots, coordinate, motion,
+                   np.array(bodies, dtype=np.int64), np.array(local).reshape(-1, dim), row)
+
+    def row_bodies(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bodies i and j of every row, (m,) each."""
+        rows_per = np.diff(np.append(self.first_row, self.n_rows))
+        return np.repeat(self.bi, rows_per), np.repeat(self.bj, rows_per)
+
+    def subset(self, instances: np.ndarray) -> "RowTable":
+        """The table of some instances only, their rows and vectors renumbered from 0."""
+        rows_per = np.diff(np.append(self.first_row, self.n_rows))[instances]
+        first = np.concatenate([[0], np.cumsum(rows_per)[:-1]]).astype(np.int64)
+        slots = self.slots[instances]
+        used = slots[slots >= 0]
+        renumbered = np.full_like(slots, -1)
+        renumbered[slots >= 0] = np.arange(len(used))
+        return RowTable(self.code[instances], self.bi[instances], self.bj[instances], first,
+                        renumbered, self.coordinate[instances], self.motion[instances],
+                        self.vector_bodies[used], self.vector_local[used], int(rows_per.sum()))
+
+    def on_bodies(self, body_map: np.ndarray) -> "RowTable":
+        """The same rows read from other body rows: body ``b`` becomes ``body_map[b]``."""
+        return RowTable(self.code, body_map[self.bi], body_map[self.bj], self.first_row,
+                        self.slots, self.coordinate, self.motion, body_map[self.vector_bodies],
+                        self.vector_local, self.n_rows)
+
+    def repeated(self, copies: int, body_stride: int, motion_stride: int) -> "RowTable":
+        """The table for ``copies`` states stacked one after the other: copy ``c`` reads bodies
+        ``c * body_stride + b``, motions ``c * motion_stride + r`` and writes rows
+        ``c * n_rows + r``."""
+        offset = np.arange(copies)[:, None]
+        tile = lambda a, stride: (a[None] + stride * offset).reshape(-1)  # noqa: E731
+        n_vectors = len(self.vector_bodies)
+        slots = np.where(self.slots[None] >= 0, self.slots[None] + n_vectors * offset[:, :, None],
+                         -1).reshape(-1, 3)
+        return RowTable(np.tile(self.code, copies), tile(self.bi, body_stride),
+                        tile(self.bj, body_stride), tile(self.first_row, self.n_rows), slots,
+                        np.tile(self.coordinate, copies),
+                        np.where(self.motion[None] >= 0, tile(self.motion, motion_stride)
+                                 .reshape(copies, -1), -1).reshape(-1),
+                        tile(self.vector_bodies, body_stride),
+                        np.tile(self.vector_local, (copies, 1)), copies * self.n_rows)
+
+
+def evaluate_rows(table: RowTable, fr, phi: np.ndarray, value: bool = True,
+                  jacobian: bool = True, gamma: bool = False, rate: bool = False,
+                  destination: np.ndarray | None = None, nnz: int | None = None):
+    """``c(q)`` (m,), Jacobian values, ``gamma`` (m,) and ``-C_t`` (m,) of the table's rows at
+    the frames ``fr`` (velocities needed for ``gamma``), ``None`` for the parts not asked for.
+
+    The Jacobian values go to positions ``destination`` of an array of ``nnz`` (indexed by
+    ``(2 row + side) n_coords + coordinate``, -1 for entries left out: the ground's); by
+    default the full array (m, 2, n_coords) of derivatives with respect to bodies i and j.
+    ``phi`` (k_motion, 3): ``(f, f', f'')`` of the motions of rotation drivers.
+    """
+    nc = fr.Q.shape[1]
+    raw = destination is None
+    if raw:
+        nnz = table.n_rows * 2 * nc
+        destination = np.arange(nnz)
+    velocities = gamma and fr.Qd is not None
+    if gamma and not velocities:
+        raise ValueError("gamma needs frames with velocities")
+    s, J, v, a = fr.vectors(table.vector_bodies, table.vector_local, velocities)
+    C, data, G, nu = kernel.constraint_rows(
+        table.code, table.bi, table.bj, table.first_row, table.slots, table.coordinate,
+        table.motion, phi, table.n_rows, fr.Q, fr.Qd if velocities else fr.Q, s, J, v, a,
+        destination, nnz, value, jacobian, gamma, rate)
+    if jacobian and raw:
+        data = data.reshape(table.n_rows, 2, nc)
+    return (C if value else None, data if jacobian else None, G if gamma else None,
+            nu if rate else None)

@@ -1,0 +1,210 @@
+"""Dense LU with partial pivoting, and the augmented solve of a small model in one call.
+
+For the matrices of a mechanism of a few bodies (tens of unknowns) a plain compiled LU costs
+less than the calls into LAPACK around it. The pivot test is that of :mod:`mbd3d.numerics.linalg`: a
+matrix is singular when its smallest pivot falls below ``pivot_tolerance`` times the largest
+(or a pivot is not finite).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mbd3d.numerics.compiled import jit
+
+
+@jit
+def pivots_regular(sizes: np.ndarray, pivot_tolerance: float) -> bool:
+    """Whether the pivots' sizes ``|U_kk|`` make a regular matrix: all finite and the
+    smallest above ``pivot_tolerance`` times the largest."""
+    smallest = np.inf
+    largest = 0.0
+    for size in sizes:
+        if not size < np.inf:  # inf or NaN
+            return False
+        smallest = min(smallest, size)
+        largest = max(largest, size)
+    return sizes.shape[0] == 0 or smallest > pivot_tolerance * largest
+
+
+@jit
+def lu_factor(A: np.ndarray, pivot_tolerance: float):
+    """Factor ``A`` (n, n) in place into ``L U`` (row interchanges ``piv``); returns
+    ``(piv, regular)``."""
+    n = A.shape[0]
+    piv = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+        pivot = A[k, k]
+        if pivot != 0.0:
+            for i in range(k + 1, n):
+                factor = A[i, k] / pivot
+                A[i, k] = factor
+                if factor != 0.0:
+                    for j in range(k + 1, n):
+                        A[i, j] -= factor * A[k, j]
+    sizes = np.empty(n)
+    for k in range(n):
+        sizes[k] = abs(A[k, k])
+    return piv, pivots_regular(sizes, pivot_tolerance)
+
+
+@jit
+def lu_solve_into(LU: np.ndarray, piv: np.ndarray, x: np.ndarray) -> None:
+    """Overwrite ``x`` (holding ``b``) with the solution of ``A x = b`` from the factors of
+    :func:`lu_factor`."""
+    n = LU.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+    for i in range(n):
+        total = x[i]
+        for j in range(i):
+            total -= LU[i, j] * x[j]
+        x[i] = total
+    for i in range(n - 1, -1, -1):
+        total = x[i]
+        for j in range(i + 1, n):
+            total -= LU[i, j] * x[j]
+        x[i] = total / LU[i, i]
+
+
+@jit
+def solve_pattern_into(rows, cols, entry_scale, scale, values, b, pivot_tolerance, matrix, x):
+    """Solve ``A x = b`` for the matrix with ``values`` at ``(rows, cols)``, factored as
+    ``D A D`` with ``D = diag(scale)`` (the model's units; see :mod:`mbd3d.numerics.linalg`), in the
+    scratch ``matrix`` (n, n); returns whether the matrix is regular."""
+    n = scale.shape[0]
+    matrix[:, :] = 0.0
+    for p in range(rows.shape[0]):
+        matrix[rows[p], cols[p]] = values[p] * entry_scale[p]
+    piv, regular = lu_factor(matrix, pivot_tolerance)
+    if not regular:
+        x[:] = 0.0
+        return False
+    for i in range(n):
+        x[i] = scale[i] * b[i]
+    lu_solve_into(matrix, piv, x)
+    for i in range(n):
+        x[i] *= scale[i]
+    return True
+
+
+@jit
+def solve_pattern(rows: np.ndarray, cols: np.ndarray, entry_scale: np.ndarray,
+                  scale: np.ndarray, values: np.ndarray, b: np.ndarray,
+                  pivot_tolerance: float):
+    """``(x, regular)`` of :func:`solve_pattern_into`."""
+    n = scale.shape[0]
+    x = np.empty(n)
+    regular = solve_pattern_into(rows, cols, entry_scale, scale, values, b, pivot_tolerance,
+                                 np.empty((n, n)), x)
+    return x, regular
+
+
+@jit
+def band_factor(ab: np.ndarray, n: int, kl: int, ku: int, pivot_tolerance: float):
+    """Factor in place a matrix in LAPACK's band storage ``ab`` (flat, column-major, ``2 kl +
+    ku + 1`` rows: ``A[i, j]`` at row ``kl + ku + i - j`` of column ``j``, the first ``kl``
+    rows room for fill-in) by LU with partial pivoting (the algorithm of LAPACK's ``gbtf2``).
+    Returns ``(piv, regular)``."""
+    rows = 2 * kl + ku + 1
+    kv = kl + ku
+    piv = np.empty(n, dtype=np.int64)
+    last = 0  # last column touched by the row interchanges so far
+    for j in range(n):
+        below = min(kl, n - 1 - j)
+        column = j * rows
+        p = 0
+        big = abs(ab[column + kv])
+        for i in range(1, below + 1):
+            if abs(ab[column + kv + i]) > big:
+                big = abs(ab[column + kv + i])
+                p = i
+        piv[j] = j + p
+        if ab[column + kv + p] == 0.0:
+            continue
+        last = max(last, min(j + ku + p, n - 1))
+        if p != 0:
+            for c in range(j, last + 1):
+                a = c * rows + kv + j - c
+                b = a + p
+                ab[a], ab[b] = ab[b], ab[a]
+        pivot = ab[column + kv]
+        for i in range(1, below + 1):
+            ab[column + kv + i] /= pivot
+        for c in range(j + 1, last + 1):
+            top = c * rows + kv + j - c
+            value = ab[top]
+            if value != 0.0:
+                for i in range(1, below + 1):
+                    ab[top + i] -= ab[column + kv + i] * value
+    sizes = np.empty(n)
+    for j in range(n):
+        sizes[j] = abs(ab[j * rows + kv])
+    return piv, pivots_regular(sizes, pivot_tolerance)
+
+
+@jit
+def band_solve_into(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray,
+                    x: np.ndarray) -> None:
+    """Overwrite ``x`` (holding ``b``) with the solution of ``A x = b`` from the factors of
+    :func:`band_factor` (LAPACK's ``gbtrs``)."""
+    rows = 2 * kl + ku + 1
+    kv = kl + ku
+    for j in range(n - 1):
+        p = piv[j]
+        if p != j:
+            x[p], x[j] = x[j], x[p]
+        below = min(kl, n - 1 - j)
+        for i in range(1, below + 1):
+            x[j + i] -= ab[j * rows + kv + i] * x[j]
+    for j in range(n - 1, -1, -1):
+        x[j] /= ab[j * rows + kv]
+        for i in range(max(0, j - kv), j):
+            x[i] -= ab[j * rows + kv + i - j] * x[j]
+
+
+@jit
+def solve_banded_pattern_into(flat, kl, ku, perm, entry_scale, scale, values, b,
+                              pivot_tolerance, ab, permuted, x):
+    """As :func:`solve_pattern_into` for a pattern permuted to a small bandwidth: the entries
+    go to the band storage ``ab`` at ``flat`` and the unknowns are taken in the order
+    ``perm`` (``permuted``: scratch of the size of ``x``)."""
+    n = scale.shape[0]
+    ab[:] = 0.0
+    for p in range(flat.shape[0]):
+        ab[flat[p]] = values[p] * entry_scale[p]
+    piv, regular = band_factor(ab, n, kl, ku, pivot_tolerance)
+    if not regular:
+        x[:] = 0.0
+        return False
+    for i in range(n):
+        permuted[i] = scale[perm[i]] * b[perm[i]]
+    band_solve_into(ab, n, kl, ku, piv, permuted)
+    for i in range(n):
+        x[perm[i]] = scale[perm[i]] * permuted[i]
+    return True
+
+
+@jit
+def solve_banded_pattern(flat: np.ndarray, kl: int, ku: int, perm: np.ndarray,
+                         entry_scale: np.ndarray, scale: np.ndarray, values: np.ndarray,
+                         b: np.ndarray, pivot_tolerance: float):
+    """``(x, regular)`` of :func:`solve_banded_pattern_into`."""
+    n = scale.shape[0]
+    x = np.empty(n)
+    regular = solve_banded_pattern_into(flat, kl, ku, perm, entry_scale, scale, values, b,
+                                        pivot_tolerance, np.empty((2 * kl + ku + 1) * n),
+                                        np.empty(n), x)
+    return x, regular

@@ -1,0 +1,247 @@
+"""The constraint primitives: the rows ``C``, their Jacobian, ``gamma`` and ``-C_t`` of every
+primitive instance of a model in one loop.
+
+Formulas of Haug, *Computer-Aided Kinematics and Dynamics of Mechanical Systems* (1989), written
+against body vectors (``s = A v`` with Jacobian ``J``, rate ``v`` and acceleration term ``a``;
+see :mod:`.bodies`), so that they serve planar and spatial bodies; the conventions and what each
+primitive means are in :mod:`mbd3d.model.primitives`. ``d = r_j - r_i`` joins two body points,
+``gamma = -(Cq qd)_q qd`` is the velocity-dependent right-hand side of the acceleration
+equation. Every instance has bodies ``i`` and ``j`` (the ground is the last body row) and up to
+three body vectors (``slots``: rows of the vector table).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mbd3d.numerics.compiled import jit
+
+#: primitive codes, in the order of mbd3d.model.primitives.PRIMITIVES
+POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION = range(7)
+
+
+@jit
+def _put(data, dest, row, side, col, nc, value):
+    """Jacobian entry of ``row`` for body ``side`` (0: i, 1: j), coordinate ``col``."""
+    p = dest[(2 * row + side) * nc + col]
+    if p >= 0:
+        data[p] = value
+
+
+@jit
+def _dot(x, i, y, j, dim):
+    total = 0.0
+    for c in range(dim):
+        total += x[i, c] * y[j, c]
+    return total
+
+
+@jit
+def _rotation_vectors(s, J, v, a, fi, gi, phi, velocities, u, uJ, uv, ua, w, wv):
+    """``u = A_i (g cos(phi) - f sin(phi))`` and ``w = A_i (f cos(phi) + g sin(phi))`` of the
+    rotation driver, from the parts of ``f_i`` and ``g_i`` (each is linear in them)."""
+    c, sn = math.cos(phi), math.sin(phi)
+    dim, n_rot = s.shape[1], J.shape[2]
+    for x in range(dim):
+        u[x] = c * s[gi, x] - sn * s[fi, x]
+        w[x] = c * s[fi, x] + sn * s[gi, x]
+        for col in range(n_rot):
+            uJ[x, col] = c * J[gi, x, col] - sn * J[fi, x, col]
+        if velocities:
+            uv[x] = c * v[gi, x] - sn * v[fi, x]
+            ua[x] = c * a[gi, x] - sn * a[fi, x]
+            wv[x] = c * v[fi, x] + sn * v[gi, x]
+
+
+@jit
+def row_work_size(dim: int, n_rot: int) -> int:
+    """Length of the scratch array of :func:`constraint_rows_into`."""
+    return 7 * dim
+
+
+@jit
+def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
+                    Q, Qd, s, J, v, a, dest, nnz, value, jacobian, gamma, rate):
+    """Evaluate every instance: returns ``c (m,)``, the Jacobian values at positions ``dest``
+    (``nnz``,), ``gamma (m,)`` and ``-C_t`` of time-dependent rows (m,), with zero-length
+    arrays for the parts not asked for (see :func:`constraint_rows_into`)."""
+    dim = s.shape[1]
+    C = np.empty(n_rows if value else 0)
+    data = np.empty(nnz if jacobian else 0)
+    G = np.empty(n_rows if gamma else 0)
+    nu = np.empty(n_rows if rate else 0)
+    work = np.empty(row_work_size(dim, Q.shape[1] - dim))
+    constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows, Q,
+                         Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G, nu,
+                         work, np.empty((dim, Q.shape[1] - dim)))
+    return C, data, G, nu
+
+
+@jit
+def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
+                         Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G,
+                         nu, work, uJ):
+    """Evaluate every instance into ``C`` (m,) (``c(q)`` only: the caller subtracts the rows'
+    constants and prescribed motions), ``data`` (the Jacobian values at positions ``dest``),
+    ``G`` (``gamma``, m) and ``nu`` (``-C_t`` of time-dependent rows, zero elsewhere), each
+    when asked for; ``work``: scratch of :func:`row_work_size`, ``uJ`` of (dim, n_rot).
+
+    ``Q``, ``Qd`` (bodies + ground, n_coords): coordinates and rates (``Qd`` is read only for
+    ``gamma``); ``phi`` (k_motion, 3): ``(f, f', f'')`` of the rotation drivers' motions.
+    """
+    dim = s.shape[1]
+    nc = Q.shape[1]
+    n_rot = nc - dim
+    if value:
+        C[:] = 0.0
+    if jacobian:
+        data[:] = 0.0
+    if gamma:
+        G[:] = 0.0
+    if rate:
+        nu[:] = 0.0
+    d = work[0:dim]
+    dd = work[dim:2 * dim]
+    u = work[2 * dim:3 * dim]
+    uv = work[3 * dim:4 * dim]
+    ua = work[4 * dim:5 * dim]
+    w = work[5 * dim:6 * dim]
+    wv = work[6 * dim:7 * dim]
+    si = sj = 0
+    for e in range(kind.shape[0]):
+        k, i, j, row = kind[e], bi[e], bj[e], first_row[e]
+        p0, p1, p2 = slots[e, 0], slots[e, 1], slots[e, 2]
+        if k == POINT or k == DOT2 or k == DISTANCE:
+            # the body points: slots (p0, p1) for a point pair, (p1, p2) after dot-2's vector
+            si, sj = (p1, p2) if k == DOT2 else (p0, p1)
+            for x in range(dim):
+                d[x] = Q[j, x] + s[sj, x] - Q[i, x] - s[si, x]
+                if gamma:
+                    dd[x] = Qd[j, x] + v[sj, x] - Qd[i, x] - v[si, x]
+        if k == POINT:
+            for x in range(dim):
+                r = row + x
+                if value:
+                    C[r] = -d[x]
+                if jacobian:
+                    _put(data, dest, r, 0, x, nc, 1.0)
+                    _put(data, dest, r, 1, x, nc, -1.0)
+                    for col in range(n_rot):
+                        _put(data, dest, r, 0, dim + col, nc, J[si, x, col])
+                        _put(data, dest, r, 1, dim + col, nc, -J[sj, x, col])
+                if gamma:
+                    G[r] = a[sj, x] - a[si, x]
+        elif k == DOT1:
+            if value:
+                C[row] = _dot(s, p0, s, p1, dim)
+            if jacobian:
+                for col in range(n_rot):
+                    di = 0.0
+                    dj = 0.0
+                    for x in range(dim):
+                        di += s[p1, x] * J[p0, x, col]
+                        dj += s[p0, x] * J[p1, x, col]
+                    _put(data, dest, row, 0, dim + col, nc, di)
+                    _put(data, dest, row, 1, dim + col, nc, dj)
+            if gamma:
+                G[row] = -(_dot(s, p1, a, p0, dim) + _dot(s, p0, a, p1, dim)
+                           + 2.0 * _dot(v, p0, v, p1, dim))
+        elif k == DOT2:
+            if value:
+                total = 0.0
+                for x in range(dim):
+                    total += s[p0, x] * d[x]
+                C[row] = total
+            if jacobian:
+                for x in range(dim):
+                    _put(data, dest, row, 0, x, nc, -s[p0, x])
+                    _put(data, dest, row, 1, x, nc, s[p0, x])
+                for col in range(n_rot):
+                    di = 0.0
+                    dj = 0.0
+                    for x in range(dim):
+                        di += d[x] * J[p0, x, col] - s[p0, x] * J[si, x, col]
+                        dj += s[p0, x] * J[sj, x, col]
+                    _put(data, dest, row, 0, dim + col, nc, di)
+                    _put(data, dest, row, 1, dim + col, nc, dj)
+            if gamma:
+                total = 0.0
+                for x in range(dim):
+                    total += (d[x] * a[p0, x] + 2.0 * v[p0, x] * dd[x]
+                              + s[p0, x] * (a[sj, x] - a[si, x]))
+                G[row] = -total
+        elif k == DISTANCE:
+            length = 0.0
+            for x in range(dim):
+                length += d[x] * d[x]
+            # a zero length is refused when the model is built; the floor only avoids 0/0 in
+            # an iterate that passes through coincidence
+            length = max(math.sqrt(length), 1e-300)
+            if value:
+                C[row] = length
+            if jacobian:
+                for x in range(dim):
+                    _put(data, dest, row, 0, x, nc, -d[x] / length)
+                    _put(data, dest, row, 1, x, nc, d[x] / length)
+                for col in range(n_rot):
+                    di = 0.0
+                    dj = 0.0
+                    for x in range(dim):
+                        di -= d[x] * J[si, x, col]
+                        dj += d[x] * J[sj, x, col]
+                    _put(data, dest, row, 0, dim + col, nc, di / length)
+                    _put(data, dest, row, 1, dim + col, nc, dj / length)
+            if gamma:
+                along = 0.0
+                squared = 0.0
+                relative = 0.0
+                for x in range(dim):
+                    along += d[x] * dd[x]
+                    squared += dd[x] * dd[x]
+                    relative += d[x] * (a[sj, x] - a[si, x])
+                along /= length
+                G[row] = -(relative / length + (squared - along * along) / length)
+        elif k == COORDINATE:
+            col = coordinate[e]
+            if value:
+                C[row] = Q[j, col]
+            if jacobian:
+                _put(data, dest, row, 1, col, nc, 1.0)
+        elif k == ANGLE:
+            # theta_j - theta_i of planar bodies: linear in q, so gamma is zero
+            if value:
+                C[row] = Q[j, nc - 1] - Q[i, nc - 1]
+            if jacobian:
+                _put(data, dest, row, 0, nc - 1, nc, -1.0)
+                _put(data, dest, row, 1, nc - 1, nc, 1.0)
+        elif k == ROTATION:
+            # dot-1 of u (body i, turned by phi) and f_j (slot p2): C = sin(theta - phi)
+            f, f1, f2 = phi[motion[e], 0], phi[motion[e], 1], phi[motion[e], 2]
+            _rotation_vectors(s, J, v, a, p0, p1, f, gamma, u, uJ, uv, ua, w, wv)
+            fj_u = 0.0
+            fj_w = 0.0
+            for x in range(dim):
+                fj_u += s[p2, x] * u[x]
+                fj_w += s[p2, x] * w[x]
+            if value:
+                C[row] = fj_u
+            if jacobian:
+                for col in range(n_rot):
+                    di = 0.0
+                    dj = 0.0
+                    for x in range(dim):
+                        di += s[p2, x] * uJ[x, col]
+                        dj += u[x] * J[p2, x, col]
+                    _put(data, dest, row, 0, dim + col, nc, di)
+                    _put(data, dest, row, 1, dim + col, nc, dj)
+            if gamma:
+                dot1 = 0.0
+                mixed = 0.0
+                for x in range(dim):
+                    dot1 += s[p2, x] * ua[x] + u[x] * a[p2, x] + 2.0 * uv[x] * v[p2, x]
+                    mixed += s[p2, x] * wv[x] + w[x] * v[p2, x]
+                G[row] = -dot1 + 2.0 * f1 * mixed + fj_u * f1 * f1 + fj_w * f2
+            if rate:
+                nu[row] = fj_w * f1

@@ -1,0 +1,224 @@
+"""The two records the compiled core passes around: a model's fixed arrays
+(:class:`ModelArrays`) and the scratch arrays of one evaluation (:class:`Workspace`).
+
+They are Numba structure references: one pointer per record in every call, with named fields,
+instead of tuples of dozens of arrays whose every member is copied and reference-counted at
+each call (which cost both run time and minutes of compilation).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba.core import types
+from numba.experimental import structref
+
+from mbd3d.numerics.compiled import DISABLED, jit
+from mbd3d.numerics.compiled.rows import row_work_size
+
+__all__ = ["ModelArrays", "Workspace", "ForceArrays", "RangeSpaceArrays", "model_arrays",
+           "force_arrays", "range_space_arrays", "workspace", "MODEL_FIELDS", "WORKSPACE_FIELDS",
+           "FORCE_FIELDS", "RANGE_FIELDS", "DENSE", "BANDED", "SPARSE", "RANGE"]
+
+#: layouts of the augmented matrix (see mbd3d.numerics.linalg): solved in compiled code (RANGE:
+#: through Cq M^-1 Cq^T, mbd3d.numerics.compiled.range_space), or by the caller (SuperLU)
+DENSE, BANDED, SPARSE, RANGE = 0, 1, 2, 3
+
+
+class _Record(types.StructRef):
+    def preprocess_fields(self, fields):
+        # literal types would make every model a new type and compile everything again
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+@structref.register
+class ModelArraysType(_Record):
+    pass
+
+
+@structref.register
+class WorkspaceType(_Record):
+    pass
+
+
+@structref.register
+class ForceArraysType(_Record):
+    pass
+
+
+@structref.register
+class RangeSpaceArraysType(_Record):
+    pass
+
+
+#: the fixed arrays of a model (see mbd3d.model.equations._Core, which fills them):
+#: kinematics and mass, the row table of the primitives (mbd3d.model.primitives.RowTable), the
+#: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
+#: (tables of mbd3d.numerics.compiled.motions, used unless python_parts), the compiled force elements
+#: (a ForceArrays, or None: see FORCE_FIELDS), the augmented matrix's pattern (mbd3d.numerics.linalg)
+#: and the structure of Cq M^-1 Cq^T (mbd3d.numerics.linalg.RangeSpacePattern), the rows' constants and
+#: scales, and empty arrays for the parts of a model that are not Python objects
+MODEL_FIELDS = (
+    "n", "python_accelerations", "python_parts", "solved_here",
+    "mass", "inertia", "weight",
+    "code", "bi", "bj", "first_row", "slots", "coordinate", "motion", "vector_bodies",
+    "vector_local", "n_rows",
+    "driver_rows", "destination", "nnz",
+    "driver_first", "driver_kinds", "driver_starts", "driver_params",
+    "rotation_first", "rotation_kinds", "rotation_starts", "rotation_params",
+    "forces",
+    "layout", "rows", "cols", "flat", "kl", "ku", "perm", "entry_scale", "scale",
+    "pivot_tolerance",
+    "range_space",
+    "c0", "row_scale", "jac_rows", "jac_cols",
+    "no_forces", "no_drivers", "no_motions",
+)
+
+#: the structure of Cq M^-1 Cq^T of a model of the RANGE layout (mbd3d.numerics.linalg.RangeSpacePattern;
+#: see mbd3d.numerics.compiled.range_space); None for the other layouts, whose compiled functions then
+#: contain none of that solve
+RANGE_FIELDS = ("slot", "body_start", "positions", "row_position", "bandwidth")
+
+#: the force elements of a model as the compiled core evaluates them (mbd3d.numerics.compiled.forces;
+#: filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
+#: rotational ones, point forces and torques, and their actuators' motions. A model without
+#: force elements, or with a value given as a Python function, has None instead, and its
+#: compiled functions contain no force code (the branch is decided by the field's type)
+FORCE_FIELDS = (
+    "spring_bodies", "spring_points", "spring_values", "rotary_bodies", "rotary_values",
+    "rotary_vectors", "point_bodies", "point_points", "point_forces", "point_body_frame",
+    "torque_bodies", "torque_values", "torque_body_frame",
+    "spring_first", "spring_kinds", "spring_starts", "spring_params",
+    "rotary_first", "rotary_kinds", "rotary_starts", "rotary_params",
+)
+
+#: the model the scratch arrays are sized for (so that a call from Python passes one record,
+#: not two: each costs about half a microsecond to hand over), and the scratch arrays of one
+#: evaluation of the augmented equations
+WORKSPACE_FIELDS = (
+    "model", "Q", "Qd", "A", "axes", "omega", "kappa", "Gb", "omega_bar",
+    "s", "J", "v", "a",
+    "C", "data", "gamma", "nu", "row_work", "row_jacobian",
+    "blocks", "rhs", "values", "matrix", "band", "permuted", "x",
+    "range_jacobian", "range_band", "range_diagonal", "range_vector", "range_forces",
+    "drivers", "phi", "forces", "spring_actuation", "rotary_actuation",
+)
+
+
+if not DISABLED:
+    class ModelArrays(structref.StructRefProxy):
+        """A model's fixed arrays, as the compiled functions take them (fields
+        :data:`MODEL_FIELDS`)."""
+
+    class Workspace(structref.StructRefProxy):
+        """Scratch arrays of one evaluation (fields :data:`WORKSPACE_FIELDS`)."""
+
+    class ForceArrays(structref.StructRefProxy):
+        """A model's compiled force elements (fields :data:`FORCE_FIELDS`)."""
+
+    class RangeSpaceArrays(structref.StructRefProxy):
+        """The structure of a model's range-space solve (fields :data:`RANGE_FIELDS`)."""
+
+    structref.define_proxy(ModelArrays, ModelArraysType, list(MODEL_FIELDS))
+    structref.define_proxy(Workspace, WorkspaceType, list(WORKSPACE_FIELDS))
+    structref.define_proxy(ForceArrays, ForceArraysType, list(FORCE_FIELDS))
+    structref.define_proxy(RangeSpaceArrays, RangeSpaceArraysType, list(RANGE_FIELDS))
+else:
+    # interpreted (NUMBA_DISABLE_JIT=1): plain records with the same fields
+    class _Plain:
+        fields: tuple = ()
+
+        def __init__(self, *values):
+            for name, value in zip(self.fields, values, strict=True):
+                setattr(self, name, value)
+
+    class ModelArrays(_Plain):
+        """A model's fixed arrays (fields :data:`MODEL_FIELDS`)."""
+
+        fields = MODEL_FIELDS
+
+    class Workspace(_Plain):
+        """Scratch arrays of one evaluation (fields :data:`WORKSPACE_FIELDS`)."""
+
+        fields = WORKSPACE_FIELDS
+
+    class ForceArrays(_Plain):
+        """A model's compiled force elements (fields :data:`FORCE_FIELDS`)."""
+
+        fields = FORCE_FIELDS
+
+    class RangeSpaceArrays(_Plain):
+        """The structure of a model's range-space solve (fields :data:`RANGE_FIELDS`)."""
+
+        fields = RANGE_FIELDS
+
+
+@jit
+def model_arrays(*fields):
+    """A :class:`ModelArrays` of ``fields`` in the order of :data:`MODEL_FIELDS` (built by a
+    compiled, cached function: the proxy's own constructor is compiled in every process)."""
+    return ModelArrays(*fields)
+
+
+@jit
+def force_arrays(*fields):
+    """A :class:`ForceArrays` of ``fields`` in the order of :data:`FORCE_FIELDS`."""
+    return ForceArrays(*fields)
+
+
+@jit
+def range_space_arrays(*fields):
+    """A :class:`RangeSpaceArrays` of ``fields`` in the order of :data:`RANGE_FIELDS`."""
+    return RangeSpaceArrays(*fields)
+
+
+@jit
+def _range_sizes(range_space, n_rows: int, n_bodies: int, nc: int):
+    """Sizes of the range-space solve's scratch: the bodies' copies of the Jacobian rows,
+    the band of S, its rows and the coordinates; none for the other layouts."""
+    if range_space is None:
+        return 0, 0, 0, 0
+    return (range_space.body_start[-1] * nc, (range_space.bandwidth + 1) * n_rows, n_rows,
+            n_bodies * nc)
+
+
+@jit
+def _force_sizes(forces, bodies: int):
+    """Rows of the force elements' scratch: bodies (with the ground), springs and rotational
+    springs; none without compiled forces."""
+    if forces is None:
+        return 0, 0, 0
+    return bodies, forces.spring_first.shape[0] - 1, forces.rotary_first.shape[0] - 1
+
+
+@jit
+def workspace(spatial: bool, model):
+    """A :class:`Workspace` for ``model`` (:class:`ModelArrays`)."""
+    nc, dim = (6, 3) if spatial else (3, 2)
+    n_rot = nc - dim
+    n_bodies = model.mass.shape[0]
+    b = n_bodies + 1
+    n_vectors = model.vector_bodies.shape[0]
+    n_rows = model.n_rows
+    nnz = model.nnz
+    size = n_bodies * nc + n_rows
+    # sizes that depend on the layout and body type, computed before the call: a call of
+    # more than 30 arguments with conditionals inside is more than Numba's bytecode reader takes
+    dense_size = size if model.layout == DENSE else 0
+    band_size = (2 * model.kl + model.ku + 1) * size if model.layout == BANDED else 0
+    chart_bodies = b if spatial else 0
+    range_jacobian, range_band, range_rows, range_forces = _range_sizes(
+        model.range_space, n_rows, n_bodies, nc)
+    force_bodies, springs, rotary_springs = _force_sizes(model.forces, b)
+    return Workspace(
+        model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)), np.empty((b, 3, n_rot)),
+        np.empty((b, 3)), np.empty(b), np.empty((chart_bodies, 3, 3)), np.empty((b, 3)),
+        np.empty((n_vectors, dim)), np.empty((n_vectors, dim, n_rot)),
+        np.empty((n_vectors, dim)), np.empty((n_vectors, dim)),
+        np.empty(n_rows), np.empty(nnz), np.empty(n_rows), np.empty(n_rows),
+        np.empty(row_work_size(dim, n_rot)), np.empty((dim, n_rot)),
+        np.empty((n_bodies, nc, nc)), np.empty(size), np.empty(n_bodies * nc * nc + 2 * nnz),
+        np.empty((dense_size, dense_size)), np.empty(band_size), np.empty(size),
+        np.empty(size), np.empty(range_jacobian), np.empty(range_band), np.empty(range_rows),
+        np.empty(range_rows), np.empty(range_forces), np.empty((model.driver_rows.shape[0], 3)),
+        np.empty((model.rotation_first.shape[0] - 1, 3)), np.empty((force_bodies, nc)),
+        np.empty((springs, 3)), np.empty((rotary_springs, 3)))
