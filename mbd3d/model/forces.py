@@ -284,6 +284,10 @@ class _SpringGroup(_CompiledForces):
                           np.array([model.padded_index(e.body_j) for e in self.elements]))
         return self._rows
 
+    def _bodies(self, model) -> np.ndarray:
+        """The padded indices of each element's two bodies, (k, 2)."""
+        return np.stack(self._indices(model), axis=1).astype(np.int64)
+
     def _actuator_terms(self) -> list | None:
         """The compiled terms of every element's actuator (none: an empty sum), or None when
         one is a Python function."""
@@ -396,9 +400,6 @@ class _SpringDampers(_SpringGroup):
                                            self._values, self._actuation(t), Q)
         if failed >= 0:
             raise coincident_points(self.elements[failed].name, t)
-
-    def _bodies(self, model) -> np.ndarray:
-        return np.stack(self._indices(model), axis=1).astype(np.int64)
 
     def table(self, model):
         terms = self._actuator_terms()
@@ -526,9 +527,6 @@ class _RotationalSprings(_SpringGroup):
     def apply(self, model, t, fr, Q):
         kernel.rotary_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, self._bodies(model),
                                   self._values, self._vectors, self._actuation(t), Q)
-
-    def _bodies(self, model) -> np.ndarray:
-        return np.stack(self._indices(model), axis=1).astype(np.int64)
 
     def table(self, model):
         terms = self._actuator_terms()

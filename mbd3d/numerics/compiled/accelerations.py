@@ -204,27 +204,6 @@ def _solve_into(nc, range_space, model, work) -> bool:
                                          model.entry_scale, model.scale, values, rhs,
                                          model.pivot_tolerance, work.band, work.permuted, work.x)
     return True
-    values = work.values
-    n_blocks = blocks.size
-    for b in range(blocks.shape[0]):
-        for i in range(nc):
-            for j in range(nc):
-                values[(b * nc + i) * nc + j] = blocks[b, i, j]
-    nnz = model.nnz
-    for i in range(nnz):
-        values[n_blocks + i] = data[i]
-        values[n_blocks + nnz + i] = data[i]
-    if model.layout == DENSE:
-        regular = solve_pattern_into(model.rows, model.cols, model.entry_scale, model.scale,
-                                     values, rhs, model.pivot_tolerance, work.matrix, work.x)
-    elif model.layout == BANDED:
-        regular = solve_banded_pattern_into(model.flat, model.kl, model.ku, model.perm,
-                                            model.entry_scale, model.scale, values, rhs,
-                                            model.pivot_tolerance, work.band, work.permuted,
-                                            work.x)
-    else:
-        return SOLVED
-    return SOLVED if regular else SINGULAR
 
 
 @jit
