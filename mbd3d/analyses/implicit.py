@@ -42,9 +42,10 @@ import scipy.sparse as sp
 
 from mbd3d.model import constraints
 from mbd3d.model.checks import finite_scalar
-from mbd3d.model.equations import augmented_accelerations, generalized_forces, mass_matrix, mass_times
+from mbd3d.model.equations import augmented_accelerations, generalized_forces, mass_matrix
 from mbd3d.errors import IntegrationError, ModelError
-from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, penalty_scale,
+from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
+from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling,
                           solve_augmented_lagrangian, solve_model_augmented)
 from mbd3d.io.observers import Watch
 from mbd3d.analyses.passages import PassageWatch
@@ -188,34 +189,53 @@ def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma
     return T.tocsr() if model.sparse else T.toarray()
 
 
-def _penalty(model, blocks: np.ndarray, jac_data: np.ndarray, beta_prime: float,
-             relative_penalty: float) -> np.ndarray:
-    """The penalties ``p`` (one per row) of the augmented Lagrangian: ``relative_penalty``
-    times the mass term ``beta' M`` per squared unit of ``Cq``, taken in the model's
-    dimensionless units (coordinates over their scale ``s``, rows over theirs ``r``, masses
-    over ``m L^2``; see linalg.penalty_scale), so that the ratio means the same for a
-    mechanism of any size: ``p_i = p~ m L^2 / r_i^2``."""
-    s, r = model.coordinate_scale, model.row_scale
-    mass_unit = model.mass_scale * model.length_scale ** 2
-    scaled = jac_data * s[model._jac_cols] / r[model._jac_rows]
-    row_norms = np.bincount(model._jac_rows, weights=scaled * scaled,
-                            minlength=model.n_constraints)
-    mass_diagonal = np.einsum("kii->ki", blocks).ravel() * s * s / mass_unit
-    scaled_penalty = relative_penalty * beta_prime * penalty_scale(mass_diagonal, row_norms)
-    return scaled_penalty * mass_unit / (r * r)
+class _IterationFactors:
+    """The factors of the last iteration matrix of a step (``beta' M + gamma' D + K + p Cq^T
+    Cq``), to project velocities with (:meth:`solve`), and the indicator of singular
+    positions (the conditioning of ``Cq`` in the metric of ``M``, free of the step; see
+    :mod:`mbd3d.analyses.passages`). They live in the run's buffers: valid until the next
+    step."""
 
-
-class _IterationMatrix:
-    """Factors of ``beta' M + gamma' D + K + p Cq^T Cq`` at one Newton iterate, from the mass
-    blocks and Jacobian values the iteration has evaluated there."""
-
-    def __init__(self, model, blocks, jac_data, beta_prime, penalty, tangent):
+    def __init__(self, arrays, buffers, python_factors, penalty, beta_prime, blocks):
+        self.arrays, self.buffers, self.python_factors = arrays, buffers, python_factors
         self.penalty = penalty
-        values = model._penalty_pattern.values(beta_prime, blocks, penalty, jac_data)
-        self.lu = model._penalty_pattern.factor(values, tangent)
-        # the conditioning of Cq in the metric of M, free of the step (see mbd3d.analyses.passages)
-        self.indicator = (self.lu.log_abs_determinant - model.n_coordinates * np.log(beta_prime)
+        matrix, band, _ = buffers
+        log_det = (python_factors.log_abs_determinant if python_factors is not None
+                   else kernel.log_abs_determinant(arrays, matrix, band))
+        self.indicator = (log_det - len(blocks) * blocks.shape[1] * np.log(beta_prime)
                           - float(np.sum(np.linalg.slogdet(blocks)[1])))
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.python_factors is not None:
+            return self.python_factors.solve(b)
+        x = np.empty(len(b))
+        kernel.solve_factored(self.arrays, *self.buffers, np.ascontiguousarray(b, dtype=float),
+                              x)
+        return x
+
+
+def _tangent_storage(model, tangent) -> tuple[np.ndarray, bool]:
+    """The applied forces' tangent in the scaled storage of the iteration matrix's layout
+    (dense: (n, n) flattened; banded: the band), and whether Python must factor the matrix
+    instead (SuperLU: the sparse layout, or a tangent reaching outside the band)."""
+    pattern = model._penalty_pattern
+    if pattern.layout == "sparse":
+        return np.zeros(0), True
+    if tangent is None:
+        return np.zeros(0), False
+    d = pattern.scale
+    if pattern.layout == "dense":
+        T = tangent.toarray() if sp.issparse(tangent) else np.asarray(tangent)
+        return np.ascontiguousarray((d[:, None] * T * d[None, :]).ravel()), False
+    T = sp.coo_matrix(tangent)
+    prow, pcol = pattern.inverse[T.row], pattern.inverse[T.col]
+    offset = prow - pcol
+    if np.any(offset > pattern.kl) or np.any(-offset > pattern.ku):
+        return np.zeros(0), True
+    extra = np.zeros(pattern.band_rows * pattern.size)
+    np.add.at(extra, pattern.kl + pattern.ku + offset + pcol * pattern.band_rows,
+              d[T.row] * T.data * d[T.col])
+    return extra, False
 
 
 def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
@@ -280,8 +300,9 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         return qd
 
     def newton(tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
-        """One step: the new state and the iteration matrix, or None when Newton does not
-        converge."""
+        """One step: the new state and the iteration matrix's factors, or None when Newton
+        does not converge (the iteration itself is compiled:
+        :func:`mbd3d.numerics.compiled.generalized_alpha.newton_step`)."""
         shift = (af * qdd_n - am * a_n) / (1.0 - am)
         q_hat = q_n + h * qd_n + h * h * (0.5 - beta) * a_n + h * h * beta * shift
         qd_hat = qd_n + h * (1.0 - gamma) * a_n + h * gamma * shift
@@ -289,66 +310,48 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         gamma_prime = gamma / (h * beta)
         q = q_hat + qdd_n / beta_prime  # predictor: unchanged accelerations
         lam = lam_n.copy()
-        previous = np.inf
-        for iteration in range(max_newton_iterations):
-            qdd = beta_prime * (q - q_hat)
-            qd = qd_hat + gamma_prime * (q - q_hat)
-            if iteration == 0:
-                # the applied forces' tangent varies slowly: once per step is enough
-                tangent = _force_tangent(model, tt, q, qd, chart, gamma_prime)
-            fr = constraints.frames(model, q, qd, chart)
-            C, jac_data, _ = constraints.evaluate(model, tt, fr)
-            blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-            penalty = _penalty(model, blocks, jac_data, beta_prime, relative_penalty)
-            Mqdd = mass_times(blocks, qdd)
-            if iteration:
-                lam = lam + penalty * C  # method of multipliers, C at the new iterate
-            lam_effective = lam + penalty * C
-            r = (Mqdd + constraints.jacobian_transpose_times(model, jac_data, lam_effective)
-                 - generalized_forces(model, tt, fr))
-            # factors at every iterate (full Newton): the constraint force p C Cq^T is
-            # normal to the free directions only at the configuration where Cq is
-            # evaluated, and it is large (p is the penalty ratio times the mass term); with
-            # factors kept from the predictor, its part along the free directions of the old
-            # factors passed the convergence test as a tangential force error (a velocity
-            # oscillation of 1e-2 rad/s on a slider-crank at h = 1e-3, 200 times the method's
-            # own error). The geometric stiffness d(Cq^T lam)/dq is left out (Gauss-Newton on
-            # the penalty term, as in ALI3-P): tried, with lam or lam + p C, it made the
-            # free slider-crank at h = 5e-4 reject thousands of steps where it rejects none
-            # without it (p C is far larger than lam between iterates, so neither is the
-            # curvature the next iterate sees)
-            try:
-                S = _IterationMatrix(model, blocks, jac_data, beta_prime, penalty, tangent)
-            except SingularMatrix:
-                raise IntegrationError(
-                    f"forward dynamics of '{model.name}': the generalized-alpha iteration "
-                    f"matrix is numerically singular at t = {tt:.6g} s. Its pivots span the "
-                    "penalty ratio times the spread of the bodies' masses and inertias: check "
-                    "for bodies many orders of magnitude lighter than the others (or give "
-                    "them mass).", time=tt) from None
-            stats["factorizations"] += 1
-            dq = -S.lu.solve(r)
-            if not np.all(np.isfinite(dq)):
-                return None
-            q = q + dq
-            stats["newton_iterations"] += 1
-            # relative to the coordinates' scale (the model's length for positions)
-            size = float(np.max(np.abs(dq) / (model.coordinate_scale + np.abs(q))))
-            rate = size / previous if iteration else np.inf
-            # near a singular configuration the multipliers converge only linearly (rate
-            # a / (a + p s^2) along a small singular value s): judge the remaining error
-            # by the observed rate, as for any linearly convergent iteration
-            remaining = size * rate / (1.0 - rate) if rate < 1.0 else np.inf
-            if (min(size, remaining) <= newton_tol
-                    and constraints.largest_relative(model, C) <= projection_tol):
-                qdd = beta_prime * (q - q_hat)
-                qd = qd_hat + gamma_prime * (q - q_hat)
-                a = shift + (1.0 - af) / (1.0 - am) * qdd
-                return (q, qd, qdd, a, lam_effective), S
-            if iteration >= 2 and rate > 0.9:
-                return None  # diverging or stalled: shorten the step
-            previous = size
-        return None
+        # the applied forces' tangent varies slowly: once per step, at the predictor
+        tangent = _force_tangent(model, tt, q, qd_hat + gamma_prime * (q - q_hat), chart,
+                                 gamma_prime)
+        extra, python_factor = _tangent_storage(model, tangent)
+        run.tangent = tangent
+        # The iteration matrix is factored at every iterate (full Newton): the constraint
+        # force p C Cq^T is normal to the free directions only at the configuration where Cq
+        # is evaluated, and it is large (p is the penalty ratio times the mass term); with
+        # factors kept from the predictor, its part along the free directions of the old
+        # factors passed the convergence test as a tangential force error (a velocity
+        # oscillation of 1e-2 rad/s on a slider-crank at h = 1e-3, 200 times the method's
+        # own error). The geometric stiffness d(Cq^T lam)/dq is left out (Gauss-Newton on
+        # the penalty term, as in ALI3-P): tried, with lam or lam + p C, it made the free
+        # slider-crank at h = 5e-4 reject thousands of steps where it rejects none without
+        # it (p C is far larger than lam between iterates, so neither is the curvature the
+        # next iterate sees).
+        outcome = kernel.newton_step(
+            work, arrays, run.key, tt, q, q_hat, qd_hat, beta_prime, gamma_prime, lam,
+            chart if spatial else None, extra, python_factor, relative_penalty, newton_tol,
+            projection_tol, max_newton_iterations, penalty, lam_effective, *buffers, counters)
+        stats["newton_iterations"], stats["factorizations"] = (int(counters[0]),
+                                                               int(counters[1]))
+        if outcome == kernel.SINGULAR_MATRIX:
+            raise IntegrationError(
+                f"forward dynamics of '{model.name}': the generalized-alpha iteration "
+                f"matrix is numerically singular at t = {tt:.6g} s. Its pivots span the "
+                "penalty ratio times the spread of the bodies' masses and inertias: check "
+                "for bodies many orders of magnitude lighter than the others (or give "
+                "them mass).", time=tt)
+        if outcome == kernel.NOT_FINITE and np.all(np.isfinite(q)):
+            # a force element or motion that cannot be evaluated there is named
+            constraints.driver_values(model, tt)
+            generalized_forces(model, tt, constraints.frames(
+                model, q, qd_hat + gamma_prime * (q - q_hat), chart))
+        if outcome != kernel.CONVERGED:
+            return None
+        qdd = beta_prime * (q - q_hat)
+        qd = qd_hat + gamma_prime * (q - q_hat)
+        a = shift + (1.0 - af) / (1.0 - am) * qdd
+        S = _IterationFactors(arrays, buffers, run.factors if python_factor else None,
+                              penalty.copy(), beta_prime, kernel.last_mass_blocks(work))
+        return (q, qd, qdd, a, lam_effective.copy()), S
 
     def loop() -> None:
         nonlocal redundant
@@ -398,7 +401,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 tt = target
                 # the reported velocities are projected onto Cq qd = -Ct; the recursion keeps
                 # its own, because projecting them inside it costs the method its order
-                record(q, project_velocity(tt, q, qd, chart, S.lu, S.penalty), chart, lam)
+                record(q, project_velocity(tt, q, qd, chart, S, S.penalty), chart, lam)
             watch.tick(tt, stats["steps"])
             q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart)
             if moved:
@@ -409,11 +412,25 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, lam, redundant)
                 a = qdd.copy()
 
-    def run() -> None:
+    # the compiled iteration's records and buffers, made once per run
+    spatial = model.dim == 3
+    work = model._core.workspace()
+    arrays = model._core.penalty_arrays(model)
+    m = model.n_constraints
+    penalty, lam_effective = np.empty(m), np.empty(m)
+    layout = model._penalty_pattern.layout
+    buffers = (np.empty((n, n) if layout == "dense" else (0, 0)),
+               np.empty(model._penalty_pattern.band_rows * n if layout == "banded" else 0),
+               np.empty(n, dtype=np.int64))
+    counters = np.zeros(2, dtype=np.int64)
+    run = callbacks.Run(model)
+
+    def run_steps() -> None:
         try:
-            loop()
+            with run:
+                loop()
         finally:
             passages.close()  # a passage still open at the end (or at a failure)
 
     watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)
-    return run_keeping_results(run, out.partial, watch)
+    return run_keeping_results(run_steps, out.partial, watch)

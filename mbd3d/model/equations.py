@@ -129,6 +129,7 @@ class _Core:
             no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((0, 3)),
             no_motions=np.zeros((0, 3)))
         self._records: dict[bool, structures.ModelArrays] = {}
+        self._penalty = None
         self._scratch = threading.local()
         self.no_forces = self._fields["no_forces"]
         self.no_motions = self._fields["no_motions"]
@@ -149,6 +150,27 @@ class _Core:
                 *(fields[name] for name in structures.MODEL_FIELDS))
         return self._records[key]
 
+    def penalty_arrays(self, model) -> "structures.PenaltyArrays":
+        """Generalized-alpha's iteration matrix pattern as the compiled Newton iteration takes
+        it (:mod:`mbd3d.numerics.compiled.generalized_alpha`), made when first asked for."""
+        if self._penalty is None:
+            pattern = model._penalty_pattern
+            banded = pattern.layout == "banded"
+            layout = {"dense": structures.DENSE, "banded": structures.BANDED,
+                      "sparse": structures.SPARSE}[pattern.layout]
+            self._penalty = structures.penalty_arrays(
+                np.array(pattern.target, dtype=np.int64),
+                np.array(pattern.first, dtype=np.int64),
+                np.array(pattern.second, dtype=np.int64), layout,
+                np.array(pattern.rows, dtype=np.int64), np.array(pattern.cols, dtype=np.int64),
+                np.array(pattern.flat if pattern.layout != "sparse" else [], dtype=np.int64),
+                pattern.kl if banded else 0, pattern.ku if banded else 0,
+                np.array(pattern.perm if banded else [], dtype=np.int64),
+                np.array(pattern.entry_scale), np.array(pattern.scale),
+                float(pattern.pivot_tolerance), np.array(model.coordinate_scale, dtype=float),
+                float(model.mass_scale * model.length_scale ** 2))
+        return self._penalty
+
     def workspace(self) -> "structures.Workspace":
         """Scratch arrays for the compiled evaluations of this thread (each thread has its
         own: nothing in them outlives a call, so results never depend on them)."""
@@ -165,10 +187,10 @@ class _Core:
 
     def __getstate__(self) -> dict:
         return {key: value for key, value in self.__dict__.items()
-                if key not in ("_records", "_scratch")}
+                if key not in ("_records", "_scratch", "_penalty")}
 
     def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state, _records={}, _scratch=threading.local())
+        self.__dict__.update(state, _records={}, _penalty=None, _scratch=threading.local())
 
 
 def _range_space_fields(pattern) -> dict | None:

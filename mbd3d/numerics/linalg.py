@@ -28,6 +28,7 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from mbd3d.numerics.compiled.dense import pivots_regular, solve_banded_pattern, solve_pattern
+from mbd3d.numerics.compiled.generalized_alpha import penalty_scale
 from mbd3d.numerics.compiled.range_space import range_space_factor, range_space_solve_factored
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
@@ -584,7 +585,8 @@ class RangeSpacePattern:
 class PenaltyPattern(_FixedPattern):
     """Where the mass blocks and the products of Jacobian values go in ``a M + p Cq^T Cq``,
     fixed per model, so that the iteration matrix of the implicit integrator is filled by one
-    ``bincount`` instead of sparse matrix products.
+    pass over them (:func:`mbd3d.numerics.compiled.generalized_alpha.iteration_values_into`)
+    instead of sparse matrix products.
 
     ``Cq^T Cq`` couples the coordinates of every pair of Jacobian entries in one row: with the
     entries sorted by row (CSR order) those pairs are enumerated once, here.
@@ -610,15 +612,6 @@ class PenaltyPattern(_FixedPattern):
         linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
         self._lay_out(linear // n, linear % n, n, model.sparse,
                       augmented_scaling(model)[:n])
-
-    def values(self, mass_factor: float, blocks: np.ndarray, penalty,
-               jac_data: np.ndarray) -> np.ndarray:
-        """Entries of ``mass_factor M + Cq^T diag(penalty) Cq`` in the pattern's order
-        (``penalty``: one per constraint row, or one for all)."""
-        per_entry = (penalty[self.first_rows] if np.ndim(penalty) else penalty)
-        weights = np.concatenate([mass_factor * blocks.ravel(),
-                                  per_entry * jac_data[self.first] * jac_data[self.second]])
-        return np.bincount(self.target, weights=weights, minlength=len(self.rows))
 
 
 def solve_model_augmented(model, blocks: np.ndarray, jac_data: np.ndarray, rhs: np.ndarray
@@ -667,16 +660,6 @@ def solve_augmented(M, Cq, top: np.ndarray, bottom: np.ndarray,
     sol = Factorization(K, scaling=None if scaling is None else (scaling, scaling)).solve(
         np.concatenate([top, bottom]))
     return sol[:n], sol[n:]
-
-
-def penalty_scale(mass_diagonal: np.ndarray, row_squared_norms: np.ndarray) -> float:
-    """Penalty [units of the mass matrix per squared unit of ``Cq``] that weighs the
-    constraints like the masses: mean ``|M_ii|`` over the mean squared row norm of ``Cq``
-    (rows without entries left out)."""
-    rows = row_squared_norms[row_squared_norms > 0]
-    if not rows.size:
-        return 1.0
-    return float(np.mean(np.abs(mass_diagonal))) / float(np.mean(rows))
 
 
 def penalty_matrix(A, Cq, penalty: float):
@@ -736,7 +719,9 @@ def solve_augmented_lagrangian(A, Cq, b: np.ndarray, c: np.ndarray, *, relative_
         return dx * x, dl * lam_s, used
     rows = (np.asarray(Cq.multiply(Cq).sum(axis=1)).ravel() if sp.issparse(Cq)
             else np.einsum("ij,ij->i", Cq, Cq))
-    p = relative_penalty * penalty_scale(A.diagonal() if sp.issparse(A) else np.diag(A), rows)
+    p = relative_penalty * penalty_scale(
+        np.ascontiguousarray(A.diagonal() if sp.issparse(A) else np.diag(A), dtype=float),
+        np.ascontiguousarray(rows, dtype=float))
     lu = Factorization(penalty_matrix(A, Cq, p))
     lam = np.zeros(Cq.shape[0]) if lam is None else np.array(lam, dtype=float)
     CqT = Cq.T

@@ -132,11 +132,42 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
                 not motions_at(model, work, t):
             return NOT_FINITE
         phi, drivers = work.phi, work.drivers
+    if not applied_forces_into(model, work, t, q, qd, charts, extra):
+        return NOT_FINITE
+    n = q.shape[0]
+    yes = n >= 0  # run-time flags (see applied_forces_into)
+    no = not yes
+    rhs, gamma = work.rhs, work.gamma
+    body_vectors_into(work.A, work.axes, work.omega, work.kappa, model.vector_bodies,
+                      model.vector_local, yes, work.s, work.J, work.v, work.a)
+    constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
+                         model.coordinate, model.motion, phi, model.n_rows, work.Q, work.Qd,
+                         work.s, work.J, work.v, work.a, model.destination, no, yes, yes, no,
+                         work.C, work.data, gamma, work.nu, work.row_work, work.row_jacobian)
+    driver_rows = model.driver_rows
+    for k in range(driver_rows.shape[0]):
+        gamma[driver_rows[k]] += drivers[k, 2]
+    for i in range(model.n_rows):
+        rhs[n + i] = gamma[i]
+    # nc: coordinates per body, a compile-time constant (a literal where it is passed on)
+    if charts is not None:
+        nc = 6
+    else:
+        nc = 3
+    return SOLVED if _solve_into(nc, model.range_space, model, work) else SINGULAR
+
+
+@jit
+def applied_forces_into(model, work, t, q, qd, charts, extra) -> bool:
+    """The frames of the bodies at ``(q, qd)`` (``work.Q``, ``work.Qd``, ``work.A``, ...),
+    their mass blocks (``work.blocks``) and the generalized forces ``Qe + Qv`` (gravity,
+    ``extra``, the quadratic velocity forces and the force elements) into ``work.rhs[:n]``;
+    False when a force element cannot be evaluated there. ``charts`` as in
+    :func:`accelerations_into`."""
     n = q.shape[0]
     # flags as run-time values: constants would be typed as literals, and every combination
     # compiled again in each callee
     yes = n >= 0
-    no = not yes
     Q, Qd, rhs, blocks = work.Q, work.Qd, work.rhs, work.blocks
     A, axes, omega, kappa = work.A, work.axes, work.omega, work.kappa
     padded_into(q, Q)
@@ -144,32 +175,14 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
     weight = model.weight
     for i in range(n):
         rhs[i] = weight[i] + extra[i]
-    # nc: coordinates per body, a compile-time constant (a literal where it is passed on)
     if charts is not None:
-        nc = 6
         spatial_frames_into(Q, Qd, charts, yes, A, axes, omega, kappa, work.Gb, work.omega_bar)
         spatial_mass_blocks_into(work.Gb, model.mass, model.inertia, blocks)
         spatial_quadratic_velocity_into(work.Gb, work.omega_bar, kappa, model.inertia, rhs)
     else:
-        nc = 3
         planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
         planar_mass_blocks_into(model.mass, model.inertia, blocks)
-    if not forces_into(model.forces, work, t, rhs):
-        return NOT_FINITE
-    s, J, v, a = work.s, work.J, work.v, work.a
-    body_vectors_into(A, axes, omega, kappa, model.vector_bodies, model.vector_local, yes, s,
-                      J, v, a)
-    gamma, data = work.gamma, work.data
-    constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
-                         model.coordinate, model.motion, phi, model.n_rows, Q, Qd, s, J, v, a,
-                         model.destination, no, yes, yes, no, work.C, data, gamma, work.nu,
-                         work.row_work, work.row_jacobian)
-    driver_rows = model.driver_rows
-    for k in range(driver_rows.shape[0]):
-        gamma[driver_rows[k]] += drivers[k, 2]
-    for i in range(model.n_rows):
-        rhs[n + i] = gamma[i]
-    return SOLVED if _solve_into(nc, model.range_space, model, work) else SINGULAR
+    return forces_into(model.forces, work, t, rhs)
 
 
 @jit

@@ -1,6 +1,7 @@
-"""What the compiled integrator loop asks of Python: the parts of a model that are Python
-objects (force elements, prescribed motions), the sparse solve of a large model, and the
-augmented-Lagrangian accelerations of a model with redundant constraints.
+"""What the compiled integrator loops ask of Python: the parts of a model that are Python
+objects (force elements, prescribed motions), the sparse solve of a large model, the
+augmented-Lagrangian accelerations of a model with redundant constraints, and
+generalized-alpha's iteration matrix where it is factored by SuperLU.
 
 The loop calls these from Numba's object mode (about a microsecond per call) with the key of
 its run: :class:`Run` registers the run's objects under a key for the length of the run.
@@ -25,6 +26,10 @@ class Run:
         self.model = model
         #: ``(t, q, qd, charts) -> (qdd, lam)`` for models the compiled solve cannot take
         self.accelerations = accelerations
+        #: generalized-alpha: the applied forces' tangent of the step (added to the iteration
+        #: matrix by :func:`factor_penalty_and_solve`), and the last factors made there
+        self.tangent = None
+        self.factors = None
         self.key = next(_keys)
 
     def __enter__(self) -> int:
@@ -61,6 +66,20 @@ def solve(key: int, values: np.ndarray, rhs: np.ndarray):
         return np.ascontiguousarray(_runs[key].model._augmented_pattern.solve(values, rhs)), SOLVED
     except SingularMatrix:
         return np.zeros(len(rhs)), SINGULAR
+
+
+def factor_penalty_and_solve(key: int, values: np.ndarray, r: np.ndarray):
+    """``(x, status)``: factor generalized-alpha's iteration matrix from its entries (and the
+    run's tangent) in Python (SuperLU, or a tangent outside the band), keep the factors in
+    the run, and solve ``A x = r``."""
+    from mbd3d.numerics.linalg import SingularMatrix
+
+    run = _runs[key]
+    try:
+        run.factors = run.model._penalty_pattern.factor(values, run.tangent)
+    except SingularMatrix:
+        return np.zeros(len(r)), 1
+    return np.ascontiguousarray(run.factors.solve(r)), 0
 
 
 def accelerations(key: int, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray):

@@ -1,5 +1,7 @@
-"""The two records the compiled core passes around: a model's fixed arrays
-(:class:`ModelArrays`) and the scratch arrays of one evaluation (:class:`Workspace`).
+"""The records the compiled core passes around: a model's fixed arrays (:class:`ModelArrays`,
+with its force elements and range-space structure as records of their own, or None), the
+scratch arrays of one evaluation (:class:`Workspace`), and generalized-alpha's iteration
+matrix pattern (:class:`PenaltyArrays`).
 
 They are Numba structure references: one pointer per record in every call, with named fields,
 instead of tuples of dozens of arrays whose every member is copied and reference-counted at
@@ -15,9 +17,9 @@ from numba.experimental import structref
 from mbd3d.numerics.compiled import DISABLED, jit
 from mbd3d.numerics.compiled.rows import row_work_size
 
-__all__ = ["ModelArrays", "Workspace", "ForceArrays", "RangeSpaceArrays", "model_arrays",
-           "force_arrays", "range_space_arrays", "workspace", "MODEL_FIELDS", "WORKSPACE_FIELDS",
-           "FORCE_FIELDS", "RANGE_FIELDS", "DENSE", "BANDED", "SPARSE", "RANGE"]
+__all__ = ["ModelArrays", "Workspace", "ForceArrays", "RangeSpaceArrays", "PenaltyArrays",
+           "model_arrays", "force_arrays", "range_space_arrays", "penalty_arrays", "workspace",
+           "MODEL_FIELDS", "WORKSPACE_FIELDS", "FORCE_FIELDS", "RANGE_FIELDS", "PENALTY_FIELDS", "DENSE", "BANDED", "SPARSE", "RANGE"]
 
 #: layouts of the augmented matrix (see mbd3d.numerics.linalg): solved in compiled code (RANGE:
 #: through Cq M^-1 Cq^T, mbd3d.numerics.compiled.range_space), or by the caller (SuperLU)
@@ -50,6 +52,11 @@ class RangeSpaceArraysType(_Record):
     pass
 
 
+@structref.register
+class PenaltyArraysType(_Record):
+    pass
+
+
 #: the fixed arrays of a model (see mbd3d.model.equations._Core, which fills them):
 #: kinematics and mass, the row table of the primitives (mbd3d.model.primitives.RowTable), the
 #: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
@@ -77,6 +84,13 @@ MODEL_FIELDS = (
 #: see mbd3d.numerics.compiled.range_space); None for the other layouts, whose compiled functions then
 #: contain none of that solve
 RANGE_FIELDS = ("slot", "body_start", "positions", "row_position", "bandwidth")
+
+#: generalized-alpha's iteration matrix (mbd3d.numerics.linalg.PenaltyPattern: where the mass
+#: blocks and the products of Jacobian entries go, its layout and scale; see
+#: mbd3d.numerics.compiled.generalized_alpha), and the model's coordinate and mass scales
+PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat", "kl", "ku",
+                  "perm", "entry_scale", "scale", "pivot_tolerance", "coordinate_scale",
+                  "mass_unit")
 
 #: the force elements of a model as the compiled core evaluates them (mbd3d.numerics.compiled.forces;
 #: filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
@@ -118,10 +132,14 @@ if not DISABLED:
     class RangeSpaceArrays(structref.StructRefProxy):
         """The structure of a model's range-space solve (fields :data:`RANGE_FIELDS`)."""
 
+    class PenaltyArrays(structref.StructRefProxy):
+        """Generalized-alpha's iteration matrix pattern (fields :data:`PENALTY_FIELDS`)."""
+
     structref.define_proxy(ModelArrays, ModelArraysType, list(MODEL_FIELDS))
     structref.define_proxy(Workspace, WorkspaceType, list(WORKSPACE_FIELDS))
     structref.define_proxy(ForceArrays, ForceArraysType, list(FORCE_FIELDS))
     structref.define_proxy(RangeSpaceArrays, RangeSpaceArraysType, list(RANGE_FIELDS))
+    structref.define_proxy(PenaltyArrays, PenaltyArraysType, list(PENALTY_FIELDS))
 else:
     # interpreted (NUMBA_DISABLE_JIT=1): plain records with the same fields
     class _Plain:
@@ -151,6 +169,11 @@ else:
 
         fields = RANGE_FIELDS
 
+    class PenaltyArrays(_Plain):
+        """Generalized-alpha's iteration matrix pattern (fields :data:`PENALTY_FIELDS`)."""
+
+        fields = PENALTY_FIELDS
+
 
 @jit
 def model_arrays(*fields):
@@ -169,6 +192,12 @@ def force_arrays(*fields):
 def range_space_arrays(*fields):
     """A :class:`RangeSpaceArrays` of ``fields`` in the order of :data:`RANGE_FIELDS`."""
     return RangeSpaceArrays(*fields)
+
+
+@jit
+def penalty_arrays(*fields):
+    """A :class:`PenaltyArrays` of ``fields`` in the order of :data:`PENALTY_FIELDS`."""
+    return PenaltyArrays(*fields)
 
 
 @jit
