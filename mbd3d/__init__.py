@@ -1,7 +1,8 @@
 """mbd3d: kinematic and dynamic analysis of planar and spatial mechanisms in absolute coordinates.
 
 Build a model with :class:`ModelBuilder` (bodies here, joints and drivers from
-:mod:`mbd3d.joints`, forces from here), then run an analysis; every analysis returns a :class:`Results`.
+:mod:`mbd3d.joints`, forces from here), then run an analysis; every analysis returns a
+:class:`Results`.
 
 >>> import numpy as np
 >>> import mbd3d as mb
@@ -27,12 +28,14 @@ from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDErr
                           NotFullyDrivenError, OverDrivenError, SingularJacobianError,
                           StiffnessWarning)
 from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
-from mbd3d.analyses.kinematics import inverse_dynamics, kinematic_analysis, solve_acceleration, solve_velocity
+from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
+                                       solve_velocity)
 from mbd3d.analyses.mobility import MobilityReport, mobility
 from mbd3d.io.observers import Observer, ProgressBar
 from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
 from mbd3d.analyses.position import solve_position
+from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io.results import Results, format_table
 
 __version__ = "0.1.0"
@@ -42,7 +45,8 @@ __all__ = [
     "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
-    "inverse_dynamics", "forward_dynamics", "forward_accelerations", "project_state", "METHODS",
+    "inverse_dynamics", "static_equilibrium", "forward_dynamics", "forward_accelerations",
+    "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "format_table", "kinetic_energy", "potential_energy",
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",

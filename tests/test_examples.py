@@ -54,6 +54,19 @@ def test_four_bar_example(capsys, tmp_path):
     np.testing.assert_allclose(res.body("crank").angle, math.radians(60) + 2 * math.pi * res.t)
 
 
+def test_pendulum_spring_equilibrium_example(capsys):
+    *rests, held = load("pendulum_spring_equilibrium").main(n_points=3)
+    out = capsys.readouterr().out
+    assert out.count("(stable)") == 3 and "motor torque" in out
+    # the spring holds the bar higher the stiffer it is, and the pin carries the weight
+    angles = [res.body("bar").angle[0] for res in rests]
+    assert -math.pi / 2 < angles[0] < angles[1] < angles[2] < 0.0
+    # held by the motor: gravity's moment -m g L/2 cos(theta) and the spring's -k theta
+    theta = held.body("bar").angle
+    np.testing.assert_allclose(held.driver("motor").effort,
+                               2.0 * 9.81 * 0.4 * np.cos(theta) + 10.0 * theta, atol=1e-9)
+
+
 def test_spatial_slider_crank_example(capsys, tmp_path):
     res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out
