@@ -63,8 +63,7 @@ def exudyn_chain(n_links: int, step: float, duration: float = 1.0, spatial: bool
     ``spin`` [rad/s] about z at t = 0 (``mbd3d.mechanisms.spatial_chain``).
     """
     import exudyn as exu
-    from exudyn.utilities import (MarkerBodyPosition, ObjectGround, RevoluteJoint2D,
-                                  RigidBodyInertia)
+    from exudyn.utilities import MarkerBodyPosition, ObjectGround, RevoluteJoint2D, RigidBodyInertia
 
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()

@@ -33,7 +33,7 @@ import mbd3d as mb  # noqa: E402
 import peers  # noqa: E402
 from mbd3d.model import constraints  # noqa: E402
 from mbd3d.mechanisms import pendulum_chain  # noqa: E402
-from measure import cheapest, fitted_exponent, interleaved_medians, machine, median_time  # noqa: E402,E501
+from measure import (cheapest, fitted_exponent, interleaved_medians, machine, median_time)  # noqa: E402,E501
 
 #: accuracy of the tip position at which the engines are compared [m]
 TOLERANCE = 1e-6

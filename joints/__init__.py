@@ -19,7 +19,7 @@ from mbd3d.joints.fixed import Fixed
 from mbd3d.joints.prismatic import Prismatic
 from mbd3d.joints.revolute import Revolute
 from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
-                                   Universal)
+                                         Universal)
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
            "TranslationDriver", "Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine",

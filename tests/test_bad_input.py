@@ -11,7 +11,7 @@ import pytest
 import mbd3d as mb
 from mbd3d.mechanisms import pendulum_chain, slider_crank, slider_crank_positions
 from mbd3d.joints import (CoordinateDriver, Distance, Prismatic, Revolute, RotationDriver,
-                    TranslationDriver)
+                          TranslationDriver)
 
 
 def builder_with_bar():

@@ -118,7 +118,8 @@ def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):
 
 
 def _band_storage(S: np.ndarray, k: int) -> np.ndarray:
-    """The lower band storage of mbd3d.numerics.compiled.range_space: ``S[i, j]`` at ``j (k+1) + i-j``."""
+    """The lower band storage of mbd3d.numerics.compiled.range_space: ``S[i, j]`` at
+    ``j (k+1) + i-j``."""
     m = S.shape[0]
     band = np.zeros((k + 1) * m)
     for j in range(m):

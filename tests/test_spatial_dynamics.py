@@ -16,8 +16,7 @@ from scipy.spatial.transform import Rotation
 import mbd3d as mb
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
-from mbd3d.mechanisms import (pendulum_chain, slider_crank, slider_crank_positions,
-                              spatial_four_bar)
+from mbd3d.mechanisms import pendulum_chain, slider_crank, slider_crank_positions, spatial_four_bar
 from mbd3d.joints import Prismatic, Revolute, Spherical, Universal
 
 G = 9.81

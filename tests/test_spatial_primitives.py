@@ -11,8 +11,8 @@ from scipy.spatial.transform import Rotation
 import mbd3d as mb
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, kinetic_energy
-from mbd3d.joints import (Cylindrical, Distance, Fixed, Planar, PointOnLine, PointOnPlane, Prismatic,
-                    Revolute, Spherical, Universal)
+from mbd3d.joints import (Cylindrical, Distance, Fixed, Planar, PointOnLine, PointOnPlane,
+                          Prismatic, Revolute, Spherical, Universal)
 
 
 def random_spatial_model(seed: int):

@@ -24,7 +24,8 @@ from rerun.chunk import RrdReader
 import mbd3d as mb
 from mbd3d.mechanisms import pendulum_chain, slider_crank
 from mbd3d.joints import Spherical
-from mbd3d.viewer import Recorder, RecordingError, entity_paths, read_component, record, rerun_executable
+from mbd3d.viewer import (Recorder, RecordingError, entity_paths, read_component, record,
+                          rerun_executable)
 
 
 @pytest.fixture(autouse=True)

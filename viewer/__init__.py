@@ -13,9 +13,8 @@ energies and the constraint residuals are on the right.
 """
 
 from mbd3d.viewer.readback import entity_paths, read_component
-from mbd3d.viewer.recorder import (VIEWER_PORT, Recorder, RecordingError, check_destination,
-                                   record, require_display, rerun_executable, show,
-                                   spawn_viewer)
+from mbd3d.viewer.recorder import (VIEWER_PORT, Recorder, RecordingError, check_destination, record,
+                                   require_display, rerun_executable, show, spawn_viewer)
 from mbd3d.viewer.scene import SIM_TIME, STEP
 
 __all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable", "entity_paths",

@@ -18,7 +18,7 @@ from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
 from mbd3d.model.mass_properties import load_mesh
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
-                           initial_points, model_size)
+                                 initial_points, model_size)
 
 __all__ = ["Scene", "SIM_TIME", "STEP"]
 

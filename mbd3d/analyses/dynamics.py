@@ -30,7 +30,8 @@ from mbd3d.numerics.compiled.runge_kutta import TABLEAUS, interpolate, rms
 from mbd3d.numerics.compiled.structures import workspace
 from mbd3d.model.equations import augmented_accelerations, generalized_forces
 from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
-from mbd3d.analyses.implicit import consistent_accelerations, integrate_generalized_alpha, rows_dependent
+from mbd3d.analyses.implicit import (consistent_accelerations, integrate_generalized_alpha,
+                                     rows_dependent)
 from mbd3d.analyses.kinematics import check_times, initial_guess, solve_velocity
 from mbd3d.numerics.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
 from mbd3d.analyses.position import LARGEST_DENSE_ANALYSIS, singular_error, solve_position

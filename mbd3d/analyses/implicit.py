@@ -45,8 +45,8 @@ from mbd3d.model.checks import finite_scalar
 from mbd3d.model.equations import augmented_accelerations, generalized_forces, mass_matrix
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
-from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling,
-                          solve_augmented_lagrangian, solve_model_augmented)
+from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, solve_augmented_lagrangian,
+                                   solve_model_augmented)
 from mbd3d.io.observers import Watch
 from mbd3d.analyses.passages import PassageWatch
 from mbd3d.analyses.kinematics import initial_guess, solve_velocity

@@ -19,9 +19,10 @@ from mbd3d.model.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.model.checks import is_finite_vector
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
-                          jacobian_scaling, ranked_rows, solve_augmented,
-                          solve_augmented_lagrangian, solve_model_augmented, summarize)
-from mbd3d.analyses.position import MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error, solve_position
+                                   jacobian_scaling, ranked_rows, solve_augmented,
+                                   solve_augmented_lagrangian, solve_model_augmented, summarize)
+from mbd3d.analyses.position import (MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error,
+                                     solve_position)
 from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
 

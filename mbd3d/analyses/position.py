@@ -18,9 +18,9 @@ import scipy.sparse as sp
 from mbd3d.model import constraints
 from mbd3d.model.equations import mass_matrix
 from mbd3d.errors import AssemblyError, ModelError, SingularJacobianError
-from mbd3d.numerics.linalg import (PIVOT_TOLERANCE, Factorization, SingularMatrix, augmented_scaling,
-                          dependent_rows, jacobian_scaling, ranked_rows, solve_augmented,
-                          solve_augmented_lagrangian, summarize)
+from mbd3d.numerics.linalg import (PIVOT_TOLERANCE, Factorization, SingularMatrix,
+                                   augmented_scaling, dependent_rows, jacobian_scaling, ranked_rows,
+                                   solve_augmented, solve_augmented_lagrangian, summarize)
 
 #: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
 #: inconsistent (a lock-up), not redundant

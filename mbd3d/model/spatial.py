@@ -27,9 +27,9 @@ import numpy as np
 from mbd3d.numerics import rotations as rot
 from mbd3d.model.body import BodyType, Frames
 from mbd3d.numerics.compiled.bodies import (spatial_frames, spatial_mass_blocks,
-                                   spatial_quadratic_velocity, spatial_rates,
-                                   spatial_reset_charts,
-                                   spatial_velocities, spatial_velocity_derivative)
+                                            spatial_quadratic_velocity, spatial_rates,
+                                            spatial_reset_charts, spatial_velocities,
+                                            spatial_velocity_derivative)
 from mbd3d.model.checks import finite_vector
 from mbd3d.errors import ModelError
 

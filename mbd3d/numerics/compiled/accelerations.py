@@ -4,8 +4,9 @@
     [Cq 0   ] [lam] = [Qd     ]
 
 from the state ``(q, qd)``: frames, body vectors, constraint rows, mass blocks, the quadratic
-velocity and gravity forces, the drivers' motions, and the solve: LU, dense or in band
-storage, or through ``Cq M^-1 Cq^T`` (:mod:`mbd3d.numerics.compiled.range_space`). Parts of a model that are Python objects (force elements, user motions) are
+velocity and gravity forces, the force elements, the drivers' motions, and the solve: LU,
+dense or in band storage, or through ``Cq M^-1 Cq^T``
+(:mod:`mbd3d.numerics.compiled.range_space`). Forces and motions given as Python functions are
 evaluated by the caller and passed in; the caller also solves the system of a model whose
 bandwidth is too large for band storage (SuperLU).
 
@@ -25,11 +26,12 @@ import numpy as np
 
 from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
-                                   planar_mass_blocks_into, spatial_frames_into,
-                                   spatial_mass_blocks_into, spatial_quadratic_velocity_into)
+                                            planar_mass_blocks_into, spatial_frames_into,
+                                            spatial_mass_blocks_into,
+                                            spatial_quadratic_velocity_into)
 from mbd3d.numerics.compiled.dense import solve_banded_pattern_into, solve_pattern_into
-from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_into, spring_forces_into,
-                                   torques_into)
+from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_into,
+                                            spring_forces_into, torques_into)
 from mbd3d.numerics.compiled.motions import motion_values_into
 from mbd3d.numerics.compiled.range_space import range_space_solve_into
 from mbd3d.numerics.compiled.rows import constraint_rows_into

@@ -19,14 +19,15 @@ import numpy as np
 from numba import objmode
 
 from mbd3d.numerics.compiled import callbacks, jit, jit_calling_python
-from mbd3d.numerics.compiled.accelerations import (NOT_FINITE, SOLVED, accelerations_into, motions_at,
-                                          padded_into)
-from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into, spatial_frames_into,
-                                   spatial_rates_into, spatial_reset_charts,
-                                   spatial_velocity_derivative_into)
+from mbd3d.numerics.compiled.accelerations import (NOT_FINITE, SOLVED, accelerations_into,
+                                                   motions_at, padded_into)
+from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
+                                            spatial_frames_into, spatial_rates_into,
+                                            spatial_reset_charts, spatial_velocity_derivative_into)
 from mbd3d.numerics.compiled.rows import constraint_rows_into
-from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, dop853_coefficients, error_norm,
-                                        polynomial_coefficients, stage_state, step_factor)
+from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, dop853_coefficients,
+                                                 error_norm, polynomial_coefficients, stage_state,
+                                                 step_factor)
 
 #: why :func:`advance` returned (bit flags, except the failures): a step passed the output
 #: time, the constraints drifted, the step collapsed, the step count to check for stiffness

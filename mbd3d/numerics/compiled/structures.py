@@ -19,7 +19,8 @@ from mbd3d.numerics.compiled.rows import row_work_size
 
 __all__ = ["ModelArrays", "Workspace", "ForceArrays", "RangeSpaceArrays", "PenaltyArrays",
            "model_arrays", "force_arrays", "range_space_arrays", "penalty_arrays", "workspace",
-           "MODEL_FIELDS", "WORKSPACE_FIELDS", "FORCE_FIELDS", "RANGE_FIELDS", "PENALTY_FIELDS", "DENSE", "BANDED", "SPARSE", "RANGE"]
+           "MODEL_FIELDS", "WORKSPACE_FIELDS", "FORCE_FIELDS", "RANGE_FIELDS", "PENALTY_FIELDS",
+           "DENSE", "BANDED", "SPARSE", "RANGE"]
 
 #: layouts of the augmented matrix (see mbd3d.numerics.linalg): solved in compiled code (RANGE:
 #: through Cq M^-1 Cq^T, mbd3d.numerics.compiled.range_space), or by the caller (SuperLU)
@@ -60,10 +61,11 @@ class PenaltyArraysType(_Record):
 #: the fixed arrays of a model (see mbd3d.model.equations._Core, which fills them):
 #: kinematics and mass, the row table of the primitives (mbd3d.model.primitives.RowTable), the
 #: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
-#: (tables of mbd3d.numerics.compiled.motions, used unless python_parts), the compiled force elements
-#: (a ForceArrays, or None: see FORCE_FIELDS), the augmented matrix's pattern (mbd3d.numerics.linalg)
-#: and the structure of Cq M^-1 Cq^T (mbd3d.numerics.linalg.RangeSpacePattern), the rows' constants and
-#: scales, and empty arrays for the parts of a model that are not Python objects
+#: (tables of mbd3d.numerics.compiled.motions, used unless python_parts), the compiled force
+#: elements (a ForceArrays, or None: see FORCE_FIELDS), the augmented matrix's pattern
+#: (mbd3d.numerics.linalg) and the structure of Cq M^-1 Cq^T (a RangeSpaceArrays, or None: see
+#: RANGE_FIELDS), the rows' constants and scales, and empty arrays for the parts of a model that
+#: are not Python objects
 MODEL_FIELDS = (
     "n", "python_accelerations", "python_parts", "solved_here",
     "mass", "inertia", "weight",
@@ -80,9 +82,9 @@ MODEL_FIELDS = (
     "no_forces", "no_drivers", "no_motions",
 )
 
-#: the structure of Cq M^-1 Cq^T of a model of the RANGE layout (mbd3d.numerics.linalg.RangeSpacePattern;
-#: see mbd3d.numerics.compiled.range_space); None for the other layouts, whose compiled functions then
-#: contain none of that solve
+#: the structure of Cq M^-1 Cq^T of a model of the RANGE layout
+#: (mbd3d.numerics.linalg.RangeSpacePattern; see mbd3d.numerics.compiled.range_space); None for
+#: the other layouts, whose compiled functions then contain none of that solve
 RANGE_FIELDS = ("slot", "body_start", "positions", "row_position", "bandwidth")
 
 #: generalized-alpha's iteration matrix (mbd3d.numerics.linalg.PenaltyPattern: where the mass
@@ -92,8 +94,8 @@ PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat",
                   "perm", "entry_scale", "scale", "pivot_tolerance", "coordinate_scale",
                   "mass_unit")
 
-#: the force elements of a model as the compiled core evaluates them (mbd3d.numerics.compiled.forces;
-#: filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
+#: the force elements of a model as the compiled core evaluates them
+#: (mbd3d.numerics.compiled.forces; filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
 #: rotational ones, point forces and torques, and their actuators' motions. A model without
 #: force elements, or with a value given as a Python function, has None instead, and its
 #: compiled functions contain no force code (the branch is decided by the field's type)
@@ -239,7 +241,8 @@ def workspace(spatial: bool, model):
         model.range_space, n_rows, n_bodies, nc)
     force_bodies, springs, rotary_springs = _force_sizes(model.forces, b)
     return Workspace(
-        model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)), np.empty((b, 3, n_rot)),
+        model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)),
+        np.empty((b, 3, n_rot)),
         np.empty((b, 3)), np.empty(b), np.empty((chart_bodies, 3, 3)), np.empty((b, 3)),
         np.empty((n_vectors, dim)), np.empty((n_vectors, dim, n_rot)),
         np.empty((n_vectors, dim)), np.empty((n_vectors, dim)),
