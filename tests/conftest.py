@@ -33,3 +33,19 @@ except ImportError:  # the test extra installs it; without it the fuzz tests are
 def pytest_configure(config):
     # tests never open a window
     os.environ.setdefault("MPLBACKEND", "Agg")
+    config.addinivalue_line(
+        "markers", "compiled_only: too long to run with the compiled core interpreted "
+        "(NUMBA_DISABLE_JIT=1); skipped there, run by the compiled suite")
+
+
+def pytest_collection_modifyitems(config, items):
+    """The interpreted suite (NUMBA_DISABLE_JIT=1, which CI runs too) leaves out the tests
+    marked compiled_only: the same code, but minutes of pure-Python loops each."""
+    import numba
+
+    if not numba.config.DISABLE_JIT:
+        return
+    skip = pytest.mark.skip(reason="compiled_only: too long interpreted (NUMBA_DISABLE_JIT=1)")
+    for item in items:
+        if "compiled_only" in item.keywords:
+            item.add_marker(skip)

@@ -88,6 +88,7 @@ def four_bar_oscillator(bars: int, t: np.ndarray) -> np.ndarray:
     return np.column_stack([np.cos(sol.y[0]), np.sin(sol.y[0])])
 
 
+@pytest.mark.compiled_only  # 40 four-bars, 20,000 generalized-alpha steps
 def test_iftomm_a02_forty_four_bars_follow_the_adams_series_through_singular_positions(
         capsys, validation_data, tmp_path):
     """IFToMM / MBS benchmark A02 (M. Gonzalez et al., Univ. of A Coruna), N = 40: the

@@ -35,7 +35,7 @@ from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_int
 from mbd3d.numerics.compiled.motions import motion_values_into
 from mbd3d.numerics.compiled.range_space import range_space_solve_into
 from mbd3d.numerics.compiled.rows import constraint_rows_into
-from mbd3d.numerics.compiled.structures import BANDED, DENSE, RANGE, SPARSE, workspace  # noqa: F401
+from mbd3d.numerics.compiled.structures import BANDED, DENSE, SPARSE
 
 SOLVED, SINGULAR, NOT_FINITE = 0, 1, 2
 

@@ -27,7 +27,7 @@ from mbd3d.numerics.compiled.bodies import body_vectors_into
 from mbd3d.numerics.compiled.dense import band_factor, band_solve_into, lu_factor, lu_solve_into
 from mbd3d.numerics.compiled.integration import _python_parts
 from mbd3d.numerics.compiled.rows import constraint_rows_into
-from mbd3d.numerics.compiled.structures import BANDED, DENSE
+from mbd3d.numerics.compiled.structures import DENSE
 
 #: outcomes of :func:`newton_step`
 CONVERGED, NOT_CONVERGED, SINGULAR_MATRIX, NOT_FINITE = 0, 1, 2, 3
