@@ -1,0 +1,87 @@
+"""Vibration modes about an equilibrium against the small-motion equations derived by hand:
+a sprung and damped pendulum, a double pendulum (its 2 x 2 Lagrangian), a spatial pendulum
+on a ball joint, and an inverted pendulum's growth rate."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as la
+
+import mbd3d as mb
+from mbd3d.joints import Revolute, Spherical
+
+G = 9.81
+
+
+def hanging_bars(lengths, masses, spring=0.0, damper=0.0, angle=-math.pi / 2):
+    """Uniform bars pinned end to end from the origin, hanging straight down (or at
+    ``angle``); a torsion spring-damper at the top pin, relaxed there."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    previous, top = b.ground, np.zeros(2)
+    direction = np.array([math.cos(angle), math.sin(angle)])
+    for k, (L, m) in enumerate(zip(lengths, masses)):
+        body = b.add_body(f"bar{k + 1}", mass=m, inertia=m * L * L / 12,
+                          position=top + direction * L / 2, angle=angle)
+        b.add(Revolute(f"pin{k + 1}", previous, body, at=top))
+        if k == 0 and (spring or damper):
+            b.add(mb.RotationalSpringDamper("torsion", body_i=b.ground, body_j=body,
+                                            stiffness=spring, damping=damper))
+        previous, top = body, top + direction * L
+    return b.build()
+
+
+def test_sprung_damped_pendulum_frequency_and_damping_ratio():
+    """I_O theta'' + c theta' + (k + m g L/2) theta = 0, I_O = m L^2 / 3."""
+    m, L, k, c = 2.0, 0.8, 6.0, 0.9
+    modes = mb.vibration_modes(hanging_bars([L], [m], spring=k, damper=c))
+    inertia, stiffness = m * L * L / 3, k + m * G * L / 2
+    omega = math.sqrt(stiffness / inertia)
+    assert modes.frequencies == pytest.approx([omega / (2 * math.pi)], rel=1e-7)
+    assert modes.damping_ratios == pytest.approx([c / (2 * math.sqrt(stiffness * inertia))],
+                                                 rel=1e-6)
+    # the shape: the bar's centre moves L/2 per radian, sideways
+    shape = modes.shapes[0].real
+    assert shape[0] == pytest.approx(L / 2 * shape[2], rel=1e-8)
+    assert modes.equilibrium.stats["stability"] == ["stable"]
+
+
+def test_double_pendulum_against_its_lagrangian():
+    """Two uniform bars, angles from the vertical: M = [[(m1/3 + m2) L1^2, m2 L1 L2 / 2],
+    [m2 L1 L2 / 2, m2 L2^2 / 3]], K = diag((m1/2 + m2) g L1, m2 g L2 / 2)."""
+    (L1, L2), (m1, m2) = (0.6, 0.9), (1.5, 2.5)
+    modes = mb.vibration_modes(hanging_bars([L1, L2], [m1, m2]))
+    M = np.array([[(m1 / 3 + m2) * L1 * L1, m2 * L1 * L2 / 2],
+                  [m2 * L1 * L2 / 2, m2 * L2 * L2 / 3]])
+    K = np.diag([(m1 / 2 + m2) * G * L1, m2 * G * L2 / 2])
+    expected = np.sqrt(la.eigh(K, M, eigvals_only=True)) / (2 * math.pi)
+    np.testing.assert_allclose(modes.frequencies, expected, rtol=1e-7)
+    np.testing.assert_allclose(modes.damping_ratios, 0.0, atol=1e-9)
+
+
+def test_spatial_pendulum_swings_alike_both_ways_and_spins_freely():
+    """A bar on a ball joint: two swings at sqrt(3 g / 2 L) and a spin about its own axis
+    without stiffness (a zero frequency, twice: the two real roots of a free motion)."""
+    m, L = 1.5, 1.2
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    from mbd3d.mechanisms import frame_along
+    bar = b.add_body("bar", mass=m, inertia=m * L * L * np.array([1e-2, 1 / 12, 1 / 12]),
+                     position=(0.0, 0.0, -L / 2), orientation=frame_along(np.array([0, 0, -1.0])))
+    b.add(Spherical("ball", b.ground, bar, at=(0.0, 0.0, 0.0)))
+    modes = mb.vibration_modes(b.build())
+    swing = math.sqrt(3 * G / (2 * L)) / (2 * math.pi)
+    np.testing.assert_allclose(modes.frequencies, [0.0, 0.0, swing, swing], atol=1e-7 * swing,
+                               rtol=1e-7)
+    assert modes.equilibrium.stats["stability"] == ["neutral"]
+
+
+def test_an_inverted_pendulum_grows_at_the_rate_of_its_equation():
+    """Upright, I_O theta'' = m g L/2 theta: a real root sqrt(3 g / 2 L) (damping ratio -1)."""
+    L = 0.8
+    modes = mb.vibration_modes(hanging_bars([L], [2.0], angle=math.pi / 2))
+    rate = math.sqrt(3 * G / (2 * L))
+    assert sorted(modes.damping_ratios) == pytest.approx([-1.0, 1.0])
+    np.testing.assert_allclose(modes.frequencies * 2 * math.pi, [rate, rate], rtol=1e-7)
+    assert modes.equilibrium.stats["stability"] == ["unstable"]
