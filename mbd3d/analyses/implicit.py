@@ -227,15 +227,11 @@ def _tangent_storage(model, tangent) -> tuple[np.ndarray, bool]:
     if pattern.layout == "dense":
         T = tangent.toarray() if sp.issparse(tangent) else np.asarray(tangent)
         return np.ascontiguousarray((d[:, None] * T * d[None, :]).ravel()), False
-    T = sp.coo_matrix(tangent)
-    prow, pcol = pattern.inverse[T.row], pattern.inverse[T.col]
-    offset = prow - pcol
-    if np.any(offset > pattern.kl) or np.any(-offset > pattern.ku):
+    # the band storage the compiled LU takes is LAPACK's, flattened in column order
+    band = np.zeros((pattern.band_rows, pattern.size), order="F")
+    if not pattern._add_to_band(band, sp.diags(d) @ sp.csr_matrix(tangent) @ sp.diags(d)):
         return np.zeros(0), True
-    extra = np.zeros(pattern.band_rows * pattern.size)
-    np.add.at(extra, pattern.kl + pattern.ku + offset + pcol * pattern.band_rows,
-              d[T.row] * T.data * d[T.col])
-    return extra, False
+    return band.ravel(order="F"), False
 
 
 def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
