@@ -67,6 +67,18 @@ def test_pendulum_spring_equilibrium_example(capsys):
                                2.0 * 9.81 * 0.4 * np.cos(theta) + 10.0 * theta, atol=1e-9)
 
 
+def test_cart_pendulum_linearized_example(capsys):
+    lin, gain = load("cart_pendulum_linearized").main()
+    out = capsys.readouterr().out
+    assert "states: cart.x, pole.theta, cart.x_dot, pole.theta_dot" in out
+    # the upright pole falls at the rate of its Lagrangian (cart 1.5 kg, pole 0.5 kg, 0.8 m)
+    M, m, l, inertia = 1.5, 0.5, 0.4, 0.5 * 0.8**2 / 12
+    rate = math.sqrt((M + m) * m * 9.81 * l / ((M + m) * (inertia + m * l * l) - (m * l) ** 2))
+    assert lin.eigenvalues[0].real == pytest.approx(rate, rel=1e-9)
+    # the regulator stabilises the linear model
+    assert np.all(np.linalg.eigvals(lin.A - lin.B @ gain).real < 0)
+
+
 def test_spatial_slider_crank_example(capsys, tmp_path):
     res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out

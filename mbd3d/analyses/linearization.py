@@ -1,0 +1,474 @@
+"""Linearisation: the linear equations of a mechanism about a state, for control design.
+
+The constrained equations of motion are reduced onto independent coordinates by coordinate
+partitioning: ``k = n - rank(Cq)`` coordinates are chosen (by the user, or by a
+column-pivoted QR of the scaled ``Cq`` that keeps the best-conditioned dependent set) and the
+others follow from the constraints, by Newton-Raphson for positions and from ``Cq qd = -Ct``
+for rates. The state is ``x = (p, v)``: the independent coordinates' displacements ``p`` from
+the reference and their velocities ``v``, and about the reference motion ``(x = 0, u0)``
+
+    dx' = A dx + B du,        dy = C dx + D du.
+
+Displacements are taken relative to the reference motion itself (co-moving): a position by
+its difference, a spatial orientation by the small rotation ``theta`` [rad] about the body's
+own axes that takes the reference attitude to the displaced one (``A = A_ref exp(theta~)``, to
+first order ``theta = 2 g`` in the reference's chart), with the body-axes angular velocity
+``omega_bar`` as its velocity. Then ``x = 0`` is the reference for all time and
+``theta' = d omega_bar - omega_bar_ref x theta`` to first order. About a motion that is
+steady in the bodies' own axes (constant body-axes angular velocities and forces: a body
+turning steadily about a fixed axis, a top precessing without spin relative to its precession)
+the matrices are constant and their eigenvalues are the frequencies of the small motions about
+it, as they are about an equilibrium. Along any other motion ``A(t)`` describes the
+disturbances as a linear time-varying system: integrate ``dx' = A(t) dx`` along it (its
+eigenvalues at one instant are not frequencies of the motion).
+
+``B`` is exact: an input is a force whose generalized force ``Q_u`` enters the augmented
+equations linearly, one solve per input. The rest of ``A`` and ``C`` comes from central
+differences through the position and velocity solves and the augmented equations, with steps
+of ``eps^(1/3)`` of each coordinate's scale (accelerations are quadratic in the rates, so the
+rate columns carry only rounding).
+
+The reduced second-order form ``Mr dp'' + Dr dp' + Kr dp = Br du``, ``Mr = N^T M N`` with
+``N = dq/dp`` the partitioning's null-space basis of ``Cq``, has ``Kr = -Mr A_21`` and
+``Dr = -Mr A_22``: at an equilibrium the stiffness of the applied and the constraint forces
+(gravity's included) and the dampers'; at a moving state also the centripetal and gyroscopic
+terms (neither is then symmetric, and for spatial bodies ``A`` holds the rotation terms the
+second-order form leaves out).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg as la
+
+from mbd3d.analyses.dynamics import forward_accelerations
+from mbd3d.analyses.position import solve_position
+from mbd3d.errors import ModelError
+from mbd3d.io.results import Results
+from mbd3d.model import constraints
+from mbd3d.model.equations import mass_matrix
+from mbd3d.model.forces import PointForce, Torque
+from mbd3d.numerics.compiled import forces as force_kernel
+from mbd3d.numerics.linalg import SingularMatrix, solve_model_augmented
+
+__all__ = ["LinearModel", "linearize"]
+
+#: relative step of the central differences: eps^(1/3) balances truncation and rounding
+_STEP = float(np.finfo(float).eps) ** (1.0 / 3.0)
+#: relative pivot of the scaled Jacobian below which a column counts as dependent
+_RANK_TOLERANCE = 1e-10
+#: state names of a spatial body's orientation coordinates g1, g2, g3: rotations about its axes
+_ROTATIONS = {"g1": ("rx", "wx"), "g2": ("ry", "wy"), "g3": ("rz", "wz")}
+
+Output = str | Callable[[Results], Any]
+
+
+@dataclass(frozen=True)
+class LinearModel:
+    """The linear equations of a mechanism about a state (see :mod:`.linearization`).
+
+    ``dx' = A dx + B du``, ``dy = C dx + D du`` with ``x = (p, v)``: the independent
+    coordinates' displacements from the reference motion and their velocities, in the
+    units of the coordinates (lengths [m], planar angles [rad] and their rates) except for
+    spatial orientations, whose displacement is a small rotation about the body's own axes
+    [rad] and whose velocity is the body-axes angular velocity [rad/s].
+
+    Attributes
+    ----------
+    A : ndarray (2k, 2k)
+    B : ndarray (2k, p)
+        Per unit of each input [N or N m].
+    C : ndarray (r, 2k)
+    D : ndarray (r, p)
+    states : list of str
+        ``"body.coordinate"`` for ``p`` (``"body.rx"``, ``.ry``, ``.rz`` for a spatial
+        body's rotations), then ``"body.coordinate_dot"`` (``"body.wx"``, ...) for ``v``.
+    inputs, outputs : list of str
+    mass, damping, stiffness : ndarray (k, k)
+        ``Mr``, ``Dr``, ``Kr`` of the second-order form ``Mr dp'' + Dr dp' + Kr dp = Br du``
+        (kg, kg m^2, N/m, N m/rad, ... by coordinate).
+    input_matrix : ndarray (k, p)
+        ``Br``.
+    basis : ndarray (n, k)
+        ``N = dq/dp``: how every coordinate follows the independent ones (a basis of the null
+        space of ``Cq``; for spatial bodies ``q`` is relative to ``charts``).
+    t : float
+        Time [s] of the reference.
+    q, qd : ndarray (n,)
+        The reference state, relative to ``charts``.
+    charts : ndarray or None
+        Spatial models: the reference rotations ``q`` is relative to, each body's attitude at
+        the reference (so its Rodrigues parameters are zero there).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    states: list[str]
+    inputs: list[str]
+    outputs: list[str]
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+    input_matrix: np.ndarray
+    basis: np.ndarray
+    t: float
+    q: np.ndarray
+    qd: np.ndarray
+    charts: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        """Eigenvalues of ``A`` [1/s], largest real part first (a positive one: the state is
+        unstable), then by imaginary part."""
+        values = np.linalg.eigvals(self.A)
+        return values[np.lexsort((-values.imag, -values.real))]
+
+
+def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: float = 0.0, *,
+              inputs: Sequence[str] = (), outputs: Sequence[str] | Mapping[str, Output] | None
+              = None, coordinates: Sequence[str] | None = None,
+              charts: np.ndarray | None = None, tol: float = 1e-8) -> LinearModel:
+    """Linear state-space equations of ``model`` about the state ``(q, qd)`` at time ``t``.
+
+    Parameters
+    ----------
+    model : Model
+    q, qd : array_like (n,)
+        A state that satisfies the constraints (from an analysis's results, or
+        :func:`mbd3d.static_equilibrium`); ``qd`` default zero. Drivers are held at their
+        motion (their coordinates are not states).
+    t : float
+        Time [s].
+    inputs : sequence of str
+        Force elements of the model whose value is the input, one component each:
+        ``"name.x"`` (``.y``, ``.z``) for a :class:`~mbd3d.PointForce` (in the axes it was
+        given in) or a spatial :class:`~mbd3d.Torque`, ``"name"`` for a planar torque. The
+        element's own value is the reference ``u0``; the input adds to it [N, N m].
+    outputs : sequence of str, or mapping of name to str or callable, optional
+        Default the states (``C = I``, ``D = 0``). A string names a coordinate
+        (``"cart.x"``) or its rate (``"cart.x_dot"``); a callable takes the one-sample
+        :class:`~mbd3d.Results` of a state (positions, velocities, accelerations,
+        multipliers) and returns a number or a vector, e.g. a joint's reaction
+        ``lambda r: r.joint("pin").reaction().force[0]``.
+    coordinates : sequence of str, optional
+        The independent coordinates ``"body.coordinate"`` (a spatial body's rotations as
+        ``"body.rx"`` or ``"body.g1"``, alike), as many as the mechanism has degrees of
+        freedom; default chosen from ``Cq``, the best-conditioned partition.
+    charts : ndarray, optional
+        Spatial models: the reference rotations ``q`` is relative to (default the model's).
+    tol : float
+        How far ``(q, qd)`` may violate the constraints: positions relative to the model's
+        length, rates to their largest term.
+
+    Returns
+    -------
+    LinearModel
+
+    Raises
+    ------
+    ModelError
+        For a state that violates the constraints (names the rows), unknown inputs, outputs
+        or coordinates, or coordinates that are not independent at the state.
+    """
+    what = f"linearisation of '{model.name}'"
+    n = model.n_coordinates
+    q = _vector(q, n, what, "q")
+    qd = np.zeros(n) if qd is None else _vector(qd, n, what, "qd")
+    t = float(t)
+    if model.dim == 3:
+        charts = model.charts0 if charts is None else np.asarray(charts, dtype=float)
+        # the reference attitude as every body's chart: orientations start at g = 0
+        q, qd, charts, _ = model.body_type.reset_charts(q, qd, charts, limit=0.0)
+    else:
+        charts = None
+    frames = constraints.frames(model, q, qd, charts)
+    C, data, _ = constraints.evaluate(model, t, frames)
+    Cq = constraints.jacobian_matrix(model, data, sparse=False)
+    _check_state(model, t, q, qd, C, Cq, constraints.velocity_rhs(model, t, frames), tol, what)
+
+    # state units: a rotation about a body axis is 2 g at g = 0, its rate omega_bar = 2 g_dot
+    rotation = np.zeros(n, dtype=bool)
+    if model.dim == 3:
+        rotation.reshape(-1, 6)[:, 3:] = True
+    unit = np.where(rotation, 2.0, 1.0)
+    independent, dependent = _partition(model, Cq, coordinates, what)
+    k = len(independent)
+    N = np.zeros((n, k))
+    N[independent] = np.eye(k)
+    if k and len(dependent):
+        N[dependent] = -la.lstsq(Cq[:, dependent], Cq[:, independent])[0]
+    N /= unit[independent][None, :]
+
+    labels = [model.coordinate_labels[j] for j in independent]
+    states = ([_state_name(label, 0) for label in labels]
+              + [_state_name(label, 1) for label in labels])
+    output_names, output_specs = _outputs(model, outputs, states, what)
+    sampler = _Sampler(model, t, q, qd, charts, independent, N, output_specs)
+
+    A = np.zeros((2 * k, 2 * k))
+    A[:k, k:] = np.eye(k)  # d p / dt = v (held exactly in every sample)
+    C_out = np.zeros((len(output_names), 2 * k))
+    position_steps = _STEP * np.maximum(model.coordinate_scale[independent],
+                                        np.abs(q[independent])) * unit[independent]
+    gravity = float(np.linalg.norm(model.gravity))
+    rate_unit = np.sqrt(gravity / model.length_scale) if gravity > 0 else 1.0
+    rate_steps = _STEP * np.maximum(model.coordinate_scale[independent] * rate_unit,
+                                    np.abs(sampler.v0[independent]))
+    for column in range(2 * k):
+        j = column % k
+        h = position_steps[j] if column < k else rate_steps[j]
+        plus, minus = (sampler.at(column < k, j, sign * h) for sign in (1.0, -1.0))
+        A[k:, column] = (plus.v_rate[independent] - minus.v_rate[independent]) / (2 * h)
+        if output_specs is not None:
+            C_out[:, column] = (plus.y - minus.y) / (2 * h)
+    if model.dim == 3:  # co-moving: theta' = d omega_bar - omega_bar_ref x theta
+        rotations = (N * unit[:, None]).reshape(model.n_bodies, 6, k)[:, 3:]  # d theta / d p
+        omega = sampler.v0.reshape(-1, 6)[:, 3:, None]
+        turning = np.zeros((model.n_bodies, 6, k))
+        turning[:, 3:] = np.cross(omega, rotations, axisa=1, axisb=1, axisc=1)
+        A[:k, :k] -= turning.reshape(n, k)[independent]
+
+    qdd0, lam0 = forward_accelerations(model, t, q, qd, charts)
+    B, D_out = _input_matrices(model, t, q, qd, qdd0, lam0, frames, data, inputs,
+                               independent, sampler, len(output_names), what)
+    if output_specs is None:
+        C_out, D_out = np.eye(2 * k), np.zeros((2 * k, B.shape[1]))
+
+    Mr = N.T @ mass_matrix(model, frames, sparse=False) @ N
+    return LinearModel(
+        A=A, B=B, C=C_out, D=D_out, states=states, inputs=list(inputs), outputs=output_names,
+        mass=Mr, damping=-Mr @ A[k:, k:], stiffness=-Mr @ A[k:, :k],
+        input_matrix=Mr @ B[k:], basis=N, t=t, q=q, qd=qd, charts=charts)
+
+
+def _state_name(label: str, order: int) -> str:
+    body, _, coordinate = label.rpartition(".")
+    if coordinate in _ROTATIONS:
+        return f"{body}.{_ROTATIONS[coordinate][order]}"
+    return label if order == 0 else f"{label}_dot"
+
+
+def _vector(value, n: int, what: str, name: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ModelError(f"{what}: {name} must be {n} numbers") from None
+    if array.size != n or not np.all(np.isfinite(array)):
+        raise ModelError(f"{what}: {name} must be {n} finite numbers (the model's coordinates), "
+                         f"got {array.size}")
+    return array.copy()
+
+
+def _check_state(model, t, q, qd, C, Cq, nu, tol, what) -> None:
+    """A linearisation about a state off the constraints would describe another mechanism:
+    refuse it, naming the rows (never project it silently)."""
+    position = np.abs(C) / model.row_scale
+    # rates against the largest term of any row, in units of the model's length
+    terms = (np.abs(Cq) @ np.abs(qd) + np.abs(nu)) / model.row_scale
+    velocity = np.abs(Cq @ qd - nu) / model.row_scale / max(float(np.max(terms, initial=0.0)),
+                                                            1e-300)
+    for kind, violation in (("position", position), ("velocity", velocity)):
+        worst = np.argsort(violation)[::-1][:3]
+        if violation.size and violation[worst[0]] > tol:
+            rows = ", ".join(f"{model.row_labels[r]} ({violation[r]:.1e})" for r in worst
+                             if violation[r] > tol)
+            raise ModelError(
+                f"{what}: the state violates the {kind} constraints at t = {t:.6g} s ({rows}, "
+                "relative); linearise about a state from an analysis's results, or make it "
+                "consistent with mb.solve_position and mb.solve_velocity")
+
+
+def _coordinate_index(model, label: str) -> int:
+    body, _, name = label.rpartition(".")
+    for coordinate, (rotation, _) in _ROTATIONS.items():
+        if model.dim == 3 and name == rotation:
+            label = f"{body}.{coordinate}"
+    return model.coordinate_index(label)
+
+
+def _partition(model, Cq: np.ndarray, coordinates, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the independent (in the user's order) and dependent coordinates."""
+    n = model.n_coordinates
+    scaled = Cq * model.coordinate_scale[None, :] / model.row_scale[:, None]
+    if scaled.shape[0]:
+        _, R, pivots = la.qr(scaled, pivoting=True, mode="economic")
+        diagonal = np.abs(np.diag(R))
+        rank = int(np.sum(diagonal > _RANK_TOLERANCE * max(diagonal.max(initial=0.0), 1e-300)))
+    else:
+        pivots, rank = np.arange(n), 0
+    if coordinates is None:
+        dependent = np.sort(pivots[:rank])
+        return np.setdiff1d(np.arange(n), dependent), dependent
+    try:
+        independent = np.array([_coordinate_index(model, label) for label in coordinates],
+                               dtype=int)
+    except ModelError as exc:
+        raise ModelError(f"{what}: coordinates: {exc}") from None
+    if len(set(independent.tolist())) != n - rank or len(independent) != n - rank:
+        raise ModelError(f"{what}: the mechanism has {n - rank} degrees of freedom here; "
+                         f"coordinates names {len(set(independent.tolist()))} distinct ones")
+    dependent = np.setdiff1d(np.arange(n), independent)
+    block = scaled[:, dependent]
+    singular = la.svdvals(block) if block.size else np.zeros(0)
+    if rank and singular[rank - 1] <= _RANK_TOLERANCE * max(singular[0], 1e-300):
+        suggestion = ", ".join(model.coordinate_labels[j] for j in np.sort(pivots[rank:]))
+        raise ModelError(f"{what}: {', '.join(coordinates)} are not independent at this state "
+                         "(the joints do not fix the other coordinates from them); choose "
+                         f"others, e.g. {suggestion}")
+    return independent, dependent
+
+
+def _outputs(model, outputs, states, what):
+    """Output names and specs: ``(index in q, is_rate)`` or a callable (None: the states)."""
+    if outputs is None:
+        return list(states), None
+    items = list(outputs.items()) if isinstance(outputs, Mapping) else [(o, o) for o in outputs]
+    names, specs = [], []
+    for name, spec in items:
+        if isinstance(spec, str):
+            label, rate = (spec[:-4], True) if spec.endswith("_dot") else (spec, False)
+            try:
+                specs.append((model.coordinate_index(label), rate))
+            except ModelError as exc:
+                raise ModelError(f"{what}: output {spec!r}: {exc} (or a callable of the "
+                                 "results)") from None
+        elif callable(spec):
+            specs.append(spec)
+        else:
+            raise ModelError(f"{what}: output {name!r} must be a coordinate's name or a "
+                             f"callable of the results, got {spec!r}")
+        names.append(name if isinstance(name, str) else getattr(name, "__name__", "output"))
+    return names, specs
+
+
+class _Sample:
+    __slots__ = ("v_rate", "y")
+
+    def __init__(self, v_rate, y):
+        self.v_rate, self.y = v_rate, y
+
+
+class _Sampler:
+    """States displaced along one independent coordinate or velocity, completed by the
+    constraints, with their velocities, the velocities' rates and the outputs."""
+
+    def __init__(self, model, t, q, qd, charts, independent, basis, output_specs):
+        self.model, self.t, self.q, self.qd, self.charts = model, t, q, qd, charts
+        self.independent, self.basis = independent, basis
+        self.held = [int(j) for j in independent]
+        self.output_specs = output_specs
+        self.v0 = model.body_type.velocities(q, qd)
+
+    def at(self, position: bool, j: int, h: float) -> _Sample:
+        model, t, charts = self.model, self.t, self.charts
+        q, v = self.q.copy(), self.v0.copy()
+        if position:  # from the tangent step, one Newton step off the constraints
+            q = solve_position(model, q + h * self.basis[:, j], t, hold=self.held,
+                               charts=charts, tol=1e-14)
+        else:
+            v[self.independent[j]] += h
+        qd = self._rates(q, v[self.independent])
+        qdd, lam = forward_accelerations(model, t, q, qd, charts)
+        return _Sample(model.body_type.velocity_derivative(q, qd, qdd),
+                       self.evaluate(q, qd, qdd, lam))
+
+    def _rates(self, q: np.ndarray, v_independent: np.ndarray) -> np.ndarray:
+        """``qd`` with ``Cq qd = -Ct`` and the independent velocities ``v`` given: the
+        velocities are linear in the rates, ``v = E(q) qd``."""
+        model, n = self.model, self.model.n_coordinates
+        frames = constraints.frames(model, q, charts=self.charts)
+        data = constraints.evaluate(model, self.t, frames, value=False)[1]
+        Cq = constraints.jacobian_matrix(model, data, sparse=False)
+        E = np.column_stack([model.body_type.velocities(q, e) for e in np.eye(n)])
+        rhs = np.concatenate([constraints.velocity_rhs(model, self.t, frames), v_independent])
+        return la.lstsq(np.vstack([Cq, E[self.independent]]), rhs)[0]
+
+    def evaluate(self, q, qd, qdd, lam) -> np.ndarray | None:
+        if self.output_specs is None:
+            return None
+        results = None
+        values = []
+        for spec in self.output_specs:
+            if isinstance(spec, tuple):
+                index, rate = spec
+                values.append([(qd if rate else q)[index]])
+                continue
+            if results is None:
+                results = Results(self.model, "linearisation", np.array([self.t]), q[None],
+                                  qd[None], qdd[None], lam[None],
+                                  charts=None if self.charts is None else self.charts[None])
+            values.append(np.ravel(np.asarray(spec(results), dtype=float)))
+        return np.concatenate(values) if values else np.zeros(0)
+
+
+def _input_matrices(model, t, q, qd, qdd0, lam0, frames, data, inputs, independent,
+                    sampler, n_outputs, what):
+    """``B`` (2k, p) and ``D`` (r, p): each input's generalized force through the augmented
+    equations (linear in it: exact), and the outputs' response by central differences."""
+    k, n = len(independent), model.n_coordinates
+    B = np.zeros((2 * k, len(inputs)))
+    D = np.zeros((n_outputs, len(inputs)))
+    blocks = model.body_type.mass_blocks(frames, model.mass, model.inertia)
+    for column, spec in enumerate(inputs):
+        Q = _unit_force(model, frames, spec, what)
+        rhs = np.concatenate([Q, np.zeros(model.n_constraints)])
+        try:
+            x = solve_model_augmented(model, blocks, data, rhs)
+        except SingularMatrix:  # redundant joints: the accelerations are still unique
+            M = mass_matrix(model, frames, sparse=False)
+            Cq = constraints.jacobian_matrix(model, data, sparse=False)
+            m = model.n_constraints
+            x = la.lstsq(np.block([[M, Cq.T], [Cq, np.zeros((m, m))]]), rhs)[0]
+        qdd_u, lam_u = x[:n], x[n:]
+        # the velocities' rates are linear in qdd at a fixed state
+        B[k:, column] = (model.body_type.velocity_derivative(q, qd, qdd0 + qdd_u)
+                         - model.body_type.velocity_derivative(q, qd, qdd0))[independent]
+        if sampler.output_specs is not None and n_outputs:
+            h = _STEP * max(1.0, float(np.max(np.abs(qdd0), initial=0.0))
+                            / max(float(np.max(np.abs(qdd_u))), 1e-300))
+            plus = sampler.evaluate(q, qd, qdd0 + h * qdd_u, lam0 + h * lam_u)
+            minus = sampler.evaluate(q, qd, qdd0 - h * qdd_u, lam0 - h * lam_u)
+            D[:, column] = (plus - minus) / (2 * h)
+    return B, D
+
+
+def _unit_force(model, frames, spec: str, what: str) -> np.ndarray:
+    """Generalized force (n,) of a unit value of the input ``spec``."""
+    name, _, component = spec.rpartition(".")
+    if not name or name not in model._force_by_name:
+        name, component = spec, ""
+    element = model._force_by_name.get(name)
+    if not isinstance(element, (PointForce, Torque)):
+        known = [f.name for f in model.forces if isinstance(f, (PointForce, Torque))]
+        raise ModelError(f"{what}: input {spec!r} must name a PointForce or Torque of the "
+                         f"model and a component ('push.x'); known: {', '.join(known) or 'none'}"
+                         " (add one with a zero value to have an input there)")
+    planar_torque = isinstance(element, Torque) and model.dim == 2
+    axes = "xyz"[:3 if isinstance(element, Torque) else model.dim]
+    if planar_torque:
+        if component:
+            raise ModelError(f"{what}: input {spec!r}: a planar torque has one component; name "
+                             f"it '{name}'")
+        unit = np.array([0.0, 0.0, 1.0])
+    elif component not in tuple(axes):
+        raise ModelError(f"{what}: input {spec!r}: name a component of '{name}', one of "
+                         f"{', '.join(f'{name}.{a}' for a in axes)}")
+    else:
+        unit = np.eye(len(axes))[axes.index(component)]
+    Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+    body = np.array([model.padded_index(element.body)], dtype=np.int64)
+    body_frame = np.array([element.frame == "body"], dtype=np.int64)
+    if isinstance(element, PointForce):
+        point = next(u for group in model.force_groups for e, u, *_ in getattr(group, "items", ())
+                     if e is element)
+        force_kernel.point_forces_into(frames.A, frames.axes, body, point[None], unit[None],
+                                       body_frame, Q)
+    else:
+        body_frame[0] = body_frame[0] and model.dim == 3
+        force_kernel.torques_into(frames.A, frames.axes, body, unit[None], body_frame, Q)
+    return Q[:model.n_bodies].ravel()
