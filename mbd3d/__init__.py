@@ -36,7 +36,7 @@ from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
 from mbd3d.analyses.position import solve_position
 from mbd3d.analyses.linearization import LinearModel, linearize
-from mbd3d.analyses.modes import Modes, vibration_modes
+from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io.results import Results, format_table
 
@@ -47,7 +47,8 @@ __all__ = [
     "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
-    "inverse_dynamics", "static_equilibrium", "vibration_modes", "Modes", "linearize",
+    "inverse_dynamics", "static_equilibrium", "vibration_modes", "Modes",
+    "vibration_modes_along", "ModesAlong", "linearize",
     "LinearModel", "forward_dynamics",
     "forward_accelerations",
     "project_state", "METHODS",

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from mbd3d.errors import ModelError
-from mbd3d.model.forces import Torque
+from mbd3d.model.forces import RotationalSpringDamper, Torque
 from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Motion, Ramp
 
@@ -90,7 +90,7 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
              coupler_length: float = 0.35, rocker_length: float = 0.30,
              mass_per_length: float = 2.0, crank_angle: float = math.radians(60.0),
              crank_speed: float | None = 2 * math.pi, crank_torque: float | None = None,
-             gravity: float = 9.81) -> Model:
+             gravity: float = 9.81, shaft_stiffness: float | None = None) -> Model:
     """Crank-rocker four-bar: ground pivots O2 = (0, 0) and O4 = (ground_length, 0).
 
     Bodies ``crank`` (O2-A), ``coupler`` (A-B), ``rocker`` (O4-B), slender uniform bars
@@ -98,6 +98,11 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
     driver ``motor`` at constant crank speed [rad/s] (None: no driver); optional constant
     ``crank_torque`` [N m] (force element ``torque``). Assembled with the open configuration
     (B above the line O4-A).
+
+    With ``shaft_stiffness`` [N m/rad] the motor drives a ``shaft`` (a small disc on its own
+    revolute ``S`` at O2) that turns the crank through an elastic coupling, the rotational
+    spring ``coupling``, relaxed in the drawing: the mechanism keeps one degree of freedom,
+    the crank's twist against the shaft.
     """
     from mbd3d.joints import Revolute, RotationDriver
 
@@ -127,8 +132,15 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
     builder.add(Revolute("A", crank, coupler, point_i=(L1 / 2, 0), point_j=(-L2 / 2, 0)))
     builder.add(Revolute("B", coupler, rocker, point_i=(L2 / 2, 0), point_j=(L3 / 2, 0)))
     builder.add(Revolute("O4", builder.ground, rocker, point_i=o4, point_j=(-L3 / 2, 0)))
+    driven = o2
+    if shaft_stiffness is not None:
+        shaft = builder.add_body("shaft", mass=0.1, inertia=0.1 * (0.2 * L1) ** 2 / 2,
+                                 position=(0.0, 0.0), angle=crank_angle)
+        driven = builder.add(Revolute("S", builder.ground, shaft, at=(0.0, 0.0)))
+        builder.add(RotationalSpringDamper("coupling", body_i=shaft, body_j=crank,
+                                           stiffness=shaft_stiffness))
     if crank_speed is not None:
-        builder.add(RotationDriver("motor", o2, motion=Ramp(crank_angle, crank_speed)))
+        builder.add(RotationDriver("motor", driven, motion=Ramp(crank_angle, crank_speed)))
     if crank_torque is not None:
         builder.add(Torque("torque", crank, crank_torque))
     return builder.build()

@@ -85,3 +85,70 @@ def test_an_inverted_pendulum_grows_at_the_rate_of_its_equation():
     assert sorted(modes.damping_ratios) == pytest.approx([-1.0, 1.0])
     np.testing.assert_allclose(modes.frequencies * 2 * math.pi, [rate, rate], rtol=1e-7)
     assert modes.equilibrium.stats["stability"] == ["unstable"]
+
+
+def _four_bar_by_hand(theta2, ground=0.30, crank=0.10, coupler=0.35, rocker=0.30, rho=2.0):
+    """The inertia the crank carries, I = sum m v^2 + J w^2 at unit crank rate, and the
+    rocker's rate per unit crank rate, from the loop's closed-form positions (open branch)
+    and its velocity equations solved by hand."""
+    A = crank * np.array([math.cos(theta2), math.sin(theta2)])
+    O4 = np.array([ground, 0.0])
+    d = np.linalg.norm(O4 - A)
+    e = (O4 - A) / d
+    along = (coupler ** 2 - rocker ** 2 + d * d) / (2 * d)
+    B = A + along * e + math.sqrt(coupler ** 2 - along ** 2) * np.array([-e[1], e[0]])
+    theta3 = math.atan2(*(B - A)[::-1])
+    theta4 = math.atan2(*(B - O4)[::-1])
+
+    def perp(angle):
+        return np.array([-math.sin(angle), math.cos(angle)])
+
+    # a w2 perp(t2) + b w3 perp(t3) = c w4 perp(t4), w2 = 1
+    w3, w4 = la.solve(np.column_stack([coupler * perp(theta3), -rocker * perp(theta4)]),
+                      -crank * perp(theta2))
+    v_coupler = crank * perp(theta2) + coupler / 2 * w3 * perp(theta3)
+    inertia = 0.0
+    for length, speed, rate in ((crank, crank / 2, 1.0), (coupler, np.linalg.norm(v_coupler), w3),
+                                (rocker, rocker / 2 * abs(w4), w4)):
+        m = rho * length
+        inertia += m * speed ** 2 + m * length ** 2 / 12 * rate ** 2
+    return inertia, w4
+
+
+def test_four_bar_on_an_elastic_shaft_along_its_turn():
+    """Each position's one frequency is sqrt(k / I(theta)) / 2 pi, I from the loop's velocity
+    equations by hand; the mode shape moves the rocker by the loop's velocity ratio; the
+    animation of the mode stays assembled and swings at the mode's frequency."""
+    from mbd3d.mechanisms import four_bar
+    k = 50.0
+    model = four_bar(shaft_stiffness=k, gravity=0.0)
+    along = mb.vibration_modes_along(model, np.linspace(0.0, 1.0, 7))
+    crank = along.equilibrium.body("crank").angle
+    np.testing.assert_allclose(crank, math.radians(60) + 2 * math.pi * along.t, atol=1e-12)
+    by_hand = [_four_bar_by_hand(angle) for angle in crank]
+    expected = [math.sqrt(k / inertia) / (2 * math.pi) for inertia, _ in by_hand]
+    np.testing.assert_allclose(along.frequencies[:, 0], expected, rtol=1e-7)
+    np.testing.assert_allclose(along.damping_ratios, 0.0, atol=1e-9)
+    i_crank, i_rocker = (model.coordinate_index(c) for c in ("crank.theta", "rocker.theta"))
+    ratios = along.shapes[:, 0, i_rocker] / along.shapes[:, 0, i_crank]
+    np.testing.assert_allclose(ratios.real, [w4 for _, w4 in by_hand], rtol=1e-7)
+    np.testing.assert_allclose(ratios.imag, 0.0, atol=1e-9)
+
+    modes = along.at(2)
+    swing = modes.animation(frames=16, cycles=1, amplitude=0.05)
+    assert swing.position_residual.max() < 1e-12
+    twist = swing.body("crank").angle - crank[2]
+    period = 1.0 / modes.frequencies[0]
+    assert swing.t[-1] == pytest.approx(period)
+    # to first order in the amplitude (putting the positions back on the constraints moves
+    # them by its square)
+    np.testing.assert_allclose(twist, 0.05 * np.cos(2 * math.pi * swing.t / period)
+                               * modes.shapes[0, i_crank].real, atol=0.5 * 0.05 ** 2)
+    with pytest.raises(mb.ModelError, match="1 modes"):
+        modes.animation(3)
+
+
+def test_a_rigid_driven_mechanism_has_no_modes():
+    from mbd3d.mechanisms import four_bar
+    along = mb.vibration_modes_along(four_bar(gravity=0.0), [0.0, 0.5])
+    assert along.frequencies.shape == (2, 0)

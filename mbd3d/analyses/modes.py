@@ -11,6 +11,12 @@ with ``K = -dQe/dq`` and ``H = d(Cq^T lam)/dq`` at ``lam0`` (the stiffness of
 rest). The eigenvalues ``s`` of the first-order form give each mode's natural frequency
 ``|s| / 2 pi`` [Hz] and damping ratio ``-Re(s) / |s|`` (negative: the equilibrium is unstable
 along that mode); its shape is ``N v`` in the coordinates ``q``.
+
+Along a driven motion (:func:`vibration_modes_along`) the same is done at each position of a
+grid of times, with the drivers held there: the frozen-position frequencies a designer
+compares with the speeds of the machine. They leave out the motion's own velocity terms
+(centripetal, gyroscopic), small where the machine runs well below its frequencies; about a
+moving state use :func:`mbd3d.linearize`.
 """
 
 from __future__ import annotations
@@ -21,12 +27,14 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg as la
 
+from mbd3d.analyses.position import solve_position
 from mbd3d.analyses.statics import _active_rows, _stiffness, static_equilibrium
+from mbd3d.errors import ModelError
 from mbd3d.io.results import Results
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
 
-__all__ = ["Modes", "vibration_modes"]
+__all__ = ["Modes", "ModesAlong", "vibration_modes", "vibration_modes_along"]
 
 
 @dataclass(frozen=True)
@@ -53,6 +61,115 @@ class Modes:
     shapes: np.ndarray
     equilibrium: Results
 
+    def animation(self, mode: int = 0, amplitude: float | None = None, frames: int = 48,
+                  cycles: int = 2) -> Results:
+        """The mechanism vibrating in one mode, as the results of an analysis (for
+        :func:`mbd3d.viewer.record` or plots): ``q = q0 + amplitude Re(shape e^(i w t))``
+        over ``cycles`` periods, each position put back on the constraints by Newton's method
+        (the shape is tangent to them, so the correction is second order in the amplitude).
+
+        Parameters
+        ----------
+        mode : int
+            Index into :attr:`frequencies` (0: the lowest).
+        amplitude : float, optional
+            Multiplies the shape (largest entry 1); default a tenth of the model's length
+            for a shape led by a position [m], a tenth of a radian for one led by an angle.
+        frames : int
+            Time points per period.
+        cycles : int
+            Periods recorded. A mode without an oscillation (a free or overdamped motion) is
+            drawn as a swing of period 1 s along its shape.
+        """
+        eq = self.equilibrium
+        model = eq.model
+        if not -len(self.frequencies) <= mode < len(self.frequencies):
+            raise ModelError(f"mode {mode}: the model has {len(self.frequencies)} modes here "
+                             f"(0 to {len(self.frequencies) - 1})")
+        shape = self.shapes[mode]
+        if amplitude is None:
+            lead = int(np.argmax(np.abs(shape)))
+            amplitude = 0.1 * (model.length_scale if model.position_coordinates[lead] else 1.0)
+        frequency = float(self.frequencies[mode])
+        oscillates = frequency > 0 and abs(self.damping_ratios[mode]) < 1
+        period = 1.0 / frequency if oscillates else 1.0
+        omega = 2 * np.pi / period
+        t = np.linspace(0.0, cycles * period, cycles * frames + 1)
+        phase = np.exp(1j * omega * t)[:, None]
+        q0, chart = eq.q[0], None if eq.charts is None else eq.charts[0]
+        q = q0 + amplitude * (shape[None, :] * phase).real
+        for k in range(len(t)):
+            q[k] = solve_position(model, q[k], eq.t[0], charts=chart)
+        qd = amplitude * (1j * omega * shape[None, :] * phase).real
+        qdd = amplitude * (-omega * omega * shape[None, :] * phase).real
+        message = (f"mode {mode % len(self.frequencies) + 1} of {len(self.frequencies)}: "
+                   f"{frequency:.6g} Hz, damping ratio {self.damping_ratios[mode]:.4g}, "
+                   f"shape times {amplitude:.3g}, about the equilibrium at t = {eq.t[0]:g} s "
+                   "(the time axis is the vibration's)")
+        return Results(model, "vibration mode", t, q, qd, qdd, message=message,
+                       charts=None if chart is None else np.broadcast_to(chart, (len(t),)
+                                                                          + chart.shape),
+                       model_t=np.full(len(t), eq.t[0]))
+
+
+@dataclass(frozen=True)
+class ModesAlong:
+    """Vibration modes at each position of a driven motion (see :func:`vibration_modes_along`).
+
+    Attributes
+    ----------
+    t : ndarray (k,)
+        Times [s] of the positions (the drivers' values there).
+    frequencies, damping_ratios : ndarray (k, r)
+        Per position, lowest frequency first [Hz], [-]; NaN where a position has fewer modes.
+    shapes : ndarray (k, r, n), complex
+    equilibrium : Results
+        The positions (static equilibria with the drivers held), reactions and efforts.
+    """
+
+    t: np.ndarray
+    frequencies: np.ndarray
+    damping_ratios: np.ndarray
+    shapes: np.ndarray
+    equilibrium: Results
+
+    def at(self, index: int) -> Modes:
+        """The modes at the ``index``-th position (to animate one)."""
+        count = int(np.sum(np.isfinite(self.frequencies[index])))
+        return Modes(self.frequencies[index, :count], self.damping_ratios[index, :count],
+                     self.shapes[index, :count], self.equilibrium.subset(index, index + 1))
+
+
+def vibration_modes_along(model, times: Sequence[float], q_guess: Sequence[float] | None = None,
+                          *, release: Sequence[str] | bool = ()) -> ModesAlong:
+    """Natural frequencies, damping ratios and shapes at each position of a driven motion.
+
+    At each time of ``times`` the mechanism rests where its drivers put it (the static
+    equilibrium with the drivers held, and those named in ``release`` released), and its
+    modes about that position are computed as by :func:`vibration_modes`: the frequencies
+    against crank angle that show the speeds to avoid. A mechanism needs compliance (springs,
+    or a released driver) to vibrate at all: a fully driven rigid one has no modes.
+
+    Returns
+    -------
+    ModesAlong
+    """
+    rest = static_equilibrium(model, times, q_guess, release=release)
+    active = _active_rows(model, release)
+    found = []
+    for k in range(len(rest)):
+        chart = None if rest.charts is None else rest.charts[k]
+        found.append(_modes_about(model, float(rest.t[k]), rest.q[k], rest.lam[k][active],
+                                  chart, active))
+    width = max((len(f) for f, _, _ in found), default=0)
+    n = model.n_coordinates
+    frequencies = np.full((len(found), width), np.nan)
+    ratios = np.full((len(found), width), np.nan)
+    shapes = np.full((len(found), width, n), np.nan, dtype=complex)
+    for k, (f, r, s) in enumerate(found):
+        frequencies[k, :len(f)], ratios[k, :len(f)], shapes[k, :len(f)] = f, r, s
+    return ModesAlong(rest.t, frequencies, ratios, shapes, rest)
+
 
 def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
                     release: Sequence[str] | bool = ()) -> Modes:
@@ -68,9 +185,17 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
         free) twice, with its two real roots.
     """
     rest = static_equilibrium(model, [t], q_guess, release=release)
-    q, chart = rest.q[0], None if rest.charts is None else rest.charts[0]
     active = _active_rows(model, release)
-    lam = rest.lam[0][active]
+    frequencies, ratios, shapes = _modes_about(
+        model, t, rest.q[0], rest.lam[0][active],
+        None if rest.charts is None else rest.charts[0], active)
+    return Modes(frequencies, ratios, shapes, rest)
+
+
+def _modes_about(model, t: float, q: np.ndarray, lam: np.ndarray, chart, active: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Frequencies [Hz], damping ratios and shapes about the equilibrium ``(q, lam)`` (the
+    multipliers of the ``active`` rows), lowest frequency first."""
     n = model.n_coordinates
     zeros = np.zeros(n)
     fr = constraints.frames(model, q, zeros, chart)
@@ -83,7 +208,7 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
     Mr, Dr, Kr = (N.T @ X @ N for X in (M, damping, stiffness))
     k = N.shape[1]
     if k == 0:
-        return Modes(np.zeros(0), np.zeros(0), np.zeros((0, n), dtype=complex), rest)
+        return np.zeros(0), np.zeros(0), np.zeros((0, n), dtype=complex)
     # first-order form [z; z'] ' = A [z; z']
     A = np.block([[np.zeros((k, k)), np.eye(k)],
                   [-la.solve(Mr, Kr), -la.solve(Mr, Dr)]])
@@ -99,9 +224,9 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
             shape /= largest
     size = np.abs(values)
     frequencies = size / (2 * np.pi)
-    ratios = np.where(size > 0, -values.real / np.where(size > 0, size, 1.0), 0.0)
+    ratios = np.where(size > 0, -values.real / np.where(size > 0, size, 1.0), 0.0) + 0.0
     order = np.argsort(frequencies, kind="stable")
-    return Modes(frequencies[order], ratios[order], shapes[order], rest)
+    return frequencies[order], ratios[order], shapes[order]
 
 
 def _damping(model, t: float, q: np.ndarray, chart) -> np.ndarray:

@@ -183,14 +183,20 @@ class Results:
     charts : ndarray (k, n_bodies + 1, 3, 3) or None
         Spatial models: the reference rotations the coordinates of each time point are relative
         to. Use ``body(name).rotation`` or ``.quaternion`` for orientations, never raw ``q``.
+    model_t : ndarray (k,)
+        Times [s] at which the model's drivers and forces are evaluated for derived quantities
+        (residuals, reactions): ``t``, except in a vibration mode's animation, whose time axis
+        is the vibration's while the mechanism stays at the equilibrium's time.
     """
 
     def __init__(self, model, analysis: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
                  qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
-                 message: str = "", stats: dict | None = None, charts: np.ndarray | None = None):
+                 message: str = "", stats: dict | None = None, charts: np.ndarray | None = None,
+                 model_t: np.ndarray | None = None):
         self.model = model
         self.analysis = analysis
         self.t = np.asarray(t, dtype=float)
+        self.model_t = self.t if model_t is None else np.asarray(model_t, dtype=float)
         self.q, self.qd, self.qdd = (np.asarray(a, dtype=float) for a in (q, qd, qdd))
         self.lam = None if lam is None else np.asarray(lam, dtype=float)
         self.status = status
@@ -214,7 +220,8 @@ class Results:
         return Results(self.model, self.analysis, self.t[sl], self.q[sl], self.qd[sl],
                        self.qdd[sl], None if self.lam is None else self.lam[sl],
                        status=self.status, message=self.message, stats=self.stats,
-                       charts=None if self.charts is None else self.charts[sl])
+                       charts=None if self.charts is None else self.charts[sl],
+                       model_t=self.model_t[sl])
 
     # -- named access ----------------------------------------------------------------------------
     def _require_lam(self) -> np.ndarray:
@@ -343,7 +350,7 @@ class Results:
         n_motions = len(model.rotation_motions)
         table = (model.row_table.subset(np.array(model._instances_of[name]))
                  .on_bodies(body_map).repeated(k, 2, n_motions))
-        phi = (np.concatenate([constraints.motion_phases(model, tk) for tk in self.t])
+        phi = (np.concatenate([constraints.motion_phases(model, tk) for tk in self.model_t])
                if n_motions else np.zeros((0, 3)))
         J = evaluate_rows(table, fr, phi, value=False)[1]  # (k * r, 2, nc)
         rows = model.rows_of(name)
@@ -370,7 +377,8 @@ class Results:
     # -- checks ----------------------------------------------------------------------------------
     def _compute_residuals(self) -> tuple[np.ndarray, np.ndarray]:
         if self._residuals is None:
-            self._residuals = history.residuals(self.model, self.t, self.q, self.qd, self.charts)
+            self._residuals = history.residuals(self.model, self.model_t, self.q, self.qd,
+                                                 self.charts)
         return self._residuals
 
     def _compute_energies(self) -> tuple[np.ndarray, np.ndarray]:
