@@ -117,6 +117,41 @@ def test_slider_crank_recording_holds_its_poses_and_both_screens(tmp_path):
     assert 0.12 < span < 0.12 * 1.2
 
 
+def test_modes_along_a_motion_and_an_animated_mode_are_recorded(tmp_path):
+    """The frequencies read back exactly, the frequency plot's curve passes through them (in
+    its square scaling), its view is in the layout; an animated mode moves the crank."""
+    from mbd3d.mechanisms import four_bar
+    from mbd3d.viewer import record_modes
+    along = mb.vibration_modes_along(four_bar(shaft_stiffness=50.0, gravity=0.0),
+                                     np.linspace(0.0, 1.0, 7))
+    path = tmp_path / "modes.rrd"
+    record_modes(along, path, against="crank.theta", announce=False)
+    assert {"/plots/modes/frequency", "/modes/curves", "/modes/axes", "/world/bodies/crank",
+            "/plots/efforts/motor"} <= entity_paths(path)
+    assert has_footer(path) and len(RrdReader(str(path)).blueprints()) == 1
+    times, frequency = read_component(path, "/plots/modes/frequency", "Scalars:scalars",
+                                      "sim_time")
+    np.testing.assert_array_equal(frequency, along.frequencies)
+    np.testing.assert_array_equal(times, np.round(along.t * 1e9).astype("timedelta64[ns]"))
+    _, curve = read_component(path, "/modes/curves", "LineStrips2D:strips", None)
+    points = np.asarray(curve[0][0], dtype=float)
+    crank = np.degrees(along.equilibrium.body("crank").angle)
+    top = along.frequencies.max()
+    np.testing.assert_allclose(points[:, 0], (crank - crank.min()) / np.ptp(crank) * 100,
+                               rtol=1e-6)
+    np.testing.assert_allclose(-points[:, 1], along.frequencies[:, 0] / top * 100, rtol=1e-6)
+
+    swing = along.at(0).animation(frames=8, cycles=1)
+    record(swing, tmp_path / "mode.rrd", announce=False)
+    _, turn = read_component(tmp_path / "mode.rrd", "/world/bodies/crank",
+                             "Transform3D:quaternion", "step")
+    angles = 2 * np.arctan2(turn[:, 0, 2], turn[:, 0, 3])
+    np.testing.assert_allclose(angles, swing.body("crank").angle, atol=1e-6)
+    assert "/plots/efforts/motor" not in entity_paths(tmp_path / "mode.rrd")
+    with pytest.raises(mb.ModelError, match="vibration_modes_along"):
+        record_modes(along.at(0), tmp_path / "one.rrd")
+
+
 def test_spatial_top_recording_turns_like_the_results(tmp_path):
     tilt = mb.rotations.axis_angle((0.0, 1.0, 0.0), math.radians(30))
     b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))

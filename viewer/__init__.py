@@ -6,17 +6,19 @@ Usage::
     res = mb.forward_dynamics(model, t, observers=[Recorder("run.rrd")])   # live, to a file
     record(res, "again.rrd")                                               # finished results
     show("run.rrd")                                    # opens the viewer (needs a display)
+    record_modes(mb.vibration_modes_along(model, t), "modes.rrd")       # frequencies along it
 
 Open a recording with ``rerun run.rrd``: the mechanism moves on the left (bodies, joints,
 reaction and effort arrows, point trails); the plots of the kinematic and force analyses, the
 energies and the constraint residuals are on the right.
 """
 
+from mbd3d.viewer.modes import record_modes
 from mbd3d.viewer.readback import entity_paths, read_component
 from mbd3d.viewer.recorder import (VIEWER_PORT, Recorder, RecordingError, check_destination, record,
                                    require_display, rerun_executable, show, spawn_viewer)
 from mbd3d.viewer.scene import SIM_TIME, STEP
 
-__all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable", "entity_paths",
+__all__ = ["Recorder", "RecordingError", "record", "record_modes", "show", "rerun_executable", "entity_paths",
            "read_component", "SIM_TIME", "STEP", "check_destination", "require_display",
            "spawn_viewer", "VIEWER_PORT"]

@@ -80,7 +80,9 @@ class Scene:
     ----------
     model : Model
     analysis : str
-        "kinematic analysis", "inverse dynamics" or "forward dynamics".
+        "kinematic analysis", "inverse dynamics", "forward dynamics", "static equilibrium",
+        "vibration mode" (one mode's animation: positions only) or "vibration modes" (the
+        modes along a motion: adds their panel).
     plots, points, reactions, shapes
         As for :class:`viewer.Recorder`.
     """
@@ -90,7 +92,8 @@ class Scene:
                  reactions: Sequence[str] | None = None, shapes: Mapping[str, Any] | None = None):
         self.model = model
         self.analysis = analysis
-        self.dynamic = analysis != "kinematic analysis"
+        # analyses without multipliers draw no forces
+        self.dynamic = analysis not in ("kinematic analysis", "vibration mode")
         self.joined = attachment_points(model)
         names = [b.name for b in model.bodies]
         unknown = sorted(set(shapes or {}) - set(names))
@@ -173,6 +176,11 @@ class Scene:
                                                  origin="/plots/reactions"))
             if forces:
                 panels.append(rrb.Tabs(*forces, name="Force analysis"))
+        if self.analysis == "vibration modes":
+            panels.insert(0, rrb.Tabs(
+                rrb.TimeSeriesView(name="Natural frequencies [Hz]", origin="/plots/modes"),
+                rrb.Spatial2DView(name="Frequencies against position", origin="/modes"),
+                name="Vibration modes"))
         panels.append(rrb.Tabs(rrb.TimeSeriesView(name="Energy [J]", origin="/plots/energy"),
                                rrb.TimeSeriesView(name="Constraint residuals",
                                                   origin="/plots/residuals"),
