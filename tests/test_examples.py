@@ -79,6 +79,18 @@ def test_cart_pendulum_linearized_example(capsys):
     assert np.all(np.linalg.eigvals(lin.A - lin.B @ gain).real < 0)
 
 
+def test_four_bar_modes_example(capsys, tmp_path):
+    along = load("four_bar_modes").main(n_points=5, rrd=str(tmp_path / "fbm.rrd"))
+    out = capsys.readouterr().out
+    assert "speed to avoid [rpm]" in out and "lowest:" in out
+    assert (tmp_path / "fbm_mode.rrd").exists() and "/modes/curves" in entity_paths(
+        tmp_path / "fbm.rrd")
+    # the printed check: the largest difference is tiny against ~10 Hz
+    difference = float(re.search(r"largest difference from the check (\S+) Hz", out).group(1))
+    assert difference < 1e-6
+    assert along.frequencies.shape == (5, 1)
+
+
 def test_spatial_slider_crank_example(capsys, tmp_path):
     res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out
