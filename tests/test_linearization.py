@@ -207,3 +207,33 @@ def test_heavy_top_in_steady_precession_nutates_at_the_closed_form_frequency():
     np.testing.assert_allclose(oscillating.real, 0.0, atol=1e-7 * nutation)
     assert np.sort(np.abs(values))[3] < 1e-4 * Omega
     assert lin.states == ["top.rx", "top.ry", "top.rz", "top.wx", "top.wy", "top.wz"]
+
+
+def test_a_motor_released_as_the_input_about_the_position_it_holds():
+    """A bar held by a motor at 30 degrees above the horizontal: released, with its effort as
+    the input about the holding torque m g L/2 cos 30, I_O theta'' = u + m g L/2 sin 30 theta
+    (gravity's moment falls as the bar rises: a negative stiffness)."""
+    from mbd3d.joints import RotationDriver
+    m, L, angle = 2.0, 0.8, math.radians(30)
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    bar = b.add_body("bar", mass=m, inertia=m * L * L / 12,
+                     position=(L / 2 * math.cos(angle), L / 2 * math.sin(angle)), angle=angle)
+    pin = b.add(Revolute("O", b.ground, bar, at=(0.0, 0.0)))
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(angle, 0.0)))
+    model = b.build()
+    rest = mb.static_equilibrium(model)
+    assert rest.driver("motor").effort[0] == pytest.approx(m * G * L / 2 * math.cos(angle))
+    lin = mb.linearize(model, rest.q[0], inputs=["motor"], coordinates=["bar.theta"],
+                       outputs={"effort": lambda r: r.driver("motor").effort[0],
+                                "pin y": lambda r: r.joint("O").reaction().force[0, 1]})
+    inertia = m * L * L / 3
+    np.testing.assert_allclose(lin.A, [[0, 1], [m * G * L / 2 * math.sin(angle) / inertia, 0]],
+                               rtol=1e-7, atol=1e-9)
+    np.testing.assert_allclose(lin.B[:, 0], [0.0, 1.0 / inertia], rtol=1e-12)
+    # the effort output is the input itself; the pin's vertical force carries the weight less
+    # m times the centre's vertical acceleration, (L/2) cos(angle) theta''
+    np.testing.assert_allclose(lin.D[0], [1.0], rtol=1e-7)
+    np.testing.assert_allclose(lin.C[0], 0.0, atol=1e-7)
+    np.testing.assert_allclose(lin.D[1], [m * L / 2 * math.cos(angle) / inertia], rtol=1e-6)
+    with pytest.raises(mb.ModelError, match="0 degrees of freedom.*release"):
+        mb.linearize(model, rest.q[0], coordinates=["bar.theta"])

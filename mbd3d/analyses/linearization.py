@@ -45,14 +45,12 @@ import numpy as np
 import scipy.linalg as la
 
 from mbd3d.analyses.dynamics import forward_accelerations
-from mbd3d.analyses.position import solve_position
-from mbd3d.errors import ModelError
+from mbd3d.errors import AnalysisError, ModelError
 from mbd3d.io.results import Results
 from mbd3d.model import constraints
-from mbd3d.model.equations import mass_matrix
+from mbd3d.model.equations import generalized_forces, mass_matrix
 from mbd3d.model.forces import PointForce, Torque
 from mbd3d.numerics.compiled import forces as force_kernel
-from mbd3d.numerics.linalg import SingularMatrix, solve_model_augmented
 
 __all__ = ["LinearModel", "linearize"]
 
@@ -140,15 +138,20 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
     model : Model
     q, qd : array_like (n,)
         A state that satisfies the constraints (from an analysis's results, or
-        :func:`mbd3d.static_equilibrium`); ``qd`` default zero. Drivers are held at their
-        motion (their coordinates are not states).
+        :func:`mbd3d.static_equilibrium`); ``qd`` default zero. Drivers not named in
+        ``inputs`` are held at their motion (their coordinates are not states).
     t : float
         Time [s].
     inputs : sequence of str
-        Force elements of the model whose value is the input, one component each:
-        ``"name.x"`` (``.y``, ``.z``) for a :class:`~mbd3d.PointForce` (in the axes it was
-        given in) or a spatial :class:`~mbd3d.Torque`, ``"name"`` for a planar torque. The
-        element's own value is the reference ``u0``; the input adds to it [N, N m].
+        What the input ``u`` adds to [N, N m], one component each:
+
+        - a force element of the model, ``"name.x"`` (``.y``, ``.z``) for a
+          :class:`~mbd3d.PointForce` (in the axes it was given in) or a spatial
+          :class:`~mbd3d.Torque`, ``"name"`` for a planar torque; the element's own value
+          is the reference;
+        - a driver's name: the driver is released and its effort (along its coordinate, as
+          ``results.driver(name).effort``) is the input, about the effort that keeps the
+          reference motion; its coordinate becomes a state.
     outputs : sequence of str, or mapping of name to str or callable, optional
         Default the states (``C = I``, ``D = 0``). A string names a coordinate
         (``"cart.x"``) or its rate (``"cart.x_dot"``); a callable takes the one-sample
@@ -186,29 +189,33 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         q, qd, charts, _ = model.body_type.reset_charts(q, qd, charts, limit=0.0)
     else:
         charts = None
-    frames = constraints.frames(model, q, qd, charts)
-    C, data, _ = constraints.evaluate(model, t, frames)
-    Cq = constraints.jacobian_matrix(model, data, sparse=False)
-    _check_state(model, t, q, qd, C, Cq, constraints.velocity_rhs(model, t, frames), tol, what)
+    released = _released_drivers(model, inputs)
+    system = _System(model, t, charts, released)
+    Cq = system.jacobian(q)
+    _check_state(model, t, system, q, qd, Cq, tol, what)
+    # the reference effort of a released driver keeps the reference motion
+    _, lam_full = forward_accelerations(model, t, q, qd, charts)
+    system.efforts = np.array([-lam_full[model.rows_of(name)[0]] for name in released])
 
     # state units: a rotation about a body axis is 2 g at g = 0, its rate omega_bar = 2 g_dot
     rotation = np.zeros(n, dtype=bool)
     if model.dim == 3:
         rotation.reshape(-1, 6)[:, 3:] = True
     unit = np.where(rotation, 2.0, 1.0)
-    independent, dependent = _partition(model, Cq, coordinates, what)
+    active = Cq[system.active]
+    independent, dependent = _partition(model, active, system.active, coordinates, what)
     k = len(independent)
     N = np.zeros((n, k))
     N[independent] = np.eye(k)
     if k and len(dependent):
-        N[dependent] = -la.lstsq(Cq[:, dependent], Cq[:, independent])[0]
+        N[dependent] = -la.lstsq(active[:, dependent], active[:, independent])[0]
     N /= unit[independent][None, :]
 
     labels = [model.coordinate_labels[j] for j in independent]
     states = ([_state_name(label, 0) for label in labels]
               + [_state_name(label, 1) for label in labels])
     output_names, output_specs = _outputs(model, outputs, states, what)
-    sampler = _Sampler(model, t, q, qd, charts, independent, N, output_specs)
+    sampler = _Sampler(system, q, qd, independent, N, output_specs, what)
 
     A = np.zeros((2 * k, 2 * k))
     A[:k, k:] = np.eye(k)  # d p / dt = v (held exactly in every sample)
@@ -233,12 +240,12 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         turning[:, 3:] = np.cross(omega, rotations, axisa=1, axisb=1, axisc=1)
         A[:k, :k] -= turning.reshape(n, k)[independent]
 
-    qdd0, lam0 = forward_accelerations(model, t, q, qd, charts)
-    B, D_out = _input_matrices(model, t, q, qd, qdd0, lam0, frames, data, inputs,
-                               independent, sampler, len(output_names), what)
+    B, D_out = _input_matrices(system, sampler, q, qd, Cq, inputs, independent,
+                               len(output_names), what)
     if output_specs is None:
         C_out, D_out = np.eye(2 * k), np.zeros((2 * k, B.shape[1]))
 
+    frames = constraints.frames(model, q, qd, charts)
     Mr = N.T @ mass_matrix(model, frames, sparse=False) @ N
     return LinearModel(
         A=A, B=B, C=C_out, D=D_out, states=states, inputs=list(inputs), outputs=output_names,
@@ -264,23 +271,116 @@ def _vector(value, n: int, what: str, name: str) -> np.ndarray:
     return array.copy()
 
 
-def _check_state(model, t, q, qd, C, Cq, nu, tol, what) -> None:
+def _check_state(model, t, system, q, qd, Cq, tol, what) -> None:
     """A linearisation about a state off the constraints would describe another mechanism:
-    refuse it, naming the rows (never project it silently)."""
-    position = np.abs(C) / model.row_scale
+    refuse it, naming the rows (never project it silently). Released drivers' rows are not
+    constraints of the linear model."""
+    rows = system.active
+    frames = constraints.frames(model, q, qd, system.charts)
+    C, _, _, nu = constraints.evaluate(model, t, frames, jacobian=False, rate=True)
+    position = np.abs(C[rows]) / model.row_scale[rows]
     # rates against the largest term of any row, in units of the model's length
-    terms = (np.abs(Cq) @ np.abs(qd) + np.abs(nu)) / model.row_scale
-    velocity = np.abs(Cq @ qd - nu) / model.row_scale / max(float(np.max(terms, initial=0.0)),
-                                                            1e-300)
+    terms = (np.abs(Cq[rows]) @ np.abs(qd) + np.abs(nu[rows])) / model.row_scale[rows]
+    velocity = (np.abs(Cq[rows] @ qd - nu[rows]) / model.row_scale[rows]
+                / max(float(np.max(terms, initial=0.0)), 1e-300))
     for kind, violation in (("position", position), ("velocity", velocity)):
         worst = np.argsort(violation)[::-1][:3]
         if violation.size and violation[worst[0]] > tol:
-            rows = ", ".join(f"{model.row_labels[r]} ({violation[r]:.1e})" for r in worst
-                             if violation[r] > tol)
+            named = ", ".join(f"{model.row_labels[rows[r]]} ({violation[r]:.1e})" for r in worst
+                              if violation[r] > tol)
             raise ModelError(
-                f"{what}: the state violates the {kind} constraints at t = {t:.6g} s ({rows}, "
+                f"{what}: the state violates the {kind} constraints at t = {t:.6g} s ({named}, "
                 "relative); linearise about a state from an analysis's results, or make it "
                 "consistent with mb.solve_position and mb.solve_velocity")
+
+
+def _released_drivers(model, inputs) -> list[str]:
+    """The drivers named as inputs: their effort is the input, their motion is released."""
+    drivers = {element.name for element in model.joints if element.is_driver}
+    return [spec for spec in inputs if spec in drivers]
+
+
+class _System:
+    """The equations the linear model describes: the model's, less the rows of the released
+    drivers, whose reference efforts act as forces. Dense (a linearisation is of a model
+    small enough for its ``A`` to be read)."""
+
+    def __init__(self, model, t, charts, released):
+        self.model, self.t, self.charts = model, t, charts
+        self.released_rows = np.array([int(model.rows_of(name)[0]) for name in released],
+                                      dtype=int)
+        for name in released:
+            if len(model.rows_of(name)) != 1:
+                raise ModelError(f"linearisation of '{model.name}': driver '{name}' has "
+                                 f"{len(model.rows_of(name))} rows; an input is one effort")
+        self.active = np.setdiff1d(np.arange(model.n_constraints), self.released_rows)
+        self.efforts = np.zeros(len(released))
+
+    def jacobian(self, q) -> np.ndarray:
+        frames = constraints.frames(self.model, q, charts=self.charts)
+        data = constraints.evaluate(self.model, self.t, frames, value=False)[1]
+        return constraints.jacobian_matrix(self.model, data, sparse=False)
+
+    def position(self, q, held, what) -> np.ndarray:
+        """Newton-Raphson on the active rows with the ``held`` coordinates fixed, from a
+        guess first-order close (a tangent step)."""
+        model, n = self.model, self.model.n_coordinates
+        H = np.eye(n)[held]
+        target = q[held].copy()
+        for _ in range(20):
+            frames = constraints.frames(model, q, charts=self.charts)
+            C, data, _ = constraints.evaluate(model, self.t, frames)
+            Cq = constraints.jacobian_matrix(model, data, sparse=False)
+            residual = np.concatenate([C[self.active], q[held] - target])
+            scale = np.concatenate([model.row_scale[self.active], model.coordinate_scale[held]])
+            if np.max(np.abs(residual) / scale, initial=0.0) <= 1e-14:
+                return q
+            q = q - la.lstsq(np.vstack([Cq[self.active], H]), residual)[0]
+        raise AnalysisError(f"{what}: the constraints do not close about a displaced state at "
+                            f"t = {self.t:.6g} s (residual {np.max(np.abs(residual) / scale):.1e});"
+                            " the state is at or near a singular position")
+
+    def rates(self, q, E_rows, v_independent) -> np.ndarray:
+        """``qd`` with ``Cq qd = -Ct`` (active rows) and the independent velocities ``v`` given:
+        the velocities are linear in the rates, ``v = E(q) qd``."""
+        model = self.model
+        frames = constraints.frames(model, q, charts=self.charts)
+        _, data, _, nu = constraints.evaluate(model, self.t, frames, value=False, rate=True)
+        Cq = constraints.jacobian_matrix(model, data, sparse=False)[self.active]
+        E = np.column_stack([model.body_type.velocities(q, e)
+                             for e in np.eye(model.n_coordinates)])[E_rows]
+        return la.lstsq(np.vstack([Cq, E]), np.concatenate([nu[self.active], v_independent]))[0]
+
+    def augmented(self, q, qd):
+        """``(M, Cq of the active rows, Q with the released efforts, Qd of the active rows,
+        Cq of every row)`` at a state."""
+        model = self.model
+        frames = constraints.frames(model, q, qd, self.charts)
+        _, data, Qd = constraints.evaluate(model, self.t, frames, value=False, gamma=True)
+        Cq = constraints.jacobian_matrix(model, data, sparse=False)
+        Q = generalized_forces(model, self.t, frames) + Cq[self.released_rows].T @ self.efforts
+        return mass_matrix(model, frames, sparse=False), Cq[self.active], Q, Qd[self.active], Cq
+
+    def solve(self, M, Ca, Q, Qd) -> tuple[np.ndarray, np.ndarray]:
+        """``qdd`` and the active rows' ``lam`` of ``[M Ca^T; Ca 0] [qdd; lam] = [Q; Qd]``
+        (least squares where rows are redundant: the accelerations are still unique)."""
+        n, m = M.shape[0], Ca.shape[0]
+        K = np.block([[M, Ca.T], [Ca, np.zeros((m, m))]])
+        rhs = np.concatenate([Q, Qd])
+        try:
+            x = la.solve(K, rhs)
+        except la.LinAlgError:
+            x = la.lstsq(K, rhs)[0]
+        return x[:n], x[n:]
+
+    def accelerations(self, q, qd) -> tuple[np.ndarray, np.ndarray]:
+        """``qdd`` and every row's ``lam`` (a released driver's: minus its effort)."""
+        M, Ca, Q, Qd, _ = self.augmented(q, qd)
+        qdd, lam_active = self.solve(M, Ca, Q, Qd)
+        lam = np.empty(self.model.n_constraints)
+        lam[self.active] = lam_active
+        lam[self.released_rows] = -self.efforts
+        return qdd, lam
 
 
 def _coordinate_index(model, label: str) -> int:
@@ -291,10 +391,12 @@ def _coordinate_index(model, label: str) -> int:
     return model.coordinate_index(label)
 
 
-def _partition(model, Cq: np.ndarray, coordinates, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """Indices of the independent (in the user's order) and dependent coordinates."""
+def _partition(model, Cq: np.ndarray, rows: np.ndarray, coordinates, what: str
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the independent (in the user's order) and dependent coordinates, from the
+    Jacobian ``Cq`` of the constraint rows ``rows``."""
     n = model.n_coordinates
-    scaled = Cq * model.coordinate_scale[None, :] / model.row_scale[:, None]
+    scaled = Cq * model.coordinate_scale[None, :] / model.row_scale[rows][:, None]
     if scaled.shape[0]:
         _, R, pivots = la.qr(scaled, pivoting=True, mode="economic")
         diagonal = np.abs(np.diag(R))
@@ -310,8 +412,10 @@ def _partition(model, Cq: np.ndarray, coordinates, what: str) -> tuple[np.ndarra
     except ModelError as exc:
         raise ModelError(f"{what}: coordinates: {exc}") from None
     if len(set(independent.tolist())) != n - rank or len(independent) != n - rank:
-        raise ModelError(f"{what}: the mechanism has {n - rank} degrees of freedom here; "
-                         f"coordinates names {len(set(independent.tolist()))} distinct ones")
+        hint = " (name a driver in inputs to release it)" if rank == n else ""
+        raise ModelError(f"{what}: the mechanism has {n - rank} degrees of freedom here"
+                         f"{hint}; coordinates names {len(set(independent.tolist()))} distinct "
+                         "ones")
     dependent = np.setdiff1d(np.arange(n), independent)
     block = scaled[:, dependent]
     singular = la.svdvals(block) if block.size else np.zeros(0)
@@ -355,42 +459,31 @@ class _Sample:
 
 class _Sampler:
     """States displaced along one independent coordinate or velocity, completed by the
-    constraints, with their velocities, the velocities' rates and the outputs."""
+    constraints, with the velocities' rates and the outputs."""
 
-    def __init__(self, model, t, q, qd, charts, independent, basis, output_specs):
-        self.model, self.t, self.q, self.qd, self.charts = model, t, q, qd, charts
+    def __init__(self, system, q, qd, independent, basis, output_specs, what):
+        self.system, self.q, self.qd = system, q, qd
         self.independent, self.basis = independent, basis
-        self.held = [int(j) for j in independent]
         self.output_specs = output_specs
-        self.v0 = model.body_type.velocities(q, qd)
+        self.what = what
+        self.v0 = system.model.body_type.velocities(q, qd)
 
     def at(self, position: bool, j: int, h: float) -> _Sample:
-        model, t, charts = self.model, self.t, self.charts
+        system = self.system
         q, v = self.q.copy(), self.v0.copy()
-        if position:  # from the tangent step, one Newton step off the constraints
-            q = solve_position(model, q + h * self.basis[:, j], t, hold=self.held,
-                               charts=charts, tol=1e-14)
+        if position:
+            q = system.position(q + h * self.basis[:, j], self.independent, self.what)
         else:
             v[self.independent[j]] += h
-        qd = self._rates(q, v[self.independent])
-        qdd, lam = forward_accelerations(model, t, q, qd, charts)
-        return _Sample(model.body_type.velocity_derivative(q, qd, qdd),
+        qd = system.rates(q, self.independent, v[self.independent])
+        qdd, lam = system.accelerations(q, qd)
+        return _Sample(system.model.body_type.velocity_derivative(q, qd, qdd),
                        self.evaluate(q, qd, qdd, lam))
-
-    def _rates(self, q: np.ndarray, v_independent: np.ndarray) -> np.ndarray:
-        """``qd`` with ``Cq qd = -Ct`` and the independent velocities ``v`` given: the
-        velocities are linear in the rates, ``v = E(q) qd``."""
-        model, n = self.model, self.model.n_coordinates
-        frames = constraints.frames(model, q, charts=self.charts)
-        data = constraints.evaluate(model, self.t, frames, value=False)[1]
-        Cq = constraints.jacobian_matrix(model, data, sparse=False)
-        E = np.column_stack([model.body_type.velocities(q, e) for e in np.eye(n)])
-        rhs = np.concatenate([constraints.velocity_rhs(model, self.t, frames), v_independent])
-        return la.lstsq(np.vstack([Cq, E[self.independent]]), rhs)[0]
 
     def evaluate(self, q, qd, qdd, lam) -> np.ndarray | None:
         if self.output_specs is None:
             return None
+        system = self.system
         results = None
         values = []
         for spec in self.output_specs:
@@ -399,32 +492,38 @@ class _Sampler:
                 values.append([(qd if rate else q)[index]])
                 continue
             if results is None:
-                results = Results(self.model, "linearisation", np.array([self.t]), q[None],
+                charts = system.charts
+                results = Results(system.model, "linearisation", np.array([system.t]), q[None],
                                   qd[None], qdd[None], lam[None],
-                                  charts=None if self.charts is None else self.charts[None])
+                                  charts=None if charts is None else charts[None])
             values.append(np.ravel(np.asarray(spec(results), dtype=float)))
         return np.concatenate(values) if values else np.zeros(0)
 
 
-def _input_matrices(model, t, q, qd, qdd0, lam0, frames, data, inputs, independent,
-                    sampler, n_outputs, what):
+def _input_matrices(system, sampler, q, qd, Cq, inputs, independent, n_outputs, what):
     """``B`` (2k, p) and ``D`` (r, p): each input's generalized force through the augmented
     equations (linear in it: exact), and the outputs' response by central differences."""
-    k, n = len(independent), model.n_coordinates
+    model = system.model
+    k = len(independent)
     B = np.zeros((2 * k, len(inputs)))
     D = np.zeros((n_outputs, len(inputs)))
-    blocks = model.body_type.mass_blocks(frames, model.mass, model.inertia)
+    M, Ca, Q, Qd, _ = system.augmented(q, qd)
+    qdd0, lam0_active = system.solve(M, Ca, Q, Qd)
+    lam0 = np.empty(model.n_constraints)
+    lam0[system.active] = lam0_active
+    lam0[system.released_rows] = -system.efforts
+    frames = constraints.frames(model, q, qd, system.charts)
     for column, spec in enumerate(inputs):
-        Q = _unit_force(model, frames, spec, what)
-        rhs = np.concatenate([Q, np.zeros(model.n_constraints)])
-        try:
-            x = solve_model_augmented(model, blocks, data, rhs)
-        except SingularMatrix:  # redundant joints: the accelerations are still unique
-            M = mass_matrix(model, frames, sparse=False)
-            Cq = constraints.jacobian_matrix(model, data, sparse=False)
-            m = model.n_constraints
-            x = la.lstsq(np.block([[M, Cq.T], [Cq, np.zeros((m, m))]]), rhs)[0]
-        qdd_u, lam_u = x[:n], x[n:]
+        if spec in model._joint_by_name:  # a released driver: its effort, along its row
+            row = int(model.rows_of(spec)[0])
+            Q_u = Cq[row]
+        else:
+            row, Q_u = None, _unit_force(model, frames, spec, what)
+        qdd_u, lam_u_active = system.solve(M, Ca, Q_u, np.zeros(len(system.active)))
+        lam_u = np.zeros(model.n_constraints)
+        lam_u[system.active] = lam_u_active
+        if row is not None:
+            lam_u[row] = -1.0  # the released driver's multiplier is minus its effort
         # the velocities' rates are linear in qdd at a fixed state
         B[k:, column] = (model.body_type.velocity_derivative(q, qd, qdd0 + qdd_u)
                          - model.body_type.velocity_derivative(q, qd, qdd0))[independent]
