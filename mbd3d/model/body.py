@@ -50,6 +50,8 @@ class Body:
         Spatial bodies: the reference rotation ``q0`` is relative to.
     shape : trimesh.Trimesh or None
         The body's geometry in the body frame [m], drawn by the viewer.
+    arguments : dict
+        The arguments of ``add_body`` that made it (what a model file writes back).
     """
 
     def __init__(self, name: str, index: int, mass: float, inertia: Any,
@@ -64,6 +66,7 @@ class Body:
         self.q0 = q0
         self.qd0 = qd0
         self.is_ground = is_ground
+        self.arguments: dict[str, Any] = {}
 
     def __repr__(self) -> str:
         if self.is_ground:

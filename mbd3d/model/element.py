@@ -14,6 +14,7 @@ import numpy as np
 
 from mbd3d.model.body import Body
 from mbd3d.model.motion import Motion
+from mbd3d.model.arguments import RecordsArguments
 
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext
@@ -50,7 +51,7 @@ class PrimitiveSpec:
     motion: Motion | None = None
 
 
-class ConstraintElement(ABC):
+class ConstraintElement(RecordsArguments, ABC):
     """Base class of joints and drivers.
 
     Subclasses set ``name``, ``body_i`` and ``body_j`` and implement :meth:`primitives`.

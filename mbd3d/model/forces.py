@@ -27,6 +27,7 @@ from mbd3d.errors import ModelError
 from mbd3d.numerics.compiled import forces as kernel
 from mbd3d.numerics.compiled.motions import CONSTANT
 from mbd3d.model.motion import Motion
+from mbd3d.model.arguments import RecordsArguments
 
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext, Model
@@ -55,7 +56,7 @@ class ForceState:
     angular_velocity: Any
 
 
-class ForceElement(ABC):
+class ForceElement(RecordsArguments, ABC):
     """Base class of applied force elements."""
 
     name: str

@@ -22,6 +22,7 @@ import numpy as np
 from mbd3d.model.checks import finite_scalar
 from mbd3d.numerics.compiled import motions as compiled
 from mbd3d.errors import ModelError
+from mbd3d.model.arguments import RecordsArguments
 
 __all__ = [
     "Motion",
@@ -35,7 +36,7 @@ __all__ = [
 ]
 
 
-class Motion(ABC):
+class Motion(RecordsArguments, ABC):
     """A scalar function of time ``f(t)`` with its exact derivatives.
 
     Motions can be added: ``Ramp(0, 2) + Harmonic(0.1, 5)`` is a motion too.
