@@ -22,11 +22,16 @@ from mbd3d.mechanisms import four_bar
 from mbd3d.viewer import check_destination, record
 
 
+def build() -> mb.Model:
+    """The crank-rocker at 2 pi rad/s (examples/models/four_bar.yaml as a file)."""
+    return four_bar(crank_speed=2 * np.pi)
+
+
 def main(n_points: int = 241, rrd: str | None = None, show: bool = False) -> mb.Results:
     # a bad path, or --show without a display, fails now, not after the computing
     if rrd is not None:
         check_destination(rrd, show=show)
-    model = four_bar(crank_speed=2 * np.pi)
+    model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 1.0, n_points)
     res = mb.inverse_dynamics(model, t)

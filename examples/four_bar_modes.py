@@ -31,11 +31,16 @@ from mbd3d.viewer import check_destination, record, record_modes
 STIFFNESS = 50.0  # [N m/rad] of the coupling between shaft and crank
 
 
+def build() -> mb.Model:
+    """The linkage on its elastic shaft (examples/models/four_bar_modes.yaml)."""
+    return four_bar(shaft_stiffness=STIFFNESS, gravity=0.0)
+
+
 def main(n_points: int = 37, rrd: str | None = None, show: bool = False) -> mb.ModesAlong:
     if rrd is not None:
         check_destination(rrd, show=show)
     t = np.linspace(0.0, 1.0, n_points)  # the motor turns once a second
-    model = four_bar(shaft_stiffness=STIFFNESS, gravity=0.0)
+    model = build()
     along = mb.vibration_modes_along(model, t)
     frequency = along.frequencies[:, 0]
 

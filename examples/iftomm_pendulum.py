@@ -33,6 +33,15 @@ from mbd3d.viewer import check_destination, record
 REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A01_simple_pendulum_P1.txt"
 
 
+def build() -> mb.Model:
+    """A point mass of 1 kg on a massless 1 m link, released horizontally
+    (examples/models/iftomm_pendulum.yaml)."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="IFToMM A01 pendulum")
+    mass = b.add_body("P1", mass=1.0, inertia=1e-3, position=(-1.0, 0.0))
+    b.add(Distance("link", b.ground, mass, point_i=(0.0, 0.0), point_j=(0.0, 0.0)))
+    return b.build()
+
+
 def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,
          show: bool = False) -> mb.Results:
     # a bad path, or --show without a display, fails now, not after the computing
@@ -40,10 +49,7 @@ def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,
         check_destination(rrd, show=show)
     reference = np.loadtxt(REFERENCE, skiprows=1)
     reference = reference[reference[:, 0] <= duration + 1e-9]
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="IFToMM A01 pendulum")
-    mass = b.add_body("P1", mass=1.0, inertia=1e-3, position=(-1.0, 0.0))
-    b.add(Distance("link", b.ground, mass, point_i=(0.0, 0.0), point_j=(0.0, 0.0)))
-    res = mb.forward_dynamics(b.build(), reference[:, 0], method="DOP853", rtol=rtol,
+    res = mb.forward_dynamics(build(), reference[:, 0], method="DOP853", rtol=rtol,
                               atol=1e-12)
     error = np.abs(res.body("P1").position - reference[:, 1:])
     energy = res.kinetic_energy + res.potential_energy

@@ -29,24 +29,33 @@ from mbd3d.viewer import check_destination, record
 STEEL = 7850.0  # kg/m^3
 
 
+LENGTH, RADIUS, THETA0 = 0.40, 0.08, math.radians(5.0)
+
+
+def build() -> mb.Model:
+    """The pendulum, released 5 degrees from hanging (examples/models/mesh_bodies.yaml, with
+    the meshes beside it)."""
+    arm_mesh = trimesh.creation.box(extents=(0.04, LENGTH, 0.02))      # along y, centred
+    disc_mesh = trimesh.creation.cylinder(radius=RADIUS, height=0.02, sections=64)  # axis z
+    swing = mb.rotations.axis_angle((0.0, 0.0, 1.0), THETA0)  # the drawing, turned by theta0
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, -9.81, 0.0), name="mesh pendulum")
+    arm = b.add_body("arm", shape=arm_mesh, density=STEEL, orientation=swing,
+                     position=swing @ (0.0, -LENGTH / 2, 0.0))
+    disc = b.add_body("disc", shape=disc_mesh, density=STEEL, orientation=swing,
+                      position=swing @ (0.0, -LENGTH, 0.0))
+    b.add(Revolute("hinge", b.ground, arm, at=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0)))
+    b.add(Fixed("weld", arm, disc, at=swing @ (0.0, -LENGTH, 0.0)))
+    return b.build()
+
+
 def main(periods: float = 3.0, n_points: int = 301, rrd: str | None = None,
          show: bool = False) -> mb.Results:
     # a bad path, or --show without a display, fails now, not after the computing
     if rrd is not None:
         check_destination(rrd, show=show)
-    length, radius, theta0 = 0.40, 0.08, math.radians(5.0)
-    arm_mesh = trimesh.creation.box(extents=(0.04, length, 0.02))      # along y, centred
-    disc_mesh = trimesh.creation.cylinder(radius=radius, height=0.02, sections=64)  # axis z
-    swing = mb.rotations.axis_angle((0.0, 0.0, 1.0), theta0)  # the drawing, turned by theta0
-
-    b = mb.ModelBuilder(dim=3, gravity=(0.0, -9.81, 0.0))
-    arm = b.add_body("arm", shape=arm_mesh, density=STEEL, orientation=swing,
-                     position=swing @ (0.0, -length / 2, 0.0))
-    disc = b.add_body("disc", shape=disc_mesh, density=STEEL, orientation=swing,
-                      position=swing @ (0.0, -length, 0.0))
-    b.add(Revolute("hinge", b.ground, arm, at=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0)))
-    b.add(Fixed("weld", arm, disc, at=swing @ (0.0, -length, 0.0)))
-    model = b.build()
+    length, radius = LENGTH, RADIUS
+    model = build()
+    arm, disc = model.body("arm"), model.body("disc")
 
     # what the meshes gave, against the closed forms of a box and of a circular disc
     m_arm = STEEL * 0.04 * length * 0.02
@@ -65,7 +74,7 @@ def main(periods: float = 3.0, n_points: int = 301, rrd: str | None = None,
     d = (arm.mass * length / 2 + disc.mass * length) / mass
     inertia_o = (arm.inertia[2, 2] + arm.mass * (length / 2) ** 2
                  + disc.inertia[2, 2] + disc.mass * length**2)
-    period = 2 * math.pi * math.sqrt(inertia_o / (mass * 9.81 * d)) * (1 + theta0**2 / 16)
+    period = 2 * math.pi * math.sqrt(inertia_o / (mass * 9.81 * d)) * (1 + THETA0**2 / 16)
 
     t = np.linspace(0.0, periods * period, n_points)
     res = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-10, atol=1e-12)

@@ -30,6 +30,12 @@ from mbd3d.mechanisms import slider_crank
 from mbd3d.viewer import check_destination, record
 
 
+def build() -> mb.Model:
+    """The slider-crank of the kinematic and force analyses: crank at 2 pi rad/s from 65
+    degrees (examples/models/slider_crank.yaml is the same model as a file)."""
+    return slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
+
+
 def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,
          csv_folder: str | None = None, rrd: str | None = None,
          show: bool = False) -> dict[str, mb.Results]:
@@ -39,7 +45,7 @@ def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,
     if csv_folder is not None:
         check_output_folder(csv_folder, "the CSV files")
     # 1. kinematics: crank at constant speed from 65 degrees
-    model = slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
+    model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, duration, n_points)
     kin = mb.inverse_dynamics(model, t)

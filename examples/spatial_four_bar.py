@@ -21,12 +21,17 @@ from mbd3d.mechanisms import spatial_four_bar
 from mbd3d.viewer import check_destination, record
 
 
+def build() -> mb.Model:
+    """The RSUR four-bar driven at 2 pi rad/s (examples/models/spatial_four_bar.yaml)."""
+    return spatial_four_bar(crank_speed=2 * np.pi)
+
+
 def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:
     # a bad path, or --show without a display, fails now, not after the computing
     if rrd is not None:
         check_destination(rrd, show=show)
     print(mb.mobility(spatial_four_bar(all_revolute=True, crank_speed=None)), "\n")
-    model = spatial_four_bar(crank_speed=2 * np.pi)
+    model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 1.0, n_points)
     res = mb.inverse_dynamics(model, t)

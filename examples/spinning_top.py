@@ -25,30 +25,37 @@ from mbd3d.joints import Spherical
 from mbd3d.viewer import check_destination, record
 
 
+M, J1, J3, L = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075  # cone, about its centre
+ALPHA, OMEGA_P = math.radians(60.0), 10.0  # nutation angle, precession rate [rad/s]
+# the spin that makes the precession steady: m g l = omega_p (C omega_3 - A omega_p cos alpha)
+OMEGA_S = (M * 9.81 * L / (J3 * OMEGA_P)
+           + (J1 + M * L * L - J3) / J3 * OMEGA_P * math.cos(ALPHA))
+
+
+def build() -> mb.Model:
+    """The top, started in steady precession (examples/models/spinning_top.yaml)."""
+    tilt = rotations.axis_angle((0.0, 1.0, 0.0), ALPHA)
+    axis = tilt[:, 2]
+    omega = OMEGA_P * np.array([0.0, 0.0, 1.0]) + OMEGA_S * axis
+    # drawn as the cone, apex down at the tip; its centre of mass is a quarter height up
+    cone = trimesh.creation.cone(radius=0.05, height=0.1, sections=64)
+    cone.apply_transform(trimesh.transformations.rotation_matrix(math.pi, (1, 0, 0)))
+    cone.apply_translation((0.0, 0.0, 0.025))
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81), name="spinning top")
+    top = b.add_body("top", mass=M, inertia=(J1, J1, J3), position=L * axis, orientation=tilt,
+                     velocity=np.cross(omega, L * axis), angular_velocity=omega, shape=cone)
+    b.add(Spherical("tip", b.ground, top, at=(0.0, 0.0, 0.0)))
+    return b.build()
+
+
 def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,
          show: bool = False) -> mb.Results:
     # a bad path, or --show without a display, fails now, not after the computing
     if rrd is not None:
         check_destination(rrd, show=show)
-    m, J1, J3, l = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075  # cone, about its centre
-    alpha, omega_p = math.radians(60.0), 10.0
-    A, C = J1 + m * l * l, J3
-    omega_s = m * 9.81 * l / (C * omega_p) + (A - C) / C * omega_p * math.cos(alpha)
-    tilt = rotations.axis_angle((0.0, 1.0, 0.0), alpha)
-    axis = tilt[:, 2]
-    omega = omega_p * np.array([0.0, 0.0, 1.0]) + omega_s * axis
-
-    # drawn as the cone, apex down at the tip; its centre of mass is a quarter height up
-    cone = trimesh.creation.cone(radius=0.05, height=0.1, sections=64)
-    cone.apply_transform(trimesh.transformations.rotation_matrix(math.pi, (1, 0, 0)))
-    cone.apply_translation((0.0, 0.0, 0.025))
-
-    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
-    top = b.add_body("top", mass=m, inertia=(J1, J1, J3), position=l * axis, orientation=tilt,
-                     velocity=np.cross(omega, l * axis), angular_velocity=omega, shape=cone)
-    b.add(Spherical("tip", b.ground, top, at=(0.0, 0.0, 0.0)))
+    omega_s, omega_p = OMEGA_S, OMEGA_P
     t = np.linspace(0.0, duration, n_points)
-    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
+    res = mb.forward_dynamics(build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
 
     symmetry_axis = res.body("top").rotation[:, :, 2]
     print(f"spin {omega_s:.2f} rad/s about the axis, precession {omega_p} rad/s\n")

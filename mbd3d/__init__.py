@@ -39,6 +39,7 @@ from mbd3d.analyses.linearization import LinearModel, linearize
 from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io.results import Results, format_table
+from mbd3d.io.model_file import load
 
 __version__ = "0.1.0"
 
@@ -52,7 +53,7 @@ __all__ = [
     "LinearModel", "forward_dynamics",
     "forward_accelerations",
     "project_state", "METHODS",
-    "mobility", "MobilityReport", "Results", "format_table", "kinetic_energy", "potential_energy",
+    "mobility", "MobilityReport", "Results", "load", "format_table", "kinetic_energy", "potential_energy",
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",
     "AssemblyError",

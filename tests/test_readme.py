@@ -130,3 +130,21 @@ def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
     # both runs reached it, each a recording of its own with every time point
     assert store_rows(received) == [201, 201]
     assert isinstance(namespace["show"]("run.rrd"), subprocess.Popen)
+
+
+def test_model_file_snippet_loads_runs_and_reports_mistakes_as_shown(tmp_path):
+    import mbd3d as mb
+    from mbd3d.io.model_file import read
+    text = README.read_text()
+    section = text.split("## Model files and the command line", 1)[1]
+    block = re.search(r"```yaml\n(.*?)```", section, re.S).group(1)
+    path = tmp_path / "pendulum.yaml"
+    path.write_text(block)
+    loaded = read(path)
+    res = loaded.analyses[0].run(loaded.model)
+    np.testing.assert_allclose(res.body("bar").angle, 6.0 * res.t, atol=1e-12)
+    shown = re.search(r"`pendulum.yaml:8: (.*?)`", section, re.S).group(1).replace("\n", " ")
+    path.write_text(block.replace("body_j: bar", "body_j: bra"))
+    with pytest.raises(mb.ModelError) as info:
+        mb.load(path)
+    assert str(info.value).endswith("pendulum.yaml:8: " + shown)

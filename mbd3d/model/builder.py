@@ -225,6 +225,12 @@ class ModelBuilder:
             Duplicate name, non-positive or non-finite mass, inertia or density, non-finite
             guess, a shape that is not a closed mesh when its mass properties are asked.
         """
+        # what a model file writes back (mbd3d.io.model_file)
+        arguments = {key: value for key, value in (
+            ("mass", mass), ("inertia", inertia), ("position", position), ("angle", angle),
+            ("orientation", orientation), ("velocity", velocity),
+            ("angular_velocity", angular_velocity), ("shape", shape), ("density", density))
+            if value is not None}
         _check_name(name, "body")
         if self._built or name in self._names:
             self._claim(name, "body")  # raises the duplicate / already-built error
@@ -258,6 +264,7 @@ class ModelBuilder:
         qd0 = bt.initial_rates(name, velocity, angular_velocity, q0, chart)
         body = Body(name, len(self._bodies), mass_value, inertia_value, q0, qd0, chart=chart,
                     shape=mesh)
+        body.arguments = arguments
         self._claim(name, "body")  # only once valid: a refused body leaves its name free
         self._bodies.append(body)
         return body
@@ -562,6 +569,12 @@ class Model:
             raise ModelError(f"model '{self.name}' has no joint or driver '{name}'; known: "
                              f"{', '.join(self._joint_by_name) or '(none)'}")
         return name
+
+    def save(self, path, *, analyses=(), overwrite: bool = True) -> str:
+        """Write this model as a model file that rebuilds it (:func:`mbd3d.io.model_file.save`);
+        ``mb.load(path)`` reads it back. Returns the path written."""
+        from mbd3d.io.model_file import save  # noqa: PLC0415
+        return save(self, path, analyses=analyses, overwrite=overwrite)
 
     def rows_of(self, name: str) -> np.ndarray:
         """Constraint rows of the joint or driver ``name``."""

@@ -1,0 +1,554 @@
+"""Model files: a mechanism written down as YAML, checked, analysed and versioned without code.
+
+Why YAML: nested lists of bodies and joints read naturally in it, it takes comments, and its
+parser reports the line of every value, so that a mistake is reported where it is. It is read
+with PyYAML's safe loader (plain data only: nothing in a file is ever executed) and written
+with its safe dumper, floats in their shortest exact form (a model saved and loaded is the same
+model to the last bit).
+
+The format, version 1 (every field in SI units)::
+
+    mbd3d: 1                       # the format version
+    name: slider-crank             # optional
+    dim: 2                         # 2 (planar) or 3 (spatial)
+    gravity: [0.0, -9.81]          # optional, [m/s^2]
+    bodies:                        # the arguments of ModelBuilder.add_body, by name
+      - {name: crank, mass: 1.0, inertia: 0.01, position: [0.05, 0.0], angle: 0.0}
+      - {name: arm, shape: arm.stl, density: 7850.0, position: [0, 0, 0]}   # a mesh file
+    joints:                        # joints and drivers, in order: a type and its arguments
+      - {type: Revolute, name: O, body_i: ground, body_j: crank, at: [0.0, 0.0]}
+      - type: RotationDriver
+        name: motor
+        joint: O                   # bodies and joints are named
+        motion: {type: Ramp, initial: 0.0, rate: 6.283185307179586}
+    forces:                        # force elements: a type and its arguments
+      - {type: Torque, name: load, body: crank, torque: 2.0}
+    analyses:                      # optional: what `mbd3d run` does
+      - {kind: forward, t: {start: 0.0, stop: 2.0, step: 0.01}, method: DOP853, rtol: 1e-10}
+
+Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd3d`
+(``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``); their fields are
+their constructors' keyword arguments, as documented there. A motion is a number (constant)
+or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
+arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file.
+Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``), times
+``t`` (a list, or ``{start, stop, step}`` or ``{start, stop, points}``) and the keyword
+arguments of that analysis function. Mesh paths are relative to the file.
+
+A mistake is reported with the file, the line and the field: ``model.yaml:14:
+joints[3].axis: ...``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+import os
+import pathlib
+import re
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from mbd3d.errors import ModelError
+from mbd3d.io import files
+
+__all__ = ["AnalysisSpec", "ModelFile", "load", "read", "save", "FORMAT_VERSION"]
+
+FORMAT_VERSION = 1
+_TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "bodies", "joints", "forces", "analyses")
+_BODY_FIELDS = ("name", "mass", "inertia", "position", "angle", "orientation", "velocity",
+                "angular_velocity", "shape", "density")
+#: constructor arguments that name a body or a joint
+_REFERENCES = ("body_i", "body_j", "body", "joint")
+#: analysis kinds and the function each runs
+_ANALYSES = {"kinematic": "kinematic_analysis", "inverse": "inverse_dynamics",
+             "forward": "forward_dynamics", "equilibrium": "static_equilibrium"}
+
+
+class ModelFileError(ModelError):
+    """A model file that cannot be read or written (names the file, line and field)."""
+
+
+@dataclass(frozen=True)
+class AnalysisSpec:
+    """An analysis a model file asks for: ``kind`` (kinematic, inverse, forward,
+    equilibrium), output times ``t`` [s] and keyword arguments of the analysis function."""
+
+    kind: str
+    t: np.ndarray
+    options: dict[str, Any] = field(default_factory=dict)
+
+    def run(self, model, **overrides: Any):
+        """Run it on ``model`` (``overrides`` replace options, e.g. ``observers``)."""
+        import mbd3d  # noqa: PLC0415 (the analyses live above this package)
+        function = getattr(mbd3d, _ANALYSES[self.kind])
+        return function(model, self.t, **{**self.options, **overrides})
+
+
+@dataclass(frozen=True)
+class ModelFile:
+    """A model file read: the model built, the analyses it asks for, and the plain data."""
+
+    model: Any
+    analyses: list[AnalysisSpec]
+    data: dict
+    path: str
+
+
+# -- reading ----------------------------------------------------------------------------------
+def load(path: str | os.PathLike):
+    """Build the model a model file describes (see the module doc for the format).
+
+    Raises
+    ------
+    ModelFileError
+        With the file, the line and the field path of the mistake.
+    """
+    return read(path).model
+
+
+def read(path: str | os.PathLike, changes: dict[str, Any] | None = None) -> ModelFile:
+    """Read a model file: its model, its analyses and its data.
+
+    ``changes`` sets values by field path before the model is built, e.g.
+    ``{"bodies.crank.mass": 2.0, "joints.motor.motion.rate": 10.0}`` (bodies and elements
+    by name, list entries by index), as a parameter sweep does.
+    """
+    import yaml  # noqa: PLC0415
+
+    path = str(path)
+    try:
+        text = pathlib.Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ModelFileError(f"model file '{path}' cannot be read: {exc.strerror}") from None
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}" if mark is not None else path
+        raise ModelFileError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+    lines = _line_map(node)
+    reader = _Reader(path, lines)
+    if not isinstance(data, dict):
+        raise reader.error((), "a model file is a mapping with bodies:, joints:, ...")
+    for key, value in (changes or {}).items():
+        _apply_change(reader, data, key, value)
+    return reader.build(data)
+
+
+def _line_map(node, path: tuple = ()) -> dict[tuple, int]:
+    """The line (1-based) of every value in the composed YAML tree, by field path."""
+    import yaml  # noqa: PLC0415
+
+    lines = {path: node.start_mark.line + 1} if node is not None else {}
+    if isinstance(node, yaml.MappingNode):
+        for key, value in node.value:
+            lines[path + (key.value,)] = key.start_mark.line + 1
+            lines.update({k: v for k, v in _line_map(value, path + (key.value,)).items()
+                          if k != path + (key.value,)})
+    elif isinstance(node, yaml.SequenceNode):
+        for index, item in enumerate(node.value):
+            lines.update(_line_map(item, path + (index,)))
+    return lines
+
+
+def _apply_change(reader, data: dict, key: str, value: Any) -> None:
+    """Set the value at a dotted field path; names pick list entries by their ``name``."""
+    parts = key.split(".")
+    target: Any = data
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        if isinstance(target, list):
+            chosen = next((item for item in target if isinstance(item, dict)
+                           and item.get("name") == part), None)
+            if chosen is None and part.isdigit() and int(part) < len(target):
+                chosen = target[int(part)]
+            if chosen is None:
+                names = [item.get("name") for item in target if isinstance(item, dict)]
+                raise reader.error((), f"change '{key}': no entry '{part}' (entries: "
+                                       f"{', '.join(map(str, names))})")
+            if last:
+                raise reader.error((), f"change '{key}': name a field of '{part}'")
+            target = chosen
+        elif isinstance(target, dict):
+            if last:
+                target[part] = value
+            elif part not in target:
+                raise reader.error((), f"change '{key}': no field '{part}'"
+                                       f"{_suggest(part, target)}")
+            else:
+                target = target[part]
+        else:
+            raise reader.error((), f"change '{key}': '{part}' is inside a value, not a field")
+
+
+def _suggest(word: str, choices) -> str:
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
+    """Joint, force and motion classes by name."""
+    import mbd3d.joints as joints  # noqa: PLC0415
+    from mbd3d.model import forces, motion  # noqa: PLC0415
+    from mbd3d.model.element import ConstraintElement  # noqa: PLC0415
+
+    joint_types = {name: getattr(joints, name) for name in joints.__all__
+                   if isinstance(getattr(joints, name), type)
+                   and issubclass(getattr(joints, name), ConstraintElement)}
+    force_types = {cls.__name__: cls for cls in (forces.PointForce, forces.Torque,
+                                                  forces.SpringDamper,
+                                                  forces.RotationalSpringDamper)}
+    motion_types = {cls.__name__: cls for cls in (motion.Constant, motion.Ramp,
+                                                   motion.Harmonic, motion.Polynomial,
+                                                   motion.SmoothStep)}
+    return joint_types, force_types, motion_types
+
+
+class _Reader:
+    """Builds a model from plain data, naming the file, line and field of each mistake."""
+
+    def __init__(self, path: str, lines: dict[tuple, int]):
+        self.path, self.lines = path, lines
+        self.folder = pathlib.Path(path).resolve().parent
+
+    def error(self, where: tuple, message: str) -> ModelFileError:
+        line = None
+        for depth in range(len(where), -1, -1):
+            line = self.lines.get(where[:depth])
+            if line is not None:
+                break
+        field_path = "".join(f"[{p}]" if isinstance(p, int) else (f".{p}" if i else p)
+                             for i, p in enumerate(where))
+        place = f"{self.path}:{line}" if line is not None else self.path
+        return ModelFileError(f"{place}: {field_path + ': ' if field_path else ''}{message}")
+
+    def build(self, data: dict) -> ModelFile:
+        from mbd3d.model.builder import ModelBuilder  # noqa: PLC0415
+
+        for key in data:
+            if key not in _TOP_LEVEL:
+                raise self.error((key,), f"unknown field{_suggest(key, _TOP_LEVEL)} (fields: "
+                                         f"{', '.join(_TOP_LEVEL)})")
+        version = data.get("mbd3d", FORMAT_VERSION)
+        if version != FORMAT_VERSION:
+            raise self.error(("mbd3d",), f"format version {version!r}; this mbd3d reads "
+                                         f"version {FORMAT_VERSION}")
+        dim = data.get("dim", 2)
+        if dim not in (2, 3):
+            raise self.error(("dim",), f"must be 2 (planar) or 3 (spatial), got {dim!r}")
+        try:
+            builder = ModelBuilder(dim=dim, gravity=data.get("gravity"),
+                                   name=str(data.get("name", pathlib.Path(self.path).stem)))
+        except ModelError as exc:
+            raise self.error(("gravity",), str(exc)) from None
+        named: dict[str, Any] = {"ground": builder.ground}
+        self.places: dict[str, tuple[tuple, dict]] = {}  # name -> (field path, entry)
+        for index, entry in enumerate(self._list(data, "bodies")):
+            where = ("bodies", index)
+            entry = self._mapping(entry, where)
+            if "name" not in entry:
+                raise self.error(where, "a body needs a name")
+            for key in entry:
+                if key not in _BODY_FIELDS:
+                    raise self.error(where + (key,), f"unknown body field"
+                                                     f"{_suggest(key, _BODY_FIELDS)} (fields: "
+                                                     f"{', '.join(_BODY_FIELDS)})")
+            arguments = dict(entry)
+            name = str(arguments.pop("name"))
+            if isinstance(arguments.get("shape"), str):
+                arguments["shape"] = str(self.folder / arguments["shape"])
+            with self._at(where):
+                named[name] = builder.add_body(name, **arguments)
+            self.places[name] = (where, entry)
+        joint_types, force_types, motion_types = _types()
+        for section, types in (("joints", joint_types), ("forces", force_types)):
+            for index, entry in enumerate(self._list(data, section)):
+                where = (section, index)
+                element = self._element(self._mapping(entry, where), where, types, named,
+                                        motion_types)
+                with self._at(where):
+                    named[element.name] = builder.add(element)
+                self.places[element.name] = (where, entry)
+        try:
+            model = builder.build()
+        except ModelFileError:
+            raise
+        except ModelError as exc:
+            raise self.error(self._blamed(str(exc)), str(exc)) from None
+        analyses = [self._analysis(self._mapping(entry, ("analyses", index)),
+                                   ("analyses", index))
+                    for index, entry in enumerate(self._list(data, "analyses"))]
+        return ModelFile(model, analyses, data, self.path)
+
+    def _blamed(self, message: str) -> tuple:
+        """Where in the file an error of the built model points: the first body or element
+        the message names in quotes, and the field it names, if any."""
+        for name in re.findall(r"'([^']+)'", message):
+            if name in self.places:
+                where, entry = self.places[name]
+                for key in entry:
+                    if re.search(rf"(^|[\s:(]){re.escape(str(key))}\b( must| \[|:)", message):
+                        return where + (key,)
+                return where
+        return ()
+
+    def _list(self, data: dict, key: str) -> list:
+        value = data.get(key) or []
+        if not isinstance(value, list):
+            raise self.error((key,), f"must be a list (entries starting with '- '), got "
+                                     f"{type(value).__name__}")
+        return value
+
+    def _mapping(self, entry, where) -> dict:
+        if not isinstance(entry, dict):
+            raise self.error(where, f"must be a mapping of fields, got {entry!r}")
+        return entry
+
+    def _at(self, where: tuple):
+        reader = self
+
+        class _Context:
+            def __enter__(self):
+                return self
+
+            def __exit__(self, kind, exc, traceback):
+                if isinstance(exc, ModelError) and not isinstance(exc, ModelFileError):
+                    raise reader.error(where, str(exc)) from None
+                return False
+
+        return _Context()
+
+    def _element(self, entry: dict, where: tuple, types: dict, named: dict, motion_types):
+        kind = entry.get("type")
+        if kind not in types:
+            what = "joint or driver" if where[0] == "joints" else "force element"
+            raise self.error(where + ("type",), f"unknown {what} type {kind!r}"
+                                                f"{_suggest(kind, types)} (types: "
+                                                f"{', '.join(sorted(types))})")
+        cls = types[kind]
+        arguments = {key: value for key, value in entry.items() if key != "type"}
+        self._check_arguments(cls, arguments, where, kind)
+        for key, value in arguments.items():
+            if key in _REFERENCES and isinstance(value, str):
+                if value not in named:
+                    raise self.error(where + (key,), f"no body or joint '{value}' (so far: "
+                                                     f"{', '.join(named)})"
+                                                     f"{_suggest(value, named)}")
+                arguments[key] = named[value]
+            elif isinstance(value, dict) and "type" in value:
+                arguments[key] = self._motion(value, where + (key,), motion_types)
+        with self._at(where):
+            return cls(**arguments)
+
+    def _check_arguments(self, function: Callable, arguments: dict, where: tuple,
+                         kind: str) -> None:
+        parameters = inspect.signature(function).parameters
+        accepted = [name for name, p in parameters.items()
+                    if name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+        for key in arguments:
+            if key not in accepted:
+                raise self.error(where + (key,), f"{kind} takes no '{key}'"
+                                                 f"{_suggest(key, accepted)} (it takes: "
+                                                 f"{', '.join(accepted)})")
+        for name in accepted:
+            if parameters[name].default is inspect.Parameter.empty and name not in arguments:
+                raise self.error(where, f"{kind} needs '{name}'")
+
+    def _motion(self, value: dict, where: tuple, motion_types: dict):
+        kind = value.get("type")
+        if kind == "Sum":
+            terms = value.get("terms")
+            if not isinstance(terms, list) or not terms:
+                raise self.error(where + ("terms",), "a Sum needs a list of terms")
+            total = None
+            for index, term in enumerate(terms):
+                part = (self._motion(term, where + ("terms", index), motion_types)
+                        if isinstance(term, dict) else term)
+                total = part if total is None else total + part
+            return total
+        if kind not in motion_types:
+            raise self.error(where + ("type",), f"unknown motion type {kind!r}"
+                                                f"{_suggest(kind, motion_types)} (types: "
+                                                f"{', '.join(motion_types)}, Sum)")
+        arguments = {key: v for key, v in value.items() if key != "type"}
+        self._check_arguments(motion_types[kind], arguments, where, kind)
+        with self._at(where):
+            return motion_types[kind](**arguments)
+
+    def _analysis(self, entry: dict, where: tuple) -> AnalysisSpec:
+        import mbd3d  # noqa: PLC0415
+
+        kind = entry.get("kind")
+        if kind not in _ANALYSES:
+            raise self.error(where + ("kind",), f"unknown analysis {kind!r}"
+                                                f"{_suggest(kind, _ANALYSES)} (kinds: "
+                                                f"{', '.join(_ANALYSES)})")
+        if "t" not in entry:
+            raise self.error(where, "an analysis needs its times t: a list, or {start, stop, "
+                                    "step} or {start, stop, points}")
+        t = self._times(entry["t"], where + ("t",))
+        options = {key: value for key, value in entry.items() if key not in ("kind", "t")}
+        function = getattr(mbd3d, _ANALYSES[kind])
+        parameters = inspect.signature(function).parameters
+        allowed = [name for name in list(parameters)[2:]
+                   if name not in ("observers", "progress")]
+        for key in options:
+            if key not in allowed:
+                raise self.error(where + (key,), f"{_ANALYSES[kind]} takes no '{key}'"
+                                                 f"{_suggest(key, allowed)} (it takes: "
+                                                 f"{', '.join(allowed)})")
+        return AnalysisSpec(kind, t, options)
+
+    def _times(self, value, where: tuple) -> np.ndarray:
+        if isinstance(value, dict):
+            unknown = set(value) - {"start", "stop", "step", "points"}
+            if unknown or "stop" not in value or ("step" in value) == ("points" in value):
+                raise self.error(where, "times are {start, stop, step} or {start, stop, "
+                                        f"points}}, got {value!r}")
+            start, stop = float(value.get("start", 0.0)), float(value["stop"])
+            if "points" in value:
+                return np.linspace(start, stop, int(value["points"]))
+            return times_from_step(start, stop, float(value["step"]), self.error, where)
+        try:
+            t = np.asarray(value, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            t = np.zeros(0) * np.nan
+        if t.size == 0 or not np.all(np.isfinite(t)):
+            raise self.error(where, f"times must be finite numbers, got {value!r}")
+        return t
+
+
+def times_from_step(start: float, stop: float, step: float, error=None, where=()) -> np.ndarray:
+    """``start, start + step, ..., stop`` (the last point is ``stop``)."""
+    if not step > 0 or not stop > start:
+        message = f"times from {start} to {stop} by {step}: need stop > start and step > 0"
+        raise error(where, message) if error else ModelError(message)
+    count = int(round((stop - start) / step))
+    if not np.isclose(start + count * step, stop, rtol=1e-9, atol=0.0):
+        count = int(np.floor((stop - start) / step))
+        return np.append(start + step * np.arange(count + 1), stop)
+    return np.linspace(start, stop, count + 1)
+
+
+# -- writing ----------------------------------------------------------------------------------
+def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | dict] = (),
+         overwrite: bool = True) -> str:
+    """Write ``model`` as a model file that rebuilds it (see the module doc).
+
+    Each body is written with the arguments of ``add_body`` that made it, each joint, driver
+    and force element with those of its constructor. A mesh given as a file is referenced
+    (relative to the model file); one given as a trimesh object is written beside the file as
+    ``<stem>.<body>.obj``.
+
+    Raises
+    ------
+    ModelFileError
+        An element made with a Python function (a ``Function`` motion, a force given as a
+        callable), which a file cannot hold; or a path that cannot be written.
+    """
+    import yaml  # noqa: PLC0415
+
+    try:
+        target = pathlib.Path(files.check_output_path(path, overwrite, "the model file"))
+    except files.OutputError as exc:
+        raise ModelFileError(str(exc)) from None
+    folder = target.parent
+    data: dict[str, Any] = {"mbd3d": FORMAT_VERSION, "name": model.name, "dim": model.dim,
+                            "gravity": _plain(model.gravity, "gravity")}
+    bodies = []
+    for body in model.bodies:
+        entry: dict[str, Any] = {"name": body.name}
+        for key, value in body.arguments.items():
+            if key == "shape":
+                entry[key] = _shape_file(value, body.name, target, folder)
+            else:
+                entry[key] = _plain(value, f"body '{body.name}': {key}")
+        bodies.append(entry)
+    data["bodies"] = bodies
+    data["joints"] = [_element_entry(e) for e in model.joints]
+    data["forces"] = [_element_entry(f) for f in model.forces]
+    if not data["forces"]:
+        del data["forces"]
+    if analyses:
+        data["analyses"] = [_analysis_entry(a) for a in analyses]
+    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    return files.atomic_write(target, lambda f: f.write(text), text=True, overwrite=overwrite,
+                              what="the model file")
+
+
+def _element_entry(element) -> dict:
+    where = f"{type(element).__name__} '{element.name}'"
+    entry = {"type": type(element).__name__}
+    for key, value in element.arguments.items():
+        entry[key] = _plain(value, f"{where}: {key}")
+    return entry
+
+
+def _analysis_entry(spec: AnalysisSpec | dict) -> dict:
+    if isinstance(spec, dict):
+        return {key: _plain(value, f"analysis {key}") for key, value in spec.items()}
+    entry = {"kind": spec.kind, "t": _plain(spec.t, "analysis t")}
+    entry.update({key: _plain(value, f"analysis {key}") for key, value in spec.options.items()})
+    return entry
+
+
+def _plain(value: Any, where: str) -> Any:
+    """``value`` as YAML's plain data: bodies and joints by name, motions as mappings."""
+    from mbd3d.model.body import Body  # noqa: PLC0415
+    from mbd3d.model.element import ConstraintElement  # noqa: PLC0415
+    from mbd3d.model.motion import Motion, _Sum  # noqa: PLC0415
+
+    if isinstance(value, (Body, ConstraintElement)):
+        return value.name
+    if isinstance(value, _Sum):
+        terms = []
+        for part in value.parts:
+            plain = _plain(part, where)
+            terms += plain["terms"] if plain.get("type") == "Sum" else [plain]
+        return {"type": "Sum", "terms": terms}
+    if isinstance(value, Motion):
+        if value.terms() is None:
+            raise ModelFileError(f"{where}: a motion given by Python functions cannot be "
+                                 "written to a model file; use Constant, Ramp, Harmonic, "
+                                 "Polynomial, SmoothStep or their sum")
+        return {"type": type(value).__name__,
+                **{k: _plain(v, where) for k, v in value.arguments.items()}}
+    if isinstance(value, np.ndarray):
+        return _plain(value.tolist(), where)
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v, where) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v, where) for k, v in value.items()}
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if callable(value):
+        raise ModelFileError(f"{where}: a Python function cannot be written to a model file; "
+                             "give a number or a motion (Constant, Ramp, Harmonic, Polynomial, "
+                             "SmoothStep)")
+    raise ModelFileError(f"{where}: {type(value).__name__} values cannot be written to a model "
+                         "file")
+
+
+def _shape_file(shape: Any, body: str, target: pathlib.Path, folder: pathlib.Path) -> str:
+    if isinstance(shape, (str, os.PathLike)):
+        source = pathlib.Path(shape).resolve()
+        try:
+            return os.path.relpath(source, folder)
+        except ValueError:  # another drive
+            return str(source)
+    from trimesh.exchange.obj import export_obj  # noqa: PLC0415
+
+    # OBJ with 20 decimals: the vertices read back as written (STL and PLY hold float32)
+    mesh_path = folder / f"{target.stem}.{body}.obj"
+    mesh_path.write_text(export_obj(shape, digits=20, include_normals=False,
+                                    include_texture=False, include_color=False),
+                         encoding="utf-8")
+    return mesh_path.name

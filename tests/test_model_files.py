@@ -1,0 +1,214 @@
+"""Model files: every example mechanism exists as a file in examples/models/ that builds the
+same model as the example's Python (same initial state, same results of its analysis, to the
+last bit); any model saved and loaded again is the same model; and mistakes in a file are
+reported with the file, the line and the field.
+
+Regenerate the example files after changing an example: python tests/test_model_files.py
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d import mechanisms
+from mbd3d.io.model_file import AnalysisSpec, ModelFileError, read
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+MODELS = ROOT / "examples" / "models"
+
+
+def example(name: str):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def steps(start, stop, step):
+    return {"start": start, "stop": stop, "step": step}
+
+
+#: example -> (its model, the analysis its file asks for: what the example runs)
+EXAMPLES = {
+    "slider_crank": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 1.0, 0.005)}),
+    "four_bar": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 1.0, 1 / 240)}),
+    "four_bar_modes": (lambda m: m.build(), {"kind": "equilibrium",
+                                             "t": steps(0.0, 1.0, 1 / 36)}),
+    "pendulum_spring_equilibrium": (lambda m: m.pendulum(10.0, motor=True),
+                                    {"kind": "equilibrium", "t": steps(0.0, 1.0, 1 / 6)}),
+    "cart_pendulum_linearized": (lambda m: m.cart_pendulum(),
+                                 {"kind": "forward", "t": steps(0.0, 1.0, 0.01),
+                                  "method": "DOP853", "rtol": 1e-10}),
+    "spatial_slider_crank": (lambda m: m.build(), {"kind": "inverse",
+                                                   "t": steps(0.0, 1.0, 0.005)}),
+    "spatial_four_bar": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 1.0, 0.005)}),
+    "spinning_top": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 1.0, 0.005),
+                                           "method": "DOP853", "rtol": 1e-11, "atol": 1e-12}),
+    "mesh_bodies": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 2.0, 0.01),
+                                          "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}),
+    "andrews_squeezer": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.03, 1e-4),
+                                               "method": "DOP853", "rtol": 1e-11,
+                                               "atol": 1e-14, "constraint_tol": 1e-12}),
+    "haug_slider_crank": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 10.0, 0.4),
+                                                "method": "DOP853", "rtol": 1e-11,
+                                                "atol": 1e-13}),
+    "iftomm_pendulum": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 10.0, 0.01),
+                                              "method": "DOP853", "rtol": 1e-12,
+                                              "atol": 1e-12}),
+    "iftomm_four_bar": (lambda m: m.build(40), {"kind": "forward", "t": steps(0.0, 20.0, 0.05),
+                                                "method": "generalized-alpha", "step": 1e-3}),
+    "flyball_governor": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 5.0, 0.01),
+                                               "method": "generalized-alpha", "step": 1e-3}),
+    "bricard": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 10.0, 0.01),
+                                      "method": "generalized-alpha", "step": 1e-3}),
+    "sweep_slider_crank": (lambda m: m.build(20.0, 0.3), {"kind": "inverse",
+                                                           "t": steps(0.0, 1.0, 0.01)}),
+}
+
+
+def write_model_files() -> None:
+    """The example files, from the examples' own Python."""
+    MODELS.mkdir(exist_ok=True)
+    for name, (make, analysis) in EXAMPLES.items():
+        model = make(example(name))
+        path = model.save(MODELS / f"{name}.yaml", analyses=[analysis])
+        print("wrote", path)
+
+
+def short(spec: AnalysisSpec) -> AnalysisSpec:
+    """The file's analysis over its first few output times (a test's budget)."""
+    count = 3 if spec.options.get("method") == "generalized-alpha" else 4
+    return AnalysisSpec(spec.kind, spec.t[:count], spec.options)
+
+
+def test_every_example_has_a_model_file():
+    examples = {p.stem for p in (ROOT / "examples").glob("*.py")}
+    assert examples == set(EXAMPLES), examples ^ set(EXAMPLES)
+
+
+@pytest.mark.parametrize("name", sorted(EXAMPLES))
+def test_example_model_file_is_the_example_model(name):
+    make, analysis = EXAMPLES[name]
+    python_model = make(example(name))
+    loaded = read(MODELS / f"{name}.yaml")
+    model = loaded.model
+    assert [b.name for b in model.bodies] == [b.name for b in python_model.bodies]
+    assert [e.name for e in model.joints] == [e.name for e in python_model.joints]
+    assert model.row_labels == python_model.row_labels
+    meshes = name == "mesh_bodies"  # masses from meshes read back from OBJ text
+    tight = {"rtol": 1e-13, "atol": 1e-15} if meshes else {"rtol": 0.0, "atol": 0.0}
+    np.testing.assert_allclose(model.q0, python_model.q0, **tight)
+    np.testing.assert_allclose(model.qd0, python_model.qd0, **tight)
+    np.testing.assert_allclose(model.mass, python_model.mass, **tight)
+    assert len(loaded.analyses) == 1 and loaded.analyses[0].kind == analysis["kind"]
+    spec = short(loaded.analyses[0])
+    ours, theirs = spec.run(model, progress=False), spec.run(python_model, progress=False)
+    if meshes:
+        np.testing.assert_allclose(ours.q, theirs.q, rtol=1e-10, atol=1e-12)
+    else:
+        np.testing.assert_array_equal(ours.q, theirs.q)
+        np.testing.assert_array_equal(ours.qd, theirs.qd)
+        if ours.lam is not None:
+            np.testing.assert_array_equal(ours.lam, theirs.lam)
+
+
+def test_a_saved_model_loads_as_the_same_model(tmp_path):
+    """Motions summed, spatial bodies with orientations and rates, meshes written beside."""
+    model = mechanisms.spatial_four_bar(crank_speed=2 * math.pi)
+    path = model.save(tmp_path / "rsur.yaml")
+    again = mb.load(path)
+    np.testing.assert_array_equal(again.q0, model.q0)
+    np.testing.assert_array_equal(again.charts0, model.charts0)
+    from mbd3d.joints import Revolute, RotationDriver
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="summed motion")
+    bar = b.add_body("bar", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    pin = b.add(Revolute("O", b.ground, bar, at=(0.0, 0.0)))
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(0.0, 2.0) + mb.Harmonic(0.1, 3.0)
+                         + mb.SmoothStep(0.0, 1.0, 0.0, 0.5)))
+    summed = b.build()
+    again = mb.load(summed.save(tmp_path / "summed.yaml"))
+    t = np.linspace(0.0, 1.0, 11)
+    np.testing.assert_array_equal(mb.inverse_dynamics(again, t).lam,
+                                  mb.inverse_dynamics(summed, t).lam)
+    text = (tmp_path / "summed.yaml").read_text()
+    assert "type: Sum" in text and "Harmonic" in text
+
+
+def test_functions_cannot_be_saved(tmp_path):
+    from mbd3d.joints import Revolute
+    b = mb.ModelBuilder(dim=2)
+    bar = b.add_body("bar", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    b.add(Revolute("O", b.ground, bar, at=(0.0, 0.0)))
+    b.add(mb.Torque("push", bar, lambda t: math.sin(t)))
+    with pytest.raises(ModelFileError, match="Torque 'push': torque: a Python function"):
+        b.build().save(tmp_path / "f.yaml")
+    assert not (tmp_path / "f.yaml").exists()
+
+
+GOOD = """\
+mbd3d: 1
+name: pendulum
+dim: 2
+gravity: [0.0, -9.81]
+bodies:
+  - {name: bar, mass: 1.0, inertia: 0.1, position: [0.5, 0.0]}
+joints:
+  - {type: Revolute, name: O, body_i: ground, body_j: bar, at: [0.0, 0.0]}
+  - type: RotationDriver
+    name: motor
+    joint: O
+    motion: {type: Ramp, initial: 0.0, rate: 6.0}
+analyses:
+  - {kind: inverse, t: {start: 0.0, stop: 1.0, points: 11}}
+"""
+
+
+@pytest.mark.parametrize("change, message", [
+    (("bodies:", "bodys:"), r"m.yaml:5: bodys: unknown field \(did you mean 'bodies'\?"),
+    (("body_j: bar", "body_j: bra"), r"m.yaml:8: joints\[0\].body_j: no body or joint 'bra'.*"
+                                     r"did you mean 'bar'"),
+    (("type: Revolute", "type: Revolut"), r"m.yaml:8: joints\[0\].type: unknown joint or "
+                                          r"driver type 'Revolut' \(did you mean 'Revolute'"),
+    (("at: [0.0, 0.0]}", "at: [0.0, 0.0, 1.0]}"),
+     r"m.yaml:8: joints\[0\].at: joint .O.: at must"),
+    (("type: Ramp", "type: Rmp"), r"m.yaml:12: joints\[1\].motion.type: unknown motion type "
+                                  r"'Rmp' \(did you mean 'Ramp'"),
+    (("rate: 6.0", "rat: 6.0"), r"m.yaml:12: joints\[1\].motion.rat: Ramp takes no 'rat' "
+                                r"\(did you mean 'rate'"),
+    (("mass: 1.0, ", ""), r"m.yaml:6: bodies\[0\]: body 'bar': give its mass"),
+    (("kind: inverse", "kind: invers"), r"m.yaml:14: analyses\[0\].kind: unknown analysis"),
+    (("name: motor\n", "name: motor\n    method: RK45\n"), r"m.yaml:11: joints\[1\].method: "
+                                                          r"RotationDriver takes no 'method'"),
+    (("[0.5, 0.0]}", "[0.5, 0.0}"), r"m.yaml:6: not valid YAML"),
+])
+def test_mistakes_are_reported_with_file_line_and_field(tmp_path, change, message):
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD.replace(*change))
+    with pytest.raises(ModelFileError, match=message):
+        mb.load(path)
+
+
+def test_a_good_file_runs_its_analysis_and_takes_changes(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD)
+    loaded = read(path)
+    res = loaded.analyses[0].run(loaded.model)
+    np.testing.assert_allclose(res.body("bar").angle, 6.0 * res.t, atol=1e-12)
+    # a field changed by path, as a sweep does: the motor's rate
+    faster = read(path, {"joints.motor.motion.rate": 3.0})
+    res = faster.analyses[0].run(faster.model)
+    np.testing.assert_allclose(res.body("bar").angle, 3.0 * res.t, atol=1e-12)
+    with pytest.raises(ModelFileError, match="no entry 'motr'"):
+        read(path, {"joints.motr.motion.rate": 3.0})
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT / "tests"))
+    write_model_files()
