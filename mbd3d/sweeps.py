@@ -209,7 +209,9 @@ def _plain_value(value: Any) -> str:
 def _identity(function: Callable) -> str:
     """What makes a function the same function across sessions: where it is defined, its
     compiled code and the values it captures (so an edited factory or metric counts as a
-    new one)."""
+    new one); a callable object's own ``sweep_identity()`` where it has one."""
+    if hasattr(function, "sweep_identity"):  # a callable object that says what it is
+        return str(function.sweep_identity())
     digest = hashlib.sha1()
     code = getattr(function, "__code__", None)
     if code is not None:

@@ -1,0 +1,334 @@
+"""The ``mbd3d`` command: check, run, view and sweep model files.
+
+::
+
+    mbd3d check MODEL.yaml                     # mobility, assembly, the analyses it asks for
+    mbd3d run MODEL.yaml [--analysis forward] [--t 0:2:0.01] [--method DOP853]
+                         [--rrd out.rrd] [--csv FOLDER] [--show] [--set bodies.crank.mass=2]
+    mbd3d view FILE.rrd                        # the Rerun viewer of the right version
+    mbd3d sweep MODEL.yaml --grid joints.motor.motion.rate=5,10,20 [--folder sweep]
+                           [--scheduler tcp://host:8786]
+
+Exit status: 0 done, 1 the analysis failed or the model has a problem, 2 a bad command line or
+model file. Messages go to stderr; results and reports to stdout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import pathlib
+import sys
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["main"]
+
+_KINDS = ("kinematic", "inverse", "forward", "equilibrium")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    from mbd3d.errors import MBDError  # noqa: PLC0415
+
+    try:
+        return args.command(args)
+    except MBDError as exc:
+        print(f"mbd3d {args.name}: error: {exc}", file=sys.stderr)
+        return 2 if _is_input_error(exc) else 1
+    except KeyboardInterrupt:
+        print(f"mbd3d {args.name}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _is_input_error(exc) -> bool:
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io.files import OutputError  # noqa: PLC0415
+    return isinstance(exc, (ModelError, OutputError))
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mbd3d", description="Kinematic and dynamic analysis of mechanisms described in "
+                                  "model files (YAML; see mbd3d.io.model_file).")
+    commands = parser.add_subparsers(required=True, metavar="COMMAND")
+
+    check = commands.add_parser("check", help="report the model's mobility and problems "
+                                              "without analysing it")
+    check.add_argument("model", help="the model file (.yaml)")
+    check.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                       help="change a value first, e.g. bodies.crank.mass=2 (repeatable)")
+    check.set_defaults(command=_check, name="check")
+
+    run = commands.add_parser("run", help="run an analysis and write its results")
+    run.add_argument("model", help="the model file (.yaml)")
+    run.add_argument("--analysis", choices=_KINDS,
+                     help="default: the file's first analysis, else inverse for a fully "
+                          "driven mechanism and forward otherwise")
+    run.add_argument("--t", metavar="START:STOP:STEP",
+                     help="output times [s] (default: the file's analysis)")
+    run.add_argument("--method", help="forward dynamics: RK45, DOP853, RK23 or "
+                                      "generalized-alpha")
+    run.add_argument("--step", type=float, help="generalized-alpha's step [s]")
+    run.add_argument("--rtol", type=float, help="relative tolerance of RK45, DOP853, RK23")
+    run.add_argument("--rrd", metavar="FILE", help="write the Rerun recording there")
+    run.add_argument("--csv", metavar="FOLDER", help="write the results as CSV there")
+    run.add_argument("--show", action="store_true", help="open the recording in the viewer")
+    run.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                     help="change a value first, e.g. bodies.crank.mass=2 (repeatable)")
+    run.add_argument("--rows", type=int, default=11, help="rows of the summary table")
+    run.set_defaults(command=_run, name="run")
+
+    view = commands.add_parser("view", help="open a recording in the Rerun viewer")
+    view.add_argument("recording", help="the .rrd file")
+    view.set_defaults(command=_view, name="view")
+
+    sweep = commands.add_parser("sweep", help="run the model's analysis over a grid of "
+                                              "values of its fields, on Dask")
+    sweep.add_argument("model", help="the model file (.yaml)")
+    sweep.add_argument("--grid", action="append", required=True, metavar="FIELD=V1,V2,...",
+                       help="a field and its values, e.g. joints.motor.motion.rate=5,10,20 "
+                            "(repeatable: the grid of all combinations)")
+    sweep.add_argument("--analysis", choices=_KINDS[:3], help="default: as for run")
+    sweep.add_argument("--t", metavar="START:STOP:STEP", help="output times [s]")
+    sweep.add_argument("--folder", default=None,
+                       help="where runs and table.csv are kept (default: MODEL_sweep); "
+                            "a sweep run again there resumes")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a Dask scheduler, e.g. tcp://host:8786 (default: worker "
+                            "processes on this machine)")
+    sweep.add_argument("--serial", action="store_true", help="run in this process")
+    sweep.set_defaults(command=_sweep, name="sweep")
+    return parser
+
+
+# -- helpers -----------------------------------------------------------------------------------
+def _changes(settings: Sequence[str]) -> dict:
+    import yaml  # noqa: PLC0415
+
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    changes = {}
+    for setting in settings:
+        key, sep, text = setting.partition("=")
+        if not sep or not key:
+            raise ModelError(f"--set {setting!r}: give FIELD=VALUE, e.g. bodies.crank.mass=2")
+        changes[key] = yaml.safe_load(text)  # a number, a list [1, 2], a word
+    return changes
+
+
+def _times(text: str):
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io.model_file import times_from_step  # noqa: PLC0415
+    try:
+        start, stop, step = (float(part) for part in text.split(":"))
+    except ValueError:
+        raise ModelError(f"--t {text!r}: give START:STOP:STEP in seconds, e.g. 0:2:0.01"
+                         ) from None
+    return times_from_step(start, stop, step)
+
+
+def _chosen_analysis(args, loaded):
+    """The analysis to run: the command line's choices over the file's."""
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io.model_file import AnalysisSpec  # noqa: PLC0415
+    import mbd3d as mb  # noqa: PLC0415
+
+    spec = loaded.analyses[0] if loaded.analyses else None
+    kind = args.analysis or (spec.kind if spec else None)
+    if kind is None:
+        kind = "inverse" if mb.mobility(loaded.model).dof == 0 else "forward"
+    options = dict(spec.options) if spec is not None and spec.kind == kind else {}
+    if args.t is not None:
+        t = _times(args.t)
+    elif spec is not None:
+        t = spec.t
+    else:
+        raise ModelError(f"{loaded.path} asks for no analysis: give the times with --t "
+                         "START:STOP:STEP")
+    for option in ("method", "step", "rtol"):
+        value = getattr(args, option, None)
+        if value is not None:
+            if kind != "forward":
+                raise ModelError(f"--{option} is for forward dynamics, not {kind}")
+            options[option] = value
+    return AnalysisSpec(kind, t, options)
+
+
+# -- the commands ------------------------------------------------------------------------------
+def _check(args) -> int:
+    from mbd3d.io.model_file import read  # noqa: PLC0415
+    import mbd3d as mb  # noqa: PLC0415
+
+    loaded = read(args.model, _changes(args.set))
+    model = loaded.model
+    report = mb.mobility(model)
+    print(f"{args.model}: {model!r}\n")
+    print(report)
+    problems = 0
+    try:
+        mb.solve_position(model, model.q0, 0.0)
+        print("\nassembles at t = 0 from the drawing")
+    except mb.MBDError as exc:
+        problems += 1
+        print(f"\nproblem: does not assemble at t = 0: {exc}")
+    for spec in loaded.analyses:
+        span = f"{spec.t[0]:g} to {spec.t[-1]:g} s, {len(spec.t)} points"
+        needs_drivers = spec.kind in ("kinematic", "inverse") and report.dof > 0
+        note = (f"  problem: needs {report.dof} more driver(s)" if needs_drivers else "")
+        problems += needs_drivers
+        options = ", ".join(f"{k}={v}" for k, v in spec.options.items())
+        print(f"analysis: {spec.kind} over {span}{'; ' + options if options else ''}{note}")
+    return 1 if problems else 0
+
+
+def _run(args) -> int:
+    from mbd3d.io.model_file import read  # noqa: PLC0415
+    from mbd3d.io.results import format_table  # noqa: PLC0415
+    import mbd3d as mb  # noqa: PLC0415
+
+    if args.rrd is not None:
+        from mbd3d.viewer import check_destination  # noqa: PLC0415
+        check_destination(args.rrd, show=args.show)  # before the computing, not after
+    if args.csv is not None:
+        from mbd3d.io.files import check_output_folder  # noqa: PLC0415
+        check_output_folder(args.csv, "the CSV files")
+    loaded = read(args.model, _changes(args.set))
+    spec = _chosen_analysis(args, loaded)
+    model = loaded.model
+    failure = None
+    try:
+        res = spec.run(model)
+    except mb.MBDError as exc:  # what was computed before the failure is still written
+        if getattr(exc, "results", None) is None:
+            raise
+        res, failure = exc.results, exc
+    stats = ", ".join(f"{key} {value:.3g}" if isinstance(value, float) else f"{key} {value}"
+                      for key, value in res.stats.items()
+                      if isinstance(value, (int, float)) and not isinstance(value, bool))
+    print(f"{model.name}: {res.analysis}, {len(res)} time points, {res.status}"
+          f"{' (' + res.message + ')' if res.message else ''}\n{stats}\n")
+    columns = {"t [s]": res.t}
+    for body in model.bodies[:4]:
+        history = res.body(body.name)
+        for axis, label in enumerate("xyz"[:model.dim]):
+            columns[f"{body.name}.{label} [m]"] = history.position[:, axis]
+    if len(res):
+        print(format_table(columns, rows=args.rows))
+    stem = pathlib.Path(args.model).stem
+    if args.csv is not None:
+        path = res.to_csv(os.path.join(args.csv, f"{stem}_{spec.kind}.csv"))
+        print(f"\nCSV written to {path}")
+    if args.rrd is not None:
+        from mbd3d.viewer import record  # noqa: PLC0415
+        record(res, args.rrd, overwrite=True, show=args.show and failure is None)
+    if failure is not None:
+        print(f"mbd3d run: error: {failure}", file=sys.stderr)
+    return 0 if res.status == "complete" else 1
+
+
+def _view(args) -> int:
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.viewer import show  # noqa: PLC0415
+
+    if not os.path.isfile(args.recording):
+        raise ModelError(f"no recording '{args.recording}'")
+    show(args.recording)
+    return 0
+
+
+def _sweep(args) -> int:
+    import yaml  # noqa: PLC0415
+
+    from mbd3d import sweeps  # noqa: PLC0415
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io.model_file import read  # noqa: PLC0415
+
+    path = str(pathlib.Path(args.model).resolve())
+    axes = {}
+    for item in args.grid:
+        key, sep, text = item.partition("=")
+        values = yaml.safe_load(f"[{text}]") if sep else None
+        if not key or not values:
+            raise ModelError(f"--grid {item!r}: give FIELD=V1,V2,..., e.g. "
+                             "joints.motor.motion.rate=5,10,20")
+        axes[key] = values
+    points = sweeps.grid(**{_parameter(k): v for k, v in axes.items()})
+    loaded = read(path)  # checks the file, and each field of the grid, before any run
+    for key, values in axes.items():
+        read(path, {key: values[0]})
+    spec = _chosen_analysis(args, loaded)
+    if spec.kind == "equilibrium":
+        raise ModelError("sweep runs kinematic, inverse or forward analyses")
+    kind = {"kinematic": "kinematic", "inverse": "inverse dynamics",
+            "forward": "forward dynamics"}[spec.kind]
+    analysis = sweeps.Analysis(kind, spec.t, spec.options)
+    metrics = _default_metrics(loaded.model)
+    folder = args.folder or str(pathlib.Path(args.model).with_suffix("")) + "_sweep"
+    table = sweeps.sweep(_FileFactory(path, dict(zip(map(_parameter, axes), axes))), points,
+                         analysis, metrics, folder, client=args.scheduler,
+                         backend="serial" if args.serial else "auto")
+    print(table)
+    return 1 if table.failed else 0
+
+
+def _parameter(field: str) -> str:
+    """A sweep parameter's name for a field path (an identifier, as factories take)."""
+    return "p_" + "".join(c if c.isalnum() else "_" for c in field)
+
+
+class _FileFactory:
+    """Builds the model file's model with sweep parameters set (pickled to Dask workers); the
+    file's digest makes an edited file a new sweep."""
+
+    def __init__(self, path: str, fields: dict[str, str]):
+        self.path, self.fields = path, fields
+        self.digest = hashlib.sha1(pathlib.Path(path).read_bytes()).hexdigest()
+
+    def sweep_identity(self) -> str:
+        return f"model file {self.path} {self.digest} {sorted(self.fields.items())}"
+
+    def __call__(self, **params):
+        from mbd3d.io.model_file import read  # noqa: PLC0415
+        return read(self.path, {self.fields[k]: v for k, v in params.items()}).model
+
+
+def _default_metrics(model) -> dict:
+    """Peak |effort| of every driver and the final position of every body (up to 12)."""
+    metrics = {}
+    for element in model.joints:
+        if element.is_driver:
+            metrics[f"peak |{element.name} effort|"] = _PeakEffort(element.name)
+    for body in model.bodies[:12]:
+        for axis, label in enumerate("xyz"[:model.dim]):
+            metrics[f"final {body.name}.{label}"] = _FinalPosition(body.name, axis)
+    return metrics
+
+
+class _PeakEffort:
+    def __init__(self, driver: str):
+        self.driver = driver
+
+    def sweep_identity(self) -> str:
+        return f"peak effort of {self.driver}"
+
+    def __call__(self, results) -> float:
+        return float(np.max(np.abs(results.driver(self.driver).effort)))
+
+
+class _FinalPosition:
+    def __init__(self, body: str, axis: int):
+        self.body, self.axis = body, axis
+
+    def sweep_identity(self) -> str:
+        return f"final position of {self.body} along {self.axis}"
+
+    def __call__(self, results) -> float:
+        return float(results.body(self.body).position[-1, self.axis])
+
+
+if __name__ == "__main__":
+    sys.exit(main())

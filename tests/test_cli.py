@@ -1,0 +1,159 @@
+"""The mbd3d command line, end to end in subprocesses: exit statuses, files written, messages
+on stderr that name the file, line and field of a mistake."""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mbd3d.viewer import read_component
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+MODELS = ROOT / "examples" / "models"
+
+
+def mbd3d(*args: str, cwd=None) -> subprocess.CompletedProcess:
+    env = {**os.environ, "MBD3D_PROGRESS": "0"}
+    return subprocess.run([sys.executable, "-m", "mbd3d.cli", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, env=env, timeout=600)
+
+
+def test_the_console_script_is_installed_beside_python():
+    script = shutil.which("mbd3d", path=os.path.dirname(sys.executable))
+    assert script is not None, "pip install should have put the mbd3d command beside python"
+
+
+def test_help_everywhere():
+    for command in ((), ("check",), ("run",), ("view",), ("sweep",)):
+        done = mbd3d(*command, "--help")
+        assert done.returncode == 0 and "usage: mbd3d" in done.stdout
+
+
+def test_check_reports_mobility_and_the_analyses():
+    done = mbd3d("check", MODELS / "four_bar.yaml")
+    assert done.returncode == 0, done.stderr
+    assert "degrees of freedom     0" in done.stdout
+    assert "analysis: inverse over 0 to 1 s, 241 points" in done.stdout
+
+
+def test_check_finds_a_kinematic_analysis_of_a_free_mechanism(tmp_path):
+    motor = GOOD[GOOD.index("  - type: RotationDriver"):GOOD.index("analyses:")]
+    (tmp_path / "free.yaml").write_text(GOOD.replace(motor, ""))
+    done = mbd3d("check", tmp_path / "free.yaml")
+    assert done.returncode == 1 and "problem: needs 1 more driver(s)" in done.stdout
+
+
+def test_run_writes_the_recording_and_the_csv(tmp_path):
+    done = mbd3d("run", MODELS / "slider_crank.yaml", "--t", "0:0.5:0.05", "--rrd",
+                 tmp_path / "sc.rrd", "--csv", tmp_path, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "inverse dynamics, 11 time points, complete" in done.stdout
+    steps, _ = read_component(tmp_path / "sc.rrd", "/world/bodies/slider",
+                              "Transform3D:translation")
+    assert len(steps) == 11
+    table = np.genfromtxt(tmp_path / "slider_crank_inverse.csv", delimiter=",", names=True)
+    np.testing.assert_allclose(table["t_s"], np.linspace(0.0, 0.5, 11))
+
+
+def test_run_with_a_changed_value_and_another_analysis(tmp_path):
+    done = mbd3d("run", MODELS / "four_bar_modes.yaml", "--analysis", "forward", "--t",
+                 "0:0.1:0.05", "--method", "DOP853", "--set", "bodies.crank.mass=0.4")
+    assert done.returncode == 0, done.stderr
+    assert "forward dynamics, 3 time points, complete" in done.stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (("run", "{bad}"), r"bad.yaml:8: joints\[0\].body_j: no body or joint 'bra'"),
+    (("run", "{good}", "--t", "0:1"), "give START:STOP:STEP"),
+    (("run", "{good}", "--set", "bodies.bar.mass=-2"), r"good.yaml:6: bodies\[0\]: body 'bar'"
+                                                       ": mass"),
+    (("run", "{good}", "--analysis", "inverse", "--method", "RK45"), "--method is for forward"),
+    (("check", "{missing}"), "cannot be read"),
+    (("view", "{missing}"), "no recording"),
+])
+def test_mistakes_exit_2_with_the_reason_on_stderr(tmp_path, args, message):
+    good = (tmp_path / "good.yaml")
+    good.write_text(GOOD)
+    (tmp_path / "bad.yaml").write_text(GOOD.replace("body_j: bar", "body_j: bra"))
+    paths = {"bad": tmp_path / "bad.yaml", "good": good, "missing": tmp_path / "missing.yaml"}
+    done = mbd3d(*(a.format(**paths) for a in args))
+    assert done.returncode == 2, (done.stdout, done.stderr)
+    assert done.stdout == ""
+    import re
+    assert re.search(message, done.stderr), done.stderr
+
+
+def test_an_unknown_command_is_a_usage_error():
+    done = mbd3d("simulate", "x.yaml")
+    assert done.returncode == 2 and "invalid choice" in done.stderr
+
+
+def test_a_file_without_analyses_needs_times(tmp_path):
+    text = GOOD[:GOOD.index("analyses:")]
+    (tmp_path / "m.yaml").write_text(text)
+    done = mbd3d("run", tmp_path / "m.yaml")
+    assert done.returncode == 2 and "asks for no analysis" in done.stderr
+
+
+def test_a_failing_analysis_exits_1_and_writes_what_it_computed(tmp_path):
+    """A slider driven out to its dead centre at t = 1 s: past it the analysis stops with the
+    joints named; the points before are in the CSV."""
+    from mbd3d.joints import Prismatic, Revolute, TranslationDriver
+    import math
+    import mbd3d as mb
+    r, l = 0.12, 0.26
+    b = mb.ModelBuilder(dim=2, name="dead centre")
+    x0 = r * math.cos(1.0) + math.sqrt(l * l - (r * math.sin(1.0)) ** 2)
+    a = r * np.array([math.cos(1.0), math.sin(1.0)])
+    crank = b.add_body("crank", mass=1, inertia=0.001, position=a / 2, angle=1.0)
+    rod = b.add_body("rod", mass=2, inertia=0.01, position=(a + (x0, 0)) / 2,
+                     angle=math.asin(-a[1] / l))
+    slider = b.add_body("slider", mass=4, inertia=0.02, position=(x0, 0.0))
+    b.add(Revolute("O", b.ground, crank, at=(0, 0)))
+    b.add(Revolute("A", crank, rod, at=a))
+    b.add(Revolute("B", rod, slider, at=(x0, 0)))
+    rail = b.add(Prismatic("rail", b.ground, slider, axis=(1, 0)))
+    b.add(TranslationDriver("piston", rail, motion=mb.Ramp(0.0, r + l - x0)))
+    path = b.build().save(tmp_path / "dead.yaml")
+    done = mbd3d("run", path, "--analysis", "kinematic", "--t", "0:1.2:0.3", "--csv", tmp_path)
+    assert done.returncode == 1
+    assert "lock-up or toggle" in done.stderr and "t = 1.2 s" in done.stderr
+    table = np.genfromtxt(tmp_path / "dead_kinematic.csv", delimiter=",", names=True)
+    assert len(table) == 4
+
+
+def test_sweep_runs_the_grid_and_keeps_the_table(tmp_path):
+    done = mbd3d("sweep", MODELS / "slider_crank.yaml", "--grid",
+                 "joints.motor.motion.rate=3,6", "--t", "0:0.5:0.05", "--serial", "--folder",
+                 tmp_path / "sweep")
+    assert done.returncode == 0, done.stderr
+    assert "SweepTable(2 runs, 0 failed)" in done.stdout
+    table = (tmp_path / "sweep" / "table.csv").read_text()
+    assert "p_joints_motor_motion_rate" in table and "peak |motor effort|" in table
+    done = mbd3d("sweep", MODELS / "slider_crank.yaml", "--grid", "joints.motr.rate=1",
+                 "--serial", "--folder", tmp_path / "bad")
+    assert done.returncode == 2 and "no entry 'motr'" in done.stderr
+
+
+GOOD = """\
+mbd3d: 1
+name: pendulum
+dim: 2
+gravity: [0.0, -9.81]
+bodies:
+  - {name: bar, mass: 1.0, inertia: 0.1, position: [0.5, 0.0]}
+joints:
+  - {type: Revolute, name: O, body_i: ground, body_j: bar, at: [0.0, 0.0]}
+  - type: RotationDriver
+    name: motor
+    joint: O
+    motion: {type: Ramp, initial: 0.0, rate: 6.0}
+analyses:
+  - {kind: inverse, t: {start: 0.0, stop: 1.0, points: 11}}
+"""
