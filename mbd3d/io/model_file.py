@@ -12,6 +12,8 @@ The format, version 1 (every field in SI units)::
     name: slider-crank             # optional
     dim: 2                         # 2 (planar) or 3 (spatial)
     gravity: [0.0, -9.81]          # optional, [m/s^2]
+    urdf: {file: arm.urdf}         # optional, dim 3: a robot to start from (see mbd3d.io.urdf;
+                                   # also fixed_base, joint_positions, drive)
     bodies:                        # the arguments of ModelBuilder.add_body, by name
       - {name: crank, mass: 1.0, inertia: 0.01, position: [0.05, 0.0], angle: 0.0}
       - {name: arm, shape: arm.stl, density: 7850.0, position: [0, 0, 0]}   # a mesh file
@@ -57,7 +59,9 @@ from mbd3d.io import files
 __all__ = ["AnalysisSpec", "ModelFile", "load", "read", "save", "FORMAT_VERSION"]
 
 FORMAT_VERSION = 1
-_TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "bodies", "joints", "forces", "analyses")
+_TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "urdf", "bodies", "joints", "forces",
+              "analyses")
+_URDF_FIELDS = ("file", "fixed_base", "joint_positions", "drive")
 _BODY_FIELDS = ("name", "mass", "inertia", "position", "angle", "orientation", "velocity",
                 "angular_velocity", "shape", "density")
 #: constructor arguments that name a body or a joint
@@ -247,6 +251,8 @@ class _Reader:
             raise self.error(("gravity",), str(exc)) from None
         named: dict[str, Any] = {"ground": builder.ground}
         self.places: dict[str, tuple[tuple, dict]] = {}  # name -> (field path, entry)
+        if "urdf" in data:
+            self._urdf(data["urdf"], builder, named)
         for index, entry in enumerate(self._list(data, "bodies")):
             where = ("bodies", index)
             entry = self._mapping(entry, where)
@@ -283,6 +289,33 @@ class _Reader:
                                    ("analyses", index))
                     for index, entry in enumerate(self._list(data, "analyses"))]
         return ModelFile(model, analyses, data, self.path)
+
+    def _urdf(self, entry, builder, named: dict) -> None:
+        """The robot of a URDF file, the start of the model (bodies and joints by name)."""
+        from mbd3d.io.urdf import urdf_builder  # noqa: PLC0415
+
+        where = ("urdf",)
+        entry = self._mapping(entry, where)
+        for key in entry:
+            if key not in _URDF_FIELDS:
+                raise self.error(where + (key,), f"unknown urdf field"
+                                                 f"{_suggest(key, _URDF_FIELDS)} (fields: "
+                                                 f"{', '.join(_URDF_FIELDS)})")
+        if "file" not in entry:
+            raise self.error(where, "urdf needs its file (relative to this file)")
+        if builder.dim != 3:
+            raise self.error(("dim",), "a URDF robot is spatial: dim: 3")
+        _, _, motion_types = _types()
+        drive = {joint: (self._motion(value, where + ("drive", joint), motion_types)
+                         if isinstance(value, dict) else value)
+                 for joint, value in (entry.get("drive") or {}).items()}
+        with self._at(where):
+            urdf_builder(self.folder / str(entry["file"]),
+                         fixed_base=entry.get("fixed_base", True),
+                         joint_positions=entry.get("joint_positions"), drive=drive,
+                         builder=builder)
+        named.update({body.name: body for body in builder._bodies})
+        named.update({element.name: element for element in builder._elements})
 
     def _blamed(self, message: str) -> tuple:
         """Where in the file an error of the built model points: the first body or element

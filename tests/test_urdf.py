@@ -1,0 +1,146 @@
+"""URDF import: the PUMA 560 (tests/data/puma560.urdf, with the source of its numbers) against
+a recursive Newton-Euler algorithm written here from the Denavit-Hartenberg table (not from the
+URDF, not from mbd3d): gravity-holding torques at several poses and inverse-dynamics torques
+along a joint trajectory. A closed-loop robot, a URDF chain closed by a link in a model file,
+conserves energy. What URDF import does not model is reported."""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import warnings
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d.io.urdf import UrdfWarning, load_urdf, urdf_builder
+
+DATA = pathlib.Path(__file__).resolve().parent / "data"
+PUMA = DATA / "puma560.urdf"
+G = 9.81
+pi = math.pi
+
+#: standard DH rows of the PUMA 560 as in the URDF's comment: d, a, alpha, m, centre (DH frame
+#: i), inertia about the centre (xx, yy, zz)
+DH = [
+    (0.0, 0.0, pi / 2, 1.0, (0.0, 0.0, 0.0), (0.2, 0.35, 0.2)),
+    (0.0, 0.4318, 0.0, 17.4, (-0.3638, 0.006, 0.2275), (0.13, 0.524, 0.539)),
+    (0.15005, 0.0203, -pi / 2, 4.8, (-0.0203, -0.0141, 0.070), (0.066, 0.078, 0.0125)),
+    (0.4318, 0.0, pi / 2, 0.82, (0.0, 0.019, 0.0), (1.8e-3, 1.3e-3, 1.8e-3)),
+    (0.0, 0.0, -pi / 2, 0.34, (0.0, 0.0, 0.0), (0.3e-3, 0.4e-3, 0.3e-3)),
+    (0.0, 0.0, 0.0, 0.09, (0.0, 0.0, 0.032), (0.15e-3, 0.15e-3, 0.04e-3)),
+]
+
+
+def rnea(q, qd, qdd, gravity=G):
+    """Joint torques of the standard-DH arm by recursive Newton-Euler (Luh, Walker and Paul),
+    every vector in the frame of its own link."""
+    z = np.array([0.0, 0.0, 1.0])
+    omega, alpha = np.zeros(3), np.zeros(3)
+    acceleration = np.array([0.0, 0.0, gravity])  # the base accelerates up: gravity
+    rotations, offsets, forces, moments = [], [], [], []
+    for (d, a, twist, m, r, inertia), qi, qdi, qddi in zip(DH, q, qd, qdd):
+        c, s, ca, sa = math.cos(qi), math.sin(qi), math.cos(twist), math.sin(twist)
+        R = np.array([[c, -s * ca, s * sa], [s, c * ca, -c * sa], [0.0, sa, ca]])  # i-1 <- i
+        p = np.array([a, d * sa, d * ca])  # origin i from origin i-1, in frame i
+        alpha = R.T @ (alpha + z * qddi + np.cross(omega, z * qdi))
+        omega = R.T @ (omega + z * qdi)
+        acceleration = (np.cross(alpha, p) + np.cross(omega, np.cross(omega, p))
+                        + R.T @ acceleration)
+        r = np.array(r)
+        centre = np.cross(alpha, r) + np.cross(omega, np.cross(omega, r)) + acceleration
+        J = np.diag(inertia)
+        forces.append(m * centre)
+        moments.append(J @ alpha + np.cross(omega, J @ omega))
+        rotations.append(R)
+        offsets.append(p)
+    tau = np.zeros(6)
+    f, n = np.zeros(3), np.zeros(3)
+    for i in range(5, -1, -1):
+        R_next = rotations[i + 1] if i < 5 else np.eye(3)
+        p, r = offsets[i], np.array(DH[i][4])
+        n = (R_next @ (n + np.cross(R_next.T @ p, f)) if i < 5 else np.zeros(3)) \
+            + np.cross(p + r, forces[i]) + moments[i]
+        f = (R_next @ f if i < 5 else np.zeros(3)) + forces[i]
+        tau[i] = n @ (rotations[i].T @ z)
+    return tau
+
+
+def puma(drive):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UrdfWarning)
+        return load_urdf(PUMA, drive=drive)
+
+
+POSES = {"qz": [0, 0, 0, 0, 0, 0], "qr": [0, pi / 2, -pi / 2, 0, 0, 0],
+         "qn": [0, pi / 4, pi, 0, pi / 4, 0], "odd": [0.3, -0.7, 1.1, 0.4, -0.9, 0.6]}
+
+
+@pytest.mark.parametrize("pose", sorted(POSES))
+def test_puma_gravity_torques_match_newton_euler(pose):
+    q = np.array(POSES[pose], dtype=float)
+    model = puma({f"joint{i + 1}": q[i] for i in range(6)})
+    rest = mb.static_equilibrium(model)
+    efforts = np.array([rest.driver(f"joint{i + 1}_drive").effort[0] for i in range(6)])
+    expected = rnea(q, np.zeros(6), np.zeros(6))
+    np.testing.assert_allclose(efforts, expected, atol=1e-9 * np.abs(expected).max())
+    if pose == "qz":  # the toolbox's documented gravload(qz): 0 37.4837 0.2489 0 0 0
+        np.testing.assert_allclose(efforts, [0, 37.4837, 0.2489, 0, 0, 0], atol=5e-5)
+
+
+def test_puma_inverse_dynamics_along_a_trajectory_matches_newton_euler():
+    amplitude = np.array([0.8, 0.6, -0.7, 1.2, 0.9, -1.5])
+    rate = np.array([1.3, 2.1, 1.7, 3.0, 2.6, 3.4])
+    start = np.array(POSES["odd"])
+    model = puma({f"joint{i + 1}": mb.Harmonic(amplitude[i], rate[i], 0.0, start[i])
+                  for i in range(6)})
+    t = np.linspace(0.0, 2.0, 21)
+    res = mb.inverse_dynamics(model, t)
+    for k, tk in enumerate(t):
+        q = start + amplitude * np.sin(rate * tk)
+        qd = amplitude * rate * np.cos(rate * tk)
+        qdd = -amplitude * rate ** 2 * np.sin(rate * tk)
+        expected = rnea(q, qd, qdd)
+        efforts = [res.driver(f"joint{i + 1}_drive").effort[k] for i in range(6)]
+        np.testing.assert_allclose(efforts, expected, atol=1e-8 * np.abs(expected).max())
+
+
+def test_what_urdf_import_does_not_model_is_reported(tmp_path):
+    with pytest.warns(UrdfWarning, match="joint limits are not enforced: joint1"):
+        urdf_builder(PUMA)
+    text = PUMA.read_text()
+    (tmp_path / "floating.urdf").write_text(text.replace('name="joint4" type="revolute"',
+                                                         'name="joint4" type="floating"'))
+    with pytest.raises(mb.ModelError, match="joint 'joint4' is floating"):
+        load_urdf(tmp_path / "floating.urdf")
+    (tmp_path / "mimic.urdf").write_text(text.replace(
+        '<joint name="joint6" type="revolute">',
+        '<joint name="joint6" type="revolute"><mimic joint="joint5" multiplier="2"/>'))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        urdf_builder(tmp_path / "mimic.urdf")
+    assert any("mimic joints are not coupled (each moves freely): joint6 = 2.0 x joint5"
+               in str(w.message) for w in caught)
+    with pytest.raises(mb.ModelError, match="no joint 'joint9'"):
+        urdf_builder(PUMA, drive={"joint9": 0.0})
+    (tmp_path / "broken.urdf").write_text(text[:500])
+    with pytest.raises(mb.ModelError, match="cannot be read"):
+        urdf_builder(tmp_path / "broken.urdf")
+
+
+def test_a_urdf_chain_closed_in_a_model_file_conserves_energy(tmp_path):
+    """A crank and coupler from a URDF, the loop closed by a Distance link to a ground pivot
+    (a four-bar whose rocker is massless), released under gravity; saved as a model file it
+    rebuilds the same model."""
+    loaded = mb.io.model_file.read(DATA / "closed_loop.yaml")
+    model = loaded.model
+    assert mb.mobility(model).dof == 1
+    res = mb.forward_dynamics(model, np.linspace(0.0, 1.0, 51), method="DOP853", rtol=1e-10,
+                              atol=1e-12)
+    energy = res.kinetic_energy + res.potential_energy
+    swing = np.ptp(res.kinetic_energy)
+    assert swing > 0.1  # it moves
+    assert np.max(np.abs(energy - energy[0])) < 1e-7 * swing
+    again = mb.load(model.save(tmp_path / "closed.yaml"))
+    np.testing.assert_array_equal(again.q0, model.q0)
