@@ -155,7 +155,8 @@ def _chosen_analysis(args, loaded):
             if kind != "forward":
                 raise ModelError(f"--{option} is for forward dynamics, not {kind}")
             options[option] = value
-    return AnalysisSpec(kind, t, options)
+    outputs = dict(spec.outputs) if spec is not None else {}
+    return AnalysisSpec(kind, t, options, outputs)
 
 
 # -- the commands ------------------------------------------------------------------------------
@@ -190,14 +191,17 @@ def _run(args) -> int:
     from mbd3d.io.results import format_table  # noqa: PLC0415
     import mbd3d as mb  # noqa: PLC0415
 
-    if args.rrd is not None:
-        from mbd3d.viewer import check_destination  # noqa: PLC0415
-        check_destination(args.rrd, show=args.show)  # before the computing, not after
-    if args.csv is not None:
-        from mbd3d.io.files import check_output_folder  # noqa: PLC0415
-        check_output_folder(args.csv, "the CSV files")
     loaded = read(args.model, _changes(args.set))
     spec = _chosen_analysis(args, loaded)
+    # the command line's destinations over the file's, checked before the computing
+    rrd = args.rrd if args.rrd is not None else spec.outputs.get("rrd")
+    csv_folder = args.csv if args.csv is not None else spec.outputs.get("csv")
+    if rrd is not None:
+        from mbd3d.viewer import check_destination  # noqa: PLC0415
+        check_destination(rrd, show=args.show)
+    if csv_folder is not None:
+        from mbd3d.io.files import check_output_folder  # noqa: PLC0415
+        check_output_folder(csv_folder, "the CSV files")
     model = loaded.model
     failure = None
     try:
@@ -219,12 +223,12 @@ def _run(args) -> int:
     if len(res):
         print(format_table(columns, rows=args.rows))
     stem = pathlib.Path(args.model).stem
-    if args.csv is not None:
-        path = res.to_csv(os.path.join(args.csv, f"{stem}_{spec.kind}.csv"))
+    if csv_folder is not None:
+        path = res.to_csv(os.path.join(csv_folder, f"{stem}_{spec.kind}.csv"))
         print(f"\nCSV written to {path}")
-    if args.rrd is not None:
+    if rrd is not None:
         from mbd3d.viewer import record  # noqa: PLC0415
-        record(res, args.rrd, overwrite=True, show=args.show and failure is None)
+        record(res, rrd, overwrite=True, show=args.show and failure is None)
     if failure is not None:
         print(f"mbd3d run: error: {failure}", file=sys.stderr)
     return 0 if res.status == "complete" else 1

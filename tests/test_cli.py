@@ -61,6 +61,15 @@ def test_run_writes_the_recording_and_the_csv(tmp_path):
     np.testing.assert_allclose(table["t_s"], np.linspace(0.0, 0.5, 11))
 
 
+def test_run_writes_where_the_file_says(tmp_path):
+    (tmp_path / "m.yaml").write_text(GOOD.replace(
+        "points: 11}}", "points: 11}, rrd: out/run.rrd, csv: out}"))
+    (tmp_path / "out").mkdir()
+    done = mbd3d("run", tmp_path / "m.yaml", cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "out" / "run.rrd").exists() and (tmp_path / "out" / "m_inverse.csv").exists()
+
+
 def test_run_with_a_changed_value_and_another_analysis(tmp_path):
     done = mbd3d("run", MODELS / "four_bar_modes.yaml", "--analysis", "forward", "--t",
                  "0:0.1:0.05", "--method", "DOP853", "--set", "bodies.crank.mass=0.4")

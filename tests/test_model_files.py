@@ -212,3 +212,23 @@ def test_a_good_file_runs_its_analysis_and_takes_changes(tmp_path):
 if __name__ == "__main__":
     sys.path.insert(0, str(ROOT / "tests"))
     write_model_files()
+
+
+def test_primitive_shapes_give_mass_properties_and_round_trip(tmp_path):
+    """A 0.2 x 0.1 x 0.05 m box of 1000 kg/m^3: 1 kg, I_zz = m (x^2 + y^2) / 12."""
+    path = tmp_path / "box.yaml"
+    path.write_text("""\
+dim: 3
+bodies:
+  - {name: brick, shape: {box: [0.2, 0.1, 0.05]}, density: 1000.0, position: [0, 0, 1]}
+""")
+    model = mb.load(path)
+    brick = model.body("brick")
+    assert brick.mass == pytest.approx(1.0, rel=1e-12)
+    assert brick.inertia[2, 2] == pytest.approx((0.2 ** 2 + 0.1 ** 2) / 12, rel=1e-12)
+    again = mb.load(model.save(tmp_path / "again.yaml"))
+    assert "box: [0.2, 0.1, 0.05]" in (tmp_path / "again.yaml").read_text()
+    np.testing.assert_array_equal(again.body("brick").inertia, brick.inertia)
+    path.write_text(path.read_text().replace("box: [0.2, 0.1, 0.05]", "cylinder: [0.1]"))
+    with pytest.raises(ModelFileError, match=r"box.yaml:3: bodies\[0\]: .*cylinder takes 2"):
+        mb.load(path)

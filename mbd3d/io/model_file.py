@@ -17,6 +17,7 @@ The format, version 1 (every field in SI units)::
     bodies:                        # the arguments of ModelBuilder.add_body, by name
       - {name: crank, mass: 1.0, inertia: 0.01, position: [0.05, 0.0], angle: 0.0}
       - {name: arm, shape: arm.stl, density: 7850.0, position: [0, 0, 0]}   # a mesh file
+      - {name: hub, shape: {cylinder: [0.05, 0.02]}, density: 2700.0, position: [0, 0, 0]}
     joints:                        # joints and drivers, in order: a type and its arguments
       - {type: Revolute, name: O, body_i: ground, body_j: crank, at: [0.0, 0.0]}
       - type: RotationDriver
@@ -25,8 +26,9 @@ The format, version 1 (every field in SI units)::
         motion: {type: Ramp, initial: 0.0, rate: 6.283185307179586}
     forces:                        # force elements: a type and its arguments
       - {type: Torque, name: load, body: crank, torque: 2.0}
-    analyses:                      # optional: what `mbd3d run` does
-      - {kind: forward, t: {start: 0.0, stop: 2.0, step: 0.01}, method: DOP853, rtol: 1e-10}
+    analyses:                      # optional: what `mbd3d run` does, and where it writes
+      - {kind: forward, t: {start: 0.0, stop: 2.0, step: 0.01}, method: DOP853, rtol: 1e-10,
+         rrd: run.rrd, csv: results}
 
 Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd3d`
 (``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``); their fields are
@@ -34,8 +36,11 @@ their constructors' keyword arguments, as documented there. A motion is a number
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file.
 Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``), times
-``t`` (a list, or ``{start, stop, step}`` or ``{start, stop, points}``) and the keyword
-arguments of that analysis function. Mesh paths are relative to the file.
+``t`` (a list, or ``{start, stop, step}`` or ``{start, stop, points}``), the keyword
+arguments of that analysis function, and optionally where ``mbd3d run`` writes the recording
+(``rrd``) and the CSV (``csv``, a folder). Paths are relative to the file. A body's shape is a
+mesh file or a primitive (``{box: [x, y, z]}``, ``{cylinder: [radius, height]}``,
+``{sphere: radius}``).
 
 A mistake is reported with the file, the line and the field: ``model.yaml:14:
 joints[3].axis: ...``.
@@ -83,6 +88,9 @@ class AnalysisSpec:
     kind: str
     t: np.ndarray
     options: dict[str, Any] = field(default_factory=dict)
+    #: where ``mbd3d run`` writes the results: ``rrd`` (a recording) and ``csv`` (a folder),
+    #: absolute paths (a file gives them relative to itself)
+    outputs: dict[str, str] = field(default_factory=dict)
 
     def run(self, model, **overrides: Any):
         """Run it on ``model`` (``overrides`` replace options, e.g. ``observers``)."""
@@ -424,7 +432,14 @@ class _Reader:
             raise self.error(where, "an analysis needs its times t: a list, or {start, stop, "
                                     "step} or {start, stop, points}")
         t = self._times(entry["t"], where + ("t",))
-        options = {key: value for key, value in entry.items() if key not in ("kind", "t")}
+        outputs = {}
+        for key in ("rrd", "csv"):
+            if key in entry:
+                if not isinstance(entry[key], str):
+                    raise self.error(where + (key,), "a path (relative to this file)")
+                outputs[key] = str(self.folder / entry[key])
+        options = {key: value for key, value in entry.items()
+                   if key not in ("kind", "t", "rrd", "csv")}
         function = getattr(mbd3d, _ANALYSES[kind])
         parameters = inspect.signature(function).parameters
         allowed = [name for name in list(parameters)[2:]
@@ -434,7 +449,7 @@ class _Reader:
                 raise self.error(where + (key,), f"{_ANALYSES[kind]} takes no '{key}'"
                                                  f"{_suggest(key, allowed)} (it takes: "
                                                  f"{', '.join(allowed)})")
-        return AnalysisSpec(kind, t, options)
+        return AnalysisSpec(kind, t, options, outputs)
 
     def _times(self, value, where: tuple) -> np.ndarray:
         if isinstance(value, dict):
@@ -570,7 +585,9 @@ def _plain(value: Any, where: str) -> Any:
                          "file")
 
 
-def _shape_file(shape: Any, body: str, target: pathlib.Path, folder: pathlib.Path) -> str:
+def _shape_file(shape: Any, body: str, target: pathlib.Path, folder: pathlib.Path) -> Any:
+    if isinstance(shape, dict):  # a primitive: its sizes
+        return _plain(shape, f"body '{body}': shape")
     if isinstance(shape, (str, os.PathLike)):
         source = pathlib.Path(shape).resolve()
         try:

@@ -193,9 +193,10 @@ class ModelBuilder:
         inertia : float or array_like
             Centroidal inertia [kg m^2]: planar, the moment about the normal to the plane;
             spatial, the 3x3 tensor in body axes (or its 3 principal values), positive definite.
-        shape : trimesh.Trimesh or path, optional
-            The body's geometry (a mesh or an STL/OBJ/PLY file), lengths in metres; what the
-            viewer draws. With ``density`` it also gives the mass properties and the body frame
+        shape : trimesh.Trimesh, path or dict, optional
+            The body's geometry (a mesh, an STL/OBJ/PLY file, or a primitive ``{"box": [x, y,
+            z]}``, ``{"cylinder": [radius, height]}`` along z, ``{"sphere": radius}`` centred on
+            the body frame), lengths in metres; what the viewer draws. With ``density`` it also gives the mass properties and the body frame
             is put at the mesh's centre of mass (mesh axes; for a planar body the mesh's x-y
             plane is the plane of motion). Without, the mesh is drawn as given, in the body
             frame.

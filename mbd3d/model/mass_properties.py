@@ -43,12 +43,21 @@ class MassProperties:
     mesh: Any
 
 
+#: primitive shapes by name: their sizes [m], centred on the body frame (cylinder axis z)
+PRIMITIVE_SHAPES = ("box: [x, y, z] edge lengths", "cylinder: [radius, height]",
+                    "sphere: radius")
+
+
 def load_mesh(shape: Any, what: str) -> Any:
-    """A ``trimesh.Trimesh`` from a mesh or from the path of a mesh file (STL, OBJ, PLY, ...)."""
+    """A ``trimesh.Trimesh`` from a mesh, the path of a mesh file (STL, OBJ, PLY, ...) or a
+    primitive shape: ``{"box": [x, y, z]}``, ``{"cylinder": [radius, height]}`` (axis z) or
+    ``{"sphere": radius}`` [m], centred on the body frame."""
     import trimesh
 
     if isinstance(shape, trimesh.Trimesh):
         return shape
+    if isinstance(shape, dict):
+        return _primitive(shape, what)
     if isinstance(shape, (str, os.PathLike)):
         path = os.fspath(shape)
         if not os.path.isfile(path):
@@ -62,6 +71,29 @@ def load_mesh(shape: Any, what: str) -> Any:
         return mesh
     raise ModelError(f"{what}: shape must be a trimesh.Trimesh or the path of a mesh file, "
                      f"got {type(shape).__name__}")
+
+
+def _primitive(shape: dict, what: str) -> Any:
+    import trimesh
+
+    if len(shape) != 1 or next(iter(shape)) not in ("box", "cylinder", "sphere"):
+        raise ModelError(f"{what}: a primitive shape is one of {{{'; '.join(PRIMITIVE_SHAPES)}}}"
+                         f", got {shape!r}")
+    kind, size = next(iter(shape.items()))
+    try:
+        values = np.asarray(size, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        values = np.zeros(0)
+    expected = {"box": 3, "cylinder": 2, "sphere": 1}[kind]
+    if values.size != expected or not np.all(np.isfinite(values)) or np.any(values <= 0):
+        raise ModelError(f"{what}: a {kind} takes {expected} positive size(s) [m] "
+                         f"({next(p for p in PRIMITIVE_SHAPES if p.startswith(kind))}), "
+                         f"got {size!r}")
+    if kind == "box":
+        return trimesh.creation.box(extents=values)
+    if kind == "cylinder":
+        return trimesh.creation.cylinder(radius=values[0], height=values[1], sections=64)
+    return trimesh.creation.icosphere(radius=values[0], subdivisions=3)
 
 
 def mesh_properties(mesh: Any, density: float, name: str = "body") -> MassProperties:
