@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from mbd3d.viewer import read_component
+from test_model_files import GOOD
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 MODELS = ROOT / "examples" / "models"
@@ -148,21 +149,3 @@ def test_sweep_runs_the_grid_and_keeps_the_table(tmp_path):
     done = mbd3d("sweep", MODELS / "slider_crank.yaml", "--grid", "joints.motr.rate=1",
                  "--serial", "--folder", tmp_path / "bad")
     assert done.returncode == 2 and "no entry 'motr'" in done.stderr
-
-
-GOOD = """\
-mbd3d: 1
-name: pendulum
-dim: 2
-gravity: [0.0, -9.81]
-bodies:
-  - {name: bar, mass: 1.0, inertia: 0.1, position: [0.5, 0.0]}
-joints:
-  - {type: Revolute, name: O, body_i: ground, body_j: bar, at: [0.0, 0.0]}
-  - type: RotationDriver
-    name: motor
-    joint: O
-    motion: {type: Ramp, initial: 0.0, rate: 6.0}
-analyses:
-  - {kind: inverse, t: {start: 0.0, stop: 1.0, points: 11}}
-"""

@@ -22,8 +22,7 @@ import numpy as np
 
 from mbd3d.analyses.modes import ModesAlong
 from mbd3d.errors import ModelError
-from mbd3d.viewer.recorder import Recorder, RecordingError
-from mbd3d.viewer.recorder import show as open_in_viewer
+from mbd3d.viewer.recorder import Recorder, write_recording
 from mbd3d.viewer.scene import SIM_TIME, _rerun
 
 __all__ = ["record_modes"]
@@ -68,20 +67,9 @@ def record_modes(modes: ModesAlong, save: str | os.PathLike | None = None, *,
         angle = not model.position_coordinates[index]
         x = np.degrees(results.q[:, index]) if angle else results.q[:, index]
         x_label = f"{against} [{'deg' if angle else 'm'}]"
-    recorder = Recorder(save, **options)
-    recorder.start(model, results.t, "vibration modes")
-    try:
-        recorder.update(results, float(results.t[-1]), len(results))
-        _log_frequencies(recorder.stream, modes, x, x_label)
-    except BaseException:
-        recorder.close()
-        raise
-    recorder.finish(results)
-    if show:
-        if recorder.path is None:
-            raise RecordingError("show=True needs save= (the file to open)")
-        open_in_viewer(recorder.path)
-    return recorder
+    return write_recording(results, save, show=show, analysis="vibration modes",
+                           extra=lambda stream: _log_frequencies(stream, modes, x, x_label),
+                           **options)
 
 
 def _log_frequencies(stream, modes: ModesAlong, x: np.ndarray, x_label: str) -> None:

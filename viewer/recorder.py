@@ -253,8 +253,22 @@ def record(results: Results, save: str | os.PathLike | None = None, *, show: boo
     """
     if not isinstance(results, Results):
         raise ModelError(f"record() takes the Results of an analysis, got {type(results).__name__}")
+    return write_recording(results, save, show=show, **options)
+
+
+def write_recording(results: Results, save: str | os.PathLike | None, *, show: bool = False,
+                    analysis: str | None = None, extra: Any = None, **options: Any) -> Recorder:
+    """:func:`record` with the analysis whose layout the recording takes (default the
+    results') and ``extra(stream)``, called to log more entities before the file closes."""
     recorder = Recorder(save, **options)
-    recorder.start(results.model, results.t, results.analysis)
+    recorder.start(results.model, results.t, analysis or results.analysis)
+    if extra is not None:
+        try:
+            recorder.update(results, float(results.t[-1]), len(results))
+            extra(recorder.stream)
+        except BaseException:
+            recorder.close()
+            raise
     recorder.finish(results)
     if show:
         if recorder.path is None:
