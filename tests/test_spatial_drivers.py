@@ -200,3 +200,21 @@ def test_translation_driver_and_joint_axes_reactions_in_space():
     np.testing.assert_allclose(reaction.moment, 0.0, atol=1e-10)  # centre of mass on the line
     np.testing.assert_allclose(res.joint("rail").reaction(on="block").force, -weight_normal[None]
                                * np.ones((6, 1)), atol=1e-10)
+
+
+@pytest.mark.parametrize("target", [math.pi - 0.1, -math.pi + 0.2, 3.0, 2.5 + 4 * math.pi])
+def test_a_rotation_driver_far_from_the_drawing_reaches_its_angle_not_the_half_turn(target):
+    """The driver's row sin(theta - f) also vanishes half a turn from f; drawn at 0 and
+    driven to beyond a quarter turn, the position must still be f (mod a turn), and the joint
+    angle reads it."""
+    from mbd3d.mechanisms import frame_along
+    axis = np.array([0.0, 0.6, 0.8])
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    arm = b.add_body("arm", mass=1.0, inertia=(0.01, 0.02, 0.02), position=(0.3, 0.0, 0.0),
+                     orientation=frame_along(np.array([1.0, 0.0, 0.0]), axis))
+    pin = b.add(Revolute("pin", b.ground, arm, at=(0.0, 0.0, 0.0), axis=axis))
+    b.add(RotationDriver("motor", pin, motion=mb.Constant(target)))
+    res = mb.kinematic_analysis(b.build(), [0.0])
+    turn = 2 * math.pi
+    assert (res.joint("pin").angle[0] - target + math.pi) % turn - math.pi == pytest.approx(
+        0.0, abs=1e-10)

@@ -174,12 +174,33 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             "there are redundant constraints (see mbd3d.analyses.mobility) or too many held coordinates",
             time=t)
 
+    # A spatial rotation driver's row sin(e), e = theta - f, also vanishes at e = pi. Where
+    # cos(e) < 0 it is replaced by sign(e) (2 - |sin e|), which keeps rising to e = pi: the
+    # row is then monotone in e on (-pi, pi] with its only root at e = 0, and its Jacobian is
+    # the sin row's with the sign of cos(e) (the derivative |cos e|). Newton reaches the
+    # driven branch from any guess, never the half turn.
+    rotating = model.dim == 3 and bool(model.rotation_motions)
+
+    def beyond_quarter_turn(qq) -> np.ndarray:
+        rows, cosine = constraints.rotation_cosines(
+            model, t, constraints.frames(model, qq, charts=charts))
+        return rows[cosine < 0]
+
     def full_residual(qq):
         C = constraints.residual(model, t, qq, constraints.frames(model, qq, charts=charts))
+        if rotating:
+            far = beyond_quarter_turn(qq)
+            C[far] = np.sign(C[far]) * (2.0 - np.abs(C[far]))
         return np.concatenate([C, qq[held] - q_held]) if len(held) else C
 
     def full_jacobian(qq):
         Cq = constraints.jacobian(model, t, qq, constraints.frames(model, qq, charts=charts))
+        if rotating:
+            far = beyond_quarter_turn(qq)
+            if len(far):
+                sign = np.ones(Cq.shape[0])
+                sign[far] = -1.0
+                Cq = sp.diags(sign) @ Cq if sp.issparse(Cq) else sign[:, None] * Cq
         if not len(held):
             return Cq
         H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))

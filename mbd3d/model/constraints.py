@@ -76,6 +76,21 @@ def motion_phases(model, t: float) -> np.ndarray:
 _NO_MOTIONS = np.zeros((0, 3))
 
 
+def rotation_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of the spatial rotation drivers and ``cos(theta - f)`` on each: their rows are
+    ``sin(theta - f)``, which vanishes half a turn away too, where the cosine is -1 (see
+    :class:`mbd3d.model.primitives.Rotation`)."""
+    for g in model.groups:
+        if g.cls.kind != "rotation":
+            continue
+        phi = motion_phases(model, t)[:, 0]
+        f_i, g_i, f_j = g.params["f_i"], g.params["g_i"], g.params["f_j"]
+        w = np.cos(phi)[:, None] * f_i + np.sin(phi)[:, None] * g_i
+        cosine = np.einsum("kab,kb,kac,kc->k", fr.A[g.bj], f_j, fr.A[g.bi], w)
+        return g.offset + np.arange(g.count), cosine
+    return np.zeros(0, dtype=int), np.zeros(0)
+
+
 def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,
              gamma: bool = False, rate: bool = False
              ) -> tuple[np.ndarray | None, np.ndarray | None, np.ndarray | None]:
