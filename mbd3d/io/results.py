@@ -47,6 +47,8 @@ class BodyHistory:
         [rad/s], [rad/s^2]: (k,) about the normal for planar bodies, (k, 3) global for spatial.
     angle : ndarray (k,) or None
         Planar bodies: body angle [rad], unwrapped (it keeps counting turns).
+
+    ``angular_velocity_body`` and ``angular_acceleration_body`` give them in the body's axes.
     """
 
     name: str
@@ -57,6 +59,22 @@ class BodyHistory:
     angular_velocity: np.ndarray
     angular_acceleration: np.ndarray
     angle: np.ndarray | None = None
+
+    @property
+    def angular_velocity_body(self) -> np.ndarray:
+        """Angular velocity in the body's own axes [rad/s]: (k, 3) ``A^T omega`` for spatial
+        bodies (what a gyro on the body reads), (k,) for planar ones (the same scalar)."""
+        if self.angular_velocity.ndim == 1:
+            return self.angular_velocity
+        return np.einsum("kba,kb->ka", self.rotation, self.angular_velocity)
+
+    @property
+    def angular_acceleration_body(self) -> np.ndarray:
+        """Angular acceleration in the body's own axes [rad/s^2]: ``A^T alpha`` (the rate of
+        :attr:`angular_velocity_body`: ``d(A^T omega)/dt = A^T alpha`` since ``A' = omega~ A``)."""
+        if self.angular_acceleration.ndim == 1:
+            return self.angular_acceleration
+        return np.einsum("kba,kb->ka", self.rotation, self.angular_acceleration)
 
     @property
     def quaternion(self) -> np.ndarray:
@@ -148,6 +166,94 @@ class JointHistory:
             raise ModelError(f"'{self.name}' is a joint, not a driver; it has reactions, not an "
                              "effort (use .reaction(on=...))")
         return -self.lam[:, 0]
+
+    # -- joint coordinates (mbd3d.io.joint_coordinates) -------------------------------------
+    def _coordinates(self, kind: str):
+        """The hinge, slide or ball coordinates of this joint (a driver: of its joint)."""
+        from mbd3d.io import joint_coordinates as jc  # noqa: PLC0415
+        from mbd3d.joints import (Cylindrical, Prismatic, Revolute,  # noqa: PLC0415
+                                  Spherical)
+
+        cache = self.__dict__.setdefault("_cache", {})
+        if kind in cache:
+            return cache[kind]
+        model, element = self._results.model, self.element
+        joint = getattr(element, "joint", None) if element.is_driver else element
+        source = joint if joint is not None else element
+        u_i, u_j, axes = model.reaction_frame(source.name)
+        planar = model.dim == 2
+        if kind == "hinge" and (isinstance(source, (Revolute, Cylindrical)) or (
+                planar and element.is_driver and joint is None)):
+            axis = axes[:, 0] if isinstance(source, Cylindrical) else (
+                np.array([0.0, 0.0, 1.0]) if planar else axes[:, 2])
+            value = jc.hinge(self._results, source.body_i, source.body_j, axis)
+        elif kind == "slide" and isinstance(source, (Prismatic, Cylindrical)):
+            value = jc.slide(self._results, source.body_i, source.body_j, axes[:, 0], u_i, u_j)
+        elif kind == "ball" and isinstance(source, Spherical):
+            value = jc.ball(self._results, source.body_i, source.body_j)
+        else:
+            what = {"hinge": "angle", "slide": "displacement", "ball": "ball rotation"}
+            raise ModelError(
+                f"'{self.name}' ({type(element).__name__}) has no {what[kind]}: revolute and "
+                "cylindrical joints have angles, prismatic and cylindrical ones "
+                "displacements, spherical ones rotations (and drivers those of their joint)")
+        cache[kind] = value
+        return value
+
+    @property
+    def angle(self) -> np.ndarray:
+        """Revolute or cylindrical joint (or its rotation driver): rotation of body j
+        relative to body i about the axis [rad], (k,), continuous over any number of turns;
+        the angle a RotationDriver on it reads (planar: ``theta_j - theta_i``)."""
+        return self._coordinates("hinge")[0]
+
+    @property
+    def angle_rate(self) -> np.ndarray:
+        """Rate of :attr:`angle` [rad/s], (k,)."""
+        return self._coordinates("hinge")[1]
+
+    @property
+    def angle_acceleration(self) -> np.ndarray:
+        """Second derivative of :attr:`angle` [rad/s^2], (k,)."""
+        return self._coordinates("hinge")[2]
+
+    @property
+    def displacement(self) -> np.ndarray:
+        """Prismatic or cylindrical joint (or its translation driver): position of body j's
+        point along the axis from body i's [m], (k,); what a TranslationDriver reads."""
+        return self._coordinates("slide")[0]
+
+    @property
+    def displacement_rate(self) -> np.ndarray:
+        """Rate of :attr:`displacement` [m/s], (k,)."""
+        return self._coordinates("slide")[1]
+
+    @property
+    def displacement_acceleration(self) -> np.ndarray:
+        """Second derivative of :attr:`displacement` [m/s^2], (k,)."""
+        return self._coordinates("slide")[2]
+
+    @property
+    def relative_rotation(self) -> np.ndarray:
+        """Spherical joint: rotation of body j relative to body i since the drawing, in body
+        i's axes, (k, 3, 3)."""
+        return self._coordinates("ball")[0]
+
+    @property
+    def relative_quaternion(self) -> np.ndarray:
+        """:attr:`relative_rotation` as unit quaternions ``(w, x, y, z)``, continuous, (k, 4)."""
+        return self._coordinates("ball")[1]
+
+    @property
+    def rotation_vector(self) -> np.ndarray:
+        """:attr:`relative_rotation` as a rotation vector (axis times angle [rad]), (k, 3)."""
+        return self._coordinates("ball")[2]
+
+    @property
+    def relative_angular_velocity(self) -> np.ndarray:
+        """Spherical joint: angular velocity of body j relative to body i, in body i's axes
+        [rad/s], (k, 3)."""
+        return self._coordinates("ball")[3]
 
     def reaction(self, on: str | Body | None = None, frame: str = "global") -> Reaction:
         """Force and moment this joint exerts on body ``on`` (default: its second body, j).

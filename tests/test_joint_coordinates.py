@@ -1,0 +1,175 @@
+"""Joint coordinates against closed forms: the four-bar's joint angles, rates and accelerations
+from its loop equations solved by hand (Freudenstein's positions), the slider-crank's slider
+travel, a spatial hinge through many turns between coarse outputs, planar == spatial in the
+plane, a spherical joint's rotation against its own angular velocity, and body-axes angular
+velocities against Euler's torque-free solution."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.linalg as la
+
+import mbd3d as mb
+from mbd3d.joints import Revolute, RotationDriver, Spherical
+from mbd3d.mechanisms import four_bar, slider_crank
+from test_spatial_dynamics import spatial_four_bar_in_plane
+
+GROUND, CRANK, COUPLER, ROCKER = 0.30, 0.10, 0.35, 0.30
+
+
+def four_bar_by_hand(theta2, w2, a2=0.0):
+    """Coupler and rocker angles (open branch), rates and accelerations of the loop
+    a e(t2) + b e(t3) = d x + c e(t4), differentiated and solved as 2 x 2 systems."""
+    A = CRANK * np.array([math.cos(theta2), math.sin(theta2)])
+    O4 = np.array([GROUND, 0.0])
+    d = np.linalg.norm(O4 - A)
+    e = (O4 - A) / d
+    along = (COUPLER ** 2 - ROCKER ** 2 + d * d) / (2 * d)
+    B = A + along * e + math.sqrt(COUPLER ** 2 - along ** 2) * np.array([-e[1], e[0]])
+    t3, t4 = math.atan2(*(B - A)[::-1]), math.atan2(*(B - O4)[::-1])
+
+    def perp(t):
+        return np.array([-math.sin(t), math.cos(t)])
+
+    def radial(t):
+        return np.array([math.cos(t), math.sin(t)])
+
+    M = np.column_stack([COUPLER * perp(t3), -ROCKER * perp(t4)])
+    w3, w4 = la.solve(M, -CRANK * w2 * perp(theta2))
+    rhs = (-CRANK * a2 * perp(theta2) + CRANK * w2 ** 2 * radial(theta2)
+           + COUPLER * w3 ** 2 * radial(t3) - ROCKER * w4 ** 2 * radial(t4))
+    a3, a4 = la.solve(M, rhs)
+    return (t3, t4), (w3, w4), (a3, a4)
+
+
+def test_four_bar_joint_angles_rates_and_accelerations():
+    w2 = 2 * math.pi
+    res = mb.inverse_dynamics(four_bar(crank_speed=w2), np.linspace(0.0, 1.0, 13))
+    theta2 = math.radians(60.0) + w2 * res.t
+    hand = [four_bar_by_hand(angle, w2) for angle in theta2]
+    t3 = np.array([h[0][0] for h in hand])
+    t4 = np.array([h[0][1] for h in hand])
+    w3 = np.array([h[1][0] for h in hand])
+    w4 = np.array([h[1][1] for h in hand])
+    a3 = np.array([h[2][0] for h in hand])
+    a4 = np.array([h[2][1] for h in hand])
+    wrap = lambda x: np.angle(np.exp(1j * x))  # noqa: E731 (angles compared modulo turns)
+    np.testing.assert_allclose(res.joint("O2").angle, theta2, atol=1e-12)  # counts turns
+    np.testing.assert_allclose(res.joint("motor").angle, theta2, atol=1e-12)
+    np.testing.assert_allclose(wrap(res.joint("A").angle - (t3 - theta2)), 0.0, atol=1e-10)
+    np.testing.assert_allclose(wrap(res.joint("B").angle - (t4 - t3)), 0.0, atol=1e-10)
+    np.testing.assert_allclose(wrap(res.joint("O4").angle - t4), 0.0, atol=1e-10)
+    np.testing.assert_allclose(res.joint("A").angle_rate, w3 - w2, atol=1e-9)
+    np.testing.assert_allclose(res.joint("B").angle_rate, w4 - w3, atol=1e-9)
+    np.testing.assert_allclose(res.joint("O4").angle_rate, w4, atol=1e-9)
+    np.testing.assert_allclose(res.joint("B").angle_acceleration, a4 - a3, atol=1e-7)
+    np.testing.assert_allclose(res.joint("O4").angle_acceleration, a4, atol=1e-7)
+
+
+def test_slider_travel_rate_and_acceleration():
+    """x = r cos(phi) + sqrt(l^2 - r^2 sin^2(phi)) and its derivatives at constant speed."""
+    r, l, w = 0.12, 0.26, 2 * math.pi
+    res = mb.kinematic_analysis(slider_crank(crank_angle=math.radians(65.0), crank_speed=w),
+                                np.linspace(0.0, 1.0, 11))
+    phi = math.radians(65.0) + w * res.t
+    root = np.sqrt(l * l - (r * np.sin(phi)) ** 2)
+    x = r * np.cos(phi) + root
+    dx = -r * np.sin(phi) - r * r * np.sin(phi) * np.cos(phi) / root
+    ddx = (-r * np.cos(phi) - r * r * np.cos(2 * phi) / root
+           - (r * r * np.sin(phi) * np.cos(phi)) ** 2 / root ** 3)
+    rail = res.joint("rail")
+    np.testing.assert_allclose(rail.displacement, x, atol=1e-12)
+    np.testing.assert_allclose(rail.displacement_rate, w * dx, atol=1e-10)
+    np.testing.assert_allclose(rail.displacement_acceleration, w * w * ddx, atol=1e-8)
+    with pytest.raises(mb.ModelError, match=r"'rail' \(Prismatic\) has no angle: revolute"):
+        rail.angle  # noqa: B018
+
+
+def test_spatial_four_bar_in_the_plane_reads_the_planar_joint_coordinates():
+    planar = mb.inverse_dynamics(four_bar(crank_speed=2 * math.pi), np.linspace(0.0, 1.0, 9))
+    spatial = mb.inverse_dynamics(spatial_four_bar_in_plane(planar, driven=True), planar.t)
+    for joint in ("O2", "O4", "motor"):
+        np.testing.assert_allclose(spatial.joint(joint).angle - spatial.joint(joint).angle[0],
+                                   planar.joint(joint).angle - planar.joint(joint).angle[0],
+                                   atol=1e-10)
+        np.testing.assert_allclose(spatial.joint(joint).angle_rate,
+                                   planar.joint(joint).angle_rate, atol=1e-9)
+        np.testing.assert_allclose(spatial.joint(joint).angle_acceleration,
+                                   planar.joint(joint).angle_acceleration, atol=1e-7)
+
+
+def test_a_spatial_hinge_keeps_count_of_turns_between_coarse_outputs():
+    """Ten turns a second on a skew axis, outputs 0.085 s apart (0.85 turn): the angle is the
+    driver's motion, turn for turn."""
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    from mbd3d.mechanisms import frame_along
+    wheel = b.add_body("wheel", mass=2.0, inertia=(0.02, 0.02, 0.03), position=0.1 * axis,
+                       orientation=frame_along(axis))
+    pin = b.add(Revolute("axle", b.ground, wheel, at=(0.0, 0.0, 0.0), axis=axis))
+    motion = mb.Ramp(0.3, 20 * math.pi) + mb.Harmonic(0.5, 3.0)
+    b.add(RotationDriver("motor", pin, motion=motion))
+    res = mb.kinematic_analysis(b.build(), np.arange(0.0, 2.0, 0.085))
+    expected = np.array([motion.evaluate(t) for t in res.t])
+    np.testing.assert_allclose(res.joint("axle").angle, expected[:, 0], atol=1e-9)
+    np.testing.assert_allclose(res.joint("axle").angle_rate, expected[:, 1], atol=1e-8)
+    np.testing.assert_allclose(res.joint("axle").angle_acceleration, expected[:, 2], atol=1e-6)
+
+
+def test_a_ball_joints_rotation_follows_its_relative_angular_velocity():
+    """dR/dt = w~ R (w the relative angular velocity in body i's axes), by central differences
+    of the reported rotations; and the rotation vector's length is the rotation's angle."""
+    planar = mb.inverse_dynamics(four_bar(crank_speed=2 * math.pi), np.linspace(0.0, 1.0, 3))
+    model = spatial_four_bar_in_plane(planar, driven=True)
+    h = 1e-5
+    t = np.array([0.3 - h, 0.3, 0.3 + h, 0.71 - h, 0.71, 0.71 + h])
+    res = mb.kinematic_analysis(model, t)
+    joint = res.joint("B")  # a ball between coupler and rocker
+    R, w = joint.relative_rotation, joint.relative_angular_velocity
+    for k in (1, 4):
+        rate = (R[k + 1] - R[k - 1]) / (2 * h)
+        skew = np.array([[0, -w[k, 2], w[k, 1]], [w[k, 2], 0, -w[k, 0]],
+                         [-w[k, 1], w[k, 0], 0]])
+        np.testing.assert_allclose(rate, skew @ R[k], atol=1e-7)
+    angle = np.arccos(np.clip((np.trace(R, axis1=1, axis2=2) - 1) / 2, -1, 1))
+    np.testing.assert_allclose(np.linalg.norm(joint.rotation_vector, axis=1), angle, atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(joint.relative_quaternion, axis=1), 1.0)
+
+
+def test_body_axes_angular_velocity_of_a_free_symmetric_body():
+    """Torque-free, I1 = I2: omega_bar_3 stays, (omega_bar_1, omega_bar_2) turns at
+    lambda = (I3 - I1) / I1 omega_bar_3 (Euler's equations solved by hand)."""
+    I1, I3 = 0.02, 0.035
+    w0 = np.array([1.5, 0.0, 7.0])  # global = body axes at t = 0 (aligned)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    b.add_body("disc", mass=1.0, inertia=(I1, I1, I3), position=(0.0, 0.0, 0.0),
+               angular_velocity=w0)
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 3.0, 31), method="DOP853",
+                              rtol=1e-12, atol=1e-12)
+    body = res.body("disc")
+    lam = (I3 - I1) / I1 * w0[2]
+    expected = np.column_stack([w0[0] * np.cos(lam * res.t), w0[0] * np.sin(lam * res.t),
+                                np.full(len(res.t), w0[2])])
+    np.testing.assert_allclose(body.angular_velocity_body, expected, atol=1e-8)
+    rate = np.column_stack([-lam * expected[:, 1], lam * expected[:, 0], 0 * res.t])
+    np.testing.assert_allclose(body.angular_acceleration_body, rate, atol=1e-7)
+    # in global axes the angular momentum is constant instead
+    momentum = np.einsum("kab,b,kb->ka", body.rotation, np.array([I1, I1, I3]),
+                         body.angular_velocity_body)
+    np.testing.assert_allclose(momentum, np.broadcast_to(momentum[0], momentum.shape), atol=1e-9)
+
+
+def test_a_spherical_pendulums_rotation_is_its_bodys():
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    bob = b.add_body("bob", mass=1.0, inertia=(0.01, 0.01, 0.01), position=(0.5, 0.0, 0.0),
+                     velocity=(0.0, 1.0, 0.0), angular_velocity=(0.0, 0.0, 2.0))
+    b.add(Spherical("ball", b.ground, bob, at=(0.0, 0.0, 0.0)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 11), method="DOP853",
+                              rtol=1e-10, atol=1e-12)
+    joint, body = res.joint("ball"), res.body("bob")
+    np.testing.assert_allclose(joint.relative_rotation, body.rotation, atol=1e-12)
+    np.testing.assert_allclose(joint.relative_angular_velocity, body.angular_velocity,
+                               atol=1e-12)
