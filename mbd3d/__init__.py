@@ -35,6 +35,7 @@ from mbd3d.io.observers import Observer, ProgressBar
 from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Constant, Function, Harmonic, Motion, Polynomial, Ramp, SmoothStep
 from mbd3d.analyses.position import solve_position
+from mbd3d.analyses.initial import InitialStateWarning
 from mbd3d.analyses.linearization import LinearModel, linearize
 from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
@@ -59,5 +60,5 @@ __all__ = [
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",
     "AssemblyError",
-    "SingularJacobianError", "IntegrationError", "StiffnessWarning",
+    "SingularJacobianError", "IntegrationError", "StiffnessWarning", "InitialStateWarning",
 ]

@@ -20,7 +20,7 @@ the same way, so every reported state satisfies the constraints.
 from __future__ import annotations
 
 import warnings
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -32,7 +32,8 @@ from mbd3d.model.equations import augmented_accelerations, generalized_forces
 from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
 from mbd3d.analyses.implicit import (consistent_accelerations, integrate_generalized_alpha,
                                      rows_dependent)
-from mbd3d.analyses.kinematics import check_times, initial_guess, solve_velocity
+from mbd3d.analyses.initial import consistent_initial_state
+from mbd3d.analyses.kinematics import check_times, solve_velocity
 from mbd3d.numerics.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
 from mbd3d.analyses.position import LARGEST_DENSE_ANALYSIS, singular_error, solve_position
 from mbd3d.io.observers import Observer, Watch
@@ -249,6 +250,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                      rtol: float = 1e-8, atol: float = 1e-10, constraint_tol: float = 1e-8,
                      max_step: float = np.inf, step: float | None = None,
                      rho_inf: float = 0.9, hold: Sequence[str | int] | None = None,
+                     initial_rates: Mapping[str, float] | None = None, strict: bool = False,
                      observers: Sequence[Observer] | None = None,
                      progress: bool | None = None) -> Results:
     """Integrate the equations of motion from ``times[0]`` to ``times[-1]``.
@@ -289,6 +291,17 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     hold : sequence of str or int, optional
         Coordinates kept at their given values (and rates) while assembling the initial state,
         e.g. ``["crank.theta"]``.
+    initial_rates : mapping, optional
+        Rates the initial state keeps exactly, in the user's terms: a joint's name for its
+        angle rate [rad/s] or displacement rate [m/s] (``"name.angle"``,
+        ``"name.displacement"`` for a cylindrical joint), or ``"body.coordinate"``; the other
+        velocities are the mass-weighted nearest consistent ones to ``qd0`` (see
+        :mod:`mbd3d.analyses.initial`).
+    strict : bool
+        Refuse (ModelError) instead of warning (InitialStateWarning) when the given velocities
+        (``qd0``, the bodies' ``velocity`` and ``angular_velocity``) or positions (``q0``)
+        violate the constraints by more than ``constraint_tol`` and are changed; the changes
+        are in ``results.stats["initial_state"]`` either way.
     observers : sequence of Observer, optional
         Watch the run as it goes (e.g. ``viewer.Recorder`` to stream to Rerun); see
         :mod:`mbd3d.io.observers`.
@@ -326,8 +339,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     if method == GENERALIZED_ALPHA:
         return integrate_generalized_alpha(
             model, t, q0, qd0, step=step, rho_inf=rho_inf,
-            constraint_tol=constraint_tol, max_step=max_step, hold=hold, observers=observers,
-            progress=progress)
+            constraint_tol=constraint_tol, max_step=max_step, hold=hold,
+            initial_rates=initial_rates, strict=strict, observers=observers, progress=progress)
     if step is not None:
         raise ModelError(f"step applies to method='{GENERALIZED_ALPHA}'; the {method} "
                          "integrator chooses its own steps (limit them with max_step)")
@@ -386,11 +399,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
 
     def loop() -> None:
         nonlocal redundant
-        guess = initial_guess(model, t[0], q0, chart(), f"forward dynamics of '{model.name}'",
-                              "q0")
-        q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
-        redundant = rows_dependent(model, t[0], q, chart())
-        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
+        q, qd, redundant = consistent_initial_state(
+            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates, strict=strict,
+            tol=constraint_tol, chart=chart(), stats=stats,
+            what=f"forward dynamics of '{model.name}'",
+            redundant_rows=lambda qq: rows_dependent(model, t[0], qq, chart()))
         # Redundant constraints (dependent rows from the start, as in Bricard's mechanism)
         # are solved throughout by the augmented Lagrangian, which gives the accelerations
         # and minimum-norm multipliers continuously. Rows that become dependent later (a

@@ -49,8 +49,8 @@ from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, solve_augm
                                    solve_model_augmented)
 from mbd3d.io.observers import Watch
 from mbd3d.analyses.passages import PassageWatch
-from mbd3d.analyses.kinematics import initial_guess, solve_velocity
-from mbd3d.analyses.position import singular_error, solve_position
+from mbd3d.analyses.initial import consistent_initial_state
+from mbd3d.analyses.position import singular_error
 from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
 
 __all__ = ["GeneralizedAlpha", "consistent_accelerations", "rows_dependent",
@@ -237,7 +237,8 @@ def _tangent_storage(model, tangent) -> tuple[np.ndarray, bool]:
 def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
                                 rho_inf: float,
                                 constraint_tol: float, max_step: float, hold, observers,
-                                progress, newton_tol: float = 1e-10,
+                                progress, initial_rates=None, strict: bool = False,
+                                newton_tol: float = 1e-10,
                                 relative_penalty: float = 1e8,
                                 max_newton_iterations: int = 30) -> Results:
     """Generalized-alpha integration over the output times ``t``; see
@@ -352,11 +353,11 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
     def loop() -> None:
         nonlocal redundant
         chart = model.charts0
-        guess = initial_guess(model, t[0], q0, chart, f"forward dynamics of '{model.name}'",
-                              "q0")
-        q = solve_position(model, guess, t[0], tol=projection_tol, hold=hold)
-        redundant = rows_dependent(model, t[0], q, chart)
-        qd = solve_velocity(model, q, t[0], qd_guess=qd0, hold=hold, redundant=redundant)
+        q, qd, redundant = consistent_initial_state(
+            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates, strict=strict,
+            tol=constraint_tol, chart=chart, stats=stats,
+            what=f"forward dynamics of '{model.name}'",
+            redundant_rows=lambda qq: rows_dependent(model, t[0], qq, chart))
         qdd, lam = record(q, qd, chart, None)
         a = qdd.copy()
         watch.tick(t[0], 0)
