@@ -181,22 +181,27 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     # driven branch from any guess, never the half turn.
     rotating = model.dim == 3 and bool(model.rotation_motions)
 
-    def beyond_quarter_turn(qq) -> np.ndarray:
-        rows, cosine = constraints.rotation_cosines(
-            model, t, constraints.frames(model, qq, charts=charts))
-        return rows[cosine < 0]
+    far_at: dict = {}  # the rows beyond a quarter turn at the last residual's q
 
     def full_residual(qq):
-        C = constraints.residual(model, t, qq, constraints.frames(model, qq, charts=charts))
+        fr = constraints.frames(model, qq, charts=charts)
+        C = constraints.residual(model, t, qq, fr)
         if rotating:
-            far = beyond_quarter_turn(qq)
+            rows, cosine = constraints.rotation_cosines(model, t, fr)
+            far = rows[cosine < 0]
+            far_at.clear()
+            far_at[qq.tobytes()] = far
             C[far] = np.sign(C[far]) * (2.0 - np.abs(C[far]))
         return np.concatenate([C, qq[held] - q_held]) if len(held) else C
 
     def full_jacobian(qq):
-        Cq = constraints.jacobian(model, t, qq, constraints.frames(model, qq, charts=charts))
+        fr = constraints.frames(model, qq, charts=charts)
+        Cq = constraints.jacobian(model, t, qq, fr)
         if rotating:
-            far = beyond_quarter_turn(qq)
+            far = far_at.get(qq.tobytes())
+            if far is None:
+                rows, cosine = constraints.rotation_cosines(model, t, fr)
+                far = rows[cosine < 0]
             if len(far):
                 sign = np.ones(Cq.shape[0])
                 sign[far] = -1.0

@@ -86,7 +86,7 @@ def rotation_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarra
         phi = motion_phases(model, t)[:, 0]
         f_i, g_i, f_j = g.params["f_i"], g.params["g_i"], g.params["f_j"]
         w = np.cos(phi)[:, None] * f_i + np.sin(phi)[:, None] * g_i
-        cosine = np.einsum("kab,kb,kac,kc->k", fr.A[g.bj], f_j, fr.A[g.bi], w)
+        cosine = np.vecdot(np.matvec(fr.A[g.bj], f_j), np.matvec(fr.A[g.bi], w))
         return g.offset + np.arange(g.count), cosine
     return np.zeros(0, dtype=int), np.zeros(0)
 
