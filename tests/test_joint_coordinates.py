@@ -10,40 +10,12 @@ import math
 
 import numpy as np
 import pytest
-import scipy.linalg as la
 
 import mbd3d as mb
 from mbd3d.joints import Revolute, RotationDriver, Spherical
 from mbd3d.mechanisms import four_bar, slider_crank
+from four_bar_loop import four_bar_by_hand
 from test_spatial_dynamics import spatial_four_bar_in_plane
-
-GROUND, CRANK, COUPLER, ROCKER = 0.30, 0.10, 0.35, 0.30
-
-
-def four_bar_by_hand(theta2, w2, a2=0.0):
-    """Coupler and rocker angles (open branch), rates and accelerations of the loop
-    a e(t2) + b e(t3) = d x + c e(t4), differentiated and solved as 2 x 2 systems."""
-    A = CRANK * np.array([math.cos(theta2), math.sin(theta2)])
-    O4 = np.array([GROUND, 0.0])
-    d = np.linalg.norm(O4 - A)
-    e = (O4 - A) / d
-    along = (COUPLER ** 2 - ROCKER ** 2 + d * d) / (2 * d)
-    B = A + along * e + math.sqrt(COUPLER ** 2 - along ** 2) * np.array([-e[1], e[0]])
-    t3, t4 = math.atan2(*(B - A)[::-1]), math.atan2(*(B - O4)[::-1])
-
-    def perp(t):
-        return np.array([-math.sin(t), math.cos(t)])
-
-    def radial(t):
-        return np.array([math.cos(t), math.sin(t)])
-
-    M = np.column_stack([COUPLER * perp(t3), -ROCKER * perp(t4)])
-    w3, w4 = la.solve(M, -CRANK * w2 * perp(theta2))
-    rhs = (-CRANK * a2 * perp(theta2) + CRANK * w2 ** 2 * radial(theta2)
-           + COUPLER * w3 ** 2 * radial(t3) - ROCKER * w4 ** 2 * radial(t4))
-    a3, a4 = la.solve(M, rhs)
-    return (t3, t4), (w3, w4), (a3, a4)
-
 
 def test_four_bar_joint_angles_rates_and_accelerations():
     w2 = 2 * math.pi

@@ -12,6 +12,7 @@ import scipy.linalg as la
 
 import mbd3d as mb
 from mbd3d.joints import Revolute, Spherical
+from four_bar_loop import COUPLER, CRANK, ROCKER, four_bar_by_hand, perp
 
 G = 9.81
 
@@ -87,29 +88,14 @@ def test_an_inverted_pendulum_grows_at_the_rate_of_its_equation():
     assert modes.equilibrium.stats["stability"] == ["unstable"]
 
 
-def _four_bar_by_hand(theta2, ground=0.30, crank=0.10, coupler=0.35, rocker=0.30, rho=2.0):
+def _inertia_by_hand(theta2, rho=2.0):
     """The inertia the crank carries, I = sum m v^2 + J w^2 at unit crank rate, and the
-    rocker's rate per unit crank rate, from the loop's closed-form positions (open branch)
-    and its velocity equations solved by hand."""
-    A = crank * np.array([math.cos(theta2), math.sin(theta2)])
-    O4 = np.array([ground, 0.0])
-    d = np.linalg.norm(O4 - A)
-    e = (O4 - A) / d
-    along = (coupler ** 2 - rocker ** 2 + d * d) / (2 * d)
-    B = A + along * e + math.sqrt(coupler ** 2 - along ** 2) * np.array([-e[1], e[0]])
-    theta3 = math.atan2(*(B - A)[::-1])
-    theta4 = math.atan2(*(B - O4)[::-1])
-
-    def perp(angle):
-        return np.array([-math.sin(angle), math.cos(angle)])
-
-    # a w2 perp(t2) + b w3 perp(t3) = c w4 perp(t4), w2 = 1
-    w3, w4 = la.solve(np.column_stack([coupler * perp(theta3), -rocker * perp(theta4)]),
-                      -crank * perp(theta2))
-    v_coupler = crank * perp(theta2) + coupler / 2 * w3 * perp(theta3)
+    rocker's rate per unit crank rate, from the loop solved by hand."""
+    (theta3, _), (w3, w4), _ = four_bar_by_hand(theta2)
+    v_coupler = CRANK * perp(theta2) + COUPLER / 2 * w3 * perp(theta3)
     inertia = 0.0
-    for length, speed, rate in ((crank, crank / 2, 1.0), (coupler, np.linalg.norm(v_coupler), w3),
-                                (rocker, rocker / 2 * abs(w4), w4)):
+    for length, speed, rate in ((CRANK, CRANK / 2, 1.0), (COUPLER, np.linalg.norm(v_coupler), w3),
+                                (ROCKER, ROCKER / 2 * abs(w4), w4)):
         m = rho * length
         inertia += m * speed ** 2 + m * length ** 2 / 12 * rate ** 2
     return inertia, w4
@@ -125,7 +111,7 @@ def test_four_bar_on_an_elastic_shaft_along_its_turn():
     along = mb.vibration_modes_along(model, np.linspace(0.0, 1.0, 7))
     crank = along.equilibrium.body("crank").angle
     np.testing.assert_allclose(crank, math.radians(60) + 2 * math.pi * along.t, atol=1e-12)
-    by_hand = [_four_bar_by_hand(angle) for angle in crank]
+    by_hand = [_inertia_by_hand(angle) for angle in crank]
     expected = [math.sqrt(k / inertia) / (2 * math.pi) for inertia, _ in by_hand]
     np.testing.assert_allclose(along.frequencies[:, 0], expected, rtol=1e-7)
     np.testing.assert_allclose(along.damping_ratios, 0.0, atol=1e-9)

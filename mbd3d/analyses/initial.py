@@ -17,6 +17,8 @@ with the other bodies at rest does not start at 0.36 rad/s without a word.
 
 from __future__ import annotations
 
+import os
+import sys
 import warnings
 from typing import Mapping
 
@@ -201,7 +203,16 @@ def report_changes(model, stats: dict, q_given, q: np.ndarray, qd_given: np.ndar
                "'body.coordinate'); strict=True makes this an error.")
     if strict:
         raise ModelError(message)
-    warnings.warn(message, InitialStateWarning, stacklevel=4)
+    warnings.warn(message, InitialStateWarning, stacklevel=_caller_level())
+
+
+def _caller_level() -> int:
+    """The ``stacklevel`` of the first frame outside mbd3d: the user's call."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    frame, level = sys._getframe(1), 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 def _physical_rates(model, q_given, qd_given, q, qd, chart):
