@@ -14,6 +14,7 @@ from mbd3d.errors import ModelError
 from mbd3d.model.forces import RotationalSpringDamper, Torque
 from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Motion, Ramp
+from mbd3d.numerics.rotations import frame_along
 
 __all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions",
            "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "frame_along"]
@@ -166,17 +167,6 @@ def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float =
         b.add(Revolute(f"pin{k + 1}", previous, body, point_i=point_i, point_j=(-L / 2, 0.0)))
         previous = body
     return b.build(sparse=sparse)
-
-
-def frame_along(direction: np.ndarray, hint: np.ndarray = np.array([0.0, 0.0, 1.0])) -> np.ndarray:
-    """Rotation matrix whose x axis is ``direction`` and whose z axis is as close to ``hint``
-    as that allows (body axes as columns)."""
-    x = np.asarray(direction, dtype=float) / np.linalg.norm(direction)
-    y = np.cross(hint, x)
-    if np.linalg.norm(y) < 1e-9:
-        y = np.cross(np.array([0.0, 1.0, 0.0]), x)
-    y /= np.linalg.norm(y)
-    return np.column_stack([x, y, np.cross(x, y)])
 
 
 def spatial_slider_crank(*, crank_length: float = 0.10, rod_length: float = 0.30,

@@ -145,3 +145,69 @@ def test_a_spherical_pendulums_rotation_is_its_bodys():
     np.testing.assert_allclose(joint.relative_rotation, body.rotation, atol=1e-12)
     np.testing.assert_allclose(joint.relative_angular_velocity, body.angular_velocity,
                                atol=1e-12)
+
+
+def test_a_cardan_shafts_cross_angles_and_its_output_shaft():
+    """Input shaft along x turning at w, output shaft bent by b in the x-z plane, a universal
+    joint between them. By hand: the cross carries a_i = R_x(theta1) e_y and a_j, normal to a_i
+    and to the output axis d, so a_j is along a_i x d; the output shaft turns by theta2 about d
+    with tan(theta2) = tan(theta1) cos(b): the classic Cardan relation, for the input yoke
+    normal to the plane of the shafts at theta1 = 0 (tan(theta2) = tan(theta1) / cos(b) counts
+    both angles from the yoke in that plane, a quarter turn on)."""
+    from mbd3d.joints import PointOnLine, Universal
+    bend, w = math.radians(30.0), 2 * math.pi
+    d = np.array([math.cos(bend), 0.0, math.sin(bend)])
+    e_y = np.array([0.0, 1.0, 0.0])
+    a_j0 = np.cross(e_y, d)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    shaft_in = b.add_body("in", mass=1.0, inertia=(0.001, 0.01, 0.01), position=(-0.2, 0, 0))
+    out_frame = mb.rotations.frame_along(d)
+    shaft_out = b.add_body("out", mass=1.0, inertia=(0.001, 0.01, 0.01), position=0.2 * d,
+                           orientation=out_frame)
+    bearing = b.add(Revolute("bearing", b.ground, shaft_in, at=(-0.2, 0.0, 0.0),
+                             axis=(1.0, 0.0, 0.0)))
+    b.add(Universal("cross", shaft_in, shaft_out, at=(0.0, 0.0, 0.0), axis_i=e_y, axis_j=a_j0))
+    b.add(PointOnLine("sleeve", b.ground, shaft_out, at=0.4 * d, axis=d))
+    b.add(RotationDriver("motor", bearing, motion=mb.Ramp(0.0, w)))
+    res = mb.kinematic_analysis(b.build(), np.linspace(0.0, 1.0, 17))
+    joint = res.joint("cross")
+
+    theta1 = w * res.t
+    expected_alpha, expected_theta2 = [], []
+    previous = a_j0
+    for angle in theta1:
+        c, s = math.cos(angle), math.sin(angle)
+        a_i = np.array([0.0, c, s])
+        a_j = np.cross(a_i, d)
+        a_j /= np.linalg.norm(a_j)
+        a_j = a_j if a_j @ previous >= 0 else -a_j  # the cross turns continuously
+        previous = a_j
+        R1 = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+        seen = R1.T @ a_j  # a_j in the input shaft's axes turns about e_y by alpha
+        expected_alpha.append(math.atan2(np.cross(a_j0, seen) @ e_y, seen @ a_j0))
+        expected_theta2.append(math.atan2(np.cross(a_j0, a_j) @ d, a_j @ a_j0))
+    wrap = lambda x: np.angle(np.exp(1j * np.asarray(x)))  # noqa: E731
+    np.testing.assert_allclose(wrap(joint.cross_angles[:, 0] - expected_alpha), 0.0, atol=1e-10)
+    # the output shaft's turn, from its rotation, against the Cardan relation
+    R_out = res.body("out").rotation
+    turned = np.einsum("kab,cb->kac", R_out, out_frame)  # Rot(d, theta2)
+    theta2 = np.arctan2(np.einsum("a,kab,b->k", np.cross(d, a_j0) / np.linalg.norm(a_j0),
+                                  turned, a_j0), np.einsum("a,kab,b->k", a_j0, turned, a_j0))
+    np.testing.assert_allclose(wrap(theta2 - np.array(expected_theta2)), 0.0, atol=1e-10)
+    np.testing.assert_allclose(np.tan(theta2[[1, 2, 5]]),
+                               np.tan(theta1[[1, 2, 5]]) * math.cos(bend), rtol=1e-9)
+    # beta: body j (the output shaft) turns about a_j relative to the cross; with the input
+    # turning and the output following, the two cross angles and the shafts' turns close up
+    rates = joint.cross_angle_rates
+    relative = res.body("out").angular_velocity - res.body("in").angular_velocity
+    a_i_now = np.einsum("kab,b->ka", res.body("in").rotation, e_y)
+    a_j_now = np.einsum("kab,b->ka", R_out, out_frame.T @ a_j0)
+    np.testing.assert_allclose(rates[:, :1] * a_i_now + rates[:, 1:] * a_j_now, relative,
+                               atol=1e-9)
+    # rates and accelerations are the angles' derivatives (central differences, h = 1e-5)
+    h = 1e-5
+    fine = mb.kinematic_analysis(b.build(), [0.3 - h, 0.3, 0.3 + h]).joint("cross")
+    np.testing.assert_allclose((fine.cross_angles[2] - fine.cross_angles[0]) / (2 * h),
+                               fine.cross_angle_rates[1], rtol=1e-7)
+    np.testing.assert_allclose((fine.cross_angle_rates[2] - fine.cross_angle_rates[0]) / (2 * h),
+                               fine.cross_angle_accelerations[1], rtol=1e-6)

@@ -17,6 +17,12 @@ one formula serves both:
   ``s'' = h . d'' + 2 (omega_i x h) . d' + (alpha_i x h + omega_i x (omega_i x h)) . d``.
 - a ball (spherical) turns body j relative to body i by ``A_i^T A_j`` from its value in the
   drawing, in body i's axes, with relative angular velocity ``A_i^T (omega_j - omega_i)``.
+- a Cardan (universal) joint turns its cross by ``alpha`` about ``a_i`` (fixed in body i)
+  relative to body i, and body j by ``beta`` about ``a_j`` (fixed in body j) relative to the
+  cross, both from the drawing; the relative angular velocity is ``alpha' a_i + beta' a_j``
+  with ``a_i`` and ``a_j`` perpendicular, so ``alpha' = a_i . (omega_j - omega_i)``,
+  ``beta' = a_j . (omega_j - omega_i)``, ``alpha'' = a_i . (alpha_j - alpha_i) + (omega_i x
+  a_i) . (omega_j - omega_i)`` and likewise ``beta''`` with ``omega_j x a_j``.
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ import numpy as np
 
 from mbd3d.numerics.rotations import continuous_quaternions, from_rodrigues, to_quaternion
 
-__all__ = ["BodyMotion", "hinge", "slide", "ball"]
+__all__ = ["BodyMotion", "hinge", "slide", "ball", "cardan"]
 
 
 class BodyMotion:
@@ -111,6 +117,35 @@ def ball(results, body_i, body_j):
     scale = np.where(sine > 1e-12, angle / np.where(sine > 1e-12, sine, 1.0), 2.0)
     velocity = np.einsum("kba,kb->ka", i.rotation, j.omega - i.omega)
     return rotation, quaternion, quaternion[:, 1:] * scale[:, None], velocity
+
+
+def cardan(results, body_i, body_j, axis_i: np.ndarray, axis_j: np.ndarray):
+    """``(angles, rates, accelerations)``, each (k, 2): ``alpha`` of the cross about
+    ``axis_i`` relative to body i and ``beta`` of body j about ``axis_j`` relative to the cross
+    [rad, rad/s, rad/s^2], from the drawing; the axes are directions of the drawing."""
+    model = results.model
+    i, j = BodyMotion(results, body_i), BodyMotion(results, body_j)
+    R_i0, R_j0 = _drawing_rotation(model, body_i), _drawing_rotation(model, body_j)
+    a_i_drawn = np.asarray(axis_i, float) / np.linalg.norm(axis_i)
+    a_j_drawn = np.asarray(axis_j, float) / np.linalg.norm(axis_j)
+    a_i_local, a_j_local = R_i0.T @ a_i_drawn, R_j0.T @ a_j_drawn
+    a_i = np.einsum("kab,b->ka", i.rotation, a_i_local)
+    a_j = np.einsum("kab,b->ka", j.rotation, a_j_local)
+    relative = j.omega - i.omega
+    dot = lambda a, b: np.einsum("ka,ka->k", a, b)  # noqa: E731
+    rates = np.column_stack([dot(a_i, relative), dot(a_j, relative)])
+    accelerations = np.column_stack([
+        dot(a_i, j.alpha - i.alpha) + dot(np.cross(i.omega, a_i), relative),
+        dot(a_j, j.alpha - i.alpha) + dot(np.cross(j.omega, a_j), relative)])
+    # a_j seen from body i turns by alpha about a_i; a_i seen from body j by -beta about a_j
+    seen_from_i = np.einsum("kba,kb->ka", i.rotation, a_j)
+    seen_from_j = np.einsum("kba,kb->ka", j.rotation, a_i)
+    b0, c0 = R_i0.T @ a_j_drawn, R_j0.T @ a_i_drawn
+    alpha = np.arctan2(np.cross(b0, seen_from_i) @ a_i_local, seen_from_i @ b0)
+    beta = -np.arctan2(np.cross(c0, seen_from_j) @ a_j_local, seen_from_j @ c0)
+    angles = np.column_stack([_unwrap(alpha, results.t, rates[:, 0], accelerations[:, 0]),
+                              _unwrap(beta, results.t, rates[:, 1], accelerations[:, 1])])
+    return angles, rates, accelerations
 
 
 def _drawing_rotation(model, body) -> np.ndarray:

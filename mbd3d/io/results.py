@@ -172,7 +172,7 @@ class JointHistory:
         """The hinge, slide or ball coordinates of this joint (a driver: of its joint)."""
         from mbd3d.io import joint_coordinates as jc  # noqa: PLC0415
         from mbd3d.joints import (Cylindrical, Prismatic, Revolute,  # noqa: PLC0415
-                                  Spherical)
+                                  Spherical, Universal)
 
         cache = self.__dict__.setdefault("_cache", {})
         if kind in cache:
@@ -191,12 +191,17 @@ class JointHistory:
             value = jc.slide(self._results, source.body_i, source.body_j, axes[:, 0], u_i, u_j)
         elif kind == "ball" and isinstance(source, Spherical):
             value = jc.ball(self._results, source.body_i, source.body_j)
+        elif kind == "cardan" and isinstance(source, Universal):
+            value = jc.cardan(self._results, source.body_i, source.body_j, source.axis_i,
+                              source.axis_j)
         else:
-            what = {"hinge": "angle", "slide": "displacement", "ball": "ball rotation"}
+            what = {"hinge": "angle", "slide": "displacement", "ball": "ball rotation",
+                    "cardan": "cross angles"}
             raise ModelError(
                 f"'{self.name}' ({type(element).__name__}) has no {what[kind]}: revolute and "
                 "cylindrical joints have angles, prismatic and cylindrical ones "
-                "displacements, spherical ones rotations (and drivers those of their joint)")
+                "displacements, spherical ones rotations, universal ones cross angles (and "
+                "drivers those of their joint)")
         cache[kind] = value
         return value
 
@@ -232,6 +237,23 @@ class JointHistory:
     def displacement_acceleration(self) -> np.ndarray:
         """Second derivative of :attr:`displacement` [m/s^2], (k,)."""
         return self._coordinates("slide")[2]
+
+    @property
+    def cross_angles(self) -> np.ndarray:
+        """Universal joint: ``(alpha, beta)`` [rad], (k, 2): the cross's rotation about
+        ``axis_i`` relative to body i, and body j's about ``axis_j`` relative to the cross,
+        from the drawing, continuous over turns."""
+        return self._coordinates("cardan")[0]
+
+    @property
+    def cross_angle_rates(self) -> np.ndarray:
+        """Rates of :attr:`cross_angles` [rad/s], (k, 2)."""
+        return self._coordinates("cardan")[1]
+
+    @property
+    def cross_angle_accelerations(self) -> np.ndarray:
+        """Second derivatives of :attr:`cross_angles` [rad/s^2], (k, 2)."""
+        return self._coordinates("cardan")[2]
 
     @property
     def relative_rotation(self) -> np.ndarray:

@@ -24,7 +24,8 @@ from mbd3d.model.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
 __all__ = ["skew", "from_rodrigues", "to_rodrigues", "from_quaternion", "to_quaternion",
-           "axis_angle", "g_bar", "g_bar_inverse", "initial_chart", "as_rotation_matrix",
+           "axis_angle", "frame_along", "g_bar", "g_bar_inverse", "initial_chart",
+           "as_rotation_matrix",
            "compose_rodrigues", "continuous_quaternions"]
 
 
@@ -131,6 +132,22 @@ def axis_angle(axis: Any, angle: float) -> np.ndarray:
         raise ModelError(f"rotation axis must be a non-zero vector, got {axis!r}")
     half = 0.5 * finite_scalar(angle, "rotation angle")
     return from_quaternion(np.concatenate([[np.cos(half)], np.sin(half) * axis / norm]))
+
+
+def frame_along(direction: Any, hint: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
+    """A body frame from the drawing: the rotation matrix (body axes as columns) whose x axis
+    is ``direction`` and whose z axis is as close to ``hint`` as that allows (y axis instead
+    of ``hint`` when the two are parallel). For a bar along ``direction``, a hinge's yoke, a
+    body whose axis the drawing gives but whose roll it does not."""
+    x = finite_vector(direction, 3, "frame direction")
+    if np.linalg.norm(x) < 1e-12:
+        raise ModelError(f"frame direction must be a non-zero vector, got {direction!r}")
+    x = x / np.linalg.norm(x)
+    y = np.cross(finite_vector(hint, 3, "frame hint"), x)
+    if np.linalg.norm(y) < 1e-9:
+        y = np.cross(np.array([0.0, 1.0, 0.0]), x)
+    y /= np.linalg.norm(y)
+    return np.column_stack([x, y, np.cross(x, y)])
 
 
 def g_bar(g: np.ndarray) -> np.ndarray:
