@@ -211,3 +211,31 @@ def test_a_cardan_shafts_cross_angles_and_its_output_shaft():
                                fine.cross_angle_rates[1], rtol=1e-7)
     np.testing.assert_allclose((fine.cross_angle_rates[2] - fine.cross_angle_rates[0]) / (2 * h),
                                fine.cross_angle_accelerations[1], rtol=1e-6)
+
+
+def test_a_puck_on_a_tilted_plane_moves_uniformly_in_the_planes_coordinates():
+    """No gravity, a Planar joint on a plane of normal n through the origin: the puck glides at
+    its initial in-plane velocity and spins at its initial rate (Newton's first law), so its
+    plane coordinates are s0 + (e . v) t along the joint's in-plane axes e, and its angle
+    w t."""
+    from mbd3d.joints import Planar
+    n = np.array([0.0, 0.6, 0.8])
+    in_plane = np.array([1.0, 0.0, 0.0])
+    v = 0.3 * in_plane + 0.2 * np.cross(n, in_plane)
+    spin = 1.7
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    puck = b.add_body("puck", mass=0.5, inertia=(0.002, 0.002, 0.003), position=(0.0, 0, 0),
+                      orientation=mb.rotations.frame_along(in_plane, hint=n), velocity=v,
+                      angular_velocity=spin * n)
+    b.add(Planar("table", b.ground, puck, at=(0.0, 0.0, 0.0), axis=n))
+    model = b.build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 2.0, 9), method="DOP853", rtol=1e-11,
+                              atol=1e-12, strict=True)
+    joint = res.joint("table")
+    axes = model.reaction_frame("table")[2]  # body i is the ground: these are global
+    e = axes[:, 1:].T  # the joint's point on the puck is its centre (drawn at the origin)
+    np.testing.assert_allclose(joint.plane_position, np.outer(res.t, e @ v), atol=1e-9)
+    np.testing.assert_allclose(joint.plane_velocity, np.broadcast_to(e @ v, (9, 2)), atol=1e-9)
+    np.testing.assert_allclose(joint.plane_acceleration, 0.0, atol=1e-8)
+    np.testing.assert_allclose(joint.angle - joint.angle[0], spin * res.t, atol=1e-9)
+    np.testing.assert_allclose(joint.angle_rate, spin, atol=1e-9)

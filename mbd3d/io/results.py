@@ -171,8 +171,8 @@ class JointHistory:
     def _coordinates(self, kind: str):
         """The hinge, slide or ball coordinates of this joint (a driver: of its joint)."""
         from mbd3d.io import joint_coordinates as jc  # noqa: PLC0415
-        from mbd3d.joints import (Cylindrical, Prismatic, Revolute,  # noqa: PLC0415
-                                  Spherical, Universal)
+        from mbd3d.joints import (Cylindrical, Planar, Prismatic,  # noqa: PLC0415
+                                  Revolute, Spherical, Universal)
 
         cache = self.__dict__.setdefault("_cache", {})
         if kind in cache:
@@ -182,13 +182,17 @@ class JointHistory:
         source = joint if joint is not None else element
         u_i, u_j, axes = model.reaction_frame(source.name)
         planar = model.dim == 2
-        if kind == "hinge" and (isinstance(source, (Revolute, Cylindrical)) or (
+        if kind == "hinge" and (isinstance(source, (Revolute, Cylindrical, Planar)) or (
                 planar and element.is_driver and joint is None)):
-            axis = axes[:, 0] if isinstance(source, Cylindrical) else (
+            axis = axes[:, 0] if isinstance(source, (Cylindrical, Planar)) else (
                 np.array([0.0, 0.0, 1.0]) if planar else axes[:, 2])
             value = jc.hinge(self._results, source.body_i, source.body_j, axis)
         elif kind == "slide" and isinstance(source, (Prismatic, Cylindrical)):
             value = jc.slide(self._results, source.body_i, source.body_j, axes[:, 0], u_i, u_j)
+        elif kind == "plane" and isinstance(source, Planar):
+            along = [jc.slide(self._results, source.body_i, source.body_j, axes[:, c], u_i, u_j)
+                     for c in (1, 2)]
+            value = tuple(np.column_stack([a[part] for a in along]) for part in range(3))
         elif kind == "ball" and isinstance(source, Spherical):
             value = jc.ball(self._results, source.body_i, source.body_j)
         elif kind == "cardan" and isinstance(source, Universal):
@@ -196,20 +200,21 @@ class JointHistory:
                               source.axis_j)
         else:
             what = {"hinge": "angle", "slide": "displacement", "ball": "ball rotation",
-                    "cardan": "cross angles"}
+                    "cardan": "cross angles", "plane": "position in a plane"}
             raise ModelError(
                 f"'{self.name}' ({type(element).__name__}) has no {what[kind]}: revolute and "
-                "cylindrical joints have angles, prismatic and cylindrical ones "
-                "displacements, spherical ones rotations, universal ones cross angles (and "
-                "drivers those of their joint)")
+                "cylindrical (and planar) joints have angles, prismatic and cylindrical ones "
+                "displacements, planar ones positions in the plane, spherical ones rotations, "
+                "universal ones cross angles (and drivers those of their joint)")
         cache[kind] = value
         return value
 
     @property
     def angle(self) -> np.ndarray:
-        """Revolute or cylindrical joint (or its rotation driver): rotation of body j
-        relative to body i about the axis [rad], (k,), continuous over any number of turns;
-        the angle a RotationDriver on it reads (planar: ``theta_j - theta_i``)."""
+        """Revolute, cylindrical or planar joint (or its rotation driver): rotation of body j
+        relative to body i about the axis (a planar joint's normal) [rad], (k,), continuous
+        over any number of turns: the angle a RotationDriver on it reads (planar models:
+        ``theta_j - theta_i``)."""
         return self._coordinates("hinge")[0]
 
     @property
@@ -237,6 +242,23 @@ class JointHistory:
     def displacement_acceleration(self) -> np.ndarray:
         """Second derivative of :attr:`displacement` [m/s^2], (k,)."""
         return self._coordinates("slide")[2]
+
+    @property
+    def plane_position(self) -> np.ndarray:
+        """Planar joint: body j's point in the plane from body i's, along the joint's two
+        in-plane axes (columns 1 and 2 of ``model.reaction_frame(name)[2]``, in body i's
+        frame) [m], (k, 2); its turn about the normal is :attr:`angle`."""
+        return self._coordinates("plane")[0]
+
+    @property
+    def plane_velocity(self) -> np.ndarray:
+        """Rate of :attr:`plane_position` [m/s], (k, 2)."""
+        return self._coordinates("plane")[1]
+
+    @property
+    def plane_acceleration(self) -> np.ndarray:
+        """Second derivative of :attr:`plane_position` [m/s^2], (k, 2)."""
+        return self._coordinates("plane")[2]
 
     @property
     def cross_angles(self) -> np.ndarray:
