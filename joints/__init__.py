@@ -10,12 +10,14 @@ against the body kinematics, so the same classes serve every body type that supp
 - :class:`PointOnLine`: a point on a line (spatial), the pin in a slot (planar).
 - Spatial only: :class:`Spherical`, :class:`Universal`, :class:`Cylindrical`, :class:`Planar`,
   :class:`PointOnPlane`.
+- Planar higher pairs: :class:`GearPair` (external and internal), :class:`RackPinion`.
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 
 from mbd3d.joints.distance import Distance
 from mbd3d.joints.drivers import CoordinateDriver, RotationDriver, TranslationDriver
 from mbd3d.joints.fixed import Fixed
+from mbd3d.joints.gears import GearPair, RackPinion
 from mbd3d.joints.prismatic import Prismatic
 from mbd3d.joints.revolute import Revolute
 from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
@@ -23,4 +25,4 @@ from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, Point
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
            "TranslationDriver", "Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine",
-           "PointOnPlane"]
+           "PointOnPlane", "GearPair", "RackPinion"]

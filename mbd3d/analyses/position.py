@@ -174,12 +174,13 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             "there are redundant constraints (see mbd3d.analyses.mobility) or too many held coordinates",
             time=t)
 
-    # A spatial rotation driver's row sin(e), e = theta - f, also vanishes at e = pi. Where
-    # cos(e) < 0 it is replaced by sign(e) (2 - |sin e|), which keeps rising to e = pi: the
-    # row is then monotone in e on (-pi, pi] with its only root at e = 0, and its Jacobian is
-    # the sin row's with the sign of cos(e) (the derivative |cos e|). Newton reaches the
-    # driven branch from any guess, never the half turn.
-    rotating = model.dim == 3 and bool(model.rotation_motions)
+    # A spatial rotation driver's row sin(e), e = theta - f, also vanishes at e = pi, and so
+    # does a gear pair's L sin(e) (e: the centre line's angle from where rolling puts it).
+    # Where cos(e) < 0 the row is replaced by sign(e) L (2 - |sin e|), which keeps rising to
+    # e = pi: the row is then monotone in e on (-pi, pi] with its only root at e = 0, and its
+    # Jacobian is the sin row's with the sign of cos(e) (the derivative |cos e|). Newton
+    # reaches the right branch from any guess, never the half turn.
+    rotating = constraints.has_branches(model)
 
     far_at: dict = {}  # the rows beyond a quarter turn at the last residual's q
 
@@ -187,11 +188,11 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         fr = constraints.frames(model, qq, charts=charts)
         C = constraints.residual(model, t, qq, fr)
         if rotating:
-            rows, cosine = constraints.rotation_cosines(model, t, fr)
-            far = rows[cosine < 0]
+            rows, cosine, amplitude = constraints.branch_cosines(model, t, fr)
+            far, amplitude = rows[cosine < 0], amplitude[cosine < 0]
             far_at.clear()
             far_at[qq.tobytes()] = far
-            C[far] = np.sign(C[far]) * (2.0 - np.abs(C[far]))
+            C[far] = np.sign(C[far]) * (2.0 * amplitude - np.abs(C[far]))
         return np.concatenate([C, qq[held] - q_held]) if len(held) else C
 
     def full_jacobian(qq):
@@ -200,7 +201,7 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         if rotating:
             far = far_at.get(qq.tobytes())
             if far is None:
-                rows, cosine = constraints.rotation_cosines(model, t, fr)
+                rows, cosine, _ = constraints.branch_cosines(model, t, fr)
                 far = rows[cosine < 0]
             if len(far):
                 sign = np.ones(Cq.shape[0])

@@ -15,6 +15,7 @@ force [N] for a translation driver).
 from __future__ import annotations
 
 import csv
+import math
 import os
 from dataclasses import dataclass
 from typing import Any, BinaryIO, Callable, Sequence
@@ -142,6 +143,29 @@ class Reaction:
     frame: str
     force: np.ndarray
     moment: np.ndarray
+
+
+@dataclass(frozen=True)
+class MeshForce:
+    """Force of a gear mesh on body j (:class:`~mbd3d.joints.GearPair`,
+    :class:`~mbd3d.joints.RackPinion`), each (k,) [N].
+
+    Attributes
+    ----------
+    tangential : ndarray
+        Along the pitch circles' common tangent: the torque of the mesh on body j about its
+        centre over its pitch radius, positive when it turns body j counter-clockwise.
+    tooth : ndarray
+        Magnitude of the tooth force along the line of action, ``|tangential| / cos(alpha)``.
+    separating : ndarray
+        Its component pushing the centres apart, ``|tangential| tan(alpha)``, carried by the
+        bearings in addition to the joints' reactions (rigid gears touching at their pitch
+        circles have no separating force of their own).
+    """
+
+    tangential: np.ndarray
+    tooth: np.ndarray
+    separating: np.ndarray
 
 
 class JointHistory:
@@ -298,6 +322,22 @@ class JointHistory:
         """Spherical joint: angular velocity of body j relative to body i, in body i's axes
         [rad/s], (k, 3)."""
         return self._coordinates("ball")[3]
+
+    @property
+    def mesh_force(self) -> MeshForce:
+        """Gear pair or rack and pinion: the force of the mesh on body j (see
+        :class:`MeshForce`), from the multiplier of the mesh row."""
+        from mbd3d.joints.gears import GearPair, RackPinion  # noqa: PLC0415
+
+        element = self.element
+        if not isinstance(element, (GearPair, RackPinion)):
+            raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a gear mesh; "
+                             "mesh_force is reported by GearPair and RackPinion")
+        torque = self.reaction(on=element.body_j).moment
+        tangential = torque / element.mesh_radius
+        alpha = float(element.pressure_angle)
+        return MeshForce(tangential, np.abs(tangential) / math.cos(alpha),
+                         np.abs(tangential) * math.tan(alpha))
 
     def reaction(self, on: str | Body | None = None, frame: str = "global") -> Reaction:
         """Force and moment this joint exerts on body ``on`` (default: its second body, j).

@@ -419,9 +419,9 @@ class Model:
             if spec.kind not in PRIMITIVES:
                 raise ModelError(f"joint '{self.joints[e_index].name}': unknown primitive "
                                  f"{spec.kind!r}")
-            if spec.kind == "angle" and self.dim != 2:
-                raise ModelError(f"joint '{self.joints[e_index].name}': a relative angle about "
-                                 "the plane normal is defined for planar bodies only")
+            if getattr(PRIMITIVES[spec.kind], "planar_only", False) and self.dim != 2:
+                raise ModelError(f"joint '{self.joints[e_index].name}': its {spec.kind} "
+                                 "constraint is defined for planar bodies only")
             if spec.body_i.is_ground and spec.body_j.is_ground:
                 raise ModelError(f"joint '{self.joints[e_index].name}' connects the ground to itself")
             by_kind[spec.kind].append((e_index, spec))

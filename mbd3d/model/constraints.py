@@ -76,19 +76,43 @@ def motion_phases(model, t: float) -> np.ndarray:
 _NO_MOTIONS = np.zeros((0, 3))
 
 
-def rotation_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray]:
-    """Rows of the spatial rotation drivers and ``cos(theta - f)`` on each: their rows are
-    ``sin(theta - f)``, which vanishes half a turn away too, where the cosine is -1 (see
-    :class:`mbd3d.model.primitives.Rotation`)."""
+def has_branches(model) -> bool:
+    """Whether the model has rows of the form ``L sin(e)`` (see :func:`branch_cosines`)."""
+    return any(g.cls.kind in ("rotation", "gear") for g in model.groups)
+
+
+def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rows of the form ``L sin(e)``, with ``cos(e)`` and ``L`` on each: they vanish half a
+    turn of ``e`` away too, where the cosine is -1.
+
+    The spatial rotation drivers' rows are ``sin(theta - f)`` (``L = 1``; see
+    :class:`mbd3d.model.primitives.Rotation`); the gear pairs' are ``|d| sin(psi - phi)``
+    (see :class:`mbd3d.model.primitives.Gear`).
+    """
+    rows, cosines, amplitudes = [], [], []
     for g in model.groups:
-        if g.cls.kind != "rotation":
+        if g.cls.kind == "rotation":
+            phi = motion_phases(model, t)[:, 0]
+            f_i, g_i, f_j = g.params["f_i"], g.params["g_i"], g.params["f_j"]
+            w = np.cos(phi)[:, None] * f_i + np.sin(phi)[:, None] * g_i
+            cosine = np.vecdot(np.matvec(fr.A[g.bj], f_j), np.matvec(fr.A[g.bi], w))
+            amplitude = np.ones(g.count)
+        elif g.cls.kind == "gear":
+            # planar bodies: theta is the last coordinate, the ground's zero
+            real = g.params["real"]
+            psi = (real[:, 0] * fr.Q[g.bi, -1] + real[:, 1] * fr.Q[g.bj, -1] - real[:, 2])
+            d = (fr.Q[g.bj, :2] + np.matvec(fr.A[g.bj], g.params["u_j"])
+                 - fr.Q[g.bi, :2] - np.matvec(fr.A[g.bi], g.params["u_i"]))
+            amplitude = np.maximum(np.linalg.norm(d, axis=1), 1e-300)
+            cosine = (d[:, 0] * np.cos(psi) + d[:, 1] * np.sin(psi)) / amplitude
+        else:
             continue
-        phi = motion_phases(model, t)[:, 0]
-        f_i, g_i, f_j = g.params["f_i"], g.params["g_i"], g.params["f_j"]
-        w = np.cos(phi)[:, None] * f_i + np.sin(phi)[:, None] * g_i
-        cosine = np.vecdot(np.matvec(fr.A[g.bj], f_j), np.matvec(fr.A[g.bi], w))
-        return g.offset + np.arange(g.count), cosine
-    return np.zeros(0, dtype=int), np.zeros(0)
+        rows.append(g.offset + np.arange(g.count))
+        cosines.append(cosine)
+        amplitudes.append(amplitude)
+    if not rows:
+        return np.zeros(0, dtype=int), np.zeros(0), np.zeros(0)
+    return np.concatenate(rows), np.concatenate(cosines), np.concatenate(amplitudes)
 
 
 def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,

@@ -25,7 +25,7 @@ import numpy as np
 from mbd3d.numerics.compiled import rows as kernel
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation", "RowTable", "evaluate_rows"]
+           "RelativeAngle", "Rotation", "Gear", "Rack", "RowTable", "evaluate_rows"]
 
 class PointCoincidence:
     """``c = r_i - r_j``: point ``u_i`` of body i coincides with point ``u_j`` of body j.
@@ -124,6 +124,8 @@ class RelativeAngle:
     """``c = theta_j - theta_i``: rotation of body j relative to body i about the plane normal
     (planar bodies only)."""
 
+    planar_only = True
+
     kind = "angle"
     code = kernel.ANGLE
     #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
@@ -165,8 +167,61 @@ class Rotation:
         return 1
 
 
+class Gear:
+    """Planar gear pair: the pitch circles of radii ``rho_i``, ``rho_j`` about points ``u_i``,
+    ``u_j`` (the gear centres) roll on each other without slip.
+
+    With ``phi`` the angle of the centre line ``d = r_j - r_i``, rolling is
+    ``rho_i (theta_i - phi) + sigma rho_j (theta_j - phi) = const`` (Nikravesh, *Planar
+    Multibody Dynamics*, 2008, sec. on gears; ``sigma = +1`` external mesh, ``-1`` internal:
+    body j the ring). It holds whatever carries the centres (the ground or a turning arm), but
+    ``phi`` has no turn count, so the row is written as ``C = kappa (d x e(psi))``, with ``e``
+    the unit vector at ``psi = (rho_i theta_i + sigma rho_j theta_j - c)/D``,
+    ``D = rho_i + sigma rho_j`` and ``kappa = sign(D)``: ``e`` must lie along ``d``. At the
+    solution ``C_q`` is the rolling condition itself (``dC/dtheta_i = rho_i``,
+    ``dC/dtheta_j = sigma rho_j``), so ``lam`` is the tangential force of the mesh [N]: the
+    torque on gear i is ``-lam rho_i``. ``real = (rho_i/D, sigma rho_j/D, c/D, kappa)``. The row
+    also vanishes where ``e`` points against ``d``, half a turn of ``psi`` away;
+    :func:`mbd3d.model.constraints.branch_cosines` tells position analysis which is which.
+    """
+
+    kind = "gear"
+    code = kernel.GEAR
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("u_i", "u_j", "real")
+    vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
+    planar_only = True
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class Rack:
+    """Planar rack (body i) and pinion (body j):
+    ``c = a_i . (r_j - r_i) + rho (theta_j - theta_i)``, the pinion centre ``u_j`` advancing
+    along the rack's direction ``v_i`` by ``-rho`` per radian it turns relative to the rack
+    (the rack's pitch line to the right of ``v_i``). ``lam`` is the tangential force of the
+    mesh [N]: the force ``-lam a_i`` on the pinion at its pitch point. ``real = (rho,)``.
+    """
+
+    kind = "rack"
+    code = kernel.RACK
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("v_i", "u_i", "u_j", "real")
+    vectors = (("ai", "i", "v_i"), ("si", "i", "u_i"), ("sj", "j", "u_j"))
+    planar_only = True
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
 PRIMITIVES = {cls.kind: cls for cls in
-              (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation)}
+              (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation, Gear,
+               Rack)}
 
 
 class RowTable:
@@ -178,16 +233,19 @@ class RowTable:
         Primitive code, bodies i and j (rows of the frames, the ground last), first row,
         coordinate of a :class:`Coordinate` and row of a :class:`Rotation`'s motion in
         ``phi`` (-1 for the others).
+    real : ndarray (k, 4) of float
+        Real-valued parameters of instances that need them inside their rows (the gear
+        pair's ratios and phase, the rack's radius); zero for the others.
     slots : ndarray (k, 3) of int
         Rows of each instance's vectors (in the order of its class's ``vectors``) in the
         vector table ``vector_bodies`` (V,), ``vector_local`` (V, dim).
     n_rows : int
     """
 
-    def __init__(self, code, bi, bj, first_row, slots, coordinate, motion, vector_bodies,
+    def __init__(self, code, bi, bj, first_row, slots, coordinate, motion, real, vector_bodies,
                  vector_local, n_rows: int):
         self.code, self.bi, self.bj, self.first_row = code, bi, bj, first_row
-        self.slots, self.coordinate, self.motion = slots, coordinate, motion
+        self.slots, self.coordinate, self.motion, self.real = slots, coordinate, motion, real
         self.vector_bodies, self.vector_local, self.n_rows = vector_bodies, vector_local, n_rows
 
     @classmethod
@@ -197,17 +255,20 @@ class RowTable:
         code, bi, bj, first_row, coordinate, motion = (np.zeros(k, dtype=np.int64)
                                                         for _ in range(6))
         slots = np.full((k, 3), -1, dtype=np.int64)
+        real = np.zeros((k, 4))
         bodies, local = [], []
         row = 0
         for e, (prim, i, j, params, motion_row) in enumerate(instances):
             code[e], bi[e], bj[e], first_row[e], motion[e] = prim.code, i, j, row, motion_row
             coordinate[e] = int(params.get("coordinate", 0))
+            if "real" in params:
+                real[e, :len(params["real"])] = params["real"]
             for n, (_, side, key) in enumerate(prim.vectors):
                 slots[e, n] = len(bodies)
                 bodies.append(i if side == "i" else j)
                 local.append(np.asarray(params[key], dtype=float))
             row += prim.rows(dim)
-        return cls(code, bi, bj, first_row, slots, coordinate, motion,
+        return cls(code, bi, bj, first_row, slots, coordinate, motion, real,
                    np.array(bodies, dtype=np.int64), np.array(local).reshape(-1, dim), row)
 
     def row_bodies(self) -> tuple[np.ndarray, np.ndarray]:
@@ -225,12 +286,14 @@ class RowTable:
         renumbered[slots >= 0] = np.arange(len(used))
         return RowTable(self.code[instances], self.bi[instances], self.bj[instances], first,
                         renumbered, self.coordinate[instances], self.motion[instances],
+                        self.real[instances],
                         self.vector_bodies[used], self.vector_local[used], int(rows_per.sum()))
 
     def on_bodies(self, body_map: np.ndarray) -> "RowTable":
         """The same rows read from other body rows: body ``b`` becomes ``body_map[b]``."""
         return RowTable(self.code, body_map[self.bi], body_map[self.bj], self.first_row,
-                        self.slots, self.coordinate, self.motion, body_map[self.vector_bodies],
+                        self.slots, self.coordinate, self.motion, self.real,
+                        body_map[self.vector_bodies],
                         self.vector_local, self.n_rows)
 
     def repeated(self, copies: int, body_stride: int, motion_stride: int) -> "RowTable":
@@ -247,6 +310,7 @@ class RowTable:
                         np.tile(self.coordinate, copies),
                         np.where(self.motion[None] >= 0, tile(self.motion, motion_stride)
                                  .reshape(copies, -1), -1).reshape(-1),
+                        np.tile(self.real, (copies, 1)),
                         tile(self.vector_bodies, body_stride),
                         np.tile(self.vector_local, (copies, 1)), copies * self.n_rows)
 
@@ -273,7 +337,7 @@ def evaluate_rows(table: RowTable, fr, phi: np.ndarray, value: bool = True,
     s, J, v, a = fr.vectors(table.vector_bodies, table.vector_local, velocities)
     C, data, G, nu = kernel.constraint_rows(
         table.code, table.bi, table.bj, table.first_row, table.slots, table.coordinate,
-        table.motion, phi, table.n_rows, fr.Q, fr.Qd if velocities else fr.Q, s, J, v, a,
+        table.motion, table.real, phi, table.n_rows, fr.Q, fr.Qd if velocities else fr.Q, s, J, v, a,
         destination, nnz, value, jacobian, gamma, rate)
     if jacobian and raw:
         data = data.reshape(table.n_rows, 2, nc)

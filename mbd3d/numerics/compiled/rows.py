@@ -19,7 +19,7 @@ import numpy as np
 from mbd3d.numerics.compiled import jit
 
 #: primitive codes, in the order of mbd3d.model.primitives.PRIMITIVES
-POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION = range(7)
+POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION, GEAR, RACK = range(9)
 
 
 @jit
@@ -28,6 +28,13 @@ def _put(data, dest, row, side, col, nc, value):
     p = dest[(2 * row + side) * nc + col]
     if p >= 0:
         data[p] = value
+
+
+@jit
+def data_at(data, dest, row, side, col, nc):
+    """The Jacobian entry :func:`_put` wrote (zero for the ground's, which are left out)."""
+    p = dest[(2 * row + side) * nc + col]
+    return data[p] if p >= 0 else 0.0
 
 
 @jit
@@ -62,7 +69,7 @@ def row_work_size(dim: int, n_rot: int) -> int:
 
 
 @jit
-def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
+def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, real, phi, n_rows,
                     Q, Qd, s, J, v, a, dest, nnz, value, jacobian, gamma, rate):
     """Evaluate every instance: returns ``c (m,)``, the Jacobian values at positions ``dest``
     (``nnz``,), ``gamma (m,)`` and ``-C_t`` of time-dependent rows (m,), with zero-length
@@ -73,14 +80,14 @@ def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_r
     G = np.empty(n_rows if gamma else 0)
     nu = np.empty(n_rows if rate else 0)
     work = np.empty(row_work_size(dim, Q.shape[1] - dim))
-    constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows, Q,
+    constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, real, phi, n_rows, Q,
                          Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G, nu,
                          work, np.empty((dim, Q.shape[1] - dim)))
     return C, data, G, nu
 
 
 @jit
-def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi, n_rows,
+def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, real, phi, n_rows,
                          Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G,
                          nu, work, uJ):
     """Evaluate every instance into ``C`` (m,) (``c(q)`` only: the caller subtracts the rows'
@@ -89,7 +96,8 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi
     when asked for; ``work``: scratch of :func:`row_work_size`, ``uJ`` of (dim, n_rot).
 
     ``Q``, ``Qd`` (bodies + ground, n_coords): coordinates and rates (``Qd`` is read only for
-    ``gamma``); ``phi`` (k_motion, 3): ``(f, f', f'')`` of the rotation drivers' motions.
+    ``gamma``); ``real`` (k, 4): real parameters of the instances (gears, racks);
+    ``phi`` (k_motion, 3): ``(f, f', f'')`` of the rotation drivers' motions.
     """
     dim = s.shape[1]
     nc = Q.shape[1]
@@ -113,9 +121,9 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi
     for e in range(kind.shape[0]):
         k, i, j, row = kind[e], bi[e], bj[e], first_row[e]
         p0, p1, p2 = slots[e, 0], slots[e, 1], slots[e, 2]
-        if k == POINT or k == DOT2 or k == DISTANCE:
+        if k == POINT or k == DOT2 or k == DISTANCE or k == GEAR or k == RACK:
             # the body points: slots (p0, p1) for a point pair, (p1, p2) after dot-2's vector
-            si, sj = (p1, p2) if k == DOT2 else (p0, p1)
+            si, sj = (p1, p2) if k == DOT2 or k == RACK else (p0, p1)
             for x in range(dim):
                 d[x] = Q[j, x] + s[sj, x] - Q[i, x] - s[si, x]
                 if gamma:
@@ -148,7 +156,7 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi
             if gamma:
                 G[row] = -(_dot(s, p1, a, p0, dim) + _dot(s, p0, a, p1, dim)
                            + 2.0 * _dot(v, p0, v, p1, dim))
-        elif k == DOT2:
+        elif k == DOT2 or k == RACK:
             if value:
                 total = 0.0
                 for x in range(dim):
@@ -172,6 +180,17 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi
                     total += (d[x] * a[p0, x] + 2.0 * v[p0, x] * dd[x]
                               + s[p0, x] * (a[sj, x] - a[si, x]))
                 G[row] = -total
+            if k == RACK:
+                # planar rack (i) and pinion (j): plus radius * (theta_j - theta_i), linear in
+                # q, so nothing is added to gamma
+                radius = real[e, 0]
+                if value:
+                    C[row] += radius * (Q[j, nc - 1] - Q[i, nc - 1])
+                if jacobian:
+                    _put(data, dest, row, 0, nc - 1, nc,
+                         data_at(data, dest, row, 0, nc - 1, nc) - radius)
+                    _put(data, dest, row, 1, nc - 1, nc,
+                         data_at(data, dest, row, 1, nc - 1, nc) + radius)
         elif k == DISTANCE:
             length = 0.0
             for x in range(dim):
@@ -216,6 +235,31 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, phi
             if jacobian:
                 _put(data, dest, row, 0, nc - 1, nc, -1.0)
                 _put(data, dest, row, 1, nc - 1, nc, 1.0)
+        elif k == GEAR:
+            # planar gear pair: C = kappa (d x e(psi)), e the unit vector at the angle
+            # psi = a theta_i + b theta_j - c, which the rolling of the pitch circles keeps
+            # along the centre line d (see mbd3d.model.primitives.Gear)
+            ra, rb, kappa = real[e, 0], real[e, 1], real[e, 3]
+            psi = ra * Q[i, nc - 1] + rb * Q[j, nc - 1] - real[e, 2]
+            e0, e1 = math.cos(psi), math.sin(psi)
+            cross = d[0] * e1 - d[1] * e0
+            along = d[0] * e0 + d[1] * e1
+            if value:
+                C[row] = kappa * cross
+            if jacobian:
+                _put(data, dest, row, 0, 0, nc, -kappa * e1)
+                _put(data, dest, row, 0, 1, nc, kappa * e0)
+                _put(data, dest, row, 1, 0, nc, kappa * e1)
+                _put(data, dest, row, 1, 1, nc, -kappa * e0)
+                _put(data, dest, row, 0, nc - 1, nc, kappa * (
+                    along * ra - (J[si, 0, 0] * e1 - J[si, 1, 0] * e0)))
+                _put(data, dest, row, 1, nc - 1, nc, kappa * (
+                    along * rb + J[sj, 0, 0] * e1 - J[sj, 1, 0] * e0))
+            if gamma:
+                psi_rate = ra * Qd[i, nc - 1] + rb * Qd[j, nc - 1]
+                relative = ((a[sj, 0] - a[si, 0]) * e1 - (a[sj, 1] - a[si, 1]) * e0)
+                G[row] = -kappa * (relative + 2.0 * (dd[0] * e0 + dd[1] * e1) * psi_rate
+                                   - cross * psi_rate * psi_rate)
         elif k == ROTATION:
             # dot-1 of u (body i, turned by phi) and f_j (slot p2): C = sin(theta - phi)
             f, f1, f2 = phi[motion[e], 0], phi[motion[e], 1], phi[motion[e], 2]

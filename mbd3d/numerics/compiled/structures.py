@@ -69,7 +69,8 @@ class PenaltyArraysType(_Record):
 MODEL_FIELDS = (
     "n", "python_accelerations", "python_parts", "solved_here",
     "mass", "inertia", "weight",
-    "code", "bi", "bj", "first_row", "slots", "coordinate", "motion", "vector_bodies",
+    "code", "bi", "bj", "first_row", "slots", "coordinate", "motion", "real",
+    "vector_bodies",
     "vector_local", "n_rows",
     "driver_rows", "destination", "nnz",
     "driver_first", "driver_kinds", "driver_starts", "driver_params",
