@@ -91,6 +91,29 @@ def test_four_bar_modes_example(capsys, tmp_path):
     assert along.frequencies.shape == (5, 1)
 
 
+def test_gear_train_example(capsys, tmp_path):
+    rrd = tmp_path / "gears.rrd"
+    res = load("gear_train").main(n_points=5, rrd=str(rrd))
+    out = capsys.readouterr().out
+    # the printed checks: Willis's ratio and the power balance
+    low, high, willis = (float(x) for x in re.search(
+        r"carrier/sun: (\S+) \.\. (\S+); Willis .* = (\S+)", out).groups())
+    assert abs(low - 0.04 / 0.13) < 1e-14 and abs(high - willis) < 1e-14
+    assert float(re.search(r"largest mismatch (\S+) of", out).group(1)) < 1e-12
+    # drawn: the sun's pitch circle on the sun, the fixed ring on the ground, the tooth force
+    # of the ring mesh at the pitch point, 90 mm from the centre
+    _, vertices = read_component(rrd, "/world/bodies/sun/shape", "Mesh3D:vertex_positions",
+                                 timeline=None)
+    assert np.max(np.linalg.norm(vertices[0][:, :2], axis=1)) == pytest.approx(0.04, rel=1e-6)
+    _, ring = read_component(rrd, "/world/ground/gears", "LineStrips3D:strips", timeline=None)
+    assert np.linalg.norm(np.asarray(ring[0][0], dtype=float)[:, :2], axis=1) == pytest.approx(0.09, rel=1e-6)
+    _, origins = read_component(rrd, "/world/reactions/planet-ring", "Arrows3D:origins")
+    assert np.linalg.norm(origins[:, 0, :2], axis=1) == pytest.approx(0.09, rel=1e-6)
+    _, forces = read_component(rrd, "/plots/meshes/sun-planet", "Scalars:scalars")
+    mesh = res.joint("sun-planet").mesh_force
+    np.testing.assert_allclose(forces, np.column_stack([mesh.tangential, mesh.tooth]))
+
+
 def test_spatial_slider_crank_example(capsys, tmp_path):
     res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out

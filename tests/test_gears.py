@@ -78,6 +78,22 @@ def test_gear_train_torques_by_the_power_balance():
     tooth = res.joint("m23").mesh_force
     np.testing.assert_allclose(tooth.tooth, np.abs(tangential) / math.cos(math.radians(20)))
     np.testing.assert_allclose(tooth.separating, np.abs(tangential) * math.tan(math.radians(20)))
+    check_tooth_force(tooth, res.body("g3").position, res.body("g2").position, R3, away=1.0)
+
+
+def check_tooth_force(mesh, centre, other, radius, away):
+    """The tooth force at the pitch point on the line of centres: its moment about the centre
+    is the tangential force times the radius, it leans by the pressure angle, and it pushes
+    the gear ``away`` (+1) from the other centre or towards it (-1, a ring)."""
+    arm = mesh.point - centre
+    np.testing.assert_allclose(np.linalg.norm(arm, axis=1), radius, rtol=1e-12)
+    line = other - centre
+    np.testing.assert_allclose(arm[:, 0] * line[:, 1] - arm[:, 1] * line[:, 0], 0.0, atol=1e-14)
+    np.testing.assert_allclose(arm[:, 0] * mesh.force[:, 1] - arm[:, 1] * mesh.force[:, 0],
+                               mesh.tangential * radius, rtol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(mesh.force, axis=1), mesh.tooth, rtol=1e-12)
+    radial = -np.einsum("ki,ki->k", mesh.force, arm) / radius
+    np.testing.assert_allclose(radial * away, mesh.separating, rtol=1e-12)
 
 
 def planetary(carrier_load: float = 0.0) -> mb.Model:
@@ -139,6 +155,11 @@ def test_planetary_torque_ratio_and_internal_mesh_force():
     # H_O = (I_s + I_c k + I_p k_p + m_p (rs + rp)^2 k) omega_sun
     momentum_rate = (4e-4 + 2e-3 * ratio + 9e-5 * planet_ratio + 0.3 * (rs + rp) ** 2 * ratio) * 6.0
     ring_torque = res.joint("planet-ring").mesh_force.tangential * rr
+    origin = np.zeros((len(t), 2))
+    check_tooth_force(res.joint("planet-ring").mesh_force, origin, res.body("planet").position,
+                      rr, away=-1.0)
+    check_tooth_force(res.joint("sun-planet").mesh_force, res.body("planet").position, origin,
+                      rp, away=1.0)
     np.testing.assert_allclose(ring_torque, res.driver("motor").effort + load - momentum_rate,
                                rtol=1e-11)
 
@@ -206,6 +227,9 @@ def test_rack_advances_one_pitch_radius_per_radian():
     # the mesh turns the pinion back: the rack's inertia and push, over the radius
     np.testing.assert_allclose(res.joint("mesh").mesh_force.tangential,
                                -(1.5 * rho * 6.0 + 20.0), rtol=1e-11)
+    below = np.array([axis[1], -axis[0]])
+    check_tooth_force(res.joint("mesh").mesh_force, res.body("pinion").position,
+                      res.body("pinion").position + below, rho, away=1.0)
 
 
 def test_pinion_rolls_along_a_fixed_rack():

@@ -12,12 +12,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from mbd3d.joints import CoordinateDriver, Prismatic, RotationDriver, TranslationDriver
+from mbd3d.joints import (CoordinateDriver, GearPair, Prismatic, RackPinion, RotationDriver,
+                          TranslationDriver)
 from mbd3d.errors import ModelError
 from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
 from mbd3d.model.mass_properties import load_mesh
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
+                                 curve_polyline, pitch_curves,
                                  initial_points, model_size)
 
 __all__ = ["Scene", "SIM_TIME", "STEP"]
@@ -174,6 +176,9 @@ class Scene:
             if self.reactions:
                 forces.append(rrb.TimeSeriesView(name="Joint reactions [N, N m]",
                                                  origin="/plots/reactions"))
+            if self._meshes_plotted():
+                forces.append(rrb.TimeSeriesView(name="Gear mesh forces [N]",
+                                                 origin="/plots/meshes"))
             if forces:
                 panels.append(rrb.Tabs(*forces, name="Force analysis"))
         if self.analysis == "vibration modes":
@@ -241,6 +246,11 @@ class Scene:
         if rails:
             stream.log("world/ground/rails", rr.LineStrips3D(rails, radii=0.3 * radius,
                                                              colors=GROUND_COLOR), static=True)
+        gears = pitch_curves(self.model)["ground"]
+        if gears:
+            stream.log("world/ground/gears", rr.LineStrips3D(
+                [curve_polyline(c, self.size) for c in gears], radii=0.3 * radius,
+                colors=GROUND_COLOR), static=True)
         self._log_styles(stream)
         self.log_info(stream, None, times)
 
@@ -278,6 +288,9 @@ class Scene:
         for name in self.reactions:
             stream.log(f"plots/reactions/{_part(name)}/force",
                        rr.SeriesLines(names=[f"{name} F{a}" for a in axes]), static=True)
+        for name in self._meshes_plotted():
+            stream.log(f"plots/meshes/{_part(name)}", rr.SeriesLines(
+                names=[f"{name} tangential", f"{name} tooth"]), static=True)
         stream.log("plots/energy", rr.SeriesLines(
             names=["kinetic", "potential", "total"],
             colors=[[76, 144, 226], [240, 140, 50], [235, 235, 235]]), static=True)
@@ -306,7 +319,8 @@ class Scene:
             lines.append(f"Torque arrows (right-hand rule): 1 m per "
                          f"{1.0 / self.torque_scale:.4g} N m.")
         lines += ["", "Reactions are the forces the joints exert on their moving body (the "
-                  "second body unless it is the ground), drawn at the joint."]
+                  "second body unless it is the ground), drawn at the joint; a gear mesh's "
+                  "is the tooth force on its second body, drawn at the pitch point."]
         stream.log("info", rr.TextDocument("\n".join(lines), media_type="text/markdown"),
                    static=True)
 
@@ -363,6 +377,11 @@ class Scene:
              columns=rr.Scalars.columns(scalars=block.position_residual))
         send("plots/residuals/velocity", indexes=times,
              columns=rr.Scalars.columns(scalars=block.velocity_residual))
+
+    def _meshes_plotted(self) -> list[str]:
+        """The gear meshes among the joints whose reactions are drawn."""
+        return [name for name in self.reactions
+                if isinstance(self.model.joint(name), (GearPair, RackPinion))]
 
     def _spring_ends(self, view: _Block, spring: SpringDamper) -> np.ndarray:
         """(k, 2, 3) global positions of a spring's two ends."""
@@ -438,6 +457,14 @@ class Scene:
             if self._moments[name]:
                 send(f"plots/reactions/{part}/moment", indexes=times,
                      columns=rr.Scalars.columns(scalars=moment))
+            if isinstance(element, (GearPair, RackPinion)):
+                # a mesh: the tooth force along the line of action, at the pitch point
+                mesh = block.joint(name).mesh_force
+                send(f"plots/meshes/{part}", indexes=times, columns=rr.Scalars.columns(
+                    scalars=np.column_stack([mesh.tangential, mesh.tooth])))
+                arrows.append((f"world/reactions/{part}", _lift(mesh.point), _lift(mesh.force),
+                               "force"))
+                continue
             arrows.append((f"world/reactions/{part}", view.point_position(body, u), force,
                            "force"))
         for driver in self.drivers:

@@ -4,7 +4,9 @@ A body given a ``shape`` (see ``ModelBuilder.add_body``) is drawn with it. Other
 comes from the model, the way a mechanism is sketched on paper: a link is a bar (a capsule)
 between its joint points, a ternary link the outline through its points, a slider a block along
 its sliding axis, and a body joined at one point or none (a top, a free body) the box with the
-same mass and principal inertia. All shapes are trimesh meshes in the body frame [m].
+same mass and principal inertia. Gears add their pitch circle (a thin ring with a spoke, so
+that the turning shows) and racks their pitch line. All shapes are trimesh meshes in the body
+frame [m].
 """
 
 from __future__ import annotations
@@ -14,13 +16,13 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from mbd3d.joints import Prismatic
+from mbd3d.joints import GearPair, Prismatic, RackPinion
 from mbd3d.model.body import Body
 from mbd3d.model.forces import SpringDamper
 from mbd3d.model.builder import Model
 
 __all__ = ["attachment_points", "body_shape", "model_size", "initial_frames", "initial_points",
-           "color_of", "GROUND_COLOR"]
+           "pitch_curves", "color_of", "GROUND_COLOR"]
 
 #: body colours, cycled (RGBA, 0-255): distinguishable and readable on the dark background
 PALETTE = np.array([[76, 144, 226, 255], [240, 140, 50, 255], [90, 190, 110, 255],
@@ -44,11 +46,12 @@ def _lift(u: np.ndarray) -> np.ndarray:
 def attachment_points(model: Model) -> dict[str, list[tuple[str, np.ndarray]]]:
     """Where each body (and the ground) is joined: ``{body: [(element, point)]}``, body frame
     [m], 3 components. Joints and the ends of spring-dampers count; drivers act at the points of
-    their joints and add none."""
+    their joints and add none, gear meshes are drawn by their pitch curves."""
     points: dict[str, list[tuple[str, np.ndarray]]] = {b.name: [] for b in model.bodies}
     points["ground"] = []
     for element in model.joints:
-        if element.is_driver:
+        # gear meshes are drawn by their pitch curves (see pitch_curves)
+        if element.is_driver or isinstance(element, (GearPair, RackPinion)):
             continue
         u_i, u_j, _ = model.reaction_frame(element.name)
         points[element.body_i.name].append((element.name, _lift(u_i)))
@@ -61,6 +64,55 @@ def attachment_points(model: Model) -> dict[str, list[tuple[str, np.ndarray]]]:
                 points[element.body_i.name].append((element.name, _lift(group.u_i[n])))
                 points[element.body_j.name].append((element.name, _lift(group.u_j[n])))
     return points
+
+
+def pitch_curves(model: Model) -> dict[str, list[tuple[np.ndarray, float | np.ndarray]]]:
+    """The gear meshes' pitch curves by body (the ground included): ``(centre, radius)`` of a
+    pitch circle, or ``(point, direction)`` of a rack's pitch line through the contact, body
+    frame [m], 3 components."""
+    curves: dict[str, list] = {b.name: [] for b in model.bodies}
+    curves["ground"] = []
+    for element in model.joints:
+        u_i, u_j, axes = model.reaction_frame(element.name) if isinstance(
+            element, (GearPair, RackPinion)) else (None, None, None)
+        if isinstance(element, GearPair):
+            curves[element.body_i.name].append((_lift(u_i), float(element.radius_i)))
+            curves[element.body_j.name].append((_lift(u_j), float(element.radius_j)))
+        elif isinstance(element, RackPinion):
+            # the pitch line lies to the right of the rack's direction, a radius from the centre
+            along, normal = axes[:, 0], axes[:, 1]
+            rho = float(element.radius)
+            curves[element.body_i.name].append((_lift(u_i - rho * normal), _lift(along)))
+            curves[element.body_j.name].append((_lift(u_j), rho))
+    return curves
+
+
+def curve_polyline(curve: tuple[np.ndarray, float | np.ndarray], size: float) -> np.ndarray:
+    """Points along a pitch circle (closed) or a rack's pitch line (``size`` each way)."""
+    start, shape = curve
+    if np.ndim(shape) == 0:
+        angle = np.linspace(0.0, 2 * np.pi, 97)
+        return start + float(shape) * np.column_stack([np.cos(angle), np.sin(angle),
+                                                       np.zeros_like(angle)])
+    return np.array([start - size * shape, start + size * shape])
+
+
+def _pitch_parts(curves: list, radius: float, size: float) -> list[trimesh.Trimesh]:
+    """A thin ring and a spoke for each pitch circle, a bar along each pitch line."""
+    parts = []
+    for start, shape in curves:
+        if np.ndim(shape) == 0:
+            rho = float(shape)
+            ring = trimesh.creation.annulus(r_min=max(rho - radius, 0.5 * rho), r_max=rho,
+                                            height=radius)
+            ring.apply_translation(start)
+            # the spoke's rounded end reaches the pitch circle, not beyond
+            spoke = start + np.array([max(rho - 0.5 * radius, 0.0), 0.0, 0.0])
+            parts += [ring, _capsule(start, spoke, 0.5 * radius)]
+        else:
+            line = curve_polyline((start, shape), size)
+            parts.append(_capsule(line[0], line[1], 0.5 * radius))
+    return parts
 
 
 def initial_frames(model: Model) -> tuple[np.ndarray, np.ndarray]:
@@ -173,7 +225,7 @@ def body_shape(model: Model, body: Body, joined: list[tuple[str, np.ndarray]],
     """The default mesh drawn for ``body`` (body frame, [m]); see the module docstring."""
     radius = 0.02 * size
     points = _distinct([p for _, p in joined], 0.5 * radius)
-    parts: list[trimesh.Trimesh] = []
+    parts: list[trimesh.Trimesh] = _pitch_parts(pitch_curves(model)[body.name], radius, size)
     axis = _slider_axis(model, body)
     if axis is not None:
         block = np.array([0.16, 0.08, 0.08]) * size
@@ -188,6 +240,8 @@ def body_shape(model: Model, body: Body, joined: list[tuple[str, np.ndarray]],
         ring = _outline(points)
         parts += [_capsule(a, b, radius) for a, b in zip(ring, ring[1:] + ring[:1])]
     elif len(points) >= 3:
+        parts += [_capsule(np.zeros(3), p, radius) for p in points]
+    elif parts:
         parts += [_capsule(np.zeros(3), p, radius) for p in points]
     else:
         parts.append(_inertia_box(body, model.dim, size))

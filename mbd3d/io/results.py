@@ -161,11 +161,17 @@ class MeshForce:
         Its component pushing the centres apart, ``|tangential| tan(alpha)``, carried by the
         bearings in addition to the joints' reactions (rigid gears touching at their pitch
         circles have no separating force of their own).
+    point : ndarray (k, 2)
+        The pitch point, where the pitch curves touch, global [m].
+    force : ndarray (k, 2)
+        The tooth force on body j at the pitch point, along the line of action, global [N].
     """
 
     tangential: np.ndarray
     tooth: np.ndarray
     separating: np.ndarray
+    point: np.ndarray
+    force: np.ndarray
 
 
 class JointHistory:
@@ -336,8 +342,24 @@ class JointHistory:
         torque = self.reaction(on=element.body_j).moment
         tangential = torque / element.mesh_radius
         alpha = float(element.pressure_angle)
-        return MeshForce(tangential, np.abs(tangential) / math.cos(alpha),
-                         np.abs(tangential) * math.tan(alpha))
+        separating = np.abs(tangential) * math.tan(alpha)
+        # r: the unit vector from body j's centre to the pitch point
+        u_i, u_j, axes = self._results.model.reaction_frame(self.name)
+        centre_j = self._results._global_point(element.body_j, u_j)
+        if isinstance(element, GearPair):
+            line = centre_j - self._results._global_point(element.body_i, u_i)
+            r = -line / np.linalg.norm(line, axis=1)[:, None]
+            # the teeth push gear j away from gear i; a ring's away from the pinion inside it
+            away = r if element.internal else -r
+        else:
+            along = self._results._global_point(element.body_i, axes[:, 0], vector=True)
+            r = np.column_stack([along[:, 1], -along[:, 0]])  # to the right of the rack
+            away = -r
+        point = centre_j + element.mesh_radius * r
+        turning = np.column_stack([-r[:, 1], r[:, 0]])  # counter-clockwise about j's centre
+        force = tangential[:, None] * turning + separating[:, None] * away
+        return MeshForce(tangential, np.abs(tangential) / math.cos(alpha), separating, point,
+                         force)
 
     def reaction(self, on: str | Body | None = None, frame: str = "global") -> Reaction:
         """Force and moment this joint exerts on body ``on`` (default: its second body, j).
@@ -482,6 +504,16 @@ class Results:
         charts = None if self.charts is None else self.charts[:, :nb].reshape(k * nb, 3, 3)
         A = model.body_type.frames(Q.reshape(k * nb, nc), None, charts).A
         return position, to_quaternion(A).reshape(k, nb, 4)
+
+    def _global_point(self, body: Body, u: np.ndarray, vector: bool = False) -> np.ndarray:
+        """(k, dim) global positions [m] of the body-frame point ``u`` of ``body`` (the
+        ground's are global), or of the body vector ``u`` with ``vector``."""
+        u = np.asarray(u, dtype=float)
+        if body.is_ground:
+            return np.tile(u, (len(self.t), 1))
+        history = self.body(body.name)
+        turned = np.einsum("kab,b->ka", history.rotation, u)
+        return turned if vector else history.position + turned
 
     def point(self, body: str, point: Sequence[float]) -> PointHistory:
         """Trajectory of the point ``point`` [m] (body frame) of body ``body``: its global
