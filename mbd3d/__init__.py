@@ -28,6 +28,7 @@ from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDErr
                           NotFullyDrivenError, OverDrivenError, SingularJacobianError,
                           StiffnessWarning)
 from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
+from mbd3d.model.friction import JointFriction
 from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
                                        solve_velocity)
 from mbd3d.analyses.mobility import MobilityReport, mobility
@@ -49,6 +50,7 @@ __all__ = [
     "ModelBuilder", "Model", "Body", "rotations",
     "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
+    "JointFriction",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "static_equilibrium", "vibration_modes", "Modes",
     "vibration_modes_along", "ModesAlong", "linearize",

@@ -77,3 +77,11 @@ def test_free_body_benchmark_runs_without_peers(capsys, monkeypatch):
     rows = module.main(tolerance=1e-6, duration=1.0)
     assert [r["engine"] for r in rows] == ["mbd3d DOP853"] and rows[0]["error"] <= 1e-6
     assert "right-hand sides" in capsys.readouterr().out
+
+
+def test_friction_benchmark_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    rows = _load("friction").main(repeat=1, duration=0.02)
+    assert len(rows) == 4 and all(r["count"] > 0 for r in rows)
+    assert "friction costs" in capsys.readouterr().out
+

@@ -114,6 +114,22 @@ def test_gear_train_example(capsys, tmp_path):
     np.testing.assert_allclose(forces, np.column_stack([mesh.tangential, mesh.tooth]))
 
 
+def test_slider_crank_friction_example(capsys, tmp_path):
+    rrd = tmp_path / "scf.rrd"
+    res = load("slider_crank_friction").main(n_points=7, rrd=str(rrd))
+    out = capsys.readouterr().out
+    largest, scale = (float(x) for x in re.search(r"largest (\S+) W of (\S+) W", out).groups())
+    assert largest < 1e-10 * scale
+    assert float(re.search(r"per revolution: (\S+) J", out).group(1)) > 0
+    # the rail's friction is 0.15 times the normal force the rail carries, against the sliding
+    normal = res.joint("rail").reaction(on="slider").force[:, 1]
+    speed = res.joint("rail").displacement_rate
+    np.testing.assert_allclose(res.friction("rail friction"),
+                               -0.15 * np.abs(normal) * np.tanh(speed / 1e-3), rtol=1e-12,
+                               atol=1e-12)
+    assert recorded_steps(rrd, "slider") == 7
+
+
 def test_spatial_slider_crank_example(capsys, tmp_path):
     res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out

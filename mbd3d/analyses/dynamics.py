@@ -373,8 +373,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     def split(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return y[:n].copy(), bt.rates(y[:n], y[n:])
 
-    def redundant_accelerations(tt, q, qd, charts_now):
-        qdd, lam, _ = consistent_accelerations(model, tt, q, qd, charts_now, redundant=True)
+    def python_accelerations(tt, q, qd, charts_now):
+        # redundant constraints (the augmented Lagrangian) or joint friction (consistent
+        # with its reactions): solved in Python
+        qdd, lam, _ = consistent_accelerations(model, tt, q, qd, charts_now,
+                                               redundant=redundant, fallback=False)
         return qdd, lam
 
     def failure(flags: int, t_fail: float, y_fail: np.ndarray) -> Exception:
@@ -411,7 +414,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         # index-1 accelerations jump, and generalized-alpha is the method to use.
         record(q, qd)
         watch.tick(t[0], 0)
-        arrays = model._core.arrays(python_accelerations=redundant)
+        arrays = model._core.arrays(
+            python_accelerations=redundant or model.friction is not None)
         work = workspace(spatial, arrays)
         # atol in the model's units: positions in units of its length, angles in radians,
         # rates per second, so that a micrometre mechanism is integrated as accurately
@@ -424,7 +428,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         recent = np.zeros(_RECENT_STEPS)  # lengths of the last accepted steps [s]
         counters = np.zeros(4, dtype=np.int64)
         drift = np.zeros(2)
-        with callbacks.Run(model, redundant_accelerations) as key:
+        with callbacks.Run(model, python_accelerations) as key:
             def first_stage(tt: float) -> None:
                 status = stepping.derivative(arrays, key, tt, y, charts, f, work)
                 counters[stepping.RHS_EVALUATIONS] += 1

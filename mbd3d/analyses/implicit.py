@@ -44,6 +44,7 @@ from mbd3d.model import constraints
 from mbd3d.model.checks import finite_scalar
 from mbd3d.model.equations import augmented_accelerations, generalized_forces, mass_matrix
 from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.model.friction import raise_friction_with_redundancy
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
 from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, solve_augmented_lagrangian,
                                    solve_model_augmented)
@@ -119,6 +120,8 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
                                        f"finite at t = {t:.6g} s (the integration diverged)",
                                        time=t)
             return x[:n], x[n:], True
+    if model.friction is not None:
+        raise_friction_with_redundancy(model, t)
     fr = constraints.frames(model, q, qd, charts)
     _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
     Qe = generalized_forces(model, t, fr)
@@ -147,16 +150,24 @@ def rows_dependent(model, t: float, q: np.ndarray, charts=None) -> bool:
 
 
 def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
-    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements, or None
-    when there are none (gravity does not depend on the state; the spatial bodies' quadratic
+    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements (and the
+    joints' friction's ``D``), or None when there are none (gravity does not depend on the state; the spatial bodies' quadratic
     velocity terms are left out of the iteration matrix, which only slows convergence). Groups with an analytic tangent
     (spring-dampers) give it directly; the others are differenced forward, only over the
     coordinates of the bodies they act on."""
-    if not model.force_groups:
+    if not model.force_groups and model.friction is None:
         return None
     n, nc, nb = model.n_coordinates, model.n_coords_per_body, model.n_bodies
     fr = constraints.frames(model, q, qd, charts)
     rows, cols, values = [], [], []
+    if model.friction is not None:
+        # the regularised friction's slope in the sliding speed, at the loads of this state:
+        # steep near sticking, where Newton's iteration would not converge without it
+        x = augmented_accelerations(model, t, q, qd, charts)
+        if x is not None:
+            damping = gamma_prime * model.friction.damping(model, fr, x[n:])
+            r, c = np.nonzero(damping)
+            rows.append(r), cols.append(c), values.append(damping[r, c])
     for group in model.force_groups:
         if group.analytic_tangent:
             r, c, v = group.tangent(model, t, fr, gamma_prime)
@@ -421,6 +432,10 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                np.empty(n, dtype=np.int64))
     counters = np.zeros(2, dtype=np.int64)
     run = callbacks.Run(model)
+    # joint friction: every Newton iterate takes the friction of its own state's multipliers
+    # (consistent with the reactions there, see mbd3d.model.friction), neither a previous
+    # step's nor the iteration's penalty estimates, which are noisy at 1e-4
+    run.friction_forces = model.friction is not None
 
     def run_steps() -> None:
         try:

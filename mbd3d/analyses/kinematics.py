@@ -17,6 +17,7 @@ import scipy.sparse as sp
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.model.checks import is_finite_vector
+from mbd3d.model.friction import consistent_multipliers, raise_friction_with_redundancy
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
                                    jacobian_scaling, ranked_rows, solve_augmented,
@@ -258,6 +259,8 @@ def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, a
     qd, _ = _solve_redundant(model, t, M, Cq, np.zeros(n), constraints.velocity_rhs(model, t, fr),
                              what)
     fr = constraints.frames(model, q, qd, chart)
+    if with_forces and model.friction is not None:
+        raise_friction_with_redundancy(model, t)
     forces = generalized_forces(model, t, fr) if with_forces else np.zeros(n)
     qdd, lam = _solve_redundant(model, t, M, Cq, forces,
                                 constraints.acceleration_rhs(model, t, q, qd, fr), what)
@@ -351,6 +354,11 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
                 rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
                 lam = lu.solve(rhs, transpose=True)
+                if model.friction is not None:
+                    # the friction forces depend on the reactions they change
+                    lam = consistent_multipliers(
+                        model, float(tk), fr,
+                        lambda extra: (lu.solve(rhs + extra, transpose=True), None), lam)[0]
             out.store(q, qd, qdd, lam, chart)
             watch.tick(tk, out.done)
 

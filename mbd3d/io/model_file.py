@@ -31,7 +31,8 @@ The format, version 1 (every field in SI units)::
          rrd: run.rrd, csv: results}
 
 Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd3d`
-(``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``); their fields are
+(``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``,
+whose ``joint`` names a joint); their fields are
 their constructors' keyword arguments, as documented there. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file.
@@ -205,7 +206,7 @@ def _suggest(word: str, choices) -> str:
 def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
     """Joint, force and motion classes by name."""
     import mbd3d.joints as joints  # noqa: PLC0415
-    from mbd3d.model import forces, motion  # noqa: PLC0415
+    from mbd3d.model import forces, friction, motion  # noqa: PLC0415
     from mbd3d.model.element import ConstraintElement  # noqa: PLC0415
 
     joint_types = {name: getattr(joints, name) for name in joints.__all__
@@ -213,7 +214,8 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
                    and issubclass(getattr(joints, name), ConstraintElement)}
     force_types = {cls.__name__: cls for cls in (forces.PointForce, forces.Torque,
                                                   forces.SpringDamper,
-                                                  forces.RotationalSpringDamper)}
+                                                  forces.RotationalSpringDamper,
+                                                  friction.JointFriction)}
     motion_types = {cls.__name__: cls for cls in (motion.Constant, motion.Ramp,
                                                    motion.Harmonic, motion.Polynomial,
                                                    motion.SmoothStep)}

@@ -544,6 +544,25 @@ class Results:
         """Effort of every driver, by name."""
         return {e.name: self.joint(e.name).effort for e in self.model.joints if e.is_driver}
 
+    def friction(self, name: str) -> np.ndarray:
+        """Friction of :class:`~mbd3d.JointFriction` ``name`` on its joint's body j, (k,): a
+        torque [N m] about a revolute's axis, a force [N] along a prismatic joint's axis (the
+        opposite acts on body i), from the results' multipliers."""
+        group = self.model.friction
+        if group is None or name not in group.names:
+            known = group.names if group is not None else []
+            raise ModelError(f"'{name}' is not a joint friction of '{self.model.name}' "
+                             f"(its frictions: {known or 'none'})")
+        lam = self._require_lam()
+        index = group.names.index(name)
+        Q = np.zeros((self.model.n_bodies + 1, self.model.n_coords_per_body))
+        out = np.empty(len(self.t))
+        for k in range(len(self.t)):
+            q, chart = self._state(k)
+            fr = constraints.frames(self.model, q, self.qd[k], chart)
+            out[k] = group.apply(self.model, fr, lam[k], Q)[index]
+        return out
+
     def _reaction(self, name: str, on: Any, frame: str) -> Reaction:
         model = self.model
         element = model.joint(name)

@@ -492,7 +492,13 @@ class Model:
 
         from mbd3d.model.equations import _Core
         from mbd3d.model.forces import compile_forces
-        self.force_groups = compile_forces(self.forces, ctx)
+        from mbd3d.model.friction import FrictionGroup, JointFriction
+        frictions = [f for f in self.forces if isinstance(f, JointFriction)]
+        self.force_groups = compile_forces(
+            tuple(f for f in self.forces if not isinstance(f, JointFriction)), ctx)
+        #: the joints' friction (mbd3d.model.friction), which needs the multipliers: None
+        #: without
+        self.friction = FrictionGroup(self, frictions, ctx) if frictions else None
         for arr in (self.q0, self.qd0, self.mass, self.inertia, self.gravity, self.c0,
                     self._ground_row, self._weight,
                     *(() if self.charts0 is None else (self.charts0,))):

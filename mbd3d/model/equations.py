@@ -91,9 +91,11 @@ class _Core:
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
         terms = [m.terms() for m in model.driver_motions + model.rotation_motions]
         force_tables = [group.table(model) for group in model.force_groups]
-        #: parts only Python can evaluate: force elements or motions given as functions
+        #: parts only Python can evaluate: force elements or motions given as functions, and
+        #: joint friction (it needs the multipliers)
         self.python_parts = (any(t is None for t in terms)
-                             or any(t is None for t in force_tables))
+                             or any(t is None for t in force_tables)
+                             or model.friction is not None)
         driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
         rotation_table = motion_table([] if self.python_parts
                                       else terms[len(model.driver_rows):])
@@ -251,18 +253,38 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     # a planar model has no charts (and its compiled functions no spatial code)
     charts = (model.charts0 if charts is None else charts) if core.spatial else None
     if not core.python_parts:
-        x, status = kernel.accelerations(core.workspace(), float(t), q, qd, charts)
-    else:
-        extra = core.no_forces
-        if model.force_groups:
-            fr = frames(model, q, qd, charts)
-            Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
-            for group in model.force_groups:
-                group.apply(model, t, fr, Q)
-            extra = Q[:model.n_bodies].ravel()
-        x, status = kernel.accelerations_with_parts(
-            core.workspace(), float(t), q, qd, charts, extra,
-            motion_phases(model, t), _motion_values(model.driver_motions, model.driver_names, t))
+        return _solved(model, t, q, qd, charts,
+                       *kernel.accelerations(core.workspace(), float(t), q, qd, charts))
+    fr = frames(model, q, qd, charts)
+    extra = core.no_forces
+    if model.force_groups:
+        Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+        for group in model.force_groups:
+            group.apply(model, t, fr, Q)
+        extra = Q[:model.n_bodies].ravel()
+    phi = motion_phases(model, t)
+    drivers = _motion_values(model.driver_motions, model.driver_names, t)
+
+    def solve(friction: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
+        x = _solved(model, t, q, qd, charts, *kernel.accelerations_with_parts(
+            core.workspace(), float(t), q, qd, charts,
+            extra if friction is None else extra + friction, phi, drivers))
+        return (None, None) if x is None else (x[model.n_coordinates:], x)
+
+    if model.friction is None:
+        return solve(None)[1]
+    from mbd3d.model.friction import consistent_multipliers  # noqa: PLC0415
+    lam, x = solve(None)
+    if x is None:
+        return None
+    return consistent_multipliers(model, t, fr, solve, lam, x)[1]
+
+
+def _solved(model, t: float, q: np.ndarray, qd: np.ndarray, charts, x: np.ndarray,
+            status: int) -> np.ndarray | None:
+    """``x = (qdd, lam)`` of a compiled solve of the augmented equations, with its status
+    turned into an error or None (see :func:`augmented_accelerations`)."""
+    core = model._core
     if status == kernel.NOT_FINITE:
         # a motion or force that cannot be evaluated is named (ModelError); else the state
         # diverged

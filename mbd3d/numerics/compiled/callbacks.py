@@ -30,6 +30,10 @@ class Run:
         #: matrix by :func:`factor_penalty_and_solve`), and the last factors made there
         self.tangent = None
         self.factors = None
+        #: whether :func:`parts` adds the joints' friction, from the multipliers of the state
+        #: it is asked at (generalized-alpha; the explicit integrators take friction with the
+        #: accelerations)
+        self.friction_forces = False
         self.key = next(_keys)
 
     def __enter__(self) -> int:
@@ -42,16 +46,25 @@ class Run:
 
 def parts(key: int, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray):
     """Generalized forces of the force elements (n,), ``(f, f', f'')`` of the drivers
-    (n_drivers, 3) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``."""
+    (n_drivers, 3) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``; with the
+    run's ``friction_forces``, the joints' friction added to the forces."""
     from mbd3d.model.constraints import _motion_values, frames, motion_phases
 
-    model = _runs[key].model
+    run = _runs[key]
+    model = run.model
     extra = np.zeros(model.n_coordinates)
-    if model.force_groups:
+    friction = model.friction is not None and run.friction_forces
+    if model.force_groups or friction:
         fr = frames(model, q, qd, charts if model.dim == 3 else None)
         Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
         for group in model.force_groups:
             group.apply(model, t, fr, Q)
+        if friction:
+            from mbd3d.model.equations import augmented_accelerations
+
+            x = augmented_accelerations(model, t, q, qd, charts if model.dim == 3 else None)
+            if x is not None:
+                model.friction.apply(model, fr, x[model.n_coordinates:], Q)
         extra = np.ascontiguousarray(Q[:model.n_bodies].ravel())
     drivers = _motion_values(model.driver_motions, model.driver_names, t)
     return extra, drivers, np.ascontiguousarray(motion_phases(model, t))
