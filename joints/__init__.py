@@ -10,10 +10,12 @@ against the body kinematics, so the same classes serve every body type that supp
 - :class:`PointOnLine`: a point on a line (spatial), the pin in a slot (planar).
 - Spatial only: :class:`Spherical`, :class:`Universal`, :class:`Cylindrical`, :class:`Planar`,
   :class:`PointOnPlane`.
-- Planar higher pairs: :class:`GearPair` (external and internal), :class:`RackPinion`.
+- Planar higher pairs: :class:`GearPair` (external and internal), :class:`RackPinion`,
+  :class:`CamFollower` (point or roller on a :class:`CamProfile`), :class:`FlatFaceFollower`.
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 
+from mbd3d.joints.cams import CamFollower, CamProfile, FlatFaceFollower
 from mbd3d.joints.distance import Distance
 from mbd3d.joints.drivers import CoordinateDriver, RotationDriver, TranslationDriver
 from mbd3d.joints.fixed import Fixed
@@ -25,4 +27,5 @@ from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, Point
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
            "TranslationDriver", "Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine",
-           "PointOnPlane", "GearPair", "RackPinion"]
+           "PointOnPlane", "GearPair", "RackPinion", "CamFollower", "FlatFaceFollower",
+           "CamProfile"]

@@ -130,6 +130,29 @@ def test_slider_crank_friction_example(capsys, tmp_path):
     assert recorded_steps(rrd, "slider") == 7
 
 
+def test_cam_follower_example(capsys, tmp_path):
+    rrd = tmp_path / "cam.rrd"
+    res = load("cam_follower").main(n_points=9, rrd=str(rrd))
+    out = capsys.readouterr().out
+    lift, speed, accel = (float(x) for x in re.search(
+        r"lift (\S+) m, velocity (\S+) m/s, acceleration (\S+) m/s2", out).groups())
+    assert lift < 1e-11 and speed < 1e-8 and accel < 1e-4
+    assert "0.97 times that speed the follower stays on the cam" in out
+    assert "1.03 times that speed the follower lifts off at" in out
+    # by hand: the critical speed makes m w^2 s'' + m g + k (0.05 + y) vanish somewhere
+    critical = float(re.search(r"lift-off speed by hand: (\S+) rad/s", out).group(1))
+    assert 55.0 < critical < 65.0
+    # drawn: the cam's surface (the base circle, 40 mm, at its smallest), the contact force on
+    # the base circle at the start
+    _, vertices = read_component(rrd, "/world/bodies/cam/shape", "Mesh3D:vertex_positions",
+                                 timeline=None)
+    radii = np.linalg.norm(vertices[0][:, :2], axis=1)
+    assert np.any(np.abs(radii - 0.04) < 1e-8) and radii.max() == pytest.approx(0.06, rel=1e-6)
+    _, origins = read_component(rrd, "/world/reactions/contact", "Arrows3D:origins")
+    assert origins[0, 0, 1] == pytest.approx(0.04, rel=1e-6)
+    assert np.all(res.joint("contact").contact_force > 0)
+
+
 def test_spatial_slider_crank_example(capsys, tmp_path):
     res = load("spatial_slider_crank").main(n_points=5, rrd=str(tmp_path / "ssc.rrd"))
     assert "closed form" in capsys.readouterr().out

@@ -71,6 +71,7 @@ EXAMPLES = {
     "gear_train": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 0.5, 0.05)}),
     "slider_crank_friction": (lambda m: m.build(), {"kind": "inverse",
                                                     "t": steps(0.0, 0.2, 0.2 / 72)}),
+    "cam_follower": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 1.0, 1 / 70)}),
     "sweep_slider_crank": (lambda m: m.build(20.0, 0.3), {"kind": "inverse",
                                                            "t": steps(0.0, 1.0, 0.01)}),
 }

@@ -12,14 +12,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from mbd3d.joints import (CoordinateDriver, GearPair, Prismatic, RackPinion, RotationDriver,
-                          TranslationDriver)
+from mbd3d.joints import (CamFollower, CoordinateDriver, FlatFaceFollower, GearPair, Prismatic,
+                          RackPinion, RotationDriver, TranslationDriver)
 from mbd3d.errors import ModelError
 from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
 from mbd3d.model.mass_properties import load_mesh
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
-                                 curve_polyline, pitch_curves,
+                                 cam_outlines, curve_polyline, pitch_curves,
                                  initial_points, model_size)
 
 __all__ = ["Scene", "SIM_TIME", "STEP"]
@@ -251,6 +251,10 @@ class Scene:
             stream.log("world/ground/gears", rr.LineStrips3D(
                 [curve_polyline(c, self.size) for c in gears], radii=0.3 * radius,
                 colors=GROUND_COLOR), static=True)
+        cams = cam_outlines(self.model)["ground"]
+        if cams:
+            stream.log("world/ground/cams", rr.LineStrips3D(cams, radii=0.3 * radius,
+                                                            colors=GROUND_COLOR), static=True)
         self._log_styles(stream)
         self.log_info(stream, None, times)
 
@@ -320,7 +324,8 @@ class Scene:
                          f"{1.0 / self.torque_scale:.4g} N m.")
         lines += ["", "Reactions are the forces the joints exert on their moving body (the "
                   "second body unless it is the ground), drawn at the joint; a gear mesh's "
-                  "is the tooth force on its second body, drawn at the pitch point."]
+                  "is the tooth force on its second body, drawn at the pitch point, and a "
+                  "cam's the contact force on its follower, at the contact point."]
         stream.log("info", rr.TextDocument("\n".join(lines), media_type="text/markdown"),
                    static=True)
 
@@ -464,6 +469,13 @@ class Scene:
                     scalars=np.column_stack([mesh.tangential, mesh.tooth])))
                 arrows.append((f"world/reactions/{part}", _lift(mesh.point), _lift(mesh.force),
                                "force"))
+                continue
+            if isinstance(element, (CamFollower, FlatFaceFollower)):
+                # a cam: the normal contact force on the follower, at the contact point
+                point, normal = block.joint(name).contact()
+                push = block.joint(name).contact_force
+                arrows.append((f"world/reactions/{part}", _lift(point),
+                               _lift(push[:, None] * normal), "force"))
                 continue
             arrows.append((f"world/reactions/{part}", view.point_position(body, u), force,
                            "force"))

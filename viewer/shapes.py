@@ -5,7 +5,8 @@ comes from the model, the way a mechanism is sketched on paper: a link is a bar 
 between its joint points, a ternary link the outline through its points, a slider a block along
 its sliding axis, and a body joined at one point or none (a top, a free body) the box with the
 same mass and principal inertia. Gears add their pitch circle (a thin ring with a spoke, so
-that the turning shows) and racks their pitch line. All shapes are trimesh meshes in the body
+that the turning shows), racks their pitch line, cams their surface (a plate) and rollers
+their circle. All shapes are trimesh meshes in the body
 frame [m].
 """
 
@@ -16,13 +17,13 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from mbd3d.joints import GearPair, Prismatic, RackPinion
+from mbd3d.joints import CamFollower, FlatFaceFollower, GearPair, Prismatic, RackPinion
 from mbd3d.model.body import Body
 from mbd3d.model.forces import SpringDamper
 from mbd3d.model.builder import Model
 
 __all__ = ["attachment_points", "body_shape", "model_size", "initial_frames", "initial_points",
-           "pitch_curves", "color_of", "GROUND_COLOR"]
+           "pitch_curves", "cam_outlines", "color_of", "GROUND_COLOR"]
 
 #: body colours, cycled (RGBA, 0-255): distinguishable and readable on the dark background
 PALETTE = np.array([[76, 144, 226, 255], [240, 140, 50, 255], [90, 190, 110, 255],
@@ -50,8 +51,9 @@ def attachment_points(model: Model) -> dict[str, list[tuple[str, np.ndarray]]]:
     points: dict[str, list[tuple[str, np.ndarray]]] = {b.name: [] for b in model.bodies}
     points["ground"] = []
     for element in model.joints:
-        # gear meshes are drawn by their pitch curves (see pitch_curves)
-        if element.is_driver or isinstance(element, (GearPair, RackPinion)):
+        # gear meshes and cams are drawn by their curves (see pitch_curves, cam_outlines)
+        if element.is_driver or isinstance(element, (GearPair, RackPinion, CamFollower,
+                                                     FlatFaceFollower)):
             continue
         u_i, u_j, _ = model.reaction_frame(element.name)
         points[element.body_i.name].append((element.name, _lift(u_i)))
@@ -74,7 +76,7 @@ def pitch_curves(model: Model) -> dict[str, list[tuple[np.ndarray, float | np.nd
     curves["ground"] = []
     for element in model.joints:
         u_i, u_j, axes = model.reaction_frame(element.name) if isinstance(
-            element, (GearPair, RackPinion)) else (None, None, None)
+            element, (GearPair, RackPinion, CamFollower)) else (None, None, None)
         if isinstance(element, GearPair):
             curves[element.body_i.name].append((_lift(u_i), float(element.radius_i)))
             curves[element.body_j.name].append((_lift(u_j), float(element.radius_j)))
@@ -84,7 +86,47 @@ def pitch_curves(model: Model) -> dict[str, list[tuple[np.ndarray, float | np.nd
             rho = float(element.radius)
             curves[element.body_i.name].append((_lift(u_i - rho * normal), _lift(along)))
             curves[element.body_j.name].append((_lift(u_j), rho))
+        elif isinstance(element, CamFollower) and element.roller_radius > 0:
+            curves[element.body_j.name].append((_lift(u_j), float(element.roller_radius)))
     return curves
+
+
+def cam_outlines(model: Model) -> dict[str, list[np.ndarray]]:
+    """The cams' surfaces by body (the ground included): closed polylines (m, 3) in the cam's
+    frame [m], from the pitch curve less the roller radius, or from a flat-faced follower's
+    support function ``h``, whose envelope is ``h e + h' e_perp``."""
+    outlines: dict[str, list] = {b.name: [] for b in model.bodies}
+    outlines["ground"] = []
+    angle = np.linspace(0.0, 2 * np.pi, 361)
+    e = np.column_stack([np.cos(angle), np.sin(angle)])
+    across = np.column_stack([-e[:, 1], e[:, 0]])
+    for element in model.joints:
+        if isinstance(element, CamFollower):
+            r, slope = element.profile(angle), element.profile(angle, 1)
+            # the outward normal of the pitch curve r(phi) e(phi): r e_perp... normalised
+            normal = r[:, None] * e - slope[:, None] * across
+            normal /= np.linalg.norm(normal, axis=1)[:, None]
+            surface = r[:, None] * e - float(element.roller_radius) * normal
+        elif isinstance(element, FlatFaceFollower):
+            surface = (element.profile(angle)[:, None] * e
+                       + element.profile(angle, 1)[:, None] * across)
+        else:
+            continue
+        centre = model.reaction_frame(element.name)[0]
+        points = centre + surface
+        outlines[element.body_i.name].append(np.column_stack([points,
+                                                              np.zeros(len(points))]))
+    return outlines
+
+
+def _plate(outline: np.ndarray) -> trimesh.Trimesh:
+    """A flat plate (a triangle fan from the centroid) bounded by a closed polyline that is
+    star-shaped about it, both faces drawn."""
+    centre = outline[:-1].mean(axis=0)
+    vertices = np.vstack([centre, outline])
+    k = np.arange(1, len(outline))
+    faces = np.column_stack([np.zeros_like(k), k, k + 1])
+    return trimesh.Trimesh(vertices, np.vstack([faces, faces[:, ::-1]]), process=False)
 
 
 def curve_polyline(curve: tuple[np.ndarray, float | np.ndarray], size: float) -> np.ndarray:
@@ -226,6 +268,7 @@ def body_shape(model: Model, body: Body, joined: list[tuple[str, np.ndarray]],
     radius = 0.02 * size
     points = _distinct([p for _, p in joined], 0.5 * radius)
     parts: list[trimesh.Trimesh] = _pitch_parts(pitch_curves(model)[body.name], radius, size)
+    parts += [_plate(outline) for outline in cam_outlines(model)[body.name]]
     axis = _slider_axis(model, body)
     if axis is not None:
         block = np.array([0.16, 0.08, 0.08]) * size

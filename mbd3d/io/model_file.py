@@ -35,7 +35,8 @@ Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd
 whose ``joint`` names a joint); their fields are
 their constructors' keyword arguments, as documented there. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
-arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file.
+arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
+cam's profile is ``{type: CamProfile, angles: [...], radii: [...]}``.
 Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``), times
 ``t`` (a list, or ``{start, stop, step}`` or ``{start, stop, points}``), the keyword
 arguments of that analysis function, and optionally where ``mbd3d run`` writes the recording
@@ -218,7 +219,7 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
                                                   friction.JointFriction)}
     motion_types = {cls.__name__: cls for cls in (motion.Constant, motion.Ramp,
                                                    motion.Harmonic, motion.Polynomial,
-                                                   motion.SmoothStep)}
+                                                   motion.SmoothStep, joints.CamProfile)}
     return joint_types, force_types, motion_types
 
 
@@ -560,6 +561,10 @@ def _plain(value: Any, where: str) -> Any:
             plain = _plain(part, where)
             terms += plain["terms"] if plain.get("type") == "Sum" else [plain]
         return {"type": "Sum", "terms": terms}
+    from mbd3d.joints.cams import CamProfile  # noqa: PLC0415
+
+    if isinstance(value, CamProfile):
+        return {"type": "CamProfile", **{k: _plain(v, where) for k, v in value.arguments.items()}}
     if isinstance(value, Motion):
         if value.terms() is None:
             raise ModelFileError(f"{where}: a motion given by Python functions cannot be "

@@ -361,6 +361,54 @@ class JointHistory:
         return MeshForce(tangential, np.abs(tangential) / math.cos(alpha), separating, point,
                          force)
 
+    @property
+    def contact_force(self) -> np.ndarray:
+        """Cam and follower: the normal force between them [N], (k,), positive while they
+        press on each other (from the multiplier of the contact row; see :attr:`lift_off`)."""
+        force = self.reaction(on=self.element.body_j).force  # on the follower
+        return np.einsum("ki,ki->k", force, self.contact()[1])
+
+    def contact(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cam and follower: the contact point on the cam's surface, global [m], and the unit
+        normal there from the cam towards the follower, each (k, 2)."""
+        from mbd3d.joints.cams import CamFollower, FlatFaceFollower  # noqa: PLC0415
+
+        element = self.element
+        if not isinstance(element, (CamFollower, FlatFaceFollower)):
+            raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a cam; contacts "
+                             "are reported by CamFollower and FlatFaceFollower")
+        results = self._results
+        u_i, u_j, _ = results.model.reaction_frame(self.name)
+        centre = results._global_point(element.body_i, u_i)
+        cam_angle = (np.zeros(len(results.t)) if element.body_i.is_ground
+                     else results.body(element.body_i.name).angle)
+        if isinstance(element, CamFollower):
+            point = results._global_point(element.body_j, u_j)
+            d = point - centre
+            distance = np.linalg.norm(d, axis=1)
+            u = d / distance[:, None]
+            slope = element.profile(np.arctan2(d[:, 1], d[:, 0]) - cam_angle, 1)
+            # the pitch curve's outward normal, u - r' w / |d|; the surface a roller in
+            normal = u + slope[:, None] * np.column_stack([u[:, 1], -u[:, 0]]) / distance[:, None]
+            normal /= np.linalg.norm(normal, axis=1)[:, None]
+            return point - float(element.roller_radius) * normal, normal
+        # the face's normal (towards the cam) is the row's first body vector, on body j
+        table = results.model.row_table
+        v_j = table.vector_local[table.slots[results.model._instances_of[self.name][0], 0]]
+        normal = -results._global_point(element.body_j, v_j, vector=True)
+        psi = np.arctan2(normal[:, 1], normal[:, 0]) - cam_angle
+        # the support function's envelope: h e + h' e_perp
+        across = np.column_stack([-normal[:, 1], normal[:, 0]])
+        return (centre + element.profile(psi)[:, None] * normal
+                + element.profile(psi, 1)[:, None] * across, normal)
+
+    @property
+    def lift_off(self) -> np.ndarray:
+        """Cam and follower: the times [s] at which the contact would have to pull, (j,):
+        there a real follower leaves the cam (a stronger return spring, or a lower speed, keeps
+        it on)."""
+        return self._results.t[self.contact_force < 0.0]
+
     def reaction(self, on: str | Body | None = None, frame: str = "global") -> Reaction:
         """Force and moment this joint exerts on body ``on`` (default: its second body, j).
 

@@ -342,7 +342,10 @@ class _Group:
                            dtype=np.intp)
         self.params = {}
         for key in cls.params:
-            self.params[key] = np.array([np.asarray(s.params[key]) for _, s in items])
+            values = [np.asarray(s.params[key]) for _, s in items]
+            # stacked, unless their lengths differ (cams' curves): then a list
+            same = all(v.shape == values[0].shape for v in values)
+            self.params[key] = np.array(values) if same else values
         self.elements = np.array([e for e, _ in items], dtype=np.intp)
         # primitives whose rows depend on time themselves (the spatial rotation driver)
         self.motions = tuple(s.motion for _, s in items) if getattr(cls, "time_dependent", False) else ()

@@ -110,7 +110,7 @@ class _Core:
             mass=np.array(model.mass), inertia=inertia, weight=np.array(model._weight[:nb].ravel()),
             code=table.code, bi=table.bi, bj=table.bj, first_row=table.first_row,
             slots=table.slots, coordinate=table.coordinate, motion=table.motion,
-            real=np.ascontiguousarray(table.real),
+            real=np.ascontiguousarray(table.real), curves=np.array(table.curves),
             vector_bodies=table.vector_bodies,
             vector_local=np.ascontiguousarray(table.vector_local),
             n_rows=table.n_rows, driver_rows=self.driver_rows,

@@ -25,7 +25,8 @@ import numpy as np
 from mbd3d.numerics.compiled import rows as kernel
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation", "Gear", "Rack", "RowTable", "evaluate_rows"]
+           "RelativeAngle", "Rotation", "Gear", "Rack", "CamPoint", "CamFace", "RowTable",
+           "evaluate_rows"]
 
 class PointCoincidence:
     """``c = r_i - r_j``: point ``u_i`` of body i coincides with point ``u_j`` of body j.
@@ -219,9 +220,54 @@ class Rack:
         return 1
 
 
+class CamPoint:
+    """Planar disc cam (body i) and a point or roller follower (body j): the follower's point
+    ``u_j`` stays on the cam's pitch curve ``r(phi)``, polar about the cam's centre ``u_i``
+    with ``phi`` measured in the cam's frame: ``C = |d| - r(angle(d) - theta_i)``,
+    ``d = r_j - r_i``. Its gradient in ``r_j`` is the pitch curve's outward normal
+    ``u - r'(phi) w / |d|`` (``u`` along ``d``, ``w`` turned from it by 90 degrees), so the
+    force on the follower is ``-lam`` times that: compressive while ``lam < 0``.
+    ``real = (offset, intervals)`` of the curve in :attr:`RowTable.curves`.
+    """
+
+    kind = "cam"
+    code = kernel.CAM_POINT
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("u_i", "u_j", "curve")
+    vectors = (("si", "i", "u_i"), ("sj", "j", "u_j"))
+    planar_only = True
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
+class CamFace:
+    """Planar disc cam (body i) and a flat-faced follower (body j): the face (point ``u_j``,
+    unit normal ``v_j`` towards the cam) stays tangent to the cam whose support function is
+    ``h(psi)``, the distance from the cam's centre ``u_i`` to its tangent with outward normal
+    at ``psi`` in the cam's frame: ``C = n . (r_i - r_j) - h(theta_j - theta_i + psi_0)``,
+    ``psi_0`` the angle of ``-v_j`` in body j's frame. The force on the follower is
+    ``lam n``: compressive while ``lam < 0``. ``real = (offset, intervals, psi_0)``.
+    """
+
+    kind = "cam_face"
+    code = kernel.CAM_FACE
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("v_j", "u_j", "u_i", "curve", "real")
+    vectors = (("nj", "j", "v_j"), ("sj", "j", "u_j"), ("si", "i", "u_i"))
+    planar_only = True
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation, Gear,
-               Rack)}
+               Rack, CamPoint, CamFace)}
 
 
 class RowTable:
@@ -235,7 +281,11 @@ class RowTable:
         ``phi`` (-1 for the others).
     real : ndarray (k, 4) of float
         Real-valued parameters of instances that need them inside their rows (the gear
-        pair's ratios and phase, the rack's radius); zero for the others.
+        pair's ratios and phase, the rack's radius, a cam's curve: its offset and intervals
+        in ``curves``); zero for the others.
+    curves : ndarray
+        The cams' periodic curves, one after the other (see
+        :mod:`mbd3d.numerics.compiled.curves`).
     slots : ndarray (k, 3) of int
         Rows of each instance's vectors (in the order of its class's ``vectors``) in the
         vector table ``vector_bodies`` (V,), ``vector_local`` (V, dim).
@@ -243,9 +293,10 @@ class RowTable:
     """
 
     def __init__(self, code, bi, bj, first_row, slots, coordinate, motion, real, vector_bodies,
-                 vector_local, n_rows: int):
+                 vector_local, n_rows: int, curves: np.ndarray | None = None):
         self.code, self.bi, self.bj, self.first_row = code, bi, bj, first_row
         self.slots, self.coordinate, self.motion, self.real = slots, coordinate, motion, real
+        self.curves = np.zeros(1) if curves is None else curves
         self.vector_bodies, self.vector_local, self.n_rows = vector_bodies, vector_local, n_rows
 
     @classmethod
@@ -256,20 +307,28 @@ class RowTable:
                                                         for _ in range(6))
         slots = np.full((k, 3), -1, dtype=np.int64)
         real = np.zeros((k, 4))
-        bodies, local = [], []
+        bodies, local, curves = [], [], [np.zeros(1)]
+        curve_start = 1
         row = 0
         for e, (prim, i, j, params, motion_row) in enumerate(instances):
             code[e], bi[e], bj[e], first_row[e], motion[e] = prim.code, i, j, row, motion_row
             coordinate[e] = int(params.get("coordinate", 0))
             if "real" in params:
                 real[e, :len(params["real"])] = params["real"]
+            if "curve" in params:
+                # a cam's curve: its place in the table and its number of intervals
+                table = np.asarray(params["curve"], dtype=float)
+                real[e, 0], real[e, 1] = curve_start, (len(table) - 1) // 5
+                curves.append(table)
+                curve_start += len(table)
             for n, (_, side, key) in enumerate(prim.vectors):
                 slots[e, n] = len(bodies)
                 bodies.append(i if side == "i" else j)
                 local.append(np.asarray(params[key], dtype=float))
             row += prim.rows(dim)
         return cls(code, bi, bj, first_row, slots, coordinate, motion, real,
-                   np.array(bodies, dtype=np.int64), np.array(local).reshape(-1, dim), row)
+                   np.array(bodies, dtype=np.int64), np.array(local).reshape(-1, dim), row,
+                   np.concatenate(curves))
 
     def row_bodies(self) -> tuple[np.ndarray, np.ndarray]:
         """Bodies i and j of every row, (m,) each."""
@@ -287,14 +346,15 @@ class RowTable:
         return RowTable(self.code[instances], self.bi[instances], self.bj[instances], first,
                         renumbered, self.coordinate[instances], self.motion[instances],
                         self.real[instances],
-                        self.vector_bodies[used], self.vector_local[used], int(rows_per.sum()))
+                        self.vector_bodies[used], self.vector_local[used], int(rows_per.sum()),
+                        self.curves)
 
     def on_bodies(self, body_map: np.ndarray) -> "RowTable":
         """The same rows read from other body rows: body ``b`` becomes ``body_map[b]``."""
         return RowTable(self.code, body_map[self.bi], body_map[self.bj], self.first_row,
                         self.slots, self.coordinate, self.motion, self.real,
                         body_map[self.vector_bodies],
-                        self.vector_local, self.n_rows)
+                        self.vector_local, self.n_rows, self.curves)
 
     def repeated(self, copies: int, body_stride: int, motion_stride: int) -> "RowTable":
         """The table for ``copies`` states stacked one after the other: copy ``c`` reads bodies
@@ -312,7 +372,8 @@ class RowTable:
                                  .reshape(copies, -1), -1).reshape(-1),
                         np.tile(self.real, (copies, 1)),
                         tile(self.vector_bodies, body_stride),
-                        np.tile(self.vector_local, (copies, 1)), copies * self.n_rows)
+                        np.tile(self.vector_local, (copies, 1)), copies * self.n_rows,
+                        self.curves)
 
 
 def evaluate_rows(table: RowTable, fr, phi: np.ndarray, value: bool = True,
@@ -337,7 +398,7 @@ def evaluate_rows(table: RowTable, fr, phi: np.ndarray, value: bool = True,
     s, J, v, a = fr.vectors(table.vector_bodies, table.vector_local, velocities)
     C, data, G, nu = kernel.constraint_rows(
         table.code, table.bi, table.bj, table.first_row, table.slots, table.coordinate,
-        table.motion, table.real, phi, table.n_rows, fr.Q, fr.Qd if velocities else fr.Q, s, J, v, a,
+        table.motion, table.real, table.curves, phi, table.n_rows, fr.Q, fr.Qd if velocities else fr.Q, s, J, v, a,
         destination, nnz, value, jacobian, gamma, rate)
     if jacobian and raw:
         data = data.reshape(table.n_rows, 2, nc)

@@ -143,7 +143,7 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
     body_vectors_into(work.A, work.axes, work.omega, work.kappa, model.vector_bodies,
                       model.vector_local, yes, work.s, work.J, work.v, work.a)
     constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
-                         model.coordinate, model.motion, model.real, phi, model.n_rows, work.Q, work.Qd,
+                         model.coordinate, model.motion, model.real, model.curves, phi, model.n_rows, work.Q, work.Qd,
                          work.s, work.J, work.v, work.a, model.destination, no, yes, yes, no,
                          work.C, work.data, gamma, work.nu, work.row_work, work.row_jacobian)
     driver_rows = model.driver_rows

@@ -214,7 +214,7 @@ def newton_step(work, penalty_arrays, key, t, q, q_hat, qd_hat, beta_prime, gamm
         body_vectors_into(work.A, work.axes, work.omega, work.kappa, model.vector_bodies,
                           model.vector_local, no, work.s, work.J, work.v, work.a)
         constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
-                             model.coordinate, model.motion, model.real, phi, m, work.Q, work.Qd, work.s,
+                             model.coordinate, model.motion, model.real, model.curves, phi, m, work.Q, work.Qd, work.s,
                              work.J, work.v, work.a, model.destination, yes, yes, no, no, C,
                              data, work.gamma, work.nu, work.row_work, work.row_jacobian)
         driver_rows = model.driver_rows

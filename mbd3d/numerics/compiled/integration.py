@@ -133,7 +133,7 @@ def drift(model, key, t, y, charts, work):
     body_vectors_into(A, axes, omega, kappa, model.vector_bodies, model.vector_local, no, s,
                       J, v, a)
     constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
-                         model.coordinate, model.motion, model.real, phi, m, Q, Q, s, J, v, a,
+                         model.coordinate, model.motion, model.real, model.curves, phi, m, Q, Q, s, J, v, a,
                          model.destination, yes, yes, no, yes, C, data, C, nu, work.row_work,
                          work.row_jacobian)
     c0, row_scale, jac_rows, jac_cols = model.c0, model.row_scale, model.jac_rows, model.jac_cols

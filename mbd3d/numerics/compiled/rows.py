@@ -17,9 +17,11 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.curves import periodic_curve
 
 #: primitive codes, in the order of mbd3d.model.primitives.PRIMITIVES
-POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION, GEAR, RACK = range(9)
+POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION, GEAR, RACK, CAM_POINT, CAM_FACE = \
+    range(11)
 
 
 @jit
@@ -69,8 +71,8 @@ def row_work_size(dim: int, n_rot: int) -> int:
 
 
 @jit
-def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, real, phi, n_rows,
-                    Q, Qd, s, J, v, a, dest, nnz, value, jacobian, gamma, rate):
+def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, real, curves, phi,
+                    n_rows, Q, Qd, s, J, v, a, dest, nnz, value, jacobian, gamma, rate):
     """Evaluate every instance: returns ``c (m,)``, the Jacobian values at positions ``dest``
     (``nnz``,), ``gamma (m,)`` and ``-C_t`` of time-dependent rows (m,), with zero-length
     arrays for the parts not asked for (see :func:`constraint_rows_into`)."""
@@ -80,15 +82,16 @@ def constraint_rows(kind, bi, bj, first_row, slots, coordinate, motion, real, ph
     G = np.empty(n_rows if gamma else 0)
     nu = np.empty(n_rows if rate else 0)
     work = np.empty(row_work_size(dim, Q.shape[1] - dim))
-    constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, real, phi, n_rows, Q,
-                         Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G, nu,
+    constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, real, curves, phi,
+                         n_rows, Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data,
+                         G, nu,
                          work, np.empty((dim, Q.shape[1] - dim)))
     return C, data, G, nu
 
 
 @jit
-def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, real, phi, n_rows,
-                         Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G,
+def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, real, curves, phi,
+                         n_rows, Q, Qd, s, J, v, a, dest, value, jacobian, gamma, rate, C, data, G,
                          nu, work, uJ):
     """Evaluate every instance into ``C`` (m,) (``c(q)`` only: the caller subtracts the rows'
     constants and prescribed motions), ``data`` (the Jacobian values at positions ``dest``),
@@ -96,7 +99,8 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, rea
     when asked for; ``work``: scratch of :func:`row_work_size`, ``uJ`` of (dim, n_rot).
 
     ``Q``, ``Qd`` (bodies + ground, n_coords): coordinates and rates (``Qd`` is read only for
-    ``gamma``); ``real`` (k, 4): real parameters of the instances (gears, racks);
+    ``gamma``); ``real`` (k, 4): real parameters of the instances (gears, racks, cams);
+    ``curves``: the cams' periodic curves (see :mod:`.curves`);
     ``phi`` (k_motion, 3): ``(f, f', f'')`` of the rotation drivers' motions.
     """
     dim = s.shape[1]
@@ -121,9 +125,16 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, rea
     for e in range(kind.shape[0]):
         k, i, j, row = kind[e], bi[e], bj[e], first_row[e]
         p0, p1, p2 = slots[e, 0], slots[e, 1], slots[e, 2]
-        if k == POINT or k == DOT2 or k == DISTANCE or k == GEAR or k == RACK:
-            # the body points: slots (p0, p1) for a point pair, (p1, p2) after dot-2's vector
-            si, sj = (p1, p2) if k == DOT2 or k == RACK else (p0, p1)
+        if (k == POINT or k == DOT2 or k == DISTANCE or k == GEAR or k == RACK
+                or k == CAM_POINT or k == CAM_FACE):
+            # the body points: slots (p0, p1) for a point pair, (p1, p2) after dot-2's vector,
+            # (p2, p1) after a flat face's normal (the cam's centre on body i is p2)
+            if k == DOT2 or k == RACK:
+                si, sj = p1, p2
+            elif k == CAM_FACE:
+                si, sj = p2, p1
+            else:
+                si, sj = p0, p1
             for x in range(dim):
                 d[x] = Q[j, x] + s[sj, x] - Q[i, x] - s[si, x]
                 if gamma:
@@ -260,6 +271,57 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, rea
                 relative = ((a[sj, 0] - a[si, 0]) * e1 - (a[sj, 1] - a[si, 1]) * e0)
                 G[row] = -kappa * (relative + 2.0 * (dd[0] * e0 + dd[1] * e1) * psi_rate
                                    - cross * psi_rate * psi_rate)
+        elif k == CAM_POINT:
+            # follower point j on the cam's pitch curve r(phi) (polar about the cam's centre,
+            # phi in the cam's frame): C = |d| - r(phi), phi = angle(d) - theta_i
+            distance = max(math.sqrt(d[0] * d[0] + d[1] * d[1]), 1e-300)
+            u0, u1 = d[0] / distance, d[1] / distance
+            angle = math.atan2(d[1], d[0]) - Q[i, nc - 1]
+            r, r1, r2 = periodic_curve(curves, int(real[e, 0]), int(real[e, 1]), angle)
+            if value:
+                C[row] = distance - r
+            # g = u - r' w / |d| (w = u turned by 90 degrees): the pitch curve's normal
+            g0, g1 = u0 + r1 * u1 / distance, u1 - r1 * u0 / distance
+            if jacobian:
+                _put(data, dest, row, 0, 0, nc, -g0)
+                _put(data, dest, row, 0, 1, nc, -g1)
+                _put(data, dest, row, 1, 0, nc, g0)
+                _put(data, dest, row, 1, 1, nc, g1)
+                _put(data, dest, row, 0, nc - 1, nc, r1 - g0 * J[si, 0, 0] - g1 * J[si, 1, 0])
+                _put(data, dest, row, 1, nc - 1, nc, g0 * J[sj, 0, 0] + g1 * J[sj, 1, 0])
+            if gamma:
+                r0, r1_ = a[sj, 0] - a[si, 0], a[sj, 1] - a[si, 1]
+                radial = u0 * dd[0] + u1 * dd[1]
+                turning = u0 * dd[1] - u1 * dd[0]  # w . d'
+                rate_phi = turning / distance - Qd[i, nc - 1]
+                G[row] = -(u0 * r0 + u1 * r1_
+                           + (dd[0] * dd[0] + dd[1] * dd[1] - radial * radial) / distance
+                           - r2 * rate_phi * rate_phi
+                           - r1 * ((u0 * r1_ - u1 * r0) / distance
+                                   - 2.0 * radial * turning / (distance * distance)))
+        elif k == CAM_FACE:
+            # a flat face of j (unit normal n, slot p0, towards the cam) touching the cam whose
+            # support function is h(psi): C = n . (c - P) - h(psi), psi = theta_j - theta_i
+            # + psi_0; here d = P - c
+            psi = Q[j, nc - 1] - Q[i, nc - 1] + real[e, 2]
+            h, h1, h2 = periodic_curve(curves, int(real[e, 0]), int(real[e, 1]), psi)
+            n0, n1 = s[p0, 0], s[p0, 1]
+            if value:
+                C[row] = -(n0 * d[0] + n1 * d[1]) - h
+            if jacobian:
+                _put(data, dest, row, 0, 0, nc, n0)
+                _put(data, dest, row, 0, 1, nc, n1)
+                _put(data, dest, row, 1, 0, nc, -n0)
+                _put(data, dest, row, 1, 1, nc, -n1)
+                _put(data, dest, row, 0, nc - 1, nc, n0 * J[si, 0, 0] + n1 * J[si, 1, 0] + h1)
+                _put(data, dest, row, 1, nc - 1, nc, -(n0 * J[sj, 0, 0] + n1 * J[sj, 1, 0])
+                     - (d[0] * J[p0, 0, 0] + d[1] * J[p0, 1, 0]) - h1)
+            if gamma:
+                rate_psi = Qd[j, nc - 1] - Qd[i, nc - 1]
+                G[row] = (a[p0, 0] * d[0] + a[p0, 1] * d[1]
+                          + 2.0 * (v[p0, 0] * dd[0] + v[p0, 1] * dd[1])
+                          + n0 * (a[sj, 0] - a[si, 0]) + n1 * (a[sj, 1] - a[si, 1])
+                          + h2 * rate_psi * rate_psi)
         elif k == ROTATION:
             # dot-1 of u (body i, turned by phi) and f_j (slot p2): C = sin(theta - phi)
             f, f1, f2 = phi[motion[e], 0], phi[motion[e], 1], phi[motion[e], 2]

@@ -69,7 +69,7 @@ class PenaltyArraysType(_Record):
 MODEL_FIELDS = (
     "n", "python_accelerations", "python_parts", "solved_here",
     "mass", "inertia", "weight",
-    "code", "bi", "bj", "first_row", "slots", "coordinate", "motion", "real",
+    "code", "bi", "bj", "first_row", "slots", "coordinate", "motion", "real", "curves",
     "vector_bodies",
     "vector_local", "n_rows",
     "driver_rows", "destination", "nnz",

@@ -1,0 +1,241 @@
+"""Disc cams and their followers (planar): a point or roller on the cam's pitch curve, and a
+flat face tangent to the cam."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from mbd3d.errors import ModelError
+from mbd3d.model.arguments import RecordsArguments
+from mbd3d.model.body import Body
+from mbd3d.model.builder import BuildContext
+from mbd3d.model.element import ConstraintElement, PrimitiveSpec
+
+#: how far (relative to the curve's size) the drawing may put the follower off the curve: the
+#: position analysis at the start closes small gaps (a profile interpolated between samples
+#: of the law the drawing was made from), not a forgotten roller radius
+_ON_CURVE = 1e-3
+
+
+class CamProfile(RecordsArguments):
+    """A closed curve about a cam's centre, in polar form: ``r(phi)`` [m] for ``phi`` [rad] in
+    the cam's frame, one turn, as a periodic cubic spline through the given points (so the
+    radius, slope and curvature are continuous all round).
+
+    For a point or roller follower it is the pitch curve (the path of the roller's centre on
+    the cam: the cam's surface offset by the roller radius); for a flat-faced follower, the
+    cam's support function (the distance from the centre to the tangent whose outward normal
+    points at ``phi``), which for a follower translating along its face's normal is the base
+    radius plus the lift.
+
+    Parameters
+    ----------
+    angles : array_like
+        Strictly increasing, within one turn (the last less than the first plus 2 pi) [rad].
+    radii : array_like
+        Positive [m], one per angle.
+    """
+
+    def __init__(self, angles: Any, radii: Any):
+        self.angles = angles
+        self.radii = radii
+        try:
+            phi = np.asarray(angles, dtype=float)
+            r = np.asarray(radii, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(f"cam profile: angles and radii must be numbers, got {angles!r} "
+                             f"and {radii!r}") from None
+        if phi.ndim != 1 or r.shape != phi.shape or len(phi) < 4:
+            raise ModelError(f"cam profile: give at least 4 angles and as many radii, got "
+                             f"shapes {phi.shape} and {r.shape}")
+        if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(r))):
+            raise ModelError("cam profile: angles and radii must be finite")
+        if not (np.all(np.diff(phi) > 0) and phi[-1] < phi[0] + 2 * math.pi):
+            raise ModelError("cam profile: angles must increase strictly and span less than one "
+                             "turn (the curve closes itself)")
+        if not np.all(r > 0):
+            raise ModelError(f"cam profile: radii must be positive, the smallest is {r.min()!r}")
+        self._spline = CubicSpline(np.append(phi, phi[0] + 2 * math.pi), np.append(r, r[0]),
+                                   bc_type="periodic")
+
+    @classmethod
+    def sampled(cls, function: Callable[[np.ndarray], np.ndarray], points: int = 720
+                ) -> "CamProfile":
+        """The profile through ``points`` samples, evenly spaced over a turn from 0, of
+        ``function(phi)`` [m] (vectorised over an array of angles)."""
+        phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
+        return cls(phi, np.asarray(function(phi), dtype=float))
+
+    def __call__(self, phi: Any, derivative: int = 0) -> np.ndarray:
+        """``r`` [m] (or its ``derivative``-th derivative) at the angles ``phi`` [rad]."""
+        return self._spline(np.asarray(phi, dtype=float), derivative, extrapolate="periodic")
+
+    def table(self) -> np.ndarray:
+        """The curve as the compiled rows read it (:mod:`mbd3d.numerics.compiled.curves`):
+        the knots, then the coefficients of each interval in ascending powers."""
+        return np.concatenate([self._spline.x, self._spline.c[::-1].T.ravel()])
+
+
+def _profile(element: ConstraintElement, profile: Any) -> CamProfile:
+    if not isinstance(profile, CamProfile):
+        raise ModelError(f"cam '{element.name}': profile must be a CamProfile (angles and radii, "
+                         f"or CamProfile.sampled(function)), got {profile!r}")
+    return profile
+
+
+def _cam_centre(ctx: BuildContext, element: ConstraintElement, centre: Any) -> np.ndarray:
+    if centre is None:
+        if element.body_i.is_ground:
+            raise ModelError(f"cam '{element.name}': the ground has no centre of mass; give "
+                             "center= (the cam's centre in the drawing)")
+        return np.zeros(2)
+    return ctx.to_local_point(element.body_i, ctx.vector(centre, f"cam '{element.name}': center"))
+
+
+def _require_planar(ctx: BuildContext, element: ConstraintElement) -> None:
+    if ctx.dim != 2:
+        raise ModelError(f"cam '{element.name}': cams are available for planar models only "
+                         "(dim=2) so far")
+
+
+class CamFollower(ConstraintElement):
+    """A point or roller follower on a planar disc cam: the follower's point (a knife edge, or
+    a roller's centre) stays on the cam's pitch curve.
+
+    The cam (body i) turns about its centre however it is driven; the follower (body j) is
+    guided by its own joints (a prismatic joint for a translating follower, a revolute for a
+    rocker). Row: :class:`mbd3d.model.primitives.CamPoint`. ``results.joint(name)
+    .contact_force`` is the normal force between them, positive while they press on each
+    other; where it would pull, the follower lifts off in reality, and ``.lift_off`` lists
+    those times.
+
+    Parameters
+    ----------
+    name : str
+    body_i : Body
+        The cam (may be the ground: a fixed track).
+    body_j : Body
+        The follower.
+    profile : CamProfile
+        The pitch curve, polar about the cam's centre in the cam's frame.
+    center : array_like, optional
+        The cam's centre in the drawing (global) [m]; default the cam's centre of mass.
+    point : array_like, optional
+        The follower's point (roller centre) in the drawing [m], on the pitch curve; default
+        the follower's centre of mass.
+    roller_radius : float
+        The roller's radius [m] (0: a knife edge), for drawing the cam's surface and placing
+        the contact point.
+    """
+
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, profile: CamProfile,
+                 center: Any = None, point: Any = None, roller_radius: float = 0.0):
+        self.name = name
+        self.body_i = body_i
+        self.body_j = body_j
+        self.profile = profile
+        self.center = center
+        self.point = point
+        self.roller_radius = roller_radius
+
+    def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, np.ndarray]:
+        """``(u_i, u_j)``: the cam's centre in its frame and the follower's point in its own."""
+        _require_planar(ctx, self)
+        profile = _profile(self, self.profile)
+        rho = ctx.scalar(self.roller_radius, f"cam '{self.name}': roller_radius")
+        if rho < 0:
+            raise ModelError(f"cam '{self.name}': roller_radius must be >= 0, got {rho!r}")
+        u_i = _cam_centre(ctx, self, self.center)
+        u_j = (np.zeros(2) if self.point is None else ctx.to_local_point(
+            self.body_j, ctx.vector(self.point, f"cam '{self.name}': point")))
+        d = ctx.to_global_point(self.body_j, u_j) - ctx.to_global_point(self.body_i, u_i)
+        phi = math.atan2(d[1], d[0]) - ctx.initial_coordinate(self.body_i, 2)
+        r = float(profile(phi))
+        off = float(np.linalg.norm(d)) - r
+        if abs(off) > _ON_CURVE * r:
+            raise ModelError(f"cam '{self.name}': the follower's point is {off:.6g} m off the "
+                             f"pitch curve in the drawing (radius {r:.6g} m at "
+                             f"{math.degrees(phi):.4g} deg in the cam's frame); put it on the "
+                             "curve, or turn the cam to match")
+        return u_i, u_j
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        u_i, u_j = self.geometry(ctx)
+        return [PrimitiveSpec("cam", self.body_i, self.body_j,
+                              {"u_i": u_i, "u_j": u_j, "curve": self.profile.table()},
+                              ("contact",))]
+
+    def reaction_frame(self, ctx: BuildContext):
+        u_i, u_j = self.geometry(ctx)
+        return u_i, u_j, np.eye(2)
+
+
+class FlatFaceFollower(ConstraintElement):
+    """A flat-faced follower on a planar disc cam: the face stays tangent to the cam.
+
+    Row: :class:`mbd3d.model.primitives.CamFace`. The cam is given by its support function
+    (see :class:`CamProfile`), which must describe a convex cam. ``contact_force`` and
+    ``lift_off`` as for :class:`CamFollower`.
+
+    Parameters
+    ----------
+    name : str
+    body_i : Body
+        The cam.
+    body_j : Body
+        The follower.
+    profile : CamProfile
+        The cam's support function about its centre, in the cam's frame.
+    normal : array_like
+        The face's normal in the drawing, pointing from the face towards the cam.
+    center : array_like, optional
+        The cam's centre in the drawing [m]; default the cam's centre of mass.
+    at : array_like, optional
+        A point of the face in the drawing [m]; default the follower's centre of mass.
+    """
+
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, profile: CamProfile,
+                 normal: Any, center: Any = None, at: Any = None):
+        self.name = name
+        self.body_i = body_i
+        self.body_j = body_j
+        self.profile = profile
+        self.normal = normal
+        self.center = center
+        self.at = at
+
+    def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+        """``(u_i, u_j, v_j, psi_0)``: the cam's centre, the face's point and normal in the
+        follower's frame, and the angle of ``-v_j`` there."""
+        _require_planar(ctx, self)
+        profile = _profile(self, self.profile)
+        u_i = _cam_centre(ctx, self, self.center)
+        n = ctx.direction(self.normal, f"cam '{self.name}': normal")
+        u_j = (np.zeros(2) if self.at is None else ctx.to_local_point(
+            self.body_j, ctx.vector(self.at, f"cam '{self.name}': at")))
+        v_j = ctx.to_local_vector(self.body_j, n)
+        psi_0 = math.atan2(-v_j[1], -v_j[0])
+        gap = (ctx.to_global_point(self.body_i, u_i) - ctx.to_global_point(self.body_j, u_j)) @ n
+        psi = (ctx.initial_coordinate(self.body_j, 2) - ctx.initial_coordinate(self.body_i, 2)
+               + psi_0)
+        h = float(profile(psi))
+        if abs(gap - h) > _ON_CURVE * h:
+            raise ModelError(f"cam '{self.name}': the face is {gap:.6g} m from the cam's centre "
+                             f"in the drawing, but the cam reaches {h:.6g} m in its direction; "
+                             "place the face on the cam")
+        return u_i, u_j, v_j, psi_0
+
+    def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
+        u_i, u_j, v_j, psi_0 = self.geometry(ctx)
+        return [PrimitiveSpec("cam_face", self.body_i, self.body_j,
+                              {"v_j": v_j, "u_j": u_j, "u_i": u_i,
+                               "curve": self.profile.table(), "real": (0.0, 0.0, psi_0)},
+                              ("contact",))]
+
+    def reaction_frame(self, ctx: BuildContext):
+        u_i, u_j, _, _ = self.geometry(ctx)
+        return u_i, u_j, np.eye(2)
