@@ -11,7 +11,8 @@ against the body kinematics, so the same classes serve every body type that supp
 - Spatial only: :class:`Spherical`, :class:`Universal`, :class:`Cylindrical`, :class:`Planar`,
   :class:`PointOnPlane`.
 - Planar higher pairs: :class:`GearPair` (external and internal), :class:`RackPinion`,
-  :class:`CamFollower` (point or roller on a :class:`CamProfile`), :class:`FlatFaceFollower`.
+  :class:`CamFollower` (point or roller on a :class:`CamProfile`), :class:`FlatFaceFollower`,
+  :class:`RollingDisc` (on a straight track).
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 
@@ -22,10 +23,11 @@ from mbd3d.joints.fixed import Fixed
 from mbd3d.joints.gears import GearPair, RackPinion
 from mbd3d.joints.prismatic import Prismatic
 from mbd3d.joints.revolute import Revolute
+from mbd3d.joints.rolling import RollingDisc
 from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
                                          Universal)
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
            "TranslationDriver", "Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine",
            "PointOnPlane", "GearPair", "RackPinion", "CamFollower", "FlatFaceFollower",
-           "CamProfile"]
+           "CamProfile", "RollingDisc"]

@@ -13,7 +13,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from mbd3d.joints import (CamFollower, CoordinateDriver, FlatFaceFollower, GearPair, Prismatic,
-                          RackPinion, RotationDriver, TranslationDriver)
+                          RackPinion, RollingDisc, RotationDriver, TranslationDriver)
 from mbd3d.errors import ModelError
 from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
@@ -386,7 +386,8 @@ class Scene:
     def _meshes_plotted(self) -> list[str]:
         """The gear meshes among the joints whose reactions are drawn."""
         return [name for name in self.reactions
-                if isinstance(self.model.joint(name), (GearPair, RackPinion))]
+                if isinstance(self.model.joint(name), (GearPair, RackPinion))
+                and not isinstance(self.model.joint(name), RollingDisc)]
 
     def _spring_ends(self, view: _Block, spring: SpringDamper) -> np.ndarray:
         """(k, 2, 3) global positions of a spring's two ends."""
@@ -462,6 +463,15 @@ class Scene:
             if self._moments[name]:
                 send(f"plots/reactions/{part}/moment", indexes=times,
                      columns=rr.Scalars.columns(scalars=moment))
+            if isinstance(element, RollingDisc):
+                # the track's whole force on the disc, at the contact point
+                point, normal = block.joint(name).contact()
+                history = block.joint(name)
+                along = np.column_stack([normal[:, 1], -normal[:, 0]])
+                arrows.append((f"world/reactions/{part}", _lift(point), _lift(
+                    history.contact_force[:, None] * normal
+                    + history.traction[:, None] * along), "force"))
+                continue
             if isinstance(element, (GearPair, RackPinion)):
                 # a mesh: the tooth force along the line of action, at the pitch point
                 mesh = block.joint(name).mesh_force

@@ -334,8 +334,12 @@ class JointHistory:
         """Gear pair or rack and pinion: the force of the mesh on body j (see
         :class:`MeshForce`), from the multiplier of the mesh row."""
         from mbd3d.joints.gears import GearPair, RackPinion  # noqa: PLC0415
+        from mbd3d.joints.rolling import RollingDisc  # noqa: PLC0415
 
         element = self.element
+        if isinstance(element, RollingDisc):
+            raise ModelError(f"'{self.name}' is a rolling disc: its forces are contact_force "
+                             "(normal) and traction (tangential)")
         if not isinstance(element, (GearPair, RackPinion)):
             raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a gear mesh; "
                              "mesh_force is reported by GearPair and RackPinion")
@@ -363,22 +367,44 @@ class JointHistory:
 
     @property
     def contact_force(self) -> np.ndarray:
-        """Cam and follower: the normal force between them [N], (k,), positive while they
-        press on each other (from the multiplier of the contact row; see :attr:`lift_off`)."""
-        force = self.reaction(on=self.element.body_j).force  # on the follower
+        """Cam and follower, or rolling disc: the normal force between the two bodies [N],
+        (k,), positive while they press on each other (from the multipliers of the contact
+        rows; see :attr:`lift_off`)."""
+        force = self.reaction(on=self.element.body_j).force  # on the follower or disc
         return np.einsum("ki,ki->k", force, self.contact()[1])
 
+    @property
+    def traction(self) -> np.ndarray:
+        """Rolling disc: the tangential force the track exerts on the disc along the track's
+        axis [N], (k,): the friction rolling without slip needs."""
+        from mbd3d.joints.rolling import RollingDisc  # noqa: PLC0415
+
+        if not isinstance(self.element, RollingDisc):
+            raise ModelError(f"'{self.name}' ({type(self.element).__name__}) is not a rolling "
+                             "disc; traction is reported by RollingDisc")
+        force = self.reaction(on=self.element.body_j).force
+        normal = self.contact()[1]
+        return normal[:, 1] * force[:, 0] - normal[:, 0] * force[:, 1]
+
     def contact(self) -> tuple[np.ndarray, np.ndarray]:
-        """Cam and follower: the contact point on the cam's surface, global [m], and the unit
-        normal there from the cam towards the follower, each (k, 2)."""
+        """Cam and follower, or rolling disc: the contact point on the cam's surface (the
+        track), global [m], and the unit normal there towards the follower (disc), each
+        (k, 2)."""
         from mbd3d.joints.cams import CamFollower, FlatFaceFollower  # noqa: PLC0415
+        from mbd3d.joints.rolling import RollingDisc  # noqa: PLC0415
 
         element = self.element
-        if not isinstance(element, (CamFollower, FlatFaceFollower)):
-            raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a cam; contacts "
-                             "are reported by CamFollower and FlatFaceFollower")
+        if not isinstance(element, (CamFollower, FlatFaceFollower, RollingDisc)):
+            raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a cam or a "
+                             "rolling disc; contacts are reported by CamFollower, "
+                             "FlatFaceFollower and RollingDisc")
         results = self._results
-        u_i, u_j, _ = results.model.reaction_frame(self.name)
+        u_i, u_j, axes = results.model.reaction_frame(self.name)
+        if isinstance(element, RollingDisc):
+            # the track's normal (to the left of its axis), the contact a radius below
+            normal = results._global_point(element.body_i, axes[:, 1], vector=True)
+            return (results._global_point(element.body_j, u_j)
+                    - float(element.radius) * normal, normal)
         centre = results._global_point(element.body_i, u_i)
         cam_angle = (np.zeros(len(results.t)) if element.body_i.is_ground
                      else results.body(element.body_i.name).angle)
