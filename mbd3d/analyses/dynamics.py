@@ -35,6 +35,7 @@ from mbd3d.analyses.implicit import (consistent_accelerations, integrate_general
 from mbd3d.analyses.initial import consistent_initial_state
 from mbd3d.analyses.kinematics import check_times, solve_velocity
 from mbd3d.numerics.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
+from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.position import LARGEST_DENSE_ANALYSIS, singular_error, solve_position
 from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
@@ -355,6 +356,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     spatial = model.dim == 3
     # the reference rotations of the integration, moved in place by the compiled loop
     charts = np.array(model.charts0) if spatial else None
+    # the charts as quaternions, their signs carried along every step (continuous output)
+    turns = to_quaternion(charts) if spatial else np.zeros((0, 4))
     redundant = False  # set at the start: the constraint rows depend on each other
 
     def chart() -> np.ndarray | None:
@@ -366,7 +369,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                                                fallback=redundant, redundant=redundant)
         if redundant:
             stats["singular_outputs"].append(float(tk))
-        out.store(q, qd, qdd, lam, chart())
+        out.store(q, qd, qdd, lam, chart(), turns.copy() if spatial else None)
 
     # the integrated state is y = (q, v): positions and the velocities of BodyType.velocities
     # (angular velocities in body axes for spatial bodies), not (q, qd)
@@ -444,7 +447,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
             while out.done < k_max:
                 flags, t_now, t_old, step, h = stepping.advance(
                     arrays, key, tableau.arrays(), t_now, y, f, h, t[out.done], t[-1], rtol,
-                    atol_y, max_step, charts, constraint_tol, _STEP_CHART_LIMIT, recent, counters,
+                    atol_y, max_step, charts, turns, constraint_tol, _STEP_CHART_LIMIT, recent,
+                    counters,
                     drift, K, y_old, dense, 0.0 if redundant else STEP_COLLAPSE, check_at,
                     _STEPS_PER_CALL, work)
                 stats.update(steps=int(counters[stepping.STEPS]),

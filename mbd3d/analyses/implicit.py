@@ -46,6 +46,7 @@ from mbd3d.model.equations import augmented_accelerations, generalized_forces, m
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.model.friction import raise_friction_with_redundancy
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
+from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, solve_augmented_lagrangian,
                                    solve_model_augmented)
 from mbd3d.io.observers import Watch
@@ -276,6 +277,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
 
     redundant = False  # set at the start: the constraint rows depend on each other
     passages = PassageWatch(model)
+    # spatial models: the charts as quaternions whose signs follow the motion
+    turns = None if model.charts0 is None else to_quaternion(model.charts0)
     stats["singular_passages"] = passages.passages
 
     def record(q, qd, chart, lam_guess):
@@ -286,7 +289,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                                                      redundant)
         if not regular:
             stats["singular_outputs"].append(float(tk))
-        out.store(q, qd, qdd, lam, chart)
+        out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
         return qdd, lam
 
     def project_velocity(tt, q, qd, chart, lu, penalty):
@@ -411,7 +414,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 # its own, because projecting them inside it costs the method its order
                 record(q, project_velocity(tt, q, qd, chart, S, S.penalty), chart, lam)
             watch.tick(tt, stats["steps"])
-            q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart)
+            q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart,
+                                                                               turns=turns)
             if moved:
                 # new orientation coordinates: restart the recursion from consistent
                 # accelerations in the new charts (as at the initial time)

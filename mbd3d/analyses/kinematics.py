@@ -18,6 +18,7 @@ from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix, mass_times
 from mbd3d.model.checks import is_finite_vector
 from mbd3d.model.friction import consistent_multipliers, raise_friction_with_redundancy
+from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
                                    jacobian_scaling, ranked_rows, solve_augmented,
@@ -305,6 +306,9 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
         stats["singular_outputs"] = []
     out = ResultsBuffer(model, analysis, t, stats, with_lam=with_forces)
 
+    # spatial models: the charts as quaternions whose signs follow the motion
+    turns = None if model.charts0 is None else to_quaternion(model.charts0)
+
     def loop() -> None:
         chart = model.charts0
         q = initial_guess(model, t[0], q_guess, chart, f"{analysis} of '{model.name}'",
@@ -319,14 +323,14 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 if not np.all(np.isfinite(q)):  # a step the predictor cannot extrapolate
                     q = out.q[k - 1]
             # keep orientation coordinates away from their singularity (spatial bodies)
-            q, _, chart, _ = model.body_type.reset_charts(q, None, chart)
+            q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=turns)
             q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)
             if surplus:
                 if k == 0:
                     _require_redundant_but_driven(model, tk, q, chart, analysis)
                 qd, qdd, lam = _redundant_rates(model, tk, q, chart, with_forces, analysis)
                 stats["singular_outputs"].append(float(tk))
-                out.store(q, qd, qdd, lam, chart)
+                out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
                 watch.tick(tk, out.done)
                 continue
             fr = constraints.frames(model, q, charts=chart)
@@ -359,7 +363,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                     lam = consistent_multipliers(
                         model, float(tk), fr,
                         lambda extra: (lu.solve(rhs + extra, transpose=True), None), lam)[0]
-            out.store(q, qd, qdd, lam, chart)
+            out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
             watch.tick(tk, out.done)
 
     watch = Watch(observers, progress, model, t, analysis, out.partial)

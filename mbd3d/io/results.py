@@ -48,6 +48,9 @@ class BodyHistory:
         [rad/s], [rad/s^2]: (k,) about the normal for planar bodies, (k, 3) global for spatial.
     angle : ndarray (k,) or None
         Planar bodies: body angle [rad], unwrapped (it keeps counting turns).
+    turning : ndarray (k, 4) or None
+        Spatial bodies: quaternions whose signs follow the motion between the outputs (from
+        the analysis's charts), which :attr:`quaternion` takes its signs from.
 
     ``angular_velocity_body`` and ``angular_acceleration_body`` give them in the body's axes.
     """
@@ -60,6 +63,7 @@ class BodyHistory:
     angular_velocity: np.ndarray
     angular_acceleration: np.ndarray
     angle: np.ndarray | None = None
+    turning: np.ndarray | None = None
 
     @property
     def angular_velocity_body(self) -> np.ndarray:
@@ -79,10 +83,17 @@ class BodyHistory:
 
     @property
     def quaternion(self) -> np.ndarray:
-        """Spatial bodies: unit quaternions (k, 4), ``(w, x, y, z)``, sign kept continuous."""
+        """Spatial bodies: unit quaternions (k, 4), ``(w, x, y, z)``, their signs continuous
+        along the motion. Forward dynamics carries them through every step, so they follow
+        the motion however far apart the outputs; kinematic analysis and inverse dynamics see
+        only their time points and take the turn between them the short way (less than half
+        a turn)."""
         if self.rotation.shape[-1] != 3:
             raise ModelError(f"body '{self.name}' is planar: use .angle")
-        return continuous_quaternions(to_quaternion(self.rotation))
+        q = to_quaternion(self.rotation)
+        if self.turning is None:
+            return continuous_quaternions(q)
+        return np.where(np.einsum("ki,ki->k", q, self.turning)[:, None] < 0, -q, q)
 
     @property
     def orientation(self):
@@ -478,6 +489,7 @@ class Results:
     def __init__(self, model, analysis: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
                  qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
                  message: str = "", stats: dict | None = None, charts: np.ndarray | None = None,
+                 turns: np.ndarray | None = None,
                  model_t: np.ndarray | None = None):
         self.model = model
         self.analysis = analysis
@@ -489,6 +501,9 @@ class Results:
         self.message = message
         self.stats = dict(stats or {})
         self.charts = charts
+        #: spatial models: the charts as quaternions with signs that follow the motion, (k,
+        #: n_bodies + 1, 4), where the analysis tracked them (else None)
+        self.turns = turns
         self._residuals: tuple[np.ndarray, np.ndarray] | None = None
         self._energies: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -507,6 +522,7 @@ class Results:
                        self.qdd[sl], None if self.lam is None else self.lam[sl],
                        status=self.status, message=self.message, stats=self.stats,
                        charts=None if self.charts is None else self.charts[sl],
+                       turns=None if self.turns is None else self.turns[sl],
                        model_t=self.model_t[sl])
 
     # -- named access ----------------------------------------------------------------------------
@@ -550,10 +566,17 @@ class Results:
         idx = np.arange(len(self.t))
         d = self.model.dim
         sl = self.model.coordinates_of(b)
+        turning = None
+        if self.turns is not None:
+            # the chart's tracked quaternion times that of g, (1, g) / sqrt(1 + g.g)
+            g = self.q[:, sl.start + 3:sl.start + 6]
+            local = (np.column_stack([np.ones(len(g)), g])
+                     / np.sqrt(1.0 + np.sum(g * g, axis=1))[:, None])
+            turning = _quaternion_product(self.turns[:, self.model.padded_index(b)], local)
         return BodyHistory(name, fr.R.copy(), fr.Rd.copy(), qdd[:, :d].copy(), fr.A,
                            bt.angular_velocity(fr, idx).copy(),
                            bt.angular_acceleration(fr, idx, qdd),
-                           self.q[:, sl.start + 2].copy() if d == 2 else None)
+                           self.q[:, sl.start + 2].copy() if d == 2 else None, turning)
 
     def poses(self) -> tuple[np.ndarray, np.ndarray]:
         """Every body's pose at every time, as a 3D pose (what a viewer draws).
@@ -836,9 +859,10 @@ class Results:
         return df
 
     def to_npz(self, path: str | os.PathLike | BinaryIO, overwrite: bool = True) -> str | None:
-        """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``) and their
-        labels to a compressed NumPy ``.npz`` file: a path (checked, then written atomically;
-        its absolute path is returned) or an open binary file."""
+        """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``,
+        ``chart_quaternions``) and their labels to a compressed NumPy ``.npz`` file: a path
+        (checked, then written atomically; its absolute path is returned) or an open binary
+        file."""
         arrays = dict(t=self.t, q=self.q, qd=self.qd, qdd=self.qdd,
                       coordinate_labels=np.array(self.model.coordinate_labels),
                       row_labels=np.array(self.model.row_labels),
@@ -848,6 +872,8 @@ class Results:
             arrays["lam"] = self.lam
         if self.charts is not None:
             arrays["charts"] = self.charts
+        if self.turns is not None:
+            arrays["chart_quaternions"] = self.turns
 
         def write(f):
             np.savez_compressed(f, **arrays)
@@ -885,16 +911,22 @@ class ResultsBuffer:
         self.q, self.qd, self.qdd = (np.empty((k, n)) for _ in range(3))
         self.lam = np.empty((k, model.n_constraints)) if with_lam else None
         self.charts = None if model.charts0 is None else np.empty((k,) + model.charts0.shape)
+        self.turns = None
         self.done = 0
 
-    def store(self, q, qd, qdd, lam=None, chart=None) -> None:
-        """The next time point's state (``chart``: its reference rotations, spatial models)."""
+    def store(self, q, qd, qdd, lam=None, chart=None, turns=None) -> None:
+        """The next time point's state (``chart``: its reference rotations, spatial models;
+        ``turns``: the charts' quaternions whose signs follow the motion, where tracked)."""
         k = self.done
         self.q[k], self.qd[k], self.qdd[k] = q, qd, qdd
         if self.lam is not None:
             self.lam[k] = lam
         if self.charts is not None:
             self.charts[k] = chart
+        if turns is not None:
+            if self.turns is None:
+                self.turns = np.empty((len(self.t),) + np.shape(turns))
+            self.turns[k] = turns
         self.done = k + 1
 
     def partial(self, status: str, message: str) -> Results:
@@ -903,7 +935,16 @@ class ResultsBuffer:
         return Results(self.model, self.analysis, self.t[:k], self.q[:k], self.qd[:k],
                        self.qdd[:k], None if self.lam is None else self.lam[:k], status=status,
                        message=message, stats=self.stats,
-                       charts=None if self.charts is None else self.charts[:k])
+                       charts=None if self.charts is None else self.charts[:k],
+                       turns=None if self.turns is None else self.turns[:k])
+
+
+def _quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton products ``a b`` of quaternions ``(w, x, y, z)``, (k, 4) each."""
+    w1, v1 = a[:, 0], a[:, 1:]
+    w2, v2 = b[:, 0], b[:, 1:]
+    return np.column_stack([w1 * w2 - np.sum(v1 * v2, 1),
+                            w1[:, None] * v2 + w2[:, None] * v1 + np.cross(v1, v2)])
 
 
 def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"],

@@ -169,7 +169,7 @@ class BodyType(ABC):
         """Coordinate rates of a body with the given centre-of-mass velocity and angular velocity."""
 
     def reset_charts(self, q: np.ndarray, qd: np.ndarray | None, charts: np.ndarray | None,
-                     limit: float = 1.0):
+                     limit: float = 1.0, turns: np.ndarray | None = None):
         """Re-reference bodies whose orientation coordinates approach a singularity.
 
         Returns ``(q, qd, charts, changed)``. Bodies whose coordinates have no singularity

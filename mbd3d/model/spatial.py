@@ -152,16 +152,18 @@ class SpatialBody(BodyType):
                                            np.asarray(qdd, dtype=float))
 
     def reset_charts(self, q: np.ndarray, qd: np.ndarray | None, charts: np.ndarray,
-                     limit: float = CHART_LIMIT):
+                     limit: float = CHART_LIMIT, turns: np.ndarray | None = None):
         """Move the chart of every body with ``|g| > limit`` (and, to restart the integrator
         less often, of every body past half of it when one does) to its current orientation.
 
-        Returns ``(q, qd, charts, changed)``; the inputs are not modified (the formulas are
-        :func:`mbd3d.numerics.compiled.bodies.spatial_reset_charts`).
+        Returns ``(q, qd, charts, changed)``; the inputs are not modified, except ``turns``
+        (the charts' quaternions, whose signs follow the motion), updated in place when given
+        (the formulas are :func:`mbd3d.numerics.compiled.bodies.spatial_reset_charts`).
         """
         q = np.array(q, dtype=float)
         qd = None if qd is None else np.array(qd, dtype=float)
         charts = np.array(charts, dtype=float)
-        if not spatial_reset_charts(q, np.zeros(0) if qd is None else qd, charts, limit):
+        if not spatial_reset_charts(q, np.zeros(0) if qd is None else qd, charts, limit,
+                                    np.zeros((0, 4)) if turns is None else turns):
             return q, qd, charts, False
         return q, qd, charts, True

@@ -297,12 +297,17 @@ def spatial_velocity_derivative(q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) 
 
 
 @jit
-def spatial_reset_charts(q: np.ndarray, qd: np.ndarray, charts: np.ndarray, limit: float
-                         ) -> bool:
+def spatial_reset_charts(q: np.ndarray, qd: np.ndarray, charts: np.ndarray, limit: float,
+                         turns: np.ndarray) -> bool:
     """Move the chart of every body with ``|g| > limit`` (and, so that charts move less often,
     of every body past half of it when one does) to its current orientation [5.2-5.4], in
     place: ``A0 <- A0 A(g)``, ``g <- 0`` and, when ``qd`` is not empty, ``g_dot <- G_bar(g)
-    g_dot / 2`` (the same angular velocity). Returns whether a chart moved."""
+    g_dot / 2`` (the same angular velocity). Returns whether a chart moved.
+
+    ``turns`` (n_bodies + 1, 4), unless empty: the charts as unit quaternions ``(w, x, y,
+    z)`` whose sign follows the motion, ``q0 <- q0 (1, g) / sqrt(1 + g.g)`` (the quaternion
+    of ``A(g)`` with ``w > 0``, less than half a turn): what keeps a body's quaternion
+    continuous however far apart its outputs are."""
     n_bodies = q.shape[0] // 6
     over = False
     for b in range(n_bodies):
@@ -325,6 +330,18 @@ def spatial_reset_charts(q: np.ndarray, qd: np.ndarray, charts: np.ndarray, limi
                 moved[i, j] = (charts[b, i, 0] * local[0, j] + charts[b, i, 1] * local[1, j]
                                + charts[b, i, 2] * local[2, j])
         charts[b] = moved
+        if turns.shape[0]:
+            scale = 1.0 / math.sqrt(1.0 + g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+            w, x, y, z = turns[b, 0], turns[b, 1], turns[b, 2], turns[b, 3]
+            a, bx, by, bz = scale, scale * g[0], scale * g[1], scale * g[2]
+            turns[b, 0] = w * a - x * bx - y * by - z * bz
+            turns[b, 1] = w * bx + x * a + y * bz - z * by
+            turns[b, 2] = w * by - x * bz + y * a + z * bx
+            turns[b, 3] = w * bz + x * by - y * bx + z * a
+            size = math.sqrt(turns[b, 0] ** 2 + turns[b, 1] ** 2 + turns[b, 2] ** 2
+                             + turns[b, 3] ** 2)
+            for c in range(4):
+                turns[b, c] /= size
         if qd.shape[0]:
             g_bar_matrix(g, G)
             w0, w1, w2 = qd[o + 3], qd[o + 4], qd[o + 5]

@@ -176,7 +176,7 @@ def error_scale(spatial, n, y, y_new, atol, rtol):
 
 @jit
 def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
-            charts, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
+            charts, turns, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
             dense, collapse, check_at, budget, work):
     """Step from ``(t, y)`` with first stage ``f`` and next step ``h`` until a step passes
     ``t_output``, ends at ``t_bound``, leaves the constraints drifted past
@@ -186,6 +186,8 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
     and ``y_old`` are updated in place; with ``OUTPUT``, ``dense`` holds the last step's
     dense-output coefficients.
 
+    ``turns`` (bodies, 4): the charts as quaternions whose signs follow the motion (see
+    :func:`.bodies.spatial_reset_charts`; empty for a planar model).
     ``charts`` (bodies, 3, 3): the reference rotations of a spatial model's bodies, None for a
     planar model. Numba compiles a function once per type of its arguments and drops the
     branches an argument's type decides (``charts is None``): a planar model compiles no
@@ -208,7 +210,7 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
     spatial = charts is not None  # a run-time flag, where no spatial-only code depends on it
     while True:
         if charts is not None:
-            if spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit):
+            if spatial_reset_charts(y[:n], np.zeros(0), charts, chart_limit, turns):
                 # v and its derivative are unchanged; the rates of g are those of the new chart
                 spatial_rates_into(y[:n], y[n:], rates)
                 f[:n] = rates
