@@ -83,3 +83,46 @@ def test_impossible_rates_are_refused_by_name():
         mb.forward_dynamics(model, T, initial_rates={"O": 6.0, "rail": 1.0})
     with pytest.raises(mb.ModelError, match="names 'crank.spin'"):
         mb.forward_dynamics(model, T, initial_rates={"crank.spin": 1.0})
+
+
+def test_initial_positions_in_joint_terms_place_the_mechanism():
+    """The crank put at 2 rad turning at 5 rad/s: the slider where the closed form puts it."""
+    from mbd3d.mechanisms import slider_crank
+    model = slider_crank(crank_speed=None)
+    res = mb.forward_dynamics(model, [0.0, 0.01], initial_positions={"O": 2.0},
+                              initial_rates={"O": 5.0}, method="DOP853", rtol=1e-10)
+    r, rod = 0.12, 0.26
+    x = r * math.cos(2.0) + math.sqrt(rod ** 2 - (r * math.sin(2.0)) ** 2)
+    rate = -r * math.sin(2.0) * 5.0 * (1 + r * math.cos(2.0) / math.sqrt(
+        rod ** 2 - (r * math.sin(2.0)) ** 2))
+    assert res.joint("O").angle[0] == pytest.approx(2.0, abs=1e-12)
+    assert res.body("slider").position[0, 0] == pytest.approx(x, abs=1e-12)
+    assert res.body("slider").velocity[0, 0] == pytest.approx(rate, rel=1e-10)
+    # or by the slider's displacement along its rail, the crank following
+    res = mb.forward_dynamics(model, [0.0, 0.01], initial_positions={"rail": 0.3})
+    assert res.joint("rail").displacement[0] == pytest.approx(0.3, abs=1e-12)
+    # planar angles keep their turns
+    res = mb.forward_dynamics(model, [0.0, 0.01], initial_positions={"crank.theta": 2.0 + 4 * math.pi})
+    assert res.body("crank").angle[0] == pytest.approx(2.0 + 4 * math.pi, abs=1e-12)
+
+
+def test_initial_position_of_a_spatial_hinge():
+    """A bar on a tilted hinge put at 1 rad from the drawing: its tip where the rotation about
+    the axis takes it."""
+    axis = np.array([0.0, 1.0, 1.0]) / math.sqrt(2.0)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81), name="tilted hinge")
+    bar = b.add_body("bar", mass=1.0, inertia=np.diag([1e-3, 0.05, 0.05]),
+                     position=(0.5, 0.0, 0.0))
+    b.add(Revolute("hinge", b.ground, bar, at=(0.0, 0.0, 0.0), axis=axis))
+    res = mb.forward_dynamics(b.build(), [0.0, 0.01], initial_positions={"hinge": 1.0},
+                              method="DOP853", rtol=1e-10)
+    turned = mb.rotations.axis_angle(axis, 1.0) @ np.array([0.5, 0.0, 0.0])
+    np.testing.assert_allclose(res.body("bar").position[0], turned, atol=1e-12)
+    assert res.joint("hinge").angle[0] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_initial_positions_that_cannot_hold_together_are_named():
+    from mbd3d.mechanisms import slider_crank
+    with pytest.raises(mb.AssemblyError, match="O = 2, rail = 0.5"):
+        mb.forward_dynamics(slider_crank(crank_speed=None), [0.0, 0.01],
+                            initial_positions={"O": 2.0, "rail": 0.5})

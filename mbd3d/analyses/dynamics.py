@@ -251,7 +251,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
                      rtol: float = 1e-8, atol: float = 1e-10, constraint_tol: float = 1e-8,
                      max_step: float = np.inf, step: float | None = None,
                      rho_inf: float = 0.9, hold: Sequence[str | int] | None = None,
-                     initial_rates: Mapping[str, float] | None = None, strict: bool = False,
+                     initial_rates: Mapping[str, float] | None = None,
+                     initial_positions: Mapping[str, float] | None = None, strict: bool = False,
                      observers: Sequence[Observer] | None = None,
                      progress: bool | None = None) -> Results:
     """Integrate the equations of motion from ``times[0]`` to ``times[-1]``.
@@ -298,6 +299,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         ``"name.displacement"`` for a cylindrical joint), or ``"body.coordinate"``; the other
         velocities are the mass-weighted nearest consistent ones to ``qd0`` (see
         :mod:`mbd3d.analyses.initial`).
+    initial_positions : mapping, optional
+        Positions the initial state takes, named the same way: a revolute's angle [rad] or a
+        prismatic's displacement [m] from the drawing, as ``results.joint(name).angle`` and
+        ``.displacement`` read them, or ``"body.coordinate"``; the rest of the mechanism is
+        assembled around them, nearest the guess (see
+        :func:`mbd3d.analyses.initial.place_joints`).
     strict : bool
         Refuse (ModelError) instead of warning (InitialStateWarning) when the given velocities
         (``qd0``, the bodies' ``velocity`` and ``angular_velocity``) or positions (``q0``)
@@ -341,7 +348,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         return integrate_generalized_alpha(
             model, t, q0, qd0, step=step, rho_inf=rho_inf,
             constraint_tol=constraint_tol, max_step=max_step, hold=hold,
-            initial_rates=initial_rates, strict=strict, observers=observers, progress=progress)
+            initial_rates=initial_rates, initial_positions=initial_positions, strict=strict,
+            observers=observers, progress=progress)
     if step is not None:
         raise ModelError(f"step applies to method='{GENERALIZED_ALPHA}'; the {method} "
                          "integrator chooses its own steps (limit them with max_step)")
@@ -406,7 +414,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     def loop() -> None:
         nonlocal redundant
         q, qd, redundant = consistent_initial_state(
-            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates, strict=strict,
+            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates,
+            initial_positions=initial_positions, strict=strict,
             tol=constraint_tol, chart=chart(), stats=stats,
             what=f"forward dynamics of '{model.name}'",
             redundant_rows=lambda qq: rows_dependent(model, t[0], qq, chart()))

@@ -249,7 +249,8 @@ def _tangent_storage(model, tangent) -> tuple[np.ndarray, bool]:
 def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
                                 rho_inf: float,
                                 constraint_tol: float, max_step: float, hold, observers,
-                                progress, initial_rates=None, strict: bool = False,
+                                progress, initial_rates=None, initial_positions=None,
+                                strict: bool = False,
                                 newton_tol: float = 1e-10,
                                 relative_penalty: float = 1e8,
                                 max_newton_iterations: int = 30) -> Results:
@@ -368,7 +369,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         nonlocal redundant
         chart = model.charts0
         q, qd, redundant = consistent_initial_state(
-            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates, strict=strict,
+            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates,
+            initial_positions=initial_positions, strict=strict,
             tol=constraint_tol, chart=chart, stats=stats,
             what=f"forward dynamics of '{model.name}'",
             redundant_rows=lambda qq: rows_dependent(model, t[0], qq, chart))

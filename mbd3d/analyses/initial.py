@@ -38,8 +38,8 @@ class InitialStateWarning(UserWarning):
 
 
 def consistent_initial_state(model, t0: float, q0, qd0, *, hold, initial_rates, strict: bool,
-                             tol: float, chart, stats: dict, what: str, redundant_rows
-                             ) -> tuple[np.ndarray, np.ndarray, bool]:
+                             tol: float, chart, stats: dict, what: str, redundant_rows,
+                             initial_positions=None) -> tuple[np.ndarray, np.ndarray, bool]:
     """``(q, qd, redundant)`` to start forward dynamics from (see the module doc):
     ``redundant_rows(q)`` says whether the constraint rows depend on each other there."""
     from mbd3d.analyses.kinematics import initial_guess, solve_velocity  # noqa: PLC0415
@@ -47,6 +47,8 @@ def consistent_initial_state(model, t0: float, q0, qd0, *, hold, initial_rates, 
 
     guess = initial_guess(model, t0, q0, chart, what, "q0")
     q = solve_position(model, guess, t0, tol=tol * 1e-3, hold=hold, charts=chart)
+    if initial_positions:
+        q = place_joints(model, t0, q, chart, initial_positions, tol * 1e-3, what)
     redundant = redundant_rows(q)
     given = given_rates(model, qd0)
     if qd0 is None:
@@ -63,6 +65,76 @@ def consistent_initial_state(model, t0: float, q0, qd0, *, hold, initial_rates, 
     report_changes(model, stats, guess, q, qd_given, qd, tol, strict, what,
                    positions_given=q0 is not None, rates_given=given, chart=chart)
     return q, qd, redundant
+
+
+def place_joints(model, t: float, q: np.ndarray, chart, positions: Mapping[str, float],
+                 tol: float, what: str) -> np.ndarray:
+    """The assembled configuration nearest ``q`` (least change) in which the joints and
+    coordinates named in ``positions`` have those values: a revolute's angle [rad] and a
+    prismatic's displacement [m] as ``results.joint(name)`` reads them (from the drawing),
+    ``"name.angle"``/``"name.displacement"`` of a cylindrical joint, ``"body.coordinate"``.
+
+    Newton's method on the constraints and ``p(q) = value``, whose rows are the joint
+    coordinates' rates (:func:`rate_rows`: ``dp/dq`` is the row that gives ``p'`` from
+    ``q'``). A planar angle is a coordinate, reached with its turns; a spatial one is read
+    within half a turn, so a target of several turns gives the same configuration.
+    """
+    from mbd3d.errors import AssemblyError  # noqa: PLC0415
+    from mbd3d.io.results import Results  # noqa: PLC0415
+
+    names = list(positions)
+    targets = np.array([float(positions[name]) for name in names])
+    if not np.all(np.isfinite(targets)):
+        raise ModelError(f"{what}: initial_positions must be finite numbers, got {positions}")
+    angular = np.zeros(len(names), dtype=bool)
+    q = np.array(q, dtype=float)
+    for _ in range(50):
+        H, _, _ = rate_rows(model, t, q, chart, {name: 1.0 for name in names}, what)
+        sample = Results(model, "positions", np.array([t]), q[None], np.zeros((1, len(q))),
+                         np.zeros((1, len(q))), charts=None if chart is None else chart[None])
+        values = np.empty(len(names))
+        for k, name in enumerate(names):
+            values[k], angular[k] = _coordinate_value(model, sample, q, name)
+        error = values - targets
+        if model.dim == 3:
+            # a spatial angle is read within half a turn: no turn count to reach
+            error[angular] = np.angle(np.exp(1j * error[angular]))
+        fr = constraints.frames(model, q, charts=chart)
+        C, jac_data, _ = constraints.evaluate(model, t, fr)
+        Cq = constraints.jacobian_matrix(model, jac_data, sparse=False)
+        largest = max(constraints.largest_relative(model, C),
+                      float(np.max(np.abs(error) / np.where(angular, 1.0, model.length_scale),
+                                   initial=0.0)))
+        if largest <= tol:
+            return q
+        step = np.linalg.lstsq(np.vstack([Cq, H]), -np.concatenate([C, error]), rcond=None)[0]
+        q = q + step
+    raise AssemblyError(f"{what}: the mechanism cannot be assembled with "
+                        f"{', '.join(f'{n} = {v:g}' for n, v in zip(names, targets))} (the "
+                        "joints cannot reach them together, or they over-determine the "
+                        "positions)", time=t)
+
+
+def _coordinate_value(model, sample, q: np.ndarray, name: str) -> tuple[float, bool]:
+    """The value of a joint coordinate or ``"body.coordinate"`` at the one-sample results,
+    and whether it is an angle."""
+    body, _, coordinate = name.rpartition(".")
+    if body in {b.name for b in model.bodies} and coordinate in model.body_type.coordinate_names:
+        index = model.coordinate_index(name)
+        return float(q[index]), model.dim == 2 and coordinate == "theta"
+    joint, kind = (body, coordinate) if coordinate in ("angle", "displacement") else (name, None)
+    history = sample.joint(joint)
+    if kind == "angle" or (kind is None and _has_angle(history)):
+        return float(history.angle[0]), True
+    return float(history.displacement[0]), False
+
+
+def _has_angle(history) -> bool:
+    try:
+        history.angle
+    except ModelError:
+        return False
+    return True
 
 
 def given_rates(model, qd0) -> np.ndarray:
