@@ -25,13 +25,16 @@ class _Mesh(ConstraintElement):
     is reported.
     """
 
+    #: what the error messages call it
+    kind = "gear pair"
+
     def _radius(self, ctx: BuildContext, value: Any, what: str) -> float:
-        return ctx.scalar(value, f"gear pair '{self.name}': {what}", positive=True)
+        return ctx.scalar(value, f"{self.kind} '{self.name}': {what}", positive=True)
 
     def _pressure_angle(self, ctx: BuildContext) -> float:
-        alpha = ctx.scalar(self.pressure_angle, f"gear pair '{self.name}': pressure_angle")
+        alpha = ctx.scalar(self.pressure_angle, f"{self.kind} '{self.name}': pressure_angle")
         if not 0.0 <= alpha < math.radians(45.0):
-            raise ModelError(f"gear pair '{self.name}': pressure_angle must be in [0, 45) "
+            raise ModelError(f"{self.kind} '{self.name}': pressure_angle must be in [0, 45) "
                              f"degrees, given in radians; got {alpha!r} rad "
                              "(20 degrees is math.radians(20))")
         return alpha
@@ -40,10 +43,10 @@ class _Mesh(ConstraintElement):
         """A gear centre in body frame: given in the drawing, or the body's centre of mass."""
         if value is None:
             if body.is_ground:
-                raise ModelError(f"gear pair '{self.name}': the ground has no centre of mass; "
+                raise ModelError(f"{self.kind} '{self.name}': the ground has no centre of mass; "
                                  f"give {what}= (the gear centre in the drawing, global axes)")
             return np.zeros(ctx.dim)
-        return ctx.to_local_point(body, ctx.vector(value, f"gear pair '{self.name}': {what}"))
+        return ctx.to_local_point(body, ctx.vector(value, f"{self.kind} '{self.name}': {what}"))
 
 
 class GearPair(_Mesh):
@@ -185,6 +188,9 @@ class RackPinion(_Mesh):
         Angle of the line of action to the pitch line [rad]; default 20 degrees.
     """
 
+    #: what the error messages call it
+    kind = "rack and pinion"
+
     def __init__(self, name: str, body_i: Body, body_j: Body, *, radius: float, axis: Any,
                  center: Any = None, pressure_angle: float = math.radians(20.0)):
         self.name = name
@@ -199,13 +205,13 @@ class RackPinion(_Mesh):
         """``(u_i, u_j, a_i, rho)``: the pinion centre in the frames of the rack and the pinion,
         the rack's unit direction in its frame, the pitch radius [m]."""
         if ctx.dim != 2:
-            raise ModelError(f"rack and pinion '{self.name}': available for planar models only "
+            raise ModelError(f"{self.kind} '{self.name}': available for planar models only "
                              "(dim=2) so far")
         rho = self._radius(ctx, self.radius, "radius")
         self._pressure_angle(ctx)
         u_j = self._centre(ctx, self.body_j, self.center, "center")
         u_i = ctx.to_local_point(self.body_i, ctx.to_global_point(self.body_j, u_j))
-        axis = ctx.direction(self.axis, f"rack and pinion '{self.name}': axis")
+        axis = ctx.direction(self.axis, f"{self.kind} '{self.name}': axis")
         return u_i, u_j, ctx.to_local_vector(self.body_i, axis), rho
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:

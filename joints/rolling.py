@@ -45,6 +45,8 @@ class RollingDisc(RackPinion):
         The disc's centre in the drawing [m]; default its centre of mass.
     """
 
+    kind = "rolling disc"
+
     def __init__(self, name: str, body_i: Body, body_j: Body, *, radius: float, axis: Any,
                  center: Any = None):
         super().__init__(name, body_i, body_j, radius=radius, axis=axis, center=center,
