@@ -80,6 +80,10 @@ class CamProfile(RecordsArguments):
         return np.concatenate([self._spline.x, self._spline.c[::-1].T.ravel()])
 
 
+#: angles at which a profile's curvature is checked
+_CHECKED = np.linspace(0.0, 2 * math.pi, 3600, endpoint=False)
+
+
 def _profile(element: ConstraintElement, profile: Any) -> CamProfile:
     if not isinstance(profile, CamProfile):
         raise ModelError(f"cam '{element.name}': profile must be a CamProfile (angles and radii, "
@@ -149,6 +153,18 @@ class CamFollower(ConstraintElement):
         rho = ctx.scalar(self.roller_radius, f"cam '{self.name}': roller_radius")
         if rho < 0:
             raise ModelError(f"cam '{self.name}': roller_radius must be >= 0, got {rho!r}")
+        r, r1, r2 = (profile(_CHECKED, k) for k in range(3))
+        # the pitch curve's radius of curvature where it is convex: a roller larger than it
+        # would need the cam's surface to cross itself (undercutting)
+        bend = r * r + 2 * r1 * r1 - r * r2
+        curvature_radius = (r * r + r1 * r1) ** 1.5 / np.where(bend > 0, bend, np.nan)
+        if rho > 0 and np.nanmin(curvature_radius, initial=np.inf) < rho:
+            k = int(np.nanargmin(curvature_radius))
+            raise ModelError(f"cam '{self.name}': the pitch curve bends tighter than the roller "
+                             f"({curvature_radius[k]:.4g} m against a {rho:g} m roller at "
+                             f"{math.degrees(_CHECKED[k]):.4g} deg in the cam's frame): the cam "
+                             "would be undercut; use a smaller roller, a larger base circle "
+                             "or a gentler law")
         u_i = _cam_centre(ctx, self, self.center)
         u_j = (np.zeros(2) if self.point is None else ctx.to_local_point(
             self.body_j, ctx.vector(self.point, f"cam '{self.name}': point")))
@@ -213,6 +229,15 @@ class FlatFaceFollower(ConstraintElement):
         follower's frame, and the angle of ``-v_j`` there."""
         _require_planar(ctx, self)
         profile = _profile(self, self.profile)
+        # a flat face follows only a convex cam: the support function's radius of curvature,
+        # h + h'', must stay positive
+        curvature_radius = profile(_CHECKED) + profile(_CHECKED, 2)
+        if curvature_radius.min() <= 0:
+            k = int(np.argmin(curvature_radius))
+            raise ModelError(f"cam '{self.name}': the cam is not convex at "
+                             f"{math.degrees(_CHECKED[k]):.4g} deg in its frame (h + h'' = "
+                             f"{curvature_radius[k]:.4g} m): a flat face cannot follow it; use "
+                             "a larger base circle or a gentler law")
         u_i = _cam_centre(ctx, self, self.center)
         n = ctx.direction(self.normal, f"cam '{self.name}': normal")
         u_j = (np.zeros(2) if self.at is None else ctx.to_local_point(

@@ -170,3 +170,24 @@ def test_bad_cams_are_named():
     b.add(CamFollower("contact", cam, follower, profile=profile))
     with pytest.raises(mb.ModelError, match="'contact'.*planar models only"):
         b.build()
+
+
+def test_undercut_and_concave_cams_are_refused():
+    """A roller larger than the pitch curve's radius of curvature, or a flat face on a cam
+    that is not convex, cannot follow the law."""
+    b = mb.ModelBuilder(dim=2, name="sharp cam")
+    # a 20 mm nose over a tenth of a radian: it bends far tighter than a 10 mm roller
+    profile = CamProfile.sampled(lambda phi: 0.03 + 0.02 * np.exp(-((phi - math.pi) / 0.15) ** 2))
+    cam = b.add_body("cam", mass=1.0, inertia=1e-3, position=(0.0, 0.0))
+    follower = b.add_body("follower", mass=1.0, inertia=1e-3, position=(0.0, 0.03))
+    b.add(CamFollower("contact", cam, follower, profile=profile, roller_radius=ROLLER))
+    with pytest.raises(mb.ModelError, match="'contact'.*undercut"):
+        b.build()
+    b = mb.ModelBuilder(dim=2, name="concave cam")
+    profile = CamProfile.sampled(lambda phi: 0.005 + law(math.pi / 2 - phi))
+    cam = b.add_body("cam", mass=1.0, inertia=1e-3, position=(0.0, 0.0))
+    follower = b.add_body("follower", mass=1.0, inertia=1e-3, position=(0.0, 0.005))
+    b.add(FlatFaceFollower("contact", cam, follower, profile=profile, normal=(0.0, -1.0)))
+    with pytest.raises(mb.ModelError, match="'contact'.*not convex"):
+        b.build()
+
