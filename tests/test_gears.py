@@ -153,7 +153,8 @@ def test_planetary_torque_ratio_and_internal_mesh_force():
     # the ring (the ground, body j of the internal mesh) takes the torque about O that the
     # motor and the load put in and the moving gears' angular momentum about O does not keep:
     # H_O = (I_s + I_c k + I_p k_p + m_p (rs + rp)^2 k) omega_sun
-    momentum_rate = (4e-4 + 2e-3 * ratio + 9e-5 * planet_ratio + 0.3 * (rs + rp) ** 2 * ratio) * 6.0
+    momentum_rate = (4e-4 + 2e-3 * ratio + 9e-5 * planet_ratio
+                     + 0.3 * (rs + rp) ** 2 * ratio) * 6.0
     ring_torque = res.joint("planet-ring").mesh_force.tangential * rr
     origin = np.zeros((len(t), 2))
     check_tooth_force(res.joint("planet-ring").mesh_force, origin, res.body("planet").position,

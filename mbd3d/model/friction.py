@@ -302,6 +302,6 @@ def raise_friction_with_redundancy(model, t: float) -> None:
     undetermined."""
     raise AnalysisError(
         f"'{model.name}': joint friction ({', '.join(repr(n) for n in model.friction.names)}) "
-        f"needs the joints' reactions, but at t = {t:.6g} s the constraints are redundant or singular "
-        "and the reactions are not unique; remove the redundant constraints (see "
+        f"needs the joints' reactions, but at t = {t:.6g} s the constraints are redundant or "
+        "singular and the reactions are not unique; remove the redundant constraints (see "
         "mb.mobility) to use friction", time=t)
