@@ -14,7 +14,6 @@ Run: python examples/gear_train.py [--rrd FILE] [--show]
 from __future__ import annotations
 
 import argparse
-import math
 
 import numpy as np
 

@@ -17,7 +17,6 @@ stiffer (an explicit integrator then takes short steps near sticking).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
