@@ -572,7 +572,10 @@ class Results:
             g = self.q[:, sl.start + 3:sl.start + 6]
             local = (np.column_stack([np.ones(len(g)), g])
                      / np.sqrt(1.0 + np.sum(g * g, axis=1))[:, None])
-            turning = _quaternion_product(self.turns[:, self.model.padded_index(b)], local)
+            import quaternion  # noqa: PLC0415  (numpy-quaternion; imported when asked for)
+            turning = quaternion.as_float_array(
+                quaternion.as_quat_array(self.turns[:, self.model.padded_index(b)])
+                * quaternion.as_quat_array(local))
         return BodyHistory(name, fr.R.copy(), fr.Rd.copy(), qdd[:, :d].copy(), fr.A,
                            bt.angular_velocity(fr, idx).copy(),
                            bt.angular_acceleration(fr, idx, qdd),
@@ -937,14 +940,6 @@ class ResultsBuffer:
                        message=message, stats=self.stats,
                        charts=None if self.charts is None else self.charts[:k],
                        turns=None if self.turns is None else self.turns[:k])
-
-
-def _quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton products ``a b`` of quaternions ``(w, x, y, z)``, (k, 4) each."""
-    w1, v1 = a[:, 0], a[:, 1:]
-    w2, v2 = b[:, 0], b[:, 1:]
-    return np.column_stack([w1 * w2 - np.sum(v1 * v2, 1),
-                            w1[:, None] * v2 + w2[:, None] * v1 + np.cross(v1, v2)])
 
 
 def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"],
