@@ -286,10 +286,10 @@ def test_bad_gear_pairs_are_named(change, words):
         assert word in str(info.value), str(info.value)
 
 
-def test_gears_refuse_spatial_models_and_a_centreless_ground():
-    b = mb.ModelBuilder(dim=3, name="spatial gears")
+def test_racks_refuse_spatial_models_and_gears_a_centreless_ground():
+    b = mb.ModelBuilder(dim=3, name="spatial rack")
     g1 = b.add_body("g1", mass=1.0, inertia=np.eye(3) * 1e-3, position=(0.0, 0.0, 0.0))
-    b.add(GearPair("m", b.ground, g1, radius_i=0.05, radius_j=0.05, center_i=(0.1, 0, 0)))
+    b.add(RackPinion("m", b.ground, g1, radius=0.05, axis=(1.0, 0.0, 0.0)))
     with pytest.raises(mb.ModelError, match="'m'.*planar models only"):
         b.build()
     b = mb.ModelBuilder(dim=2, name="no centre")

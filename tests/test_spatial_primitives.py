@@ -1,6 +1,6 @@
-"""Spatial bodies: every joint's Jacobian and gamma against finite differences of C, with the
-bodies in random charts (reference rotations), and the mass matrix and quadratic velocity
-vector against the kinetic energy."""
+"""Spatial bodies: every joint's Jacobian and gamma (gear meshes' included) against finite
+differences of C, with the bodies in random charts (reference rotations), and the mass matrix
+and quadratic velocity vector against the kinetic energy."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from scipy.spatial.transform import Rotation
 import mbd3d as mb
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, kinetic_energy
-from mbd3d.joints import (Cylindrical, Distance, Fixed, Planar, PointOnLine, PointOnPlane,
-                          Prismatic, Revolute, Spherical, Universal)
+from mbd3d.joints import (Cylindrical, Distance, Fixed, GearPair, Planar, PointOnLine,
+                          PointOnPlane, Prismatic, Revolute, Spherical, Universal)
 
 
 def random_spatial_model(seed: int):
@@ -35,6 +35,15 @@ def random_spatial_model(seed: int):
     b.add(PointOnLine("line", b0, b2, axis=p(), point_i=p(), point_j=p()))
     b.add(PointOnPlane("surface", b3, b1, axis=p(), point_i=p(), point_j=p()))
     b.add(Fixed("weld", b1, b3, point_i=p(), point_j=p()))
+    # a spur pair (parallel axes, centres the pitch radii apart across them) and a bevel pair
+    # (axes meeting at an apex)
+    axis, centre = p(), p()
+    across = np.cross(axis, p())
+    b.add(GearPair("spur", b0, b2, radius_i=0.5, radius_j=0.3, axis_i=axis, center_i=centre,
+                   center_j=centre + 0.8 * across / np.linalg.norm(across)))
+    apex, h_i, h_j = p(), p(), p()
+    b.add(GearPair("bevel", b1, b3, radius_i=0.4, radius_j=0.6, axis_i=h_i, axis_j=h_j,
+                   center_i=apex + 0.7 * h_i, center_j=apex - 0.5 * h_j))
     model = b.build()
     q = model.q0 + 0.3 * rng.normal(size=model.n_coordinates)
     qd = rng.normal(size=model.n_coordinates)

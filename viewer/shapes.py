@@ -18,6 +18,7 @@ import numpy as np
 import trimesh
 
 from mbd3d.joints import CamFollower, FlatFaceFollower, GearPair, Prismatic, RackPinion
+from mbd3d.joints.base import triad
 from mbd3d.model.body import Body
 from mbd3d.model.forces import SpringDamper
 from mbd3d.model.builder import Model
@@ -68,26 +69,34 @@ def attachment_points(model: Model) -> dict[str, list[tuple[str, np.ndarray]]]:
     return points
 
 
-def pitch_curves(model: Model) -> dict[str, list[tuple[np.ndarray, float | np.ndarray]]]:
-    """The gear meshes' pitch curves by body (the ground included): ``(centre, radius)`` of a
-    pitch circle, or ``(point, direction)`` of a rack's pitch line through the contact, body
-    frame [m], 3 components."""
+def pitch_curves(model: Model) -> dict[str, list[tuple[np.ndarray, float | np.ndarray,
+                                                     np.ndarray | None]]]:
+    """The gear meshes' pitch curves by body (the ground included): ``(centre, radius,
+    axis)`` of a pitch circle (about the centre the mesh was given), or ``(point, direction,
+    None)`` of a rack's pitch line through the contact, body frame [m], 3 components."""
     curves: dict[str, list] = {b.name: [] for b in model.bodies}
     curves["ground"] = []
+    normal = np.array([0.0, 0.0, 1.0])
     for element in model.joints:
         u_i, u_j, axes = model.reaction_frame(element.name) if isinstance(
             element, (GearPair, RackPinion, CamFollower)) else (None, None, None)
         if isinstance(element, GearPair):
-            curves[element.body_i.name].append((_lift(u_i), float(element.radius_i)))
-            curves[element.body_j.name].append((_lift(u_j), float(element.radius_j)))
+            axis_i = axis_j = normal
+            if model.dim == 3:
+                # each gear's axis in its frame: f x g of the mesh row's vectors on it
+                table = model.row_table
+                local = table.vector_local[table.slots[model._instances_of[element.name][0]]]
+                axis_i, axis_j = np.cross(local[0], local[1]), np.cross(local[2], local[3])
+            curves[element.body_i.name].append((_lift(u_i), float(element.radius_i), axis_i))
+            curves[element.body_j.name].append((_lift(u_j), float(element.radius_j), axis_j))
         elif isinstance(element, RackPinion):
             # the pitch line lies to the right of the rack's direction, a radius from the centre
-            along, normal = axes[:, 0], axes[:, 1]
+            along, across = axes[:, 0], axes[:, 1]
             rho = float(element.radius)
-            curves[element.body_i.name].append((_lift(u_i - rho * normal), _lift(along)))
-            curves[element.body_j.name].append((_lift(u_j), rho))
+            curves[element.body_i.name].append((_lift(u_i - rho * across), _lift(along), None))
+            curves[element.body_j.name].append((_lift(u_j), rho, normal))
         elif isinstance(element, CamFollower) and element.roller_radius > 0:
-            curves[element.body_j.name].append((_lift(u_j), float(element.roller_radius)))
+            curves[element.body_j.name].append((_lift(u_j), float(element.roller_radius), normal))
     return curves
 
 
@@ -129,30 +138,41 @@ def _plate(outline: np.ndarray) -> trimesh.Trimesh:
     return trimesh.Trimesh(vertices, np.vstack([faces, faces[:, ::-1]]), process=False)
 
 
-def curve_polyline(curve: tuple[np.ndarray, float | np.ndarray], size: float) -> np.ndarray:
+def curve_polyline(curve: tuple, size: float) -> np.ndarray:
     """Points along a pitch circle (closed) or a rack's pitch line (``size`` each way)."""
-    start, shape = curve
+    start, shape, axis = curve
     if np.ndim(shape) == 0:
         angle = np.linspace(0.0, 2 * np.pi, 97)
-        return start + float(shape) * np.column_stack([np.cos(angle), np.sin(angle),
-                                                       np.zeros_like(angle)])
+        f, g, _ = _circle_axes(axis)
+        return start + float(shape) * (np.cos(angle)[:, None] * f + np.sin(angle)[:, None] * g)
     return np.array([start - size * shape, start + size * shape])
+
+
+def _circle_axes(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """In-plane axes and normal of a circle about ``axis``: the body's own x, y about z."""
+    if np.allclose(axis, (0.0, 0.0, 1.0)):
+        return np.eye(3)[0], np.eye(3)[1], np.eye(3)[2]
+    return triad(np.asarray(axis, dtype=float))
 
 
 def _pitch_parts(curves: list, radius: float, size: float) -> list[trimesh.Trimesh]:
     """A thin ring and a spoke for each pitch circle, a bar along each pitch line."""
     parts = []
-    for start, shape in curves:
+    for start, shape, axis in curves:
         if np.ndim(shape) == 0:
             rho = float(shape)
             ring = trimesh.creation.annulus(r_min=max(rho - radius, 0.5 * rho), r_max=rho,
                                             height=radius)
-            ring.apply_translation(start)
+            # the annulus lies about z: turn z onto the gear's axis
+            placed = np.eye(4)
+            placed[:3, :3] = np.column_stack(_circle_axes(axis))
+            placed[:3, 3] = start
+            ring.apply_transform(placed)
             # the spoke's rounded end reaches the pitch circle, not beyond
-            spoke = start + np.array([max(rho - 0.5 * radius, 0.0), 0.0, 0.0])
+            spoke = start + max(rho - 0.5 * radius, 0.0) * placed[:3, 0]
             parts += [ring, _capsule(start, spoke, 0.5 * radius)]
         else:
-            line = curve_polyline((start, shape), size)
+            line = curve_polyline((start, shape, None), size)
             parts.append(_capsule(line[0], line[1], 0.5 * radius))
     return parts
 

@@ -9,6 +9,7 @@ those factors.
 
 from __future__ import annotations
 
+import math
 from typing import Sequence
 
 import numpy as np
@@ -294,6 +295,14 @@ def _check_velocities(model, Cq, qd: np.ndarray, nu: np.ndarray, t: float, what:
                             "ill-conditioned here to trust them", time=t)
 
 
+def _mesh_pieces(model, q: np.ndarray, qd: np.ndarray, chart, h: float) -> int:
+    """Into how many steps to cut the step ``h`` after the state ``(q, qd)`` so that no spatial
+    gear mesh's phase terms change by more than a quarter turn in one (half the change that
+    lets a guess be a tooth off, leaving a factor of two for gears speeding up)."""
+    speed = constraints.mesh_turn_speed(model, constraints.frames(model, q, qd, chart))
+    return max(1, int(math.ceil(speed * h / (0.5 * math.pi))))
+
+
 def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
            progress) -> Results:
     t = check_times(times)
@@ -309,60 +318,76 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
     # spatial models: the charts as quaternions whose signs follow the motion
     turns = None if model.charts0 is None else to_quaternion(model.charts0)
 
+    what = f"{analysis} of '{model.name}'"
+    reference = [1.0]  # the Jacobian's conditioning at the first time point
+
+    def solve_point(tk: float, q: np.ndarray, chart, first: bool, forces: bool):
+        """Positions from the guess ``q``, velocities, accelerations and (``forces``) the
+        multipliers at ``tk``: ``(q, qd, qdd, lam, chart)``."""
+        # keep orientation coordinates away from their singularity (spatial bodies)
+        q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=turns)
+        q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)
+        if surplus:
+            if first:
+                _require_redundant_but_driven(model, tk, q, chart, analysis)
+            qd, qdd, lam = _redundant_rates(model, tk, q, chart, forces, analysis)
+            return q, qd, qdd, lam, chart
+        fr = constraints.frames(model, q, charts=chart)
+        Cq = constraints.jacobian(model, tk, q, fr)
+        try:
+            lu = Factorization(Cq, scaling=jacobian_scaling(model))
+        except SingularMatrix:
+            raise singular_error(model, Cq, float(tk), what) from None
+        # A singular position (a dead centre of a driven slider, a toggle) has a finite
+        # position but unbounded velocities: stop there rather than report them
+        conditioning = lu.reciprocal_condition()
+        if first:
+            reference[0] = conditioning
+        if conditioning < SINGULAR_CONDITIONING * reference[0]:
+            raise singular_error(model, Cq, float(tk), f"{what} (the velocities are "
+                                 f"unbounded here: the Jacobian's conditioning fell from "
+                                 f"{reference[0]:.1e} at the start to {conditioning:.1e})")
+        nu = constraints.velocity_rhs(model, tk, fr)
+        qd = lu.solve(nu)
+        _check_velocities(model, Cq, qd, nu, float(tk), what)
+        fr = constraints.frames(model, q, qd, chart)
+        qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
+        lam = None
+        if forces:
+            # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
+            rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
+            lam = lu.solve(rhs, transpose=True)
+            if model.friction is not None:
+                # the friction forces depend on the reactions they change
+                lam = consistent_multipliers(
+                    model, float(tk), fr,
+                    lambda extra: (lu.solve(rhs + extra, transpose=True), None), lam)[0]
+        return q, qd, qdd, lam, chart
+
+    def predicted(q, qd, qdd, h):
+        # second-order Taylor predictor: Newton-Raphson then needs one or two iterations and
+        # stays on the branch of the previous time point
+        guess = q + h * qd + 0.5 * h * h * qdd
+        return guess if np.all(np.isfinite(guess)) else q  # a step it cannot extrapolate
+
     def loop() -> None:
         chart = model.charts0
-        q = initial_guess(model, t[0], q_guess, chart, f"{analysis} of '{model.name}'",
-                          "q_guess")
-        reference = 1.0  # the Jacobian's conditioning at the first time point
+        q = initial_guess(model, t[0], q_guess, chart, what, "q_guess")
         for k, tk in enumerate(t):
             if k > 0:
-                # second-order Taylor predictor: Newton-Raphson then needs one or two iterations
-                # and stays on the branch of the previous time point
-                h = tk - t[k - 1]
-                q = out.q[k - 1] + h * out.qd[k - 1] + 0.5 * h * h * out.qdd[k - 1]
-                if not np.all(np.isfinite(q)):  # a step the predictor cannot extrapolate
-                    q = out.q[k - 1]
-            # keep orientation coordinates away from their singularity (spatial bodies)
-            q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=turns)
-            q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)
+                last = (t[k - 1], out.q[k - 1], out.qd[k - 1], out.qdd[k - 1])
+                # spatial gears know their angles modulo a tooth of the reduced ratio: steps
+                # between solved states short enough that no guess can be a tooth off
+                pieces = _mesh_pieces(model, last[1], last[2], chart, tk - last[0])
+                for s in range(1, pieces):
+                    ts = last[0] + (tk - last[0]) * s / pieces
+                    q, qd, qdd, _, chart = solve_point(
+                        ts, predicted(*last[1:], ts - last[0]), chart, False, False)
+                    last = (ts, q, qd, qdd)
+                q = predicted(*last[1:], tk - last[0])
+            q, qd, qdd, lam, chart = solve_point(tk, q, chart, k == 0, with_forces)
             if surplus:
-                if k == 0:
-                    _require_redundant_but_driven(model, tk, q, chart, analysis)
-                qd, qdd, lam = _redundant_rates(model, tk, q, chart, with_forces, analysis)
                 stats["singular_outputs"].append(float(tk))
-                out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
-                watch.tick(tk, out.done)
-                continue
-            fr = constraints.frames(model, q, charts=chart)
-            Cq = constraints.jacobian(model, tk, q, fr)
-            what = f"{analysis} of '{model.name}'"
-            try:
-                lu = Factorization(Cq, scaling=jacobian_scaling(model))
-            except SingularMatrix:
-                raise singular_error(model, Cq, float(tk), what) from None
-            # A singular position (a dead centre of a driven slider, a toggle) has a finite
-            # position but unbounded velocities: stop there rather than report them
-            conditioning = lu.reciprocal_condition()
-            reference = conditioning if k == 0 else reference
-            if conditioning < SINGULAR_CONDITIONING * reference:
-                raise singular_error(model, Cq, float(tk), f"{what} (the velocities are "
-                                     f"unbounded here: the Jacobian's conditioning fell from "
-                                     f"{reference:.1e} at the start to {conditioning:.1e})")
-            nu = constraints.velocity_rhs(model, tk, fr)
-            qd = lu.solve(nu)
-            _check_velocities(model, Cq, qd, nu, float(tk), what)
-            fr = constraints.frames(model, q, qd, chart)
-            qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
-            lam = None
-            if with_forces:
-                # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
-                rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
-                lam = lu.solve(rhs, transpose=True)
-                if model.friction is not None:
-                    # the friction forces depend on the reactions they change
-                    lam = consistent_multipliers(
-                        model, float(tk), fr,
-                        lambda extra: (lu.solve(rhs + extra, transpose=True), None), lam)[0]
             out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
             watch.tick(tk, out.done)
 

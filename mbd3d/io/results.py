@@ -165,17 +165,22 @@ class MeshForce:
     ----------
     tangential : ndarray
         Along the pitch circles' common tangent: the torque of the mesh on body j about its
-        centre over its pitch radius, positive when it turns body j counter-clockwise.
+        centre (spatial: about its axis) over its pitch radius, positive when it turns body j
+        counter-clockwise (about its axis, which for a bevel pair points away from the apex).
     tooth : ndarray
         Magnitude of the tooth force along the line of action, ``|tangential| / cos(alpha)``.
     separating : ndarray
         Its component pushing the centres apart, ``|tangential| tan(alpha)``, carried by the
         bearings in addition to the joints' reactions (rigid gears touching at their pitch
         circles have no separating force of their own).
-    point : ndarray (k, 2)
-        The pitch point, where the pitch curves touch, global [m].
-    force : ndarray (k, 2)
-        The tooth force on body j at the pitch point, along the line of action, global [N].
+    point : ndarray (k, dim)
+        The pitch point, where the pitch curves touch, global [m]; of a spatial pair, in the
+        plane of gear j's centre (spur) or at the radii given (bevel).
+    force : ndarray (k, dim)
+        The tooth force on body j at the pitch point, along the line of action, global [N]. A
+        bevel pair's separating part is normal to the pitch cone: ``|tangential| tan(alpha)
+        cos(delta_j)`` towards gear j's axis and ``... sin(delta_j)`` along it away from the
+        apex, ``delta_j`` its pitch-cone angle.
     """
 
     tangential: np.ndarray
@@ -354,6 +359,8 @@ class JointHistory:
         if not isinstance(element, (GearPair, RackPinion)):
             raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a gear mesh; "
                              "mesh_force is reported by GearPair and RackPinion")
+        if isinstance(element, GearPair) and self._results.model.dim == 3:
+            return self._spatial_mesh_force(element)
         torque = self.reaction(on=element.body_j).moment
         tangential = torque / element.mesh_radius
         alpha = float(element.pressure_angle)
@@ -373,6 +380,55 @@ class JointHistory:
         point = centre_j + element.mesh_radius * r
         turning = np.column_stack([-r[:, 1], r[:, 0]])  # counter-clockwise about j's centre
         force = tangential[:, None] * turning + separating[:, None] * away
+        return MeshForce(tangential, np.abs(tangential) / math.cos(alpha), separating, point,
+                         force)
+
+    def _spatial_mesh_force(self, element) -> MeshForce:
+        """:attr:`mesh_force` of a spatial spur or bevel pair: the tooth force at the pitch
+        point, where the pitch circles (cones, at the radii given) touch."""
+        results = self._results
+        table = results.model.row_table
+        slots = table.slots[results.model._instances_of[self.name][0]]
+        u_i, u_j, _ = results.model.reaction_frame(self.name)
+        axes = []
+        for body, first in ((element.body_i, 0), (element.body_j, 2)):
+            f, g = (results._global_point(body, table.vector_local[slots[first + k]], vector=True)
+                    for k in (0, 1))
+            axes.append(np.cross(f, g))
+        h_i, h_j = axes
+        centre_i = results._global_point(element.body_i, u_i)
+        centre_j = results._global_point(element.body_j, u_j)
+        radius_i, radius_j = float(element.radius_i), float(element.radius_j)
+        tangential = np.einsum("ki,ki->k", self.reaction(on=element.body_j).moment, h_j) / radius_j
+        alpha = float(element.pressure_angle)
+        separating = np.abs(tangential) * math.tan(alpha)
+        cosine = np.einsum("ki,ki->k", h_i, h_j)
+        if np.all(np.abs(cosine) > 1.0 - 1e-12):  # parallel axes: a spur pair
+            line = centre_i - centre_j
+            across = line - np.einsum("ki,ki->k", line, h_j)[:, None] * h_j
+            e_j = across / np.linalg.norm(across, axis=1)[:, None]  # from axis j towards i
+            point = centre_j + radius_j * e_j
+            # the teeth push gear j away from gear i; a ring's away from the pinion inside it
+            away = e_j if element.internal else -e_j
+        else:
+            # the apex, where the axes meet, and the pitch cone of gear j (angle delta_j)
+            # touching gear i's along the line from the apex through the pitch point
+            e_j = h_i - cosine[:, None] * h_j
+            e_j /= np.linalg.norm(e_j, axis=1)[:, None]
+            shaft = np.arccos(np.clip(cosine, -1.0, 1.0))
+            delta = np.arctan2(np.sin(shaft), radius_i / radius_j + np.cos(shaft))
+            # apex = centre_j + b h_j on both axes: b from the component across h_i
+            line = centre_i - centre_j
+            across_i = h_j - cosine[:, None] * h_i
+            b = (np.einsum("ki,ki->k", line, across_i)
+                 / np.einsum("ki,ki->k", h_j, across_i))
+            apex = centre_j + b[:, None] * h_j
+            distance = radius_j / np.sin(delta)
+            point = apex + distance[:, None] * (np.cos(delta)[:, None] * h_j
+                                                + np.sin(delta)[:, None] * e_j)
+            # normal to the pitch cone, into gear j: radial inwards, axial away from the apex
+            away = np.sin(delta)[:, None] * h_j - np.cos(delta)[:, None] * e_j
+        force = (tangential[:, None] * np.cross(h_j, e_j) + separating[:, None] * away)
         return MeshForce(tangential, np.abs(tangential) / math.cos(alpha), separating, point,
                          force)
 

@@ -14,6 +14,7 @@ import scipy.sparse as sp
 from mbd3d.model.body import Frames
 from mbd3d.errors import ModelError
 from mbd3d.model.primitives import evaluate_rows
+from mbd3d.numerics.compiled import rows as rows_kernel
 
 __all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
            "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs",
@@ -78,7 +79,7 @@ _NO_MOTIONS = np.zeros((0, 3))
 
 def has_branches(model) -> bool:
     """Whether the model has rows of the form ``L sin(e)`` (see :func:`branch_cosines`)."""
-    return any(g.cls.kind in ("rotation", "gear") for g in model.groups)
+    return any(g.cls.kind in ("rotation", "gear", "gear_mesh") for g in model.groups)
 
 
 def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -86,8 +87,9 @@ def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray,
     turn of ``e`` away too, where the cosine is -1.
 
     The spatial rotation drivers' rows are ``sin(theta - f)`` (``L = 1``; see
-    :class:`mbd3d.model.primitives.Rotation`); the gear pairs' are ``|d| sin(psi - phi)``
-    (see :class:`mbd3d.model.primitives.Gear`).
+    :class:`mbd3d.model.primitives.Rotation`); the planar gear pairs' are
+    ``|d| sin(psi - phi)`` (see :class:`mbd3d.model.primitives.Gear`), the spatial ones'
+    ``size sin(Phi)`` (see :class:`mbd3d.model.primitives.GearMesh`).
     """
     rows, cosines, amplitudes = [], [], []
     for g in model.groups:
@@ -105,6 +107,14 @@ def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray,
                  - fr.Q[g.bi, :2] - np.matvec(fr.A[g.bi], g.params["u_i"]))
             amplitude = np.maximum(np.linalg.norm(d, axis=1), 1e-300)
             cosine = (d[:, 0] * np.cos(psi) + d[:, 1] * np.sin(psi)) / amplitude
+        elif g.cls.kind == "gear_mesh":
+            p = g.params
+            d = (fr.Q[g.bj, :3] + np.matvec(fr.A[g.bj], p["u_j"])
+                 - fr.Q[g.bi, :3] - np.matvec(fr.A[g.bi], p["u_i"]))
+            along = [np.vecdot(d, np.matvec(fr.A[b], p[key])) for b, key in
+                     ((g.bi, "f_i"), (g.bi, "g_i"), (g.bj, "f_j"), (g.bj, "g_j"))]
+            cosine = np.cos(rows_kernel.mesh_phases(*along, p["real"]))
+            amplitude = p["real"][:, 3].copy()
         else:
             continue
         rows.append(g.offset + np.arange(g.count))
@@ -113,6 +123,20 @@ def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray,
     if not rows:
         return np.zeros(0, dtype=int), np.zeros(0), np.zeros(0)
     return np.concatenate(rows), np.concatenate(cosines), np.concatenate(amplitudes)
+
+
+def mesh_turn_speed(model, fr: Frames) -> float:
+    """The largest rate [rad/s] at which a spatial gear mesh's phase terms change (see
+    :func:`mbd3d.numerics.compiled.rows.mesh_turn_speeds`), at the frames' velocities; zero
+    without spatial gears. Position analysis from a guess that errs by less than the change
+    since a solved state cannot skip a tooth while ``speed * step < pi``."""
+    if not any(g.cls.kind == "gear_mesh" for g in model.groups):
+        return 0.0
+    table = model.row_table
+    s, _, v, a = fr.vectors(table.vector_bodies, table.vector_local, True)
+    return float(np.max(rows_kernel.mesh_turn_speeds(table.code, table.bi, table.bj,
+                                                     table.slots, table.real, fr.Q, fr.Qd,
+                                                     s, v, a)))
 
 
 def evaluate(model, t: float, fr: Frames, value: bool = True, jacobian: bool = True,

@@ -25,8 +25,11 @@ import numpy as np
 from mbd3d.numerics.compiled import rows as kernel
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation", "Gear", "Rack", "CamPoint", "CamFace", "RowTable",
+           "RelativeAngle", "Rotation", "Gear", "GearMesh", "Rack", "CamPoint", "CamFace", "RowTable",
            "evaluate_rows"]
+
+#: the most body vectors and points one primitive instance reads (a spatial gear mesh's six)
+MAX_VECTORS = 6
 
 class PointCoincidence:
     """``c = r_i - r_j``: point ``u_i`` of body i coincides with point ``u_j`` of body j.
@@ -199,6 +202,40 @@ class Gear:
         return 1
 
 
+class GearMesh:
+    """Spatial gear pair, spur or bevel: the gears turn about their hinges as their pitch
+    circles (pitch cones) roll on each other.
+
+    Each gear has unit vectors ``f``, ``g = h x f`` spanning its plane (``h`` its axis; slots
+    0, 1 on body i and 2, 3 on body j) and a centre on its axis (``u_i``, ``u_j``); the line
+    ``d = r_j - r_i`` joining the centres is fixed in whatever carries both hinges (the
+    ground, an arm, a differential's cage), so each gear's angle relative to the carrier is,
+    up to a constant, ``-beta`` with ``beta = atan2(d . g, d . f)``. Rolling is
+    ``rho_i alpha_i + sigma rho_j alpha_j = const`` (parallel axes: both ``h`` the same way,
+    ``sigma = -1`` for an internal mesh; bevel: both ``h`` pointing away from the apex,
+    ``sigma = +1``). The angles are known modulo a turn, but the tooth counts ``z_i``, ``z_j``
+    (coprime, ``z_i / z_j = rho_i / rho_j``) make the phase
+    ``Phi = -(z_i beta_i + sigma z_j beta_j) - c`` a function of the configuration, and the
+    row is ``C = size sin(Phi)``, ``size = rho_i / z_i``: at the solution
+    ``dC/dalpha_i = rho_i``, ``dC/dalpha_j = sigma rho_j``, so ``lam`` is the tangential force
+    of the mesh [N] as in :class:`Gear`. The row also vanishes at ``Phi = pi`` (the gears half
+    a tooth ratio out of phase); :func:`mbd3d.model.constraints.branch_cosines` tells position
+    analysis which is which. ``real = (z_i, sigma z_j, c, size)``.
+    """
+
+    kind = "gear_mesh"
+    code = kernel.GEAR_MESH
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("f_i", "g_i", "f_j", "g_j", "u_i", "u_j", "real")
+    vectors = (("fi", "i", "f_i"), ("gi", "i", "g_i"), ("fj", "j", "f_j"), ("gj", "j", "g_j"),
+               ("si", "i", "u_i"), ("sj", "j", "u_j"))
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 1
+
+
 class Rack:
     """Planar rack (body i) and pinion (body j):
     ``c = a_i . (r_j - r_i) + rho (theta_j - theta_i)``, the pinion centre ``u_j`` advancing
@@ -267,7 +304,7 @@ class CamFace:
 
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation, Gear,
-               Rack, CamPoint, CamFace)}
+               Rack, CamPoint, CamFace, GearMesh)}
 
 
 class RowTable:
@@ -286,7 +323,7 @@ class RowTable:
     curves : ndarray
         The cams' periodic curves, one after the other (see
         :mod:`mbd3d.numerics.compiled.curves`).
-    slots : ndarray (k, 3) of int
+    slots : ndarray (k, MAX_VECTORS) of int
         Rows of each instance's vectors (in the order of its class's ``vectors``) in the
         vector table ``vector_bodies`` (V,), ``vector_local`` (V, dim).
     n_rows : int
@@ -305,7 +342,7 @@ class RowTable:
         k = len(instances)
         code, bi, bj, first_row, coordinate, motion = (np.zeros(k, dtype=np.int64)
                                                         for _ in range(6))
-        slots = np.full((k, 3), -1, dtype=np.int64)
+        slots = np.full((k, MAX_VECTORS), -1, dtype=np.int64)
         real = np.zeros((k, 4))
         bodies, local, curves = [], [], [np.zeros(1)]
         curve_start = 1
@@ -364,7 +401,7 @@ class RowTable:
         tile = lambda a, stride: (a[None] + stride * offset).reshape(-1)  # noqa: E731
         n_vectors = len(self.vector_bodies)
         slots = np.where(self.slots[None] >= 0, self.slots[None] + n_vectors * offset[:, :, None],
-                         -1).reshape(-1, 3)
+                         -1).reshape(-1, MAX_VECTORS)
         return RowTable(np.tile(self.code, copies), tile(self.bi, body_stride),
                         tile(self.bj, body_stride), tile(self.first_row, self.n_rows), slots,
                         np.tile(self.coordinate, copies),

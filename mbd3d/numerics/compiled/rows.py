@@ -20,8 +20,8 @@ from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.curves import periodic_curve
 
 #: primitive codes, in the order of mbd3d.model.primitives.PRIMITIVES
-POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION, GEAR, RACK, CAM_POINT, CAM_FACE = \
-    range(11)
+(POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION, GEAR, RACK, CAM_POINT, CAM_FACE,
+ GEAR_MESH) = range(12)
 
 
 @jit
@@ -62,6 +62,64 @@ def _rotation_vectors(s, J, v, a, fi, gi, phi, velocities, u, uJ, uv, ua, w, wv)
             uv[x] = c * v[gi, x] - sn * v[fi, x]
             ua[x] = c * a[gi, x] - sn * a[fi, x]
             wv[x] = c * v[fi, x] + sn * v[gi, x]
+
+
+@jit
+def mesh_phase(x_i, y_i, x_j, y_j, z_i, z_j, phase):
+    """Phase of a spatial gear mesh [rad], zero where the teeth mesh as in the drawing:
+    ``-(z_i beta_i + z_j beta_j) - phase`` with ``beta = atan2(y, x)`` each gear's angle of the
+    carrier-fixed line (see :class:`mbd3d.model.primitives.GearMesh`)."""
+    return -(z_i * math.atan2(y_i, x_i) + z_j * math.atan2(y_j, x_j)) - phase
+
+
+@jit
+def mesh_phases(x_i, y_i, x_j, y_j, real):
+    """:func:`mesh_phase` of k meshes, (k,) each, ``real`` (k, 4)."""
+    out = np.empty(x_i.shape[0])
+    for e in range(out.shape[0]):
+        out[e] = mesh_phase(x_i[e], y_i[e], x_j[e], y_j[e], real[e, 0], real[e, 1], real[e, 2])
+    return out
+
+
+@jit
+def _line_angle_rates(d, dd, s, v, a, si, sj, pf, pg, dim):
+    """``x = d . f`` and ``y = d . g`` of a gear (slots ``pf``, ``pg``), and the rate and the
+    velocity part of the second derivative of ``beta = atan2(y, x)``."""
+    x = y = x1 = y1 = x2 = y2 = 0.0
+    for c in range(dim):
+        d2 = a[sj, c] - a[si, c]
+        x += d[c] * s[pf, c]
+        y += d[c] * s[pg, c]
+        x1 += dd[c] * s[pf, c] + d[c] * v[pf, c]
+        y1 += dd[c] * s[pg, c] + d[c] * v[pg, c]
+        x2 += d2 * s[pf, c] + 2.0 * dd[c] * v[pf, c] + d[c] * a[pf, c]
+        y2 += d2 * s[pg, c] + 2.0 * dd[c] * v[pg, c] + d[c] * a[pg, c]
+    squared = max(x * x + y * y, 1e-300)
+    rate = (x * y1 - y * x1) / squared
+    return rate, (x * y2 - y * x2) / squared - rate * 2.0 * (x * x1 + y * y1) / squared
+
+
+@jit
+def mesh_turn_speeds(kind, bi, bj, slots, real, Q, Qd, s, v, a):
+    """``|z_i beta_i'| + |z_j beta_j'|`` [rad/s] of every spatial gear mesh (zero for the other
+    instances), (k,): how fast the terms of the mesh's phase change, each gear's share. Over
+    a step of position analysis whose guess errs by less than their change, a phase error of
+    ``pi`` (a tooth's worth of the reduced ratio) needs a change of at least ``pi``."""
+    dim = s.shape[1]
+    out = np.zeros(kind.shape[0])
+    d = np.empty(dim)
+    dd = np.empty(dim)
+    for e in range(kind.shape[0]):
+        if kind[e] != GEAR_MESH:
+            continue
+        i, j, si, sj = bi[e], bj[e], slots[e, 4], slots[e, 5]
+        for x in range(dim):
+            d[x] = Q[j, x] + s[sj, x] - Q[i, x] - s[si, x]
+            dd[x] = Qd[j, x] + v[sj, x] - Qd[i, x] - v[si, x]
+        rate_i = _line_angle_rates(d, dd, s, v, a, si, sj, slots[e, 0], slots[e, 1], dim)[0]
+        rate_j = _line_angle_rates(d, dd, s, v, a, si, sj, slots[e, 2], slots[e, 3], dim)[0]
+        out[e] = abs(real[e, 0] * rate_i) + abs(real[e, 1] * rate_j)
+    return out
 
 
 @jit
@@ -126,13 +184,16 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, rea
         k, i, j, row = kind[e], bi[e], bj[e], first_row[e]
         p0, p1, p2 = slots[e, 0], slots[e, 1], slots[e, 2]
         if (k == POINT or k == DOT2 or k == DISTANCE or k == GEAR or k == RACK
-                or k == CAM_POINT or k == CAM_FACE):
+                or k == CAM_POINT or k == CAM_FACE or k == GEAR_MESH):
             # the body points: slots (p0, p1) for a point pair, (p1, p2) after dot-2's vector,
-            # (p2, p1) after a flat face's normal (the cam's centre on body i is p2)
+            # (p2, p1) after a flat face's normal (the cam's centre on body i is p2), (p4, p5)
+            # after a gear mesh's four vectors
             if k == DOT2 or k == RACK:
                 si, sj = p1, p2
             elif k == CAM_FACE:
                 si, sj = p2, p1
+            elif k == GEAR_MESH:
+                si, sj = slots[e, 4], slots[e, 5]
             else:
                 si, sj = p0, p1
             for x in range(dim):
@@ -271,6 +332,46 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, rea
                 relative = ((a[sj, 0] - a[si, 0]) * e1 - (a[sj, 1] - a[si, 1]) * e0)
                 G[row] = -kappa * (relative + 2.0 * (dd[0] * e0 + dd[1] * e1) * psi_rate
                                    - cross * psi_rate * psi_rate)
+        elif k == GEAR_MESH:
+            # spatial gear pair: C = size sin(Phi), Phi the mesh phase of the gears' angles
+            # beta = atan2(d . g, d . f) of the line d joining their centres (fixed in their
+            # carrier); f, g span each gear's plane (slots p0, p1 on i; p2, p3 on j)
+            z_i, z_j, size = real[e, 0], real[e, 1], real[e, 3]
+            p3 = slots[e, 3]
+            x_i = y_i = x_j = y_j = 0.0
+            for x in range(dim):
+                x_i += d[x] * s[p0, x]
+                y_i += d[x] * s[p1, x]
+                x_j += d[x] * s[p2, x]
+                y_j += d[x] * s[p3, x]
+            n_i = max(x_i * x_i + y_i * y_i, 1e-300)
+            n_j = max(x_j * x_j + y_j * y_j, 1e-300)
+            mesh = mesh_phase(x_i, y_i, x_j, y_j, z_i, z_j, real[e, 2])
+            cosine, sine = math.cos(mesh), math.sin(mesh)
+            if value:
+                C[row] = size * sine
+            if jacobian:
+                # dPhi/dd (in u) and the coefficients of d in dPhi/df and dPhi/dg of each gear
+                fi_, gi_ = z_i * y_i / n_i, -z_i * x_i / n_i
+                fj_, gj_ = z_j * y_j / n_j, -z_j * x_j / n_j
+                for x in range(dim):
+                    u[x] = -(z_i * (x_i * s[p1, x] - y_i * s[p0, x]) / n_i
+                             + z_j * (x_j * s[p3, x] - y_j * s[p2, x]) / n_j)
+                    _put(data, dest, row, 0, x, nc, -size * cosine * u[x])
+                    _put(data, dest, row, 1, x, nc, size * cosine * u[x])
+                for col in range(n_rot):
+                    di = 0.0
+                    dj = 0.0
+                    for x in range(dim):
+                        di += d[x] * (fi_ * J[p0, x, col] + gi_ * J[p1, x, col]) - u[x] * J[si, x, col]
+                        dj += d[x] * (fj_ * J[p2, x, col] + gj_ * J[p3, x, col]) + u[x] * J[sj, x, col]
+                    _put(data, dest, row, 0, dim + col, nc, size * cosine * di)
+                    _put(data, dest, row, 1, dim + col, nc, size * cosine * dj)
+            if gamma:
+                rate_i, acc_i = _line_angle_rates(d, dd, s, v, a, si, sj, p0, p1, dim)
+                rate_j, acc_j = _line_angle_rates(d, dd, s, v, a, si, sj, p2, p3, dim)
+                mesh_rate = -(z_i * rate_i + z_j * rate_j)
+                G[row] = size * (cosine * (z_i * acc_i + z_j * acc_j) + sine * mesh_rate ** 2)
         elif k == CAM_POINT:
             # follower point j on the cam's pitch curve r(phi) (polar about the cam's centre,
             # phi in the cam's frame): C = |d| - r(phi), phi = angle(d) - theta_i
