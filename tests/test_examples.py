@@ -114,6 +114,27 @@ def test_gear_train_example(capsys, tmp_path):
     np.testing.assert_allclose(forces, np.column_stack([mesh.tangential, mesh.tooth]))
 
 
+def test_differential_example(capsys, tmp_path):
+    rrd = tmp_path / "differential.rrd"
+    res = load("differential").main(n_points=3, rrd=str(rrd))
+    out = capsys.readouterr().out
+    low, high, expected = (float(x) for x in re.search(
+        r"right wheel (\S+) \.\. (\S+) rad/s; 2 x cage - left = (\S+)", out).groups())
+    assert low == pytest.approx(expected, abs=1e-11) and high == pytest.approx(expected, abs=1e-11)
+    assert float(re.search(r"differ by (\S+) N m", out).group(1)) < 1e-12
+    assert float(re.search(r"mismatch (\S+) W", out).group(1)) < 1e-11
+    thrust, shigley = (float(x) for x in re.search(r"thrust (\S+) N .* = (\S+) N", out).groups())
+    assert thrust == pytest.approx(shigley, rel=1e-9)
+    # drawn: each side gear's pitch circle about the axle (x), the spider's about its pin
+    for body, radius, axis in (("left", 0.032, 0), ("spider", 0.020, 0)):
+        _, vertices = read_component(rrd, f"/world/bodies/{body}/shape",
+                                     "Mesh3D:vertex_positions", timeline=None)
+        across = np.delete(vertices[0], axis, axis=1)  # body frames: both axes are body x
+        assert np.max(np.linalg.norm(across, axis=1)) == pytest.approx(radius, rel=1e-6)
+    _, origins = read_component(rrd, "/world/reactions/left\\ mesh", "Arrows3D:origins")
+    np.testing.assert_allclose(origins[:, 0], res.joint("left mesh").mesh_force.point, rtol=1e-6)
+
+
 def test_slider_crank_friction_example(capsys, tmp_path):
     rrd = tmp_path / "scf.rrd"
     res = load("slider_crank_friction").main(n_points=7, rrd=str(rrd))

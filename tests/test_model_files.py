@@ -69,6 +69,7 @@ EXAMPLES = {
     "bricard": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 10.0, 0.01),
                                       "method": "generalized-alpha", "step": 1e-3}),
     "gear_train": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 0.5, 0.05)}),
+    "differential": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 0.5, 0.0625)}),
     "slider_crank_friction": (lambda m: m.build(), {"kind": "inverse",
                                                     "t": steps(0.0, 0.2, 0.2 / 72)}),
     "cam_follower": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 1.0, 1 / 70)}),

@@ -35,6 +35,7 @@ method is second order.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -365,6 +366,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                               penalty.copy(), beta_prime, kernel.last_mass_blocks(work))
         return (q, qd, qdd, a, lam_effective.copy()), S
 
+    meshes = any(g.cls.kind == "gear_mesh" for g in model.groups)
+
     def loop() -> None:
         nonlocal redundant
         chart = model.charts0
@@ -386,6 +389,14 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 h_try = target - tt
             elif target - (tt + h_try) < 0.05 * h:
                 h_try = 0.5 * (target - tt)  # two even steps instead of a sliver
+            if meshes:
+                # spatial gears know their angles modulo a tooth of the reduced ratio: no
+                # step may turn a mesh's gears by a quarter of one (half what lets Newton's
+                # guess be a tooth off, a factor of two left for gears speeding up)
+                speed = constraints.mesh_turn_speed(model, constraints.frames(model, q, qd,
+                                                                              chart))
+                if speed * h_try > 0.5 * math.pi:
+                    h_try = 0.5 * math.pi / speed
             result = newton(tt + h_try, h_try, q, qd, qdd, a, lam, chart)
             if result is None:
                 stats["rejected_steps"] += 1
