@@ -10,9 +10,10 @@ against the body kinematics, so the same classes serve every body type that supp
 - :class:`PointOnLine`: a point on a line (spatial), the pin in a slot (planar).
 - Spatial only: :class:`Spherical`, :class:`Universal`, :class:`Cylindrical`, :class:`Planar`,
   :class:`PointOnPlane`.
-- Planar higher pairs: :class:`GearPair` (external and internal), :class:`RackPinion`,
-  :class:`CamFollower` (point or roller on a :class:`CamProfile`), :class:`FlatFaceFollower`,
-  :class:`RollingDisc` (on a straight track).
+- Higher pairs: :class:`GearPair` (planar external and internal; spatial spur and bevel),
+  and, planar, :class:`RackPinion`, :class:`CamFollower` (point or roller on a
+  :class:`CamProfile`), :class:`FlatFaceFollower`, :class:`RollingDisc` (on a straight
+  track); spatial, :class:`RollingDiscOnPlane` (nonholonomic).
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
 """
 
@@ -23,11 +24,11 @@ from mbd3d.joints.fixed import Fixed
 from mbd3d.joints.gears import GearPair, RackPinion
 from mbd3d.joints.prismatic import Prismatic
 from mbd3d.joints.revolute import Revolute
-from mbd3d.joints.rolling import RollingDisc
+from mbd3d.joints.rolling import RollingDisc, RollingDiscOnPlane
 from mbd3d.joints.spatial_joints import (Cylindrical, Planar, PointOnLine, PointOnPlane, Spherical,
                                          Universal)
 
 __all__ = ["Revolute", "Prismatic", "Fixed", "Distance", "CoordinateDriver", "RotationDriver",
            "TranslationDriver", "Spherical", "Universal", "Cylindrical", "Planar", "PointOnLine",
            "PointOnPlane", "GearPair", "RackPinion", "CamFollower", "FlatFaceFollower",
-           "CamProfile", "RollingDisc"]
+           "CamProfile", "RollingDisc", "RollingDiscOnPlane"]

@@ -345,6 +345,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         raise ModelError(f"max_step must be a positive time [s] (or inf: no limit), got "
                          f"{max_step!r}")
     if method == GENERALIZED_ALPHA:
+        constraints.require_holonomic(model, "forward dynamics with generalized-alpha "
+                                             "(an index-3 method, on positions)")
         return integrate_generalized_alpha(
             model, t, q0, qd0, step=step, rho_inf=rho_inf,
             constraint_tol=constraint_tol, max_step=max_step, hold=hold,

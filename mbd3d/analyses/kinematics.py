@@ -58,6 +58,7 @@ LATEST_TIME = 1e12
 
 
 def _require_fully_driven(model, what: str) -> None:
+    constraints.require_holonomic(model, what)
     n, m = model.n_coordinates, model.n_constraints
     if m < n:
         raise NotFullyDrivenError(

@@ -178,6 +178,7 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         For a state that violates the constraints (names the rows), unknown inputs, outputs
         or coordinates, or coordinates that are not independent at the state.
     """
+    constraints.require_holonomic(model, "linearize")
     what = f"linearisation of '{model.name}'"
     n = model.n_coordinates
     q = _vector(q, n, what, "q")

@@ -41,6 +41,12 @@ class MobilityReport:
     over_driven : list of str
         Drivers among the dependent rows: they prescribe motions the joints or other drivers
         already fix, and no analysis can follow them.
+    velocity_rows : int
+        Rows that constrain velocities only (nonholonomic). With them ``dof`` counts the
+        independent velocities, and the configurations reachable have the larger dimension
+        ``configuration_dof`` (a disc rolling on a plane: 3 and 5).
+    configuration_dof : int
+        ``n_coordinates`` less the rank of the position-level rows.
     """
 
     model: str
@@ -55,6 +61,8 @@ class MobilityReport:
     free_coordinates: list = field(default_factory=list)
     free_directions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     over_driven: list = field(default_factory=list)
+    velocity_rows: int = 0
+    configuration_dof: int = 0
 
     @property
     def fully_driven(self) -> bool:
@@ -72,6 +80,10 @@ class MobilityReport:
             return (f"{self.redundant} redundant constraint equation(s): the Gruebler count "
                     f"({self.gruebler}) understates the mobility ({self.dof}). Rows that depend "
                     f"on each other, one set per redundant equation: {sets}")
+        if self.velocity_rows:
+            return (f"{self.dof} degree(s) of freedom of motion in a {self.configuration_dof}-"
+                    "dimensional space of configurations (nonholonomic: forward dynamics with "
+                    "an explicit method)")
         if self.dof == 0:
             return "fully driven (kinematic analysis possible)"
         return f"{self.dof} degree(s) of freedom (forward dynamics, or add drivers)"
@@ -85,6 +97,8 @@ class MobilityReport:
             f"  Gruebler n_d = n - m   {self.gruebler}",
             f"  rank of Cq             {self.rank}",
             f"  degrees of freedom     {self.dof}",
+            *([f"  velocity-only rows     {self.velocity_rows}",
+               f"  configuration freedom  {self.configuration_dof}"] if self.velocity_rows else []),
             *([f"  free coordinates       {', '.join(self.free_coordinates)}"]
               if self.free_coordinates else []),
             f"  => {self.message}",
@@ -125,6 +139,14 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
     over_driven = [] if not redundant else [
         name for name in model.joints_of_rows(np.concatenate(groups))
         if model.joint(name).is_driver]
+    configuration_dof = dof
+    if len(model.velocity_rows):
+        # nonholonomic rows restrict velocities only: the configurations have the freedom
+        # the position-level rows leave
+        positions = np.setdiff1d(np.arange(m), model.velocity_rows)
+        scale_rows, scale_columns = jacobian_scaling(model)
+        configuration_dof = n - (dependent_rows(Cq[positions], scaling=(
+            scale_rows[positions], scale_columns))[0] if len(positions) else 0)
     return MobilityReport(model.name, model.n_bodies, n, m, n - m, rank, dof, redundant,
                           dependent, [model.coordinate_labels[k] for k in free], directions,
-                          over_driven)
+                          over_driven, len(model.velocity_rows), configuration_dof)

@@ -443,30 +443,47 @@ class JointHistory:
     @property
     def traction(self) -> np.ndarray:
         """Rolling disc: the tangential force the track exerts on the disc along the track's
-        axis [N], (k,): the friction rolling without slip needs."""
-        from mbd3d.joints.rolling import RollingDisc  # noqa: PLC0415
+        axis [N], (k,): the friction rolling without slip needs. On a plane
+        (:class:`~mbd3d.joints.RollingDiscOnPlane`): the in-plane force, global, (k, 3)."""
+        from mbd3d.joints.rolling import RollingDisc, RollingDiscOnPlane  # noqa: PLC0415
 
+        if isinstance(self.element, RollingDiscOnPlane):
+            force = self.reaction(on=self.element.body_j).force
+            normal = self.contact()[1]
+            return force - np.einsum("ki,ki->k", force, normal)[:, None] * normal
         if not isinstance(self.element, RollingDisc):
             raise ModelError(f"'{self.name}' ({type(self.element).__name__}) is not a rolling "
-                             "disc; traction is reported by RollingDisc")
+                             "disc; traction is reported by RollingDisc and "
+                             "RollingDiscOnPlane")
         force = self.reaction(on=self.element.body_j).force
         normal = self.contact()[1]
         return normal[:, 1] * force[:, 0] - normal[:, 0] * force[:, 1]
 
     def contact(self) -> tuple[np.ndarray, np.ndarray]:
         """Cam and follower, or rolling disc: the contact point on the cam's surface (the
-        track), global [m], and the unit normal there towards the follower (disc), each
-        (k, 2)."""
+        track, the plane), global [m], and the unit normal there towards the follower (disc),
+        each (k, dim)."""
         from mbd3d.joints.cams import CamFollower, FlatFaceFollower  # noqa: PLC0415
-        from mbd3d.joints.rolling import RollingDisc  # noqa: PLC0415
+        from mbd3d.joints.rolling import RollingDisc, RollingDiscOnPlane  # noqa: PLC0415
 
         element = self.element
-        if not isinstance(element, (CamFollower, FlatFaceFollower, RollingDisc)):
+        if not isinstance(element, (CamFollower, FlatFaceFollower, RollingDisc,
+                                    RollingDiscOnPlane)):
             raise ModelError(f"'{self.name}' ({type(element).__name__}) is not a cam or a "
                              "rolling disc; contacts are reported by CamFollower, "
-                             "FlatFaceFollower and RollingDisc")
+                             "FlatFaceFollower, RollingDisc and RollingDiscOnPlane")
         results = self._results
         u_i, u_j, axes = results.model.reaction_frame(self.name)
+        if isinstance(element, RollingDiscOnPlane):
+            # the lowest rim point, r (a_k a - k) / |a x k| from the centre
+            table = results.model.row_table
+            slots = table.slots[results.model._instances_of[self.name][0]]
+            normal = np.tile(axes[:, 2], (len(results.t), 1))
+            a = results._global_point(element.body_j, table.vector_local[slots[2]], vector=True)
+            along = np.einsum("ki,ki->k", a, normal)
+            down = (along[:, None] * a - normal) / np.sqrt(1.0 - along ** 2)[:, None]
+            return (results._global_point(element.body_j, u_j)
+                    + float(element.radius) * down, normal)
         if isinstance(element, RollingDisc):
             # the track's normal (to the left of its axis), the contact a radius below
             normal = results._global_point(element.body_i, axes[:, 1], vector=True)

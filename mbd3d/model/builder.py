@@ -381,6 +381,10 @@ class Model:
     gravity : ndarray, shape (dim,)
     row_labels : list of str
         ``"joint.component"`` for each constraint row.
+    velocity_rows : ndarray of int
+        Rows that constrain velocities only (nonholonomic: a disc rolling on a plane), whose
+        ``c`` is zero; the configurations they leave are ``n - (m - len(velocity_rows))``
+        dimensional, the velocities ``n - m``.
     coordinate_labels : list of str
         ``"body.coordinate"`` for each coordinate.
     sparse : bool
@@ -425,6 +429,9 @@ class Model:
             if getattr(PRIMITIVES[spec.kind], "planar_only", False) and self.dim != 2:
                 raise ModelError(f"joint '{self.joints[e_index].name}': its {spec.kind} "
                                  "constraint is defined for planar bodies only")
+            if getattr(PRIMITIVES[spec.kind], "spatial_only", False) and self.dim != 3:
+                raise ModelError(f"joint '{self.joints[e_index].name}': its {spec.kind} "
+                                 "constraint is defined for spatial bodies only")
             if spec.body_i.is_ground and spec.body_j.is_ground:
                 raise ModelError(f"joint '{self.joints[e_index].name}' connects the ground to itself")
             by_kind[spec.kind].append((e_index, spec))
@@ -433,6 +440,7 @@ class Model:
         labels: list[str] = []
         row_element: list[int] = []
         row_is_length: list[bool] = []
+        velocity_only: list[bool] = []
         c0: list[float] = []
         driver_rows, driver_motions, driver_names = [], [], []
         # each joint's primitive instances: their positions in the row table (row order)
@@ -458,6 +466,7 @@ class Model:
                     labels.append(f"{name}.{spec.labels[k]}")
                     row_element.append(e_index)
                     row_is_length.append(is_length)
+                    velocity_only.append(k in getattr(cls, "velocity_rows", ()))
                     c0.append(float(spec.c0) if k == 0 else 0.0)
                 if spec.motion is not None and group.motions:
                     if not isinstance(spec.motion, Motion):
@@ -480,6 +489,8 @@ class Model:
         self.row_element = np.array(row_element, dtype=np.intp)
         self._set_scales(specs, np.array(row_is_length, dtype=bool))
         self.c0 = np.array(c0)
+        #: rows that constrain velocities only (nonholonomic), whose c is zero
+        self.velocity_rows = np.flatnonzero(velocity_only)
         self.driver_rows = np.array(driver_rows, dtype=np.intp)
         self.driver_motions = tuple(driver_motions)
         self.driver_names = tuple(driver_names)

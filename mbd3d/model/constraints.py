@@ -125,6 +125,20 @@ def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray,
     return np.concatenate(rows), np.concatenate(cosines), np.concatenate(amplitudes)
 
 
+def require_holonomic(model, what: str) -> None:
+    """Refuse models with velocity-level (nonholonomic) rows for analyses that need the
+    positions to follow from the constraints, naming the joints."""
+    if not len(model.velocity_rows):
+        return
+    joints = list(dict.fromkeys(model.joints_of_rows(model.velocity_rows)))
+    raise ModelError(
+        f"{what} needs positions that the constraints fix, but in '{model.name}' "
+        f"{', '.join(repr(j) for j in joints)} constrain{'s' if len(joints) == 1 else ''} "
+        "velocities only (nonholonomic: a disc rolling on a plane reaches any position by "
+        "rolling); forward dynamics with an explicit method (method='DOP853', 'RK45' or "
+        "'RK23') integrates its motion")
+
+
 def mesh_turn_speed(model, fr: Frames) -> float:
     """The largest rate [rad/s] at which a spatial gear mesh's phase terms change (see
     :func:`mbd3d.numerics.compiled.rows.mesh_turn_speeds`), at the frames' velocities; zero

@@ -25,7 +25,7 @@ import numpy as np
 from mbd3d.numerics.compiled import rows as kernel
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
-           "RelativeAngle", "Rotation", "Gear", "GearMesh", "Rack", "CamPoint", "CamFace", "RowTable",
+           "RelativeAngle", "Rotation", "Gear", "GearMesh", "DiscOnPlane", "Rack", "CamPoint", "CamFace", "RowTable",
            "evaluate_rows"]
 
 #: the most body vectors and points one primitive instance reads (a spatial gear mesh's six)
@@ -236,6 +236,40 @@ class GearMesh:
         return 1
 
 
+class DiscOnPlane:
+    """A thin disc (body j) rolling without slipping on a fixed plane (body i, the ground):
+    three rows, the first holonomic and the other two nonholonomic.
+
+    Row 0 keeps the disc's lowest rim point on the plane, ``c = k . R_j - r |a x k|``
+    (``k`` the plane's unit normal, ``a`` the disc's axis, ``c0`` the plane's offset
+    ``k . P0``). Rows 1 and 2 hold the disc's material point at the contact still along the
+    plane's axes ``t_1``, ``t_2 = k x t_1``: ``t . (R_j' + omega_j x w) = 0``, ``w`` the
+    contact's offset from the centre. These constrain velocities only, no function of the
+    positions has them as its derivative (a disc can roll to any position and heading), so
+    their ``c`` is zero: position analysis and projection keep them as conditions on the
+    step, velocity and acceleration analysis and the augmented equations as rows like any
+    other, and the multipliers of the three rows are the contact force's normal and in-plane
+    components (``-lam`` along ``k``, ``t_1``, ``t_2`` on the disc). ``real = (r,)``; body
+    vectors: ``k``, ``t_1`` of the ground, the disc's axis and its three body axes (see
+    :func:`mbd3d.numerics.compiled.rows._disc_on_plane`).
+    """
+
+    kind = "disc_on_plane"
+    code = kernel.DISC_ON_PLANE
+    #: whether the rows are lengths [m] (else dimensionless: cosines, angles [rad])
+    length_rows = True
+    params = ("k_i", "t_i", "a_j", "x_j", "y_j", "z_j", "real")
+    vectors = (("k", "i", "k_i"), ("t", "i", "t_i"), ("a", "j", "a_j"), ("x", "j", "x_j"),
+               ("y", "j", "y_j"), ("z", "j", "z_j"))
+    spatial_only = True
+    #: rows of each instance that constrain velocities only (nonholonomic)
+    velocity_rows = (1, 2)
+
+    @staticmethod
+    def rows(dim: int) -> int:
+        return 3
+
+
 class Rack:
     """Planar rack (body i) and pinion (body j):
     ``c = a_i . (r_j - r_i) + rho (theta_j - theta_i)``, the pinion centre ``u_j`` advancing
@@ -304,7 +338,7 @@ class CamFace:
 
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation, Gear,
-               Rack, CamPoint, CamFace, GearMesh)}
+               Rack, CamPoint, CamFace, GearMesh, DiscOnPlane)}
 
 
 class RowTable:

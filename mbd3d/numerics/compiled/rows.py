@@ -21,7 +21,7 @@ from mbd3d.numerics.compiled.curves import periodic_curve
 
 #: primitive codes, in the order of mbd3d.model.primitives.PRIMITIVES
 (POINT, DOT1, DOT2, DISTANCE, COORDINATE, ANGLE, ROTATION, GEAR, RACK, CAM_POINT, CAM_FACE,
- GEAR_MESH) = range(12)
+ GEAR_MESH, DISC_ON_PLANE) = range(13)
 
 
 @jit
@@ -120,6 +120,102 @@ def mesh_turn_speeds(kind, bi, bj, slots, real, Q, Qd, s, v, a):
         rate_j = _line_angle_rates(d, dd, s, v, a, si, sj, slots[e, 2], slots[e, 3], dim)[0]
         out[e] = abs(real[e, 0] * rate_i) + abs(real[e, 1] * rate_j)
     return out
+
+
+@jit
+def _disc_on_plane(data, dest, row, nc, dim, n_rot, Q, s, J, v, a, slot, radius, i, j, value,
+                   jacobian, gamma, C, G, omega, w, w_rate, t2):
+    """A thin disc (body j, axis slot 2, its body axes slots 3 to 5) rolling without slipping
+    on a fixed plane (the ground, body i: unit normal slot 0, an in-plane unit vector slot 1).
+
+    Row 0, holonomic: the lowest rim point touches the plane, ``k . R - r n_a`` with
+    ``n_a = |a x k|``. Rows 1 and 2, nonholonomic (velocity level, ``c`` = 0): the disc's
+    material point at the contact, ``w = r (a_k a - k) / n_a`` from the centre, stands still
+    along the plane's in-plane axes ``t_1``, ``t_2 = k x t_1``: ``t . (R' + omega x w) = 0``.
+    ``omega x w`` is the rate of ``w`` frozen in the body, ``sum_m (e_m . w) e_m'``, so the
+    body axes give its Jacobian, and ``gamma = -(d/dt B) q'`` from their acceleration terms.
+    """
+    k0, t0, pa = slot[0], slot[1], slot[2]
+    a_k = a_rate = a_acc = 0.0
+    for x in range(dim):
+        a_k += s[pa, x] * s[k0, x]
+    normal = math.sqrt(max(1.0 - a_k * a_k, 1e-300))  # |a x k|: zero for a disc lying flat
+    if value:
+        height = 0.0
+        for x in range(dim):
+            height += s[k0, x] * (Q[j, x] - Q[i, x])
+        C[row] = height - radius * normal
+    # the contact's offset from the centre, and the second in-plane axis
+    for x in range(dim):
+        w[x] = radius * (a_k * s[pa, x] - s[k0, x]) / normal
+    t2[0] = s[k0, 1] * s[t0, 2] - s[k0, 2] * s[t0, 1]
+    t2[1] = s[k0, 2] * s[t0, 0] - s[k0, 0] * s[t0, 2]
+    t2[2] = s[k0, 0] * s[t0, 1] - s[k0, 1] * s[t0, 0]
+    if jacobian:
+        for x in range(dim):
+            _put(data, dest, row, 0, x, nc, -s[k0, x])
+            _put(data, dest, row, 1, x, nc, s[k0, x])
+            _put(data, dest, row + 1, 0, x, nc, -s[t0, x])
+            _put(data, dest, row + 1, 1, x, nc, s[t0, x])
+            _put(data, dest, row + 2, 0, x, nc, -t2[x])
+            _put(data, dest, row + 2, 1, x, nc, t2[x])
+        # the contact offset's components on the body axes
+        share0 = s[slot[3], 0] * w[0] + s[slot[3], 1] * w[1] + s[slot[3], 2] * w[2]
+        share1 = s[slot[4], 0] * w[0] + s[slot[4], 1] * w[1] + s[slot[4], 2] * w[2]
+        share2 = s[slot[5], 0] * w[0] + s[slot[5], 1] * w[1] + s[slot[5], 2] * w[2]
+        for col in range(n_rot):
+            lift = 0.0
+            along_1 = 0.0
+            along_2 = 0.0
+            for x in range(dim):
+                lift += s[k0, x] * J[pa, x, col]
+                turned = (share0 * J[slot[3], x, col] + share1 * J[slot[4], x, col]
+                          + share2 * J[slot[5], x, col])
+                along_1 += s[t0, x] * turned
+                along_2 += t2[x] * turned
+            _put(data, dest, row, 1, dim + col, nc, radius * a_k / normal * lift)
+            _put(data, dest, row + 1, 1, dim + col, nc, along_1)
+            _put(data, dest, row + 2, 1, dim + col, nc, along_2)
+    if gamma:
+        for x in range(dim):
+            a_rate += s[k0, x] * v[pa, x]
+            a_acc += s[k0, x] * a[pa, x]
+        G[row] = -radius * (a_rate * a_rate / normal ** 3 + a_k * a_acc / normal)
+        # omega = (sum_m e_m x e_m') / 2 from the body axes
+        for x in range(dim):
+            omega[x] = 0.0
+        for m in range(3):
+            e = slot[3 + m]
+            omega[0] += 0.5 * (s[e, 1] * v[e, 2] - s[e, 2] * v[e, 1])
+            omega[1] += 0.5 * (s[e, 2] * v[e, 0] - s[e, 0] * v[e, 2])
+            omega[2] += 0.5 * (s[e, 0] * v[e, 1] - s[e, 1] * v[e, 0])
+        # w' (the contact moving round the rim): r d/dt[(a_k a - k) / n_a]
+        normal_rate = -a_k * a_rate / normal
+        for x in range(dim):
+            w_rate[x] = (radius * (a_rate * s[pa, x] + a_k * v[pa, x]) - normal_rate * w[x]) / normal
+        # d/dt(B) q' = t . [sum_m (e_m . w) a_m - omega x (omega x w) + omega x w']
+        for r_ in range(2):
+            total = 0.0
+            for m in range(3):
+                e = slot[3 + m]
+                share = 0.0
+                for y in range(dim):
+                    share += s[e, y] * w[y]
+                for x in range(dim):
+                    total += share * (s[t0, x] if r_ == 0 else t2[x]) * a[e, x]
+            ow0 = omega[1] * w[2] - omega[2] * w[1]
+            ow1 = omega[2] * w[0] - omega[0] * w[2]
+            ow2 = omega[0] * w[1] - omega[1] * w[0]
+            # omega x (omega x w) - omega x w' = omega x (omega x w - w')
+            p0, p1, p2 = ow0 - w_rate[0], ow1 - w_rate[1], ow2 - w_rate[2]
+            c0 = omega[1] * p2 - omega[2] * p1
+            c1 = omega[2] * p0 - omega[0] * p2
+            c2 = omega[0] * p1 - omega[1] * p0
+            if r_ == 0:
+                total -= s[t0, 0] * c0 + s[t0, 1] * c1 + s[t0, 2] * c2
+            else:
+                total -= t2[0] * c0 + t2[1] * c1 + t2[2] * c2
+            G[row + 1 + r_] = -total
 
 
 @jit
@@ -372,6 +468,9 @@ def constraint_rows_into(kind, bi, bj, first_row, slots, coordinate, motion, rea
                 rate_j, acc_j = _line_angle_rates(d, dd, s, v, a, si, sj, p2, p3, dim)
                 mesh_rate = -(z_i * rate_i + z_j * rate_j)
                 G[row] = size * (cosine * (z_i * acc_i + z_j * acc_j) + sine * mesh_rate ** 2)
+        elif k == DISC_ON_PLANE:
+            _disc_on_plane(data, dest, row, nc, dim, n_rot, Q, s, J, v, a, slots[e], real[e, 0],
+                           i, j, value, jacobian, gamma, C, G, u, uv, ua, wv)
         elif k == CAM_POINT:
             # follower point j on the cam's pitch curve r(phi) (polar about the cam's centre,
             # phi in the cam's frame): C = |d| - r(phi), phi = angle(d) - theta_i
