@@ -135,6 +135,27 @@ def test_differential_example(capsys, tmp_path):
     np.testing.assert_allclose(origins[:, 0], res.joint("left mesh").mesh_force.point, rtol=1e-6)
 
 
+def test_rolling_disc_example(capsys, tmp_path):
+    rrd = tmp_path / "disc.rrd"
+    res = load("rolling_disc").main(n_points=5, rrd=str(rrd))
+    out = capsys.readouterr().out
+    assert float(re.search(r"turning rate by the closed form: (\S+) rad/s", out).group(1)) \
+        == pytest.approx(1.541134, abs=5e-7)  # the formula sheet's number
+    assert float(re.search(r"lean stays within (\S+) deg", out).group(1)) < 1e-8
+    assert float(re.search(r"radius within (\S+) m", out).group(1)) < 1e-10
+    assert float(re.search(r"after one turn: (\S+) m", out).group(1)) < 1e-9
+    normal, weight, friction, needed = (float(x) for x in re.search(
+        r"normal force (\S+) N = m g = (\S+) N; friction (\S+) N = m Omega\^2 R_G = (\S+) N",
+        out).groups())
+    assert normal == pytest.approx(weight, rel=1e-9) and friction == pytest.approx(needed, rel=1e-9)
+    assert float(re.search(r"lean drifts by (\S+) deg", out).group(1)) > 1.0
+    # drawn: the table under the disc, the path of a rim point
+    _, outline = read_component(rrd, "/world/ground/rails", "LineStrips3D:strips", timeline=None)
+    assert np.allclose(np.asarray(outline[0][0], dtype=float)[:, 2], 0.0)
+    assert recorded_steps(rrd, "disc") == 5
+    assert res.status == "complete"
+
+
 def test_slider_crank_friction_example(capsys, tmp_path):
     rrd = tmp_path / "scf.rrd"
     res = load("slider_crank_friction").main(n_points=7, rrd=str(rrd))

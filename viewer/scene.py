@@ -13,7 +13,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from mbd3d.joints import (CamFollower, CoordinateDriver, FlatFaceFollower, GearPair, Prismatic,
-                          RackPinion, RollingDisc, RotationDriver, TranslationDriver)
+                          RackPinion, RollingDisc, RollingDiscOnPlane, RotationDriver,
+                          TranslationDriver)
 from mbd3d.errors import ModelError
 from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
@@ -242,7 +243,7 @@ class Scene:
             stream.log("world/ground/joints", rr.Points3D(
                 [u for _, u in ground], radii=1.3 * radius, colors=GROUND_COLOR,
                 labels=[name for name, _ in ground], show_labels=False), static=True)
-        rails = self._rails()
+        rails = self._rails() + self._planes()
         if rails:
             stream.log("world/ground/rails", rr.LineStrips3D(rails, radii=0.3 * radius,
                                                              colors=GROUND_COLOR), static=True)
@@ -257,6 +258,23 @@ class Scene:
                                                             colors=GROUND_COLOR), static=True)
         self._log_styles(stream)
         self.log_info(stream, None, times)
+
+    def _planes(self) -> list[np.ndarray]:
+        """Outlines of the planes discs roll on: squares about the drawing's contact points,
+        as wide as the mechanism is big."""
+        outlines = []
+        for element in self.model.joints:
+            if isinstance(element, RollingDiscOnPlane):
+                _, _, axes = self.model.reaction_frame(element.name)
+                first, second, normal = axes.T
+                q0 = self.model.q0[self.model.coordinates_of(element.body_j)]
+                offset = self.model.c0[self.model.rows_of(element.name)[0]]
+                # below the disc's centre in the drawing, on the plane
+                centre = q0[:3] - (q0[:3] @ normal - offset) * normal
+                corners = [centre + self.size * (a * first + b * second)
+                           for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1))]
+                outlines.append(np.array(corners))
+        return outlines
 
     def _rails(self) -> list[np.ndarray]:
         """Lines along which bodies slide on the ground, as long as the mechanism is big."""
