@@ -366,7 +366,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                               penalty.copy(), beta_prime, kernel.last_mass_blocks(work))
         return (q, qd, qdd, a, lam_effective.copy()), S
 
-    meshes = any(g.cls.kind == "gear_mesh" for g in model.groups)
+    meshes = constraints.has_spatial_meshes(model)
 
     def loop() -> None:
         nonlocal redundant
@@ -393,8 +393,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                 # spatial gears know their angles modulo a tooth of the reduced ratio: no
                 # step may turn a mesh's gears by a quarter of one (half what lets Newton's
                 # guess be a tooth off, a factor of two left for gears speeding up)
-                speed = constraints.mesh_turn_speed(model, constraints.frames(model, q, qd,
-                                                                              chart))
+                speed = constraints.mesh_turn_speed(model, q, qd, chart)
                 if speed * h_try > 0.5 * math.pi:
                     h_try = 0.5 * math.pi / speed
             result = newton(tt + h_try, h_try, q, qd, qdd, a, lam, chart)

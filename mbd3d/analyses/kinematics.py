@@ -58,7 +58,6 @@ LATEST_TIME = 1e12
 
 
 def _require_fully_driven(model, what: str) -> None:
-    constraints.require_holonomic(model, what)
     n, m = model.n_coordinates, model.n_constraints
     if m < n:
         raise NotFullyDrivenError(
@@ -300,13 +299,15 @@ def _mesh_pieces(model, q: np.ndarray, qd: np.ndarray, chart, h: float) -> int:
     """Into how many steps to cut the step ``h`` after the state ``(q, qd)`` so that no spatial
     gear mesh's phase terms change by more than a quarter turn in one (half the change that
     lets a guess be a tooth off, leaving a factor of two for gears speeding up)."""
-    speed = constraints.mesh_turn_speed(model, constraints.frames(model, q, qd, chart))
+    speed = constraints.mesh_turn_speed(model, q, qd, chart)
     return max(1, int(math.ceil(speed * h / (0.5 * math.pi))))
 
 
 def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
            progress) -> Results:
     t = check_times(times)
+    # positions on a time grid come from the constraints alone: not those of velocity rows
+    constraints.require_holonomic(model, analysis)
     _require_fully_driven(model, analysis)
     # more equations than coordinates: redundant rows if they still fix every coordinate
     # (checked on the assembled first point), solved then by the augmented Lagrangian

@@ -139,13 +139,19 @@ def require_holonomic(model, what: str) -> None:
         "'RK23') integrates its motion")
 
 
-def mesh_turn_speed(model, fr: Frames) -> float:
+def has_spatial_meshes(model) -> bool:
+    """Whether the model has spatial gear meshes (see :func:`mesh_turn_speed`)."""
+    return any(g.cls.kind == "gear_mesh" for g in model.groups)
+
+
+def mesh_turn_speed(model, q: np.ndarray, qd: np.ndarray, charts=None) -> float:
     """The largest rate [rad/s] at which a spatial gear mesh's phase terms change (see
-    :func:`mbd3d.numerics.compiled.rows.mesh_turn_speeds`), at the frames' velocities; zero
-    without spatial gears. Position analysis from a guess that errs by less than the change
-    since a solved state cannot skip a tooth while ``speed * step < pi``."""
-    if not any(g.cls.kind == "gear_mesh" for g in model.groups):
+    :func:`mbd3d.numerics.compiled.rows.mesh_turn_speeds`) at ``(q, qd)``; zero without
+    spatial gears. Position analysis from a guess that errs by less than the change since a
+    solved state cannot skip a tooth while ``speed * step < pi``."""
+    if not has_spatial_meshes(model):
         return 0.0
+    fr = frames(model, q, qd, charts)
     table = model.row_table
     s, _, v, a = fr.vectors(table.vector_bodies, table.vector_local, True)
     return float(np.max(rows_kernel.mesh_turn_speeds(table.code, table.bi, table.bj,
