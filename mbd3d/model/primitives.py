@@ -14,7 +14,9 @@ velocity-dependent right-hand side of the acceleration equation (drivers add ``f
 Each primitive class gives its ``code`` in the compiled loop, its parameters, the rows per
 instance (``rows(dim)``), whether its rows are lengths (``length_rows``: residuals are judged
 relative to the model's length scale) and the body-frame vectors it needs, as
-``(name, body "i" or "j", parameter)``. :class:`RowTable` stacks every instance of a model in
+``(name, body "i" or "j", parameter)``; optionally ``planar_only`` or ``spatial_only``, and
+``velocity_rows``: rows of each instance that constrain velocities only (nonholonomic, their
+``c`` zero; see :class:`DiscOnPlane`). :class:`RowTable` stacks every instance of a model in
 row order; one call of :func:`evaluate_rows` evaluates them all.
 """
 
