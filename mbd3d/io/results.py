@@ -345,6 +345,13 @@ class JointHistory:
         [rad/s], (k, 3)."""
         return self._coordinates("ball")[3]
 
+    def _row_vectors(self) -> np.ndarray:
+        """The body-frame vectors of the joint's first primitive row, in its class's order
+        (see :attr:`mbd3d.model.primitives.RowTable.slots`)."""
+        table = self._results.model.row_table
+        slots = table.slots[self._results.model._instances_of[self.name][0]]
+        return table.vector_local[slots[slots >= 0]]
+
     @property
     def mesh_force(self) -> MeshForce:
         """Gear pair or rack and pinion: the force of the mesh on body j (see
@@ -387,15 +394,11 @@ class JointHistory:
         """:attr:`mesh_force` of a spatial spur or bevel pair: the tooth force at the pitch
         point, where the pitch circles (cones, at the radii given) touch."""
         results = self._results
-        table = results.model.row_table
-        slots = table.slots[results.model._instances_of[self.name][0]]
         u_i, u_j, _ = results.model.reaction_frame(self.name)
-        axes = []
-        for body, first in ((element.body_i, 0), (element.body_j, 2)):
-            f, g = (results._global_point(body, table.vector_local[slots[first + k]], vector=True)
-                    for k in (0, 1))
-            axes.append(np.cross(f, g))
-        h_i, h_j = axes
+        # each gear's axis, f x g of the row's vectors on it (slots 0, 1 on i; 2, 3 on j)
+        local = self._row_vectors()
+        h_i, h_j = (results._global_point(body, np.cross(local[k], local[k + 1]), vector=True)
+                    for body, k in ((element.body_i, 0), (element.body_j, 2)))
         centre_i = results._global_point(element.body_i, u_i)
         centre_j = results._global_point(element.body_j, u_j)
         radius_i, radius_j = float(element.radius_i), float(element.radius_j)
@@ -476,10 +479,8 @@ class JointHistory:
         u_i, u_j, axes = results.model.reaction_frame(self.name)
         if isinstance(element, RollingDiscOnPlane):
             # the lowest rim point, r (a_k a - k) / |a x k| from the centre
-            table = results.model.row_table
-            slots = table.slots[results.model._instances_of[self.name][0]]
             normal = np.tile(axes[:, 2], (len(results.t), 1))
-            a = results._global_point(element.body_j, table.vector_local[slots[2]], vector=True)
+            a = results._global_point(element.body_j, self._row_vectors()[2], vector=True)
             along = np.einsum("ki,ki->k", a, normal)
             down = (along[:, None] * a - normal) / np.sqrt(1.0 - along ** 2)[:, None]
             return (results._global_point(element.body_j, u_j)
@@ -503,8 +504,7 @@ class JointHistory:
             normal /= np.linalg.norm(normal, axis=1)[:, None]
             return point - float(element.roller_radius) * normal, normal
         # the face's normal (towards the cam) is the row's first body vector, on body j
-        table = results.model.row_table
-        v_j = table.vector_local[table.slots[results.model._instances_of[self.name][0], 0]]
+        v_j = self._row_vectors()[0]
         normal = -results._global_point(element.body_j, v_j, vector=True)
         psi = np.arctan2(normal[:, 1], normal[:, 0]) - cam_angle
         # the support function's envelope: h e + h' e_perp

@@ -130,7 +130,7 @@ def require_holonomic(model, what: str) -> None:
     positions to follow from the constraints, naming the joints."""
     if not len(model.velocity_rows):
         return
-    joints = list(dict.fromkeys(model.joints_of_rows(model.velocity_rows)))
+    joints = model.joints_of_rows(model.velocity_rows)
     raise ModelError(
         f"{what} needs positions that the constraints fix, but in '{model.name}' "
         f"{', '.join(repr(j) for j in joints)} constrain{'s' if len(joints) == 1 else ''} "

@@ -151,6 +151,10 @@ def _disc_on_plane(data, dest, row, nc, dim, n_rot, Q, s, J, v, a, slot, radius,
     t2[0] = s[k0, 1] * s[t0, 2] - s[k0, 2] * s[t0, 1]
     t2[1] = s[k0, 2] * s[t0, 0] - s[k0, 0] * s[t0, 2]
     t2[2] = s[k0, 0] * s[t0, 1] - s[k0, 1] * s[t0, 0]
+    # the contact offset's components on the body axes (frozen in the body for B)
+    share0 = s[slot[3], 0] * w[0] + s[slot[3], 1] * w[1] + s[slot[3], 2] * w[2]
+    share1 = s[slot[4], 0] * w[0] + s[slot[4], 1] * w[1] + s[slot[4], 2] * w[2]
+    share2 = s[slot[5], 0] * w[0] + s[slot[5], 1] * w[1] + s[slot[5], 2] * w[2]
     if jacobian:
         for x in range(dim):
             _put(data, dest, row, 0, x, nc, -s[k0, x])
@@ -159,10 +163,6 @@ def _disc_on_plane(data, dest, row, nc, dim, n_rot, Q, s, J, v, a, slot, radius,
             _put(data, dest, row + 1, 1, x, nc, s[t0, x])
             _put(data, dest, row + 2, 0, x, nc, -t2[x])
             _put(data, dest, row + 2, 1, x, nc, t2[x])
-        # the contact offset's components on the body axes
-        share0 = s[slot[3], 0] * w[0] + s[slot[3], 1] * w[1] + s[slot[3], 2] * w[2]
-        share1 = s[slot[4], 0] * w[0] + s[slot[4], 1] * w[1] + s[slot[4], 2] * w[2]
-        share2 = s[slot[5], 0] * w[0] + s[slot[5], 1] * w[1] + s[slot[5], 2] * w[2]
         for col in range(n_rot):
             lift = 0.0
             along_1 = 0.0
@@ -193,29 +193,21 @@ def _disc_on_plane(data, dest, row, nc, dim, n_rot, Q, s, J, v, a, slot, radius,
         normal_rate = -a_k * a_rate / normal
         for x in range(dim):
             w_rate[x] = (radius * (a_rate * s[pa, x] + a_k * v[pa, x]) - normal_rate * w[x]) / normal
-        # d/dt(B) q' = t . [sum_m (e_m . w) a_m - omega x (omega x w) + omega x w']
-        for r_ in range(2):
-            total = 0.0
-            for m in range(3):
-                e = slot[3 + m]
-                share = 0.0
-                for y in range(dim):
-                    share += s[e, y] * w[y]
-                for x in range(dim):
-                    total += share * (s[t0, x] if r_ == 0 else t2[x]) * a[e, x]
-            ow0 = omega[1] * w[2] - omega[2] * w[1]
-            ow1 = omega[2] * w[0] - omega[0] * w[2]
-            ow2 = omega[0] * w[1] - omega[1] * w[0]
-            # omega x (omega x w) - omega x w' = omega x (omega x w - w')
-            p0, p1, p2 = ow0 - w_rate[0], ow1 - w_rate[1], ow2 - w_rate[2]
-            c0 = omega[1] * p2 - omega[2] * p1
-            c1 = omega[2] * p0 - omega[0] * p2
-            c2 = omega[0] * p1 - omega[1] * p0
-            if r_ == 0:
-                total -= s[t0, 0] * c0 + s[t0, 1] * c1 + s[t0, 2] * c2
-            else:
-                total -= t2[0] * c0 + t2[1] * c1 + t2[2] * c2
-            G[row + 1 + r_] = -total
+        # d/dt(B) q' = t . V, V = sum_m (e_m . w) a_m - omega x (omega x w - w'); the bracket
+        # goes in place of w'
+        for x in range(3):
+            w_rate[x] = (omega[(x + 1) % 3] * w[(x + 2) % 3] - omega[(x + 2) % 3] * w[(x + 1) % 3]
+                         - w_rate[x])
+        along_1 = 0.0
+        along_2 = 0.0
+        for x in range(3):
+            turned = (share0 * a[slot[3], x] + share1 * a[slot[4], x] + share2 * a[slot[5], x]
+                      - (omega[(x + 1) % 3] * w_rate[(x + 2) % 3]
+                         - omega[(x + 2) % 3] * w_rate[(x + 1) % 3]))
+            along_1 += s[t0, x] * turned
+            along_2 += t2[x] * turned
+        G[row + 1] = -along_1
+        G[row + 2] = -along_2
 
 
 @jit
