@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import os
 import pathlib
+import signal
+import subprocess
+import sys
 
 import pytest
 
@@ -15,6 +18,41 @@ VALIDATION_DATA = REPO / "examples" / "data"
 def validation_data() -> pathlib.Path:
     """Folder of the published reference series (examples/data/, sources in its README)."""
     return VALIDATION_DATA
+
+
+@pytest.fixture
+def default_sigint():
+    """Python's own SIGINT handler (KeyboardInterrupt) for the test, whatever pytest was started
+    with: a background job or nohup ignores SIGINT, and a test of Ctrl-C must not depend on
+    that. The previous handling is restored afterwards."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def with_default_sigint(command: list[str]) -> list[str]:
+    """``command`` started with SIGINT at its default disposition. An ignored SIGINT is
+    inherited by child processes: without this, a server started by a test run under nohup
+    would ignore the SIGINT meant to stop it."""
+    reset = ("import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); "
+             "os.execvp(sys.argv[1], sys.argv[1:])")
+    return [sys.executable, "-c", reset, *command]
+
+
+def stop_process(process: subprocess.Popen | None, timeout: float = 20.0) -> None:
+    """End a process a test started: SIGINT (a Rerun server then writes out what it
+    received), and SIGKILL if it is still running ``timeout`` seconds later, so that no
+    process or port outlives the test."""
+    if process is None or process.poll() is not None:
+        return
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
 
 
 try:

@@ -9,6 +9,8 @@ import time
 import numpy as np
 import pytest
 
+from conftest import stop_process, with_default_sigint
+
 README = pathlib.Path(__file__).resolve().parent.parent / "README.md"
 
 
@@ -86,7 +88,6 @@ def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
     """The file snippet runs as printed; the display snippet runs as printed with Rerun's own
     binary, saving instead of drawing, as the viewer it spawns and connects to, and the file
     viewer replaced by a program that only checks its argument (no window here)."""
-    import signal
     import socket
     import subprocess
 
@@ -105,8 +106,8 @@ def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
             pytest.skip(f"port {recorder.VIEWER_PORT} is taken: a viewer is running here")
     received = tmp_path / "viewer received.rrd"
     binary = rerun_executable()
-    monkeypatch.setattr(recorder, "_viewer_command", lambda port: [
-        binary, "--bind", "127.0.0.1", "--port", str(port), "--save", str(received)])
+    monkeypatch.setattr(recorder, "_viewer_command", lambda port: with_default_sigint([
+        binary, "--bind", "127.0.0.1", "--port", str(port), "--save", str(received)]))
     spawned = []
     spawn = recorder.spawn_viewer
     monkeypatch.setattr(recorder, "spawn_viewer",
@@ -123,9 +124,7 @@ def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
             time.sleep(0.2)
     finally:
         for _, process in spawned:
-            if process is not None:
-                process.send_signal(signal.SIGINT)
-                process.wait(timeout=20)
+            stop_process(process)
     assert len(spawned) == 1 and spawned[0][1] is not None  # started once, then reused
     # both runs reached it, each a recording of its own with every time point
     assert store_rows(received) == [201, 201]

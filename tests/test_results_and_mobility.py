@@ -170,7 +170,7 @@ def test_interrupt_keeps_the_results_so_far(monkeypatch):
     np.testing.assert_array_equal(res.t, np.linspace(0.0, 5.0, 501)[:len(res)])
 
 
-def test_ctrl_c_stops_a_long_stretch_of_compiled_steps():
+def test_ctrl_c_stops_a_long_stretch_of_compiled_steps(default_sigint):
     # outputs far apart: the compiled loop still returns every few thousand steps, so a real
     # SIGINT ends the run with the outputs done so far instead of waiting for the next one
     import os

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import math
 import os
-import signal
 import socket
 import sys
 import subprocess
@@ -22,6 +21,7 @@ import trimesh
 from rerun.chunk import RrdReader
 
 import mbd3d as mb
+from conftest import stop_process, with_default_sigint
 from mbd3d.mechanisms import pendulum_chain, slider_crank
 from mbd3d.joints import Spherical
 from mbd3d.viewer import (Recorder, RecordingError, entity_paths, read_component, record,
@@ -294,8 +294,9 @@ def free_port() -> int:
 def test_live_stream_reaches_a_rerun_server_on_loopback(tmp_path):
     port = free_port()
     saved = tmp_path / "received.rrd"
-    server = subprocess.Popen([rerun_executable(), "--bind", "127.0.0.1", "--port", str(port),
-                               "--save", str(saved)], stdout=subprocess.DEVNULL,
+    server = subprocess.Popen(with_default_sigint([
+        rerun_executable(), "--bind", "127.0.0.1", "--port", str(port), "--save", str(saved)]),
+                              stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL, env={**os.environ, "CI": "true"})
     try:
         deadline = time.monotonic() + 30
@@ -325,11 +326,7 @@ def test_live_stream_reaches_a_rerun_server_on_loopback(tmp_path):
             time.sleep(0.2)
         np.testing.assert_allclose(translation[:, 0], expected, atol=2e-6)
     finally:
-        server.terminate()
-        try:
-            server.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            server.kill()
+        stop_process(server)
 
 
 def wait_for_rows(path, entity: str, rows: int, timeout: float = 30.0):
@@ -353,8 +350,8 @@ def test_spawned_viewer_receives_every_time_point(tmp_path, monkeypatch):
     from mbd3d.viewer import recorder
 
     port, saved = free_port(), tmp_path / "spawned.rrd"
-    monkeypatch.setattr(recorder, "_viewer_command", lambda p: [
-        rerun_executable(), "--bind", "127.0.0.1", "--port", str(p), "--save", str(saved)])
+    monkeypatch.setattr(recorder, "_viewer_command", lambda p: with_default_sigint([
+        rerun_executable(), "--bind", "127.0.0.1", "--port", str(p), "--save", str(saved)]))
     monkeypatch.setenv("DISPLAY", ":99")  # what a desktop session has
     monkeypatch.setenv("CI", "true")  # no analytics from the stand-in
     live = Recorder(spawn=True, viewer_port=port, interval=0.0, announce=False)
@@ -365,9 +362,7 @@ def test_spawned_viewer_receives_every_time_point(tmp_path, monkeypatch):
         # delivered to the viewer when the run ends; the stand-in writes it out in its time
         steps, translation = wait_for_rows(saved, "/world/bodies/slider", 26)
     finally:
-        if live.viewer_process is not None:
-            live.viewer_process.send_signal(signal.SIGINT)
-            live.viewer_process.wait(timeout=20)
+        stop_process(live.viewer_process)
     assert len(steps) == len(res) == 26
     np.testing.assert_allclose(translation[:, 0], lifted(res.body("slider").position), atol=2e-6)
 
