@@ -3,6 +3,8 @@ on stderr that name the file, line and field of a mistake."""
 
 from __future__ import annotations
 
+import csv
+import io
 import os
 import pathlib
 import shutil
@@ -12,6 +14,7 @@ import sys
 import numpy as np
 import pytest
 
+import mbd3d as mb
 from mbd3d.viewer import read_component
 from test_model_files import GOOD
 
@@ -146,6 +149,21 @@ def test_sweep_runs_the_grid_and_keeps_the_table(tmp_path):
     assert "SweepTable(2 runs, 0 failed)" in done.stdout
     table = (tmp_path / "sweep" / "table.csv").read_text()
     assert "p_joints_motor_motion_rate" in table and "peak |motor effort|" in table
+    # the default metrics are what they are called: the motor's effort, largest in magnitude
+    # where it is negative here, and the slider's last position, from runs made apart
+    from mbd3d.io.model_file import read
+    rows = list(csv.DictReader(io.StringIO(table)))
+    assert [float(row["p_joints_motor_motion_rate"]) for row in rows] == [3.0, 6.0]
+    for row in rows:
+        model = read(MODELS / "slider_crank.yaml", {
+            "joints.motor.motion.rate": float(row["p_joints_motor_motion_rate"])}).model
+        res = mb.inverse_dynamics(model, np.linspace(0.0, 0.5, 11))
+        effort = res.driver("motor").effort
+        assert -effort.min() > effort.max()
+        assert float(row["peak |motor effort|"]) == pytest.approx(np.abs(effort).max(),
+                                                                  rel=1e-12)
+        assert float(row["final slider.x"]) == pytest.approx(
+            res.body("slider").position[-1, 0], rel=1e-12)
     done = mbd3d("sweep", MODELS / "slider_crank.yaml", "--grid", "joints.motr.rate=1",
                  "--serial", "--folder", tmp_path / "bad")
     assert done.returncode == 2 and "no entry 'motr'" in done.stderr

@@ -202,16 +202,31 @@ def test_mistakes_are_reported_with_file_line_and_field(tmp_path, change, messag
         mb.load(path)
 
 
+@pytest.mark.parametrize("spec, expected", [
+    ("{start: 0.5, stop: 1.5, points: 5}", [0.5, 0.75, 1.0, 1.25, 1.5]),
+    ("{stop: 1.0, points: 3}", [0.0, 0.5, 1.0]),
+    ("{start: 0.0, stop: 0.3, step: 0.1}", [0.0, 0.1, 0.2, 0.3]),
+    ("{start: 0.0, stop: 0.25, step: 0.1}", [0.0, 0.1, 0.2, 0.25]),  # the stop is kept
+    ("[0.0, 0.2, 0.7]", [0.0, 0.2, 0.7]),
+])
+def test_times_in_a_file_are_the_ones_it_states(tmp_path, spec, expected):
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD.replace("t: {start: 0.0, stop: 1.0, points: 11}", f"t: {spec}"))
+    t = read(path).analyses[0].t
+    assert len(t) == len(expected)
+    np.testing.assert_allclose(t, expected, rtol=0, atol=1e-15)
+
+
 def test_a_good_file_runs_its_analysis_and_takes_changes(tmp_path):
     path = tmp_path / "m.yaml"
     path.write_text(GOOD)
     loaded = read(path)
     res = loaded.analyses[0].run(loaded.model)
-    np.testing.assert_allclose(res.body("bar").angle, 6.0 * res.t, atol=1e-12)
+    np.testing.assert_allclose(res.body("bar").angle, 6.0 * res.t, rtol=0, atol=1e-12)
     # a field changed by path, as a sweep does: the motor's rate
     faster = read(path, {"joints.motor.motion.rate": 3.0})
     res = faster.analyses[0].run(faster.model)
-    np.testing.assert_allclose(res.body("bar").angle, 3.0 * res.t, atol=1e-12)
+    np.testing.assert_allclose(res.body("bar").angle, 3.0 * res.t, rtol=0, atol=1e-12)
     with pytest.raises(ModelFileError, match="no entry 'motr'"):
         read(path, {"joints.motr.motion.rate": 3.0})
 
