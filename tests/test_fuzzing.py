@@ -13,6 +13,7 @@ thousands (see conftest.py).
 
 from __future__ import annotations
 
+import collections
 import math
 
 import numpy as np
@@ -88,32 +89,69 @@ def all_finite(res: mb.Results) -> bool:
     return all(np.all(np.isfinite(a)) for a in arrays)
 
 
-@given(chains())
-def test_random_mechanisms_are_solved_or_refused_by_name(spec):
-    try:
-        model = build(spec)
-        report = mb.mobility(model)
-        assert report.dof >= 0 and report.rank <= min(report.n_constraints, report.n_coordinates)
-        rng = np.random.default_rng(len(spec["links"]))
-        guess = model.q0 + spec["rough"] * rng.normal(size=model.n_coordinates)
-        q = mb.solve_position(model, guess)
-        assert np.all(np.isfinite(q))
-        res = mb.forward_dynamics(model, [0.0, 0.02, 0.04], q0=q, method="RK45")
-        assert res.status == "complete" and all_finite(res)
-        assert np.max(res.position_residual) <= 1e-6
-    except mb.MBDError as error:
-        assert str(error)  # a message, and it is ours
+#: the refusals a random mechanism may justly end in: a position where the constraint
+#: Jacobian is singular (links drawn in line, a loop at a dead centre), or a rough guess from
+#: which a closed loop does not assemble; any other error is a failure
+JUSTIFIED = (mb.SingularJacobianError, mb.AssemblyError)
+#: the share of examples that may end in a justified refusal: about 1 in 40 do
+MAX_REFUSED = 0.15
 
 
-@given(chains())
-def test_random_mechanisms_integrate_implicitly_or_refuse(spec):
+def outcome(attempt) -> str:
+    """``"solved"`` or ``"refused"`` (a justified refusal, with a message) of ``attempt()``;
+    any other error propagates and fails the test."""
     try:
-        model = build(spec)
-        res = mb.forward_dynamics(model, [0.0, 0.01], method="generalized-alpha", step=5e-3)
-        assert res.status == "complete" and all_finite(res)
-        assert np.max(res.position_residual) <= 1e-6
-    except mb.MBDError as error:
+        attempt()
+    except JUSTIFIED as error:
         assert str(error)
+        return "refused"
+    return "solved"
+
+
+def run_examples(strategy, check) -> collections.Counter:
+    """``check(example)`` over Hypothesis's examples of ``strategy``, counting its outcomes
+    (each a string): the refusals are judged over all examples, not one at a time."""
+    counts: collections.Counter = collections.Counter()
+
+    @given(strategy)
+    def each(example):
+        counts[check(example)] += 1
+
+    each()
+    return counts
+
+
+def test_random_mechanisms_are_solved_or_refused_by_name():
+    def check(spec) -> str:
+        def attempt():
+            model = build(spec)
+            report = mb.mobility(model)
+            assert report.dof >= 0
+            assert report.rank <= min(report.n_constraints, report.n_coordinates)
+            rng = np.random.default_rng(len(spec["links"]))
+            guess = model.q0 + spec["rough"] * rng.normal(size=model.n_coordinates)
+            q = mb.solve_position(model, guess)
+            assert np.all(np.isfinite(q))
+            res = mb.forward_dynamics(model, [0.0, 0.02, 0.04], q0=q, method="RK45")
+            assert res.status == "complete" and all_finite(res)
+            assert np.max(res.position_residual) <= 1e-6
+        return outcome(attempt)
+
+    counts = run_examples(chains(), check)
+    assert counts["refused"] <= MAX_REFUSED * sum(counts.values()), counts
+
+
+def test_random_mechanisms_integrate_implicitly_or_refuse():
+    def check(spec) -> str:
+        def attempt():
+            model = build(spec)
+            res = mb.forward_dynamics(model, [0.0, 0.01], method="generalized-alpha", step=5e-3)
+            assert res.status == "complete" and all_finite(res)
+            assert np.max(res.position_residual) <= 1e-6
+        return outcome(attempt)
+
+    counts = run_examples(chains(), check)
+    assert counts["refused"] <= MAX_REFUSED * sum(counts.values()), counts
 
 
 def within_tolerances(res: mb.Results, position_tol: float, velocity_tol: float) -> bool:
@@ -124,30 +162,36 @@ def within_tolerances(res: mb.Results, position_tol: float, velocity_tol: float)
                 and np.all(res.velocity_residual <= velocity_tol * limit))
 
 
-@given(chains(), st.floats(min_value=-3.0, max_value=3.0), st.floats(min_value=0.05, max_value=1.5))
-def test_any_complete_result_satisfies_the_constraints_at_every_output_time(spec, speed, span):
-    """Complete means right: with every joint driven (closed chains are then over-driven and
-    must be refused), kinematics and inverse dynamics, and without drivers forward dynamics,
-    each end complete with the constraints met at every output time, or stop with one of
-    mbd3d's errors."""
-    for link in spec["links"]:
-        if link["joint"] == "spherical":  # three rotations: not one driver's worth
-            link["joint"] = "revolute"
-    times = np.linspace(0.0, span, 21)
-    try:
+def test_any_complete_result_satisfies_the_constraints_at_every_output_time():
+    """Complete means right: with every joint driven, kinematics and inverse dynamics of an
+    open chain complete, and a closed chain (then over-driven) is refused as over-driven;
+    without drivers forward dynamics completes, or stops at a singular position. Each
+    complete run meets the constraints at every output time."""
+    def check(example) -> str:
+        spec, speed, span = example
+        for link in spec["links"]:
+            if link["joint"] == "spherical":  # three rotations: not one driver's worth
+                link["joint"] = "revolute"
+        times = np.linspace(0.0, span, 21)
         driven = build(spec, drive=speed)
         for analysis in (mb.kinematic_analysis, mb.inverse_dynamics):
+            if spec["closed"]:
+                with pytest.raises(mb.OverDrivenError, match="over-driven"):
+                    analysis(driven, times)
+                continue
             res = analysis(driven, times)
             assert res.status == "complete" and all_finite(res)
             assert within_tolerances(res, 1e-9, 1e-9)
-    except mb.MBDError as error:
-        assert str(error)
-    try:
-        res = mb.forward_dynamics(build(spec), times[:6], method="RK45")
-        assert res.status == "complete" and all_finite(res)
-        assert within_tolerances(res, 1e-8, 1e-8)
-    except mb.MBDError as error:
-        assert str(error)
+
+        def free_motion():
+            res = mb.forward_dynamics(build(spec), times[:6], method="RK45")
+            assert res.status == "complete" and all_finite(res)
+            assert within_tolerances(res, 1e-8, 1e-8)
+        return outcome(free_motion)
+
+    counts = run_examples(st.tuples(chains(), st.floats(min_value=-3.0, max_value=3.0),
+                                    st.floats(min_value=0.05, max_value=1.5)), check)
+    assert counts["refused"] <= MAX_REFUSED * sum(counts.values()), counts
 
 
 BAD_NUMBERS = [-1.0, 0.0, float("nan"), float("inf"), "heavy", None, [1.0, 2.0]]
