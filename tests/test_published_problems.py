@@ -28,7 +28,7 @@ def test_andrews_squeezing_mechanism_matches_the_test_set_at_30_ms(capsys, tmp_p
     # the motor's work went into kinetic and spring energy (no gravity, no losses)
     energy = res.kinetic_energy + res.potential_energy
     work = 0.033 * (res.body("body1").angle - res.body("body1").angle[0])
-    np.testing.assert_allclose(energy - energy[0], work, atol=1e-9)
+    np.testing.assert_allclose(energy - energy[0], work, rtol=0, atol=1e-9)
     assert "relative error" in capsys.readouterr().out
 
 
@@ -98,7 +98,7 @@ def test_iftomm_a02_forty_four_bars_follow_the_adams_series_through_singular_pos
     res = load("iftomm_four_bar").main(bars=40, duration=20.0, rrd=str(tmp_path / "a02.rrd"))
     assert (tmp_path / "a02.rrd").stat().st_size > 0
     b0 = res.point("crank0", (0.5, 0.0)).position
-    np.testing.assert_allclose(res.t, reference[:, 0], atol=1e-12)
+    np.testing.assert_allclose(res.t, reference[:, 0], rtol=0, atol=1e-12)
     assert np.max(np.abs(b0 - reference[:, 1:])) < 1e-3
     # and the separately derived one-degree-of-freedom equation, to the method's h^2 error
     assert np.max(np.abs(b0 - four_bar_oscillator(40, res.t))) < 1e-3
@@ -148,7 +148,7 @@ def test_explicit_methods_stop_at_the_singular_position_naming_joints_and_time()
     before = results.t < first_flat
     assert np.count_nonzero(before) >= 5
     np.testing.assert_allclose(results.point("crank0", (0.5, 0.0)).position[before],
-                               four_bar_oscillator(2, results.t[before]), atol=1e-6)
+                               four_bar_oscillator(2, results.t[before]), rtol=0, atol=1e-6)
 
 
 def test_iftomm_a04_bricard_redundant_constraint_found_and_motion_computed(capsys, tmp_path):
@@ -171,8 +171,10 @@ def test_iftomm_a04_bricard_redundant_constraint_found_and_motion_computed(capsy
     assert not explicit.reactions_unique
     for k in range(1, 6):  # poses (raw q would depend on when each run re-referenced charts)
         implicit_body, explicit_body = res.body(f"rod{k}"), explicit.body(f"rod{k}")
-        np.testing.assert_allclose(implicit_body.position, explicit_body.position, atol=5e-6)
-        np.testing.assert_allclose(implicit_body.rotation, explicit_body.rotation, atol=5e-6)
+        np.testing.assert_allclose(implicit_body.position, explicit_body.position,
+                                   rtol=0, atol=5e-6)
+        np.testing.assert_allclose(implicit_body.rotation, explicit_body.rotation,
+                                   rtol=0, atol=5e-6)
     # minimum-norm multipliers, in the model's dimensionless units (rows over their scale,
     # coordinates times theirs, see mbd3d.numerics.linalg): no component along the dependency of the
     # rows, and the equations of motion hold with them
@@ -188,7 +190,8 @@ def test_iftomm_a04_bricard_redundant_constraint_found_and_motion_computed(capsy
         balance = M @ explicit.qdd[k] + Cq.T @ explicit.lam[k] - generalized_forces(
             explicit.model, explicit.t[k], fr)
         assert np.abs(balance).max() < 1e-8
-    np.testing.assert_allclose(res.lam, explicit.lam, atol=1e-3 * np.abs(explicit.lam).max())
+    np.testing.assert_allclose(res.lam, explicit.lam,
+                               rtol=0, atol=1e-3 * np.abs(explicit.lam).max())
 
 
 def test_iftomm_a05_flyball_governor_conserves_momentum_and_moves_as_its_rigid_twin(
@@ -206,7 +209,11 @@ def test_iftomm_a05_flyball_governor_conserves_momentum_and_moves_as_its_rigid_t
     # integrator's own energy error at the same level)
     assert np.max(np.abs(energy - energy[0])) < 2e-5 * energy[0] and energy[-1] < energy[0]
     right, left = res.body("arm right").position, res.body("arm left").position
-    np.testing.assert_allclose(right * [1, 1, 1], left * [-1, -1, 1], atol=1e-9)
+    # mirror images, to generalized-alpha's error: it integrates each arm's Rodrigues
+    # parameters, and the arms' charts differ by the half turn between them, so the two see
+    # different O(h^2) errors (6.8e-9 m at h = 1 ms, a quarter at h/2; DOP853 keeps the
+    # symmetry to 4e-14 m)
+    np.testing.assert_allclose(right * [1, 1, 1], left * [-1, -1, 1], rtol=0, atol=1e-8)
     sleeve = res.body("sleeve").position[:, 2]
     assert np.ptp(sleeve) > 0.2  # the arms fly out and pull the sleeve up
     rigid = mb.forward_dynamics(example.build(rigid_couplers=True), res.t, method="DOP853",

@@ -119,11 +119,11 @@ def test_spatial_planetary_train_follows_willis_over_turns():
     carrier = res.joint("carrier shaft").angle
     sun_turn = res.joint("sun shaft").angle - res.joint("sun shaft").angle[0]
     assert carrier[-1] - carrier[0] > 2 * math.pi
-    np.testing.assert_allclose(carrier - carrier[0], sun_turn * rs / (rs + rr), atol=1e-12)
+    np.testing.assert_allclose(carrier - carrier[0], sun_turn * rs / (rs + rr), rtol=0, atol=1e-12)
     # the planet relative to the carrier, by the pin's angle: against the sun by rs / rp
     pin = res.joint("planet pin").angle
     np.testing.assert_allclose(pin - pin[0], -(sun_turn - (carrier - carrier[0])) * rs / rp,
-                               atol=1e-11)
+                               rtol=0, atol=1e-11)
 
 
 R_SIDE, R_SPIDER = 0.06, 0.03
@@ -180,7 +180,8 @@ def test_bevel_differential_splits_speeds_and_rolls_without_slip():
     turned = {n: res.joint(f"{n} axle").angle - res.joint(f"{n} axle").angle[0]
               for n in ("cage", "left", "right")}
     assert turned["right"][-1] > 3 * 2 * math.pi
-    np.testing.assert_allclose(turned["right"], 2 * turned["cage"] - turned["left"], atol=1e-11)
+    np.testing.assert_allclose(turned["right"], 2 * turned["cage"] - turned["left"],
+                               rtol=0, atol=1e-11)
     # the spider spins on its pin at (omega_L - omega_c) R_SIDE / R_SPIDER
     spin = res.joint("spider pin").angle_rate
     np.testing.assert_allclose(spin, (w_left - w_cage) * R_SIDE / R_SPIDER, rtol=0, atol=1e-11)
@@ -250,7 +251,7 @@ def test_bevel_pair_under_torque_matches_its_equation_and_tooth_force(shaft_angl
     pinion, wheel = res.joint("A").angle, res.joint("B").angle
     np.testing.assert_allclose(pinion - pinion[0], alpha * t ** 2 / 2, rtol=0, atol=1e-9)
     assert pinion[-1] - pinion[0] > 6 * 2 * math.pi
-    np.testing.assert_allclose(wheel - wheel[0], -ratio * (pinion - pinion[0]), atol=1e-10)
+    np.testing.assert_allclose(wheel - wheel[0], -ratio * (pinion - pinion[0]), rtol=0, atol=1e-10)
     # the power balance: the torque's work is the kinetic energy
     np.testing.assert_allclose(res.kinetic_energy, torque * (pinion - pinion[0]), rtol=0,
                                atol=1e-11)
@@ -295,7 +296,7 @@ def test_bevel_pair_with_generalized_alpha_converges_at_second_order():
         errors.append(np.max(np.abs(pinion - pinion[0] - alpha * t ** 2 / 2)))
         # the mesh holds to the Newton tolerance at every step whatever the step's error
         np.testing.assert_allclose(wheel - wheel[0], -g["ri"] / g["rj"] * (pinion - pinion[0]),
-                                   atol=1e-9)
+                                   rtol=0, atol=1e-9)
     assert 3.5 < errors[0] / errors[1] < 4.5, errors
 
 
@@ -354,6 +355,7 @@ def test_generalized_alpha_keeps_steps_within_a_quarter_tooth():
     res = mb.forward_dynamics(b.build(), t, method="generalized-alpha", step=2e-2)
     alpha = 1.0 / (inertia * (1.0 + (ri / rj) ** 2))
     pinion, wheel = res.joint("A").angle, res.joint("B").angle
-    np.testing.assert_allclose(wheel - wheel[0], -ri / rj * (pinion - pinion[0]), atol=1e-9)
+    np.testing.assert_allclose(wheel - wheel[0], -ri / rj * (pinion - pinion[0]),
+                               rtol=0, atol=1e-9)
     # the method's own error at these steps (second order), 2e-4 of the 32 rad turned
     np.testing.assert_allclose(pinion - pinion[0], alpha * t ** 2 / 2, rtol=1e-3)
