@@ -17,7 +17,6 @@ from mbd3d.errors import ModelError
 from mbd3d.model.builder import BuildContext
 from mbd3d.model.motion import Motion, as_motion
 
-from mbd3d.joints.base import Axes
 from mbd3d.joints.prismatic import Prismatic
 from mbd3d.joints.revolute import Revolute
 
@@ -118,7 +117,7 @@ class RotationDriver(ConstraintElement):
         if self.joint is None:
             raise ModelError(f"driver '{self.name}': in space, give the Revolute whose rotation "
                              "is driven (its axis defines the angle)")
-        f_i, g_i, f_j = hinge_directions(ctx, self.joint, f"driver '{self.name}'")
+        f_i, g_i, f_j = self.joint.hinge_directions(ctx, f"driver '{self.name}'")
         return [PrimitiveSpec("rotation", self.body_i, self.body_j,
                               {"f_i": f_i, "g_i": g_i, "f_j": f_j}, ("angle",),
                               motion=self.motion)]
@@ -127,28 +126,6 @@ class RotationDriver(ConstraintElement):
         if self.joint is not None:
             return self.joint.reaction_frame(ctx)
         return super().reaction_frame(ctx)
-
-
-def hinge_directions(ctx: BuildContext, joint: Revolute, what: str
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(f_i, g_i, f_j)`` in body frames: the reference directions from which a rotation about
-    a spatial revolute's axis is measured (``g_i = h_i x f_i``)."""
-    if not isinstance(joint, Revolute):
-        raise ModelError(f"{what}: needs a Revolute, got {joint!r}")
-    axes = Axes(ctx, joint, joint.axis)
-    h_i, h_j = axes.i[2], axes.j[2]
-    f_i = _reference_direction(h_i)
-    return f_i, np.cross(h_i, f_i), _reference_direction(h_j)
-
-
-def _reference_direction(h: np.ndarray) -> np.ndarray:
-    """The body's x axis projected on the plane normal to ``h`` (body frame), or its y axis
-    when x lies along ``h`` (both cannot)."""
-    x, y = np.eye(3)[0], np.eye(3)[1]
-    v = x - (x @ h) * h
-    if np.linalg.norm(v) < 1e-6:
-        v = y - (y @ h) * h
-    return v / np.linalg.norm(v)
 
 
 class TranslationDriver(ConstraintElement):

@@ -38,6 +38,8 @@ class Prismatic(Joint):
         mass.
     """
 
+    friction_kind = "prismatic"
+
     def __init__(self, name: str, body_i: Body, body_j: Body, *, axis: Any, at: Any = None,
                  point_i: Any = None, point_j: Any = None):
         super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)

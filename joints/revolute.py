@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from mbd3d.model.body import Body
 from mbd3d.model.element import PrimitiveSpec
 from mbd3d.model.builder import BuildContext
@@ -44,10 +46,19 @@ class Revolute(Joint):
     >>> pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
     """
 
+    friction_kind = "revolute"
+
     def __init__(self, name: str, body_i: Body, body_j: Body, *, at: Any = None,
                  point_i: Any = None, point_j: Any = None, axis: Any = None):
         super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
         self.axis = axis
+
+    def hinge_directions(self, ctx: BuildContext, what: str
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        axes = Axes(ctx, self, self.axis)
+        h_i, h_j = axes.i[2], axes.j[2]
+        f_i = reference_direction(h_i)
+        return f_i, np.cross(h_i, f_i), reference_direction(h_j)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         u_i, u_j = self.points(ctx)
@@ -62,3 +73,13 @@ class Revolute(Joint):
         if ctx.dim == 2:
             return super().reaction_frame(ctx)
         return u_i, u_j, Axes(ctx, self, self.axis).reaction_axes(along_x=False)
+
+
+def reference_direction(h: np.ndarray) -> np.ndarray:
+    """The body's x axis projected on the plane normal to ``h`` (body frame), or its y axis
+    when x lies along ``h`` (both cannot): where a rotation about ``h`` is measured from."""
+    x, y = np.eye(3)[0], np.eye(3)[1]
+    v = x - (x @ h) * h
+    if np.linalg.norm(v) < 1e-6:
+        v = y - (y @ h) * h
+    return v / np.linalg.norm(v)

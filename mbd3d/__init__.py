@@ -41,7 +41,7 @@ from mbd3d.analyses.linearization import LinearModel, linearize
 from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io.results import Results, format_table
-from mbd3d.io.model_file import load
+from mbd3d.io.model_file import load, save
 from mbd3d.io.urdf import load_urdf, urdf_builder
 
 __version__ = "0.1.0"
@@ -57,7 +57,7 @@ __all__ = [
     "LinearModel", "forward_dynamics",
     "forward_accelerations",
     "project_state", "METHODS",
-    "mobility", "MobilityReport", "Results", "load", "load_urdf", "urdf_builder",
+    "mobility", "MobilityReport", "Results", "load", "save", "load_urdf", "urdf_builder",
     "format_table", "kinetic_energy", "potential_energy",
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",

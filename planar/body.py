@@ -18,7 +18,7 @@ import numpy as np
 
 from mbd3d.model.body import BodyType, Frames
 from mbd3d.numerics.compiled.bodies import planar_frames, planar_mass_blocks
-from mbd3d.model.checks import finite_scalar, finite_vector
+from mbd3d.numerics.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
 

@@ -133,7 +133,7 @@ def test_a_failing_analysis_exits_1_and_writes_what_it_computed(tmp_path):
     b.add(Revolute("B", rod, slider, at=(x0, 0)))
     rail = b.add(Prismatic("rail", b.ground, slider, axis=(1, 0)))
     b.add(TranslationDriver("piston", rail, motion=mb.Ramp(0.0, r + l - x0)))
-    path = b.build().save(tmp_path / "dead.yaml")
+    path = mb.save(b.build(), tmp_path / "dead.yaml")
     done = mbd3d("run", path, "--analysis", "kinematic", "--t", "0:1.2:0.3", "--csv", tmp_path)
     assert done.returncode == 1
     assert "lock-up or toggle" in done.stderr and "t = 1.2 s" in done.stderr

@@ -142,7 +142,7 @@ def test_a_urdf_chain_closed_in_a_model_file_conserves_energy(tmp_path):
     swing = np.ptp(res.kinetic_energy)
     assert swing > 0.1  # it moves
     assert np.max(np.abs(energy - energy[0])) < 1e-7 * swing
-    again = mb.load(model.save(tmp_path / "closed.yaml"))
+    again = mb.load(mb.save(model, tmp_path / "closed.yaml"))
     np.testing.assert_array_equal(again.q0, model.q0)
 
 

@@ -28,7 +28,7 @@ from mbd3d.model import constraints
 from mbd3d.numerics.compiled import callbacks, integration as stepping
 from mbd3d.numerics.compiled.runge_kutta import TABLEAUS, interpolate, rms
 from mbd3d.numerics.compiled.structures import workspace
-from mbd3d.model.equations import augmented_accelerations, generalized_forces
+from mbd3d.model.equations import augmented_accelerations, generalized_forces, python_parts
 from mbd3d.errors import IntegrationError, ModelError, SingularJacobianError, StiffnessWarning
 from mbd3d.analyses.implicit import (consistent_accelerations, integrate_generalized_alpha,
                                      rows_dependent)
@@ -389,6 +389,7 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     def python_accelerations(tt, q, qd, charts_now):
         # redundant constraints (the augmented Lagrangian) or joint friction (consistent
         # with its reactions): solved in Python
+        charts_now = charts_now if spatial else None
         qdd, lam, _ = consistent_accelerations(model, tt, q, qd, charts_now,
                                                redundant=redundant, fallback=False)
         return qdd, lam
@@ -442,7 +443,9 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         recent = np.zeros(_RECENT_STEPS)  # lengths of the last accepted steps [s]
         counters = np.zeros(4, dtype=np.int64)
         drift = np.zeros(2)
-        with callbacks.Run(model, python_accelerations) as key:
+        with callbacks.Run(lambda tt, q, qd, charts: python_parts(model, tt, q, qd, charts),
+                           solve=lambda values, rhs: model._augmented_pattern.solve(values, rhs),
+                           accelerations=python_accelerations) as key:
             def first_stage(tt: float) -> None:
                 status = stepping.derivative(arrays, key, tt, y, charts, f, work)
                 counters[stepping.RHS_EVALUATIONS] += 1

@@ -42,8 +42,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from mbd3d.model import constraints
-from mbd3d.model.checks import finite_scalar
-from mbd3d.model.equations import augmented_accelerations, generalized_forces, mass_matrix
+from mbd3d.numerics.checks import finite_scalar
+from mbd3d.model.equations import (augmented_accelerations, generalized_forces, mass_matrix,
+                                   python_parts)
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.model.friction import raise_friction_with_redundancy
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
@@ -447,11 +448,13 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                np.empty(model._penalty_pattern.band_rows * n if layout == "banded" else 0),
                np.empty(n, dtype=np.int64))
     counters = np.zeros(2, dtype=np.int64)
-    run = callbacks.Run(model)
     # joint friction: every Newton iterate takes the friction of its own state's multipliers
     # (consistent with the reactions there, see mbd3d.model.friction), neither a previous
     # step's nor the iteration's penalty estimates, which are noisy at 1e-4
-    run.friction_forces = model.friction is not None
+    run = callbacks.Run(lambda tt, q, qd, charts: python_parts(model, tt, q, qd, charts,
+                                                               friction=True),
+                        factor=lambda values, tangent: model._penalty_pattern.factor(values,
+                                                                                     tangent))
 
     def run_steps() -> None:
         try:

@@ -17,7 +17,7 @@ import scipy.sparse as sp
 
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix, mass_times
-from mbd3d.model.checks import is_finite_vector
+from mbd3d.numerics.checks import is_finite_vector
 from mbd3d.model.friction import consistent_multipliers, raise_friction_with_redundancy
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError

@@ -70,7 +70,7 @@ class BodyMotion:
 def hinge(results, body_i, body_j, axis_i: np.ndarray):
     """``(angle [rad], rate [rad/s], acceleration [rad/s^2])`` (k,) of a hinge whose axis is
     ``axis_i`` in body i's frame (see the module doc)."""
-    from mbd3d.joints.drivers import _reference_direction  # noqa: PLC0415
+    from mbd3d.joints.revolute import reference_direction  # noqa: PLC0415
 
     i, j = BodyMotion(results, body_i), BodyMotion(results, body_j)
     h_i = _lift_vector(axis_i)
@@ -80,8 +80,8 @@ def hinge(results, body_i, body_j, axis_i: np.ndarray):
     if results.model.dim == 2:
         return j.angle - i.angle, rate, acceleration
     h_j = j.rotation[0].T @ h[0] if len(h) else h_i
-    f_i = np.einsum("kab,b->ka", i.rotation, _reference_direction(h_i))
-    f_j = np.einsum("kab,b->ka", j.rotation, _reference_direction(h_j / np.linalg.norm(h_j)))
+    f_i = np.einsum("kab,b->ka", i.rotation, reference_direction(h_i))
+    f_j = np.einsum("kab,b->ka", j.rotation, reference_direction(h_j / np.linalg.norm(h_j)))
     wrapped = np.arctan2(np.einsum("ka,ka->k", h, np.cross(f_i, f_j)),
                          np.einsum("ka,ka->k", f_i, f_j))
     return _unwrap(wrapped, results.t, rate, acceleration), rate, acceleration

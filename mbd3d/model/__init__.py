@@ -7,6 +7,6 @@ parameters; planar bodies are :mod:`mbd3d.planar`), :mod:`.element` and :mod:`.p
 (constraint elements and the primitives they are made of), :mod:`.constraints` (evaluating
 ``C``, ``Cq`` and the velocity and acceleration right-hand sides), :mod:`.equations` (mass
 matrix, applied and quadratic velocity forces, energies, the augmented accelerations),
-:mod:`.forces` (force elements), :mod:`.motion` (prescribed motions), :mod:`.mass_properties`
-(bodies from meshes) and :mod:`.checks` (input validation).
+:mod:`.forces` (force elements), :mod:`.friction` (joint friction), :mod:`.motion` (prescribed
+motions) and :mod:`.mass_properties` (bodies from meshes).
 """

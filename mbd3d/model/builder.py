@@ -18,7 +18,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from mbd3d.model.body import Body, BodyType
-from mbd3d.model.checks import finite_scalar, finite_vector
+from mbd3d.numerics.checks import finite_scalar, finite_vector
 from mbd3d.model.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.numerics.linalg import AugmentedPattern, PenaltyPattern
@@ -590,12 +590,6 @@ class Model:
             raise ModelError(f"model '{self.name}' has no joint or driver '{name}'; known: "
                              f"{', '.join(self._joint_by_name) or '(none)'}")
         return name
-
-    def save(self, path, *, analyses=(), overwrite: bool = True) -> str:
-        """Write this model as a model file that rebuilds it (:func:`mbd3d.io.model_file.save`);
-        ``mb.load(path)`` reads it back. Returns the path written."""
-        from mbd3d.io.model_file import save  # noqa: PLC0415
-        return save(self, path, analyses=analyses, overwrite=overwrite)
 
     def rows_of(self, name: str) -> np.ndarray:
         """Constraint rows of the joint or driver ``name``."""

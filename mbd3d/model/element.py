@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mbd3d.errors import ModelError
 from mbd3d.model.body import Body
 from mbd3d.model.motion import Motion
 from mbd3d.model.arguments import RecordsArguments
@@ -64,6 +65,9 @@ class ConstraintElement(RecordsArguments, ABC):
     is_driver: bool = False
     #: drivers: the unit of the effort ("N m" for a torque, "N" for a force)
     effort_unit: str = ""
+    #: the joint friction the element can carry (:class:`mbd3d.JointFriction`): "revolute"
+    #: (a pin's), "prismatic" (a slide's) or None
+    friction_kind: str | None = None
 
     @abstractmethod
     def primitives(self, ctx: "BuildContext") -> list[PrimitiveSpec]:
@@ -78,6 +82,13 @@ class ConstraintElement(RecordsArguments, ABC):
         """
         dim = ctx.dim
         return np.zeros(dim), np.zeros(dim), np.eye(dim)
+
+    def hinge_directions(self, ctx: "BuildContext", what: str
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Spatial hinges: ``(f_i, g_i, f_j)`` in body frames, the reference directions from
+        which a rotation about the hinge's axis is measured (``g_i = h_i x f_i``), for the
+        drivers and springs acting across it. Other elements refuse, naming ``what`` asked."""
+        raise ModelError(f"{what}: needs a Revolute, got {self!r}")
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name!r}, {self.body_i.name!r}, {self.body_j.name!r})"

@@ -234,6 +234,32 @@ def _force_fields(model, tables: list[dict]) -> dict | None:
     return fields
 
 
+def python_parts(model, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray,
+                 friction: bool = False):
+    """What the compiled loops take from Python (see
+    :class:`mbd3d.numerics.compiled.callbacks.Run`): the generalized forces of the force
+    elements (n,), ``(f, f', f'')`` of the drivers (n_drivers, 3) and of the rotation drivers'
+    motions (k, 3) at ``(t, q, qd)``, ``charts`` the spatial bodies' (ignored for planar
+    ones). With ``friction``, the joints' friction of the multipliers of this very state is
+    added to the forces (generalized-alpha; the explicit integrators take friction with the
+    accelerations)."""
+    charts = charts if model.dim == 3 else None
+    extra = np.zeros(model.n_coordinates)
+    friction = model.friction is not None and friction
+    if model.force_groups or friction:
+        fr = frames(model, q, qd, charts)
+        Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+        for group in model.force_groups:
+            group.apply(model, t, fr, Q)
+        if friction:
+            x = augmented_accelerations(model, t, q, qd, charts)
+            if x is not None:
+                model.friction.apply(model, fr, x[model.n_coordinates:], Q)
+        extra = np.ascontiguousarray(Q[:model.n_bodies].ravel())
+    drivers = _motion_values(model.driver_motions, model.driver_names, t)
+    return extra, drivers, np.ascontiguousarray(motion_phases(model, t))
+
+
 def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
                             charts: np.ndarray | None = None) -> np.ndarray | None:
     """``(qdd, lam)`` stacked (n + m,) from the augmented equations at ``(t, q, qd)``, or None

@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mbd3d.model.body import Body
-from mbd3d.model.checks import finite_scalar, finite_vector
+from mbd3d.model.element import ConstraintElement
+from mbd3d.numerics.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 from mbd3d.numerics.compiled import forces as kernel
 from mbd3d.numerics.compiled.motions import CONSTANT
@@ -492,13 +493,14 @@ class _RotationalSprings(_SpringGroup):
         super().__init__(elements, ctx)
         self.planar = ctx.dim == 2
         if not self.planar:
-            from mbd3d.joints.drivers import hinge_directions
             vectors = []
             for e in elements:
                 if e.joint is None:
                     raise ModelError(f"spring '{e.name}': in space, give the Revolute it acts "
                                      "across (joint=): its axis is the spring's axis")
-                vectors.append(hinge_directions(ctx, e.joint, f"spring '{e.name}'"))
+                if not isinstance(e.joint, ConstraintElement):
+                    raise ModelError(f"spring '{e.name}': needs a Revolute, got {e.joint!r}")
+                vectors.append(e.joint.hinge_directions(ctx, f"spring '{e.name}'"))
             self.f_i, self.g_i, self.f_j = (np.array(v) for v in zip(*vectors))
         free = [e.free_angle for e in elements]
         self.phi0 = np.zeros(len(elements))

@@ -95,8 +95,6 @@ class FrictionGroup:
     """
 
     def __init__(self, model, elements: list[JointFriction], ctx):
-        from mbd3d.joints import Prismatic, Revolute  # noqa: PLC0415
-
         self.elements = elements
         self.dim = model.dim
         k = len(elements)
@@ -112,7 +110,8 @@ class FrictionGroup:
         for n, e in enumerate(elements):
             what = f"friction '{e.name}'"
             joint = e.joint
-            if not isinstance(joint, (Revolute, Prismatic)):
+            kind = getattr(joint, "friction_kind", None)
+            if kind is None:
                 raise ModelError(f"{what}: joint friction is for Revolute and Prismatic joints, "
                                  f"got {joint!r}")
             if model._joint_by_name.get(joint.name, (None, None))[1] is not joint:
@@ -125,7 +124,7 @@ class FrictionGroup:
             labels = {model.row_labels[r].rpartition(".")[2]: r for r in model.rows_of(joint.name)}
             u_i, u_j, axes = model.reaction_frame(joint.name)
             self.u_j[n] = u_j
-            if isinstance(joint, Revolute):
+            if kind == "revolute":
                 self.revolute[n] = True
                 if e.pin_radius is None:
                     raise ModelError(f"{what}: a revolute's friction needs pin_radius= (the "

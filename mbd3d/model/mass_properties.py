@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from mbd3d.model.checks import finite_scalar
+from mbd3d.numerics.checks import finite_scalar
 from mbd3d.errors import ModelError
 
 __all__ = ["MassProperties", "mesh_properties", "load_mesh"]

@@ -19,7 +19,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from mbd3d.model.checks import finite_scalar
+from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import motions as compiled
 from mbd3d.errors import ModelError
 from mbd3d.model.arguments import RecordsArguments

@@ -30,7 +30,7 @@ from mbd3d.numerics.compiled.bodies import (spatial_frames, spatial_mass_blocks,
                                             spatial_quadratic_velocity, spatial_rates,
                                             spatial_reset_charts, spatial_velocities,
                                             spatial_velocity_derivative)
-from mbd3d.model.checks import finite_vector
+from mbd3d.numerics.checks import finite_vector
 from mbd3d.errors import ModelError
 
 #: |g| above which a body's chart is moved (90 degrees from the reference orientation)

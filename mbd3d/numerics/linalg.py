@@ -27,8 +27,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mbd3d.numerics.compiled.dense import pivots_regular, solve_banded_pattern, solve_pattern
-from mbd3d.numerics.compiled.generalized_alpha import penalty_scale
+from mbd3d.numerics.compiled.dense import (penalty_scale, pivots_regular, solve_banded_pattern,
+                                           solve_pattern)
 from mbd3d.numerics.compiled.range_space import range_space_factor, range_space_solve_factored
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",

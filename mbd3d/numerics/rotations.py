@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from mbd3d.numerics.compiled import rotations as compiled
-from mbd3d.model.checks import finite_scalar, finite_vector
+from mbd3d.numerics.checks import finite_scalar, finite_vector
 from mbd3d.errors import ModelError
 
 __all__ = ["skew", "from_rodrigues", "to_rodrigues", "from_quaternion", "to_quaternion",

@@ -1,4 +1,5 @@
-"""Dense LU with partial pivoting, and the augmented solve of a small model in one call.
+"""Dense LU with partial pivoting, the augmented solve of a small model in one call, and the
+penalty that weighs constraints like masses in augmented-Lagrangian matrices.
 
 For the matrices of a mechanism of a few bodies (tens of unknowns) a plain compiled LU costs
 less than the calls into LAPACK around it. The pivot test is that of :mod:`mbd3d.numerics.linalg`: a
@@ -208,3 +209,21 @@ def solve_banded_pattern(flat: np.ndarray, kl: int, ku: int, perm: np.ndarray,
                                         pivot_tolerance, np.empty((2 * kl + ku + 1) * n),
                                         np.empty(n), x)
     return x, regular
+
+
+@jit
+def penalty_scale(mass_diagonal: np.ndarray, row_squared_norms: np.ndarray) -> float:
+    """Penalty [units of the mass matrix per squared unit of ``Cq``] that weighs the
+    constraints like the masses: mean ``|M_ii|`` over the mean squared row norm of ``Cq``
+    (rows without entries left out; 1 when no row has any)."""
+    total, count = 0.0, 0
+    for norm in row_squared_norms:
+        if norm > 0.0:
+            total += norm
+            count += 1
+    if count == 0:
+        return 1.0
+    diagonal = 0.0
+    for value in mass_diagonal:
+        diagonal += abs(value)
+    return (diagonal / max(mass_diagonal.shape[0], 1)) / (total / count)

@@ -24,7 +24,8 @@ from numba import objmode
 from mbd3d.numerics.compiled import callbacks, jit, jit_calling_python
 from mbd3d.numerics.compiled.accelerations import _finite, applied_forces_into, motions_at
 from mbd3d.numerics.compiled.bodies import body_vectors_into
-from mbd3d.numerics.compiled.dense import band_factor, band_solve_into, lu_factor, lu_solve_into
+from mbd3d.numerics.compiled.dense import (band_factor, band_solve_into, lu_factor, lu_solve_into,
+                                           penalty_scale)
 from mbd3d.numerics.compiled.integration import _python_parts
 from mbd3d.numerics.compiled.rows import constraint_rows_into
 from mbd3d.numerics.compiled.structures import DENSE
@@ -38,24 +39,6 @@ def _callback_factor_solve(key, values, r):
     with objmode(x="float64[::1]", status="int64"):
         x, status = callbacks.factor_penalty_and_solve(key, values, r)
     return x, status
-
-
-@jit
-def penalty_scale(mass_diagonal: np.ndarray, row_squared_norms: np.ndarray) -> float:
-    """Penalty [units of the mass matrix per squared unit of ``Cq``] that weighs the
-    constraints like the masses: mean ``|M_ii|`` over the mean squared row norm of ``Cq``
-    (rows without entries left out; 1 when no row has any)."""
-    total, count = 0.0, 0
-    for norm in row_squared_norms:
-        if norm > 0.0:
-            total += norm
-            count += 1
-    if count == 0:
-        return 1.0
-    diagonal = 0.0
-    for value in mass_diagonal:
-        diagonal += abs(value)
-    return (diagonal / max(mass_diagonal.shape[0], 1)) / (total / count)
 
 
 @jit

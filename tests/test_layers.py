@@ -1,0 +1,99 @@
+"""The package's layers point one way, and its imports make no circle.
+
+From the bottom: ``mbd3d.errors``; ``mbd3d.numerics`` (linear algebra, rotations, the compiled
+core); ``mbd3d.model`` and ``mbd3d.planar`` (bodies, primitives, forces, the built model);
+``mbd3d.joints``; ``mbd3d.io`` (results, files, URDF); ``mbd3d.analyses``; ``mbd3d.viewer``;
+and the top (``mbd3d`` itself, the command line, sweeps, the example mechanisms). A module
+imports only from its own layer or below, wherever the import stands (in a function too);
+imports for type annotations only (``if TYPE_CHECKING:``) are not imports at run time.
+"""
+
+from __future__ import annotations
+
+import ast
+import pathlib
+
+REPO = pathlib.Path(__file__).resolve().parent.parent
+#: the repository's folders and the names they are installed under
+FOLDERS = {"mbd3d": "mbd3d", "joints": "mbd3d.joints", "planar": "mbd3d.planar",
+           "viewer": "mbd3d.viewer"}
+LAYERS = ["mbd3d.errors", "mbd3d.numerics", "mbd3d.model mbd3d.planar", "mbd3d.joints",
+          "mbd3d.io", "mbd3d.analyses", "mbd3d.viewer"]
+#: the upward imports still to be removed: the model file's analyses section runs the
+#: analyses (issue #31 moves that part above them)
+KNOWN = {("mbd3d.io.model_file", "mbd3d")}
+
+
+def modules() -> dict[str, pathlib.Path]:
+    found = {}
+    for folder, package in FOLDERS.items():
+        for path in (REPO / folder).rglob("*.py"):
+            parts = [p for p in path.relative_to(REPO / folder).with_suffix("").parts
+                     if p != "__init__"]
+            found[".".join([package, *parts])] = path
+    return found
+
+
+def _type_checking_only(node: ast.AST, parents: dict) -> bool:
+    while node in parents:
+        node = parents[node]
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            return True
+    return False
+
+
+def imports() -> dict[str, set[str]]:
+    """Module -> the package modules it imports at run time."""
+    names = modules()
+    graph = {}
+    for name, path in names.items():
+        tree = ast.parse(path.read_text())
+        parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+        targets = set()
+        for node in ast.walk(tree):
+            if (not isinstance(node, (ast.Import, ast.ImportFrom))
+                    or _type_checking_only(node, parents)):
+                continue
+            if isinstance(node, ast.Import):
+                targets.update(alias.name for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                for alias in node.names:  # a submodule, or a name of the module
+                    sub = f"{node.module}.{alias.name}"
+                    targets.add(sub if sub in names else node.module)
+        graph[name] = {t for t in targets if t in names and t != name}
+    return graph
+
+
+def layer(module: str) -> int:
+    for rank, members in enumerate(LAYERS):
+        if any(module == m or module.startswith(m + ".") for m in members.split()):
+            return rank
+    if module == "mbd3d._checkout":
+        return 0
+    return len(LAYERS)  # the top
+
+
+def test_no_module_imports_from_a_layer_above_its_own():
+    upward = {(a, b) for a, targets in imports().items() for b in targets
+              if layer(b) > layer(a)}
+    assert upward <= KNOWN, sorted(upward - KNOWN)
+    assert upward == KNOWN, f"remove from KNOWN, now fixed: {sorted(KNOWN - upward)}"
+
+
+def test_the_imports_make_no_circle():
+    graph = {a: {b for b in targets if (a, b) not in KNOWN} for a, targets in imports().items()}
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+
+    def visit(module: str, path: list[str]) -> None:
+        state[module] = 1
+        for target in sorted(graph[module]):
+            if state.get(target) == 1:
+                circle = path[path.index(target):] + [target]
+                raise AssertionError("import circle: " + " -> ".join(circle))
+            if target not in state:
+                visit(target, path + [target])
+        state[module] = 2
+
+    for module in sorted(graph):
+        if module not in state:
+            visit(module, [module])
