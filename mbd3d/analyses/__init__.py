@@ -6,3 +6,12 @@ Modules: :mod:`.position`, :mod:`.kinematics`, :mod:`.dynamics` (forward dynamic
 integrators' driver), :mod:`.implicit` (generalized-alpha), :mod:`.mobility` and
 :mod:`.passages`.
 """
+
+from mbd3d.analyses.dynamics import forward_dynamics
+from mbd3d.analyses.kinematics import inverse_dynamics, kinematic_analysis
+from mbd3d.analyses.statics import static_equilibrium
+from mbd3d.io import model_file
+
+# the analyses a model file's analyses: section can ask for, by kind
+model_file.ANALYSES.update(kinematic=kinematic_analysis, inverse=inverse_dynamics,
+                           forward=forward_dynamics, equilibrium=static_equilibrium)

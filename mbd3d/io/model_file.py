@@ -73,9 +73,10 @@ _BODY_FIELDS = ("name", "mass", "inertia", "position", "angle", "orientation", "
                 "angular_velocity", "shape", "density")
 #: constructor arguments that name a body or a joint
 _REFERENCES = ("body_i", "body_j", "body", "joint")
-#: analysis kinds and the function each runs
-_ANALYSES = {"kinematic": "kinematic_analysis", "inverse": "inverse_dynamics",
-             "forward": "forward_dynamics", "equilibrium": "static_equilibrium"}
+#: analysis kind -> the function that runs it, ``f(model, t, **options)``: filled by
+#: :mod:`mbd3d.analyses` when it is imported (the analyses live above this package, which
+#: reads their options and hands the runs back to them)
+ANALYSES: dict[str, Callable] = {}
 
 
 class ModelFileError(ModelError):
@@ -96,9 +97,7 @@ class AnalysisSpec:
 
     def run(self, model, **overrides: Any):
         """Run it on ``model`` (``overrides`` replace options, e.g. ``observers``)."""
-        import mbd3d  # noqa: PLC0415 (the analyses live above this package)
-        function = getattr(mbd3d, _ANALYSES[self.kind])
-        return function(model, self.t, **{**self.options, **overrides})
+        return ANALYSES[self.kind](model, self.t, **{**self.options, **overrides})
 
 
 @dataclass(frozen=True)
@@ -424,13 +423,11 @@ class _Reader:
             return motion_types[kind](**arguments)
 
     def _analysis(self, entry: dict, where: tuple) -> AnalysisSpec:
-        import mbd3d  # noqa: PLC0415
-
         kind = entry.get("kind")
-        if kind not in _ANALYSES:
+        if kind not in ANALYSES:
             raise self.error(where + ("kind",), f"unknown analysis {kind!r}"
-                                                f"{_suggest(kind, _ANALYSES)} (kinds: "
-                                                f"{', '.join(_ANALYSES)})")
+                                                f"{_suggest(kind, ANALYSES)} (kinds: "
+                                                f"{', '.join(ANALYSES)})")
         if "t" not in entry:
             raise self.error(where, "an analysis needs its times t: a list, or {start, stop, "
                                     "step} or {start, stop, points}")
@@ -443,13 +440,13 @@ class _Reader:
                 outputs[key] = str(self.folder / entry[key])
         options = {key: value for key, value in entry.items()
                    if key not in ("kind", "t", "rrd", "csv")}
-        function = getattr(mbd3d, _ANALYSES[kind])
+        function = ANALYSES[kind]
         parameters = inspect.signature(function).parameters
         allowed = [name for name in list(parameters)[2:]
                    if name not in ("observers", "progress")]
         for key in options:
             if key not in allowed:
-                raise self.error(where + (key,), f"{_ANALYSES[kind]} takes no '{key}'"
+                raise self.error(where + (key,), f"{function.__name__} takes no '{key}'"
                                                  f"{_suggest(key, allowed)} (it takes: "
                                                  f"{', '.join(allowed)})")
         return AnalysisSpec(kind, t, options, outputs)
