@@ -12,7 +12,8 @@ import mbd3d as mb
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, kinetic_energy
 from mbd3d.joints import (Cylindrical, Distance, Fixed, GearPair, Planar, PointOnLine,
-                          PointOnPlane, Prismatic, Revolute, Spherical, Universal)
+                          PointOnPlane, Prismatic, Revolute, RotationDriver, Spherical,
+                          Universal)
 
 
 def random_spatial_model(seed: int):
@@ -25,7 +26,9 @@ def random_spatial_model(seed: int):
     b0, b1, b2, b3 = bodies
     p = lambda: rng.normal(size=3)  # noqa: E731
     b.add(Spherical("ball", b0, b1, point_i=p(), point_j=p()))
-    b.add(Revolute("hinge", b.ground, b0, point_i=p(), point_j=p(), axis=p()))
+    hinge = b.add(Revolute("hinge", b.ground, b0, point_i=p(), point_j=p(), axis=p()))
+    # a rotation driver turning it to and fro: its rows depend on time too
+    b.add(RotationDriver("turn", hinge, motion=mb.Harmonic(0.7, 2.3, phase=0.4, offset=0.2)))
     b.add(Prismatic("slide", b1, b2, axis=p(), point_i=p(), point_j=p()))
     b.add(Universal("cardan", b2, b3, axis_i=(1, 0, 0), axis_j=(0, 1, 0), point_i=p(),
                     point_j=p()))
@@ -52,11 +55,16 @@ def random_spatial_model(seed: int):
     return model, q, qd, charts
 
 
+#: the time at which the rows are evaluated: the driver's motion, its rate and its
+#: acceleration are all non-zero there
+T0 = 0.37
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_spatial_jacobian_equals_central_differences(seed):
     model, q, _, charts = random_spatial_model(seed)
-    C = lambda x: constraints.residual(model, 0.0, x, constraints.frames(model, x, charts=charts))  # noqa: E731
-    Cq = constraints.jacobian(model, 0.0, q, constraints.frames(model, q, charts=charts), sparse=False)
+    C = lambda x: constraints.residual(model, T0, x, constraints.frames(model, x, charts=charts))  # noqa: E731
+    Cq = constraints.jacobian(model, T0, q, constraints.frames(model, q, charts=charts), sparse=False)
     h = 1e-6
     fd = np.column_stack([(C(q + h * e) - C(q - h * e)) / (2 * h) for e in np.eye(len(q))])
     np.testing.assert_allclose(Cq, fd, rtol=0, atol=2e-8)
@@ -64,13 +72,18 @@ def test_spatial_jacobian_equals_central_differences(seed):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_spatial_gamma_equals_second_directional_derivative(seed):
+    """Along ``(q + s qd, T0 + s)`` the accelerations are zero, so ``d2C/ds2 = -gamma``,
+    the time-dependent terms of the driver's row included."""
     model, q, qd, charts = random_spatial_model(seed)
-    C = lambda x: constraints.residual(model, 0.0, x, constraints.frames(model, x, charts=charts))  # noqa: E731
-    gamma = constraints.acceleration_rhs(model, 0.0, q, qd,
+
+    def C(s: float) -> np.ndarray:
+        x = q + s * qd
+        return constraints.residual(model, T0 + s, x, constraints.frames(model, x, charts=charts))
+
+    gamma = constraints.acceleration_rhs(model, T0, q, qd,
                                          constraints.frames(model, q, qd, charts=charts))
     h = 1e-3
-    second = (-C(q + 2 * h * qd) + 16 * C(q + h * qd) - 30 * C(q) + 16 * C(q - h * qd)
-              - C(q - 2 * h * qd)) / (12 * h * h)
+    second = (-C(2 * h) + 16 * C(h) - 30 * C(0.0) + 16 * C(-h) - C(-2 * h)) / (12 * h * h)
     np.testing.assert_allclose(gamma, -second, rtol=0, atol=1e-6)
 
 
@@ -97,3 +110,14 @@ def test_mass_matrix_and_quadratic_velocity_follow_from_kinetic_energy():
     np.testing.assert_allclose(Qv, dT_dq - M_dot_qd, rtol=0, atol=1e-7)
     # gravity-free model without force elements: the generalized forces are Qv alone
     np.testing.assert_allclose(generalized_forces(model, 0.0, fr), Qv, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_gear_meshes_are_in_mesh_as_drawn(seed):
+    """The drawing is in mesh: each gear row vanishes there, whatever the bodies' poses (the
+    rest of the random model's joints are not assembled)."""
+    model = random_spatial_model(seed)[0]
+    C = constraints.residual(model, T0, model.q0, constraints.frames(model, model.q0,
+                                                                     charts=model.charts0))
+    for mesh in ("spur", "bevel"):
+        np.testing.assert_allclose(C[model.rows_of(mesh)], 0.0, rtol=0, atol=1e-14)
