@@ -38,7 +38,8 @@ import numpy as np
 
 from mbd3d.errors import MBDError
 from mbd3d.io.files import atomic_write
-from mbd3d.io.results import Results, _import_pandas, format_table
+from mbd3d.io.exports import format_table, import_pandas
+from mbd3d.io.results import Results
 
 __all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable"]
 
@@ -341,7 +342,7 @@ class SweepTable:
         """The table as a ``pandas.DataFrame``, one row per run, columns as :attr:`columns`
         (metric names carry the units their authors gave them). Needs pandas
         (``pip install "mbd3d[pandas]"``)."""
-        pd = _import_pandas()
+        pd = import_pandas()
         return pd.DataFrame([{c: row.get(c) for c in self.columns} for row in self.rows],
                             columns=self.columns)
 

@@ -27,8 +27,11 @@ def random_spatial_model(seed: int):
     p = lambda: rng.normal(size=3)  # noqa: E731
     b.add(Spherical("ball", b0, b1, point_i=p(), point_j=p()))
     hinge = b.add(Revolute("hinge", b.ground, b0, point_i=p(), point_j=p(), axis=p()))
-    # a rotation driver turning it to and fro: its rows depend on time too
+    # rotation drivers turning it and a hinge between two moving bodies to and fro: their rows
+    # depend on time too
+    elbow = b.add(Revolute("elbow", b2, b3, point_i=p(), point_j=p(), axis=p()))
     b.add(RotationDriver("turn", hinge, motion=mb.Harmonic(0.7, 2.3, phase=0.4, offset=0.2)))
+    b.add(RotationDriver("bend", elbow, motion=mb.Harmonic(0.5, 1.9, phase=1.1, offset=-0.3)))
     b.add(Prismatic("slide", b1, b2, axis=p(), point_i=p(), point_j=p()))
     b.add(Universal("cardan", b2, b3, axis_i=(1, 0, 0), axis_j=(0, 1, 0), point_i=p(),
                     point_j=p()))

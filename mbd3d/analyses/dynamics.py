@@ -38,7 +38,8 @@ from mbd3d.numerics.linalg import SingularMatrix, factor_model_augmented, jacobi
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.position import LARGEST_DENSE_ANALYSIS, singular_error, solve_position
 from mbd3d.io.observers import Observer, Watch
-from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
+from mbd3d.io.results import Results
+from mbd3d.io.store import ResultsBuffer, run_keeping_results
 
 __all__ = ["forward_accelerations", "forward_dynamics", "project_state", "METHODS",
            "GENERALIZED_ALPHA"]

@@ -55,7 +55,8 @@ from mbd3d.io.observers import Watch
 from mbd3d.analyses.passages import PassageWatch
 from mbd3d.analyses.initial import consistent_initial_state
 from mbd3d.analyses.position import singular_error
-from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
+from mbd3d.io.results import Results
+from mbd3d.io.store import ResultsBuffer, run_keeping_results
 
 __all__ = ["GeneralizedAlpha", "consistent_accelerations", "rows_dependent",
            "integrate_generalized_alpha"]

@@ -27,7 +27,8 @@ from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scal
 from mbd3d.analyses.position import (MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error,
                                      solve_position)
 from mbd3d.io.observers import Observer, Watch
-from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
+from mbd3d.io.results import Results
+from mbd3d.io.store import ResultsBuffer, run_keeping_results
 
 __all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "inverse_dynamics",
            "check_times"]

@@ -34,7 +34,8 @@ import scipy.linalg as la
 from mbd3d.analyses.kinematics import check_times, initial_guess
 from mbd3d.errors import AnalysisError, ModelError
 from mbd3d.io.observers import Observer, Watch
-from mbd3d.io.results import Results, ResultsBuffer, run_keeping_results
+from mbd3d.io.results import Results
+from mbd3d.io.store import ResultsBuffer, run_keeping_results
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces
 

@@ -1,0 +1,159 @@
+"""Results as tables and files: named columns with units, CSV, pandas and NPZ, and plain-text
+tables for a terminal. The :class:`~mbd3d.io.results.Results` methods of the same names call
+these; files are written atomically (:mod:`mbd3d.io.files`)."""
+
+from __future__ import annotations
+
+import csv
+import os
+from typing import TYPE_CHECKING, BinaryIO, Sequence
+
+import numpy as np
+
+from mbd3d.errors import MBDError
+from mbd3d.io import files
+
+if TYPE_CHECKING:
+    from mbd3d.io.results import Results
+
+__all__ = ["columns", "export_columns", "to_csv", "to_pandas", "to_npz", "import_pandas",
+           "format_table"]
+
+
+def export_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
+    """``(name, unit, values)`` of every exported time history (see :func:`columns`)."""
+    out: list[tuple[str, str, np.ndarray]] = []
+    planar = results.model.dim == 2
+    axes = "xy" if planar else "xyz"
+    for b in results.model.bodies:
+        h = results.body(b.name)
+        for label, unit, arr in (("", "m", h.position), ("v", "m/s", h.velocity),
+                                 ("a", "m/s^2", h.acceleration)):
+            out += [(f"{b.name}.{label}{c}", unit, arr[:, k]) for k, c in enumerate(axes)]
+        if planar:
+            out += [(f"{b.name}.angle", "rad", h.angle),
+                    (f"{b.name}.omega", "rad/s", h.angular_velocity),
+                    (f"{b.name}.alpha", "rad/s^2", h.angular_acceleration)]
+        else:
+            quaternion = h.quaternion  # computed per call: once
+            out += [(f"{b.name}.q{c}", "-", quaternion[:, k]) for k, c in enumerate("wxyz")]
+            out += [(f"{b.name}.omega_{c}", "rad/s", h.angular_velocity[:, k])
+                    for k, c in enumerate(axes)]
+            out += [(f"{b.name}.alpha_{c}", "rad/s^2", h.angular_acceleration[:, k])
+                    for k, c in enumerate(axes)]
+    if results.lam is None:
+        return out
+    for element in results.model.joints:
+        if element.is_driver:
+            out.append((f"{element.name}.effort", element.effort_unit, results.joint(
+                element.name).effort))
+            continue
+        on = element.body_i if element.body_j.is_ground else element.body_j
+        r = results.joint(element.name).reaction(on=on)
+        out += [(f"{element.name}.F{c} on {on.name}", "N", r.force[:, k])
+                for k, c in enumerate(axes)]
+        if planar:
+            out.append((f"{element.name}.M on {on.name}", "N m", r.moment))
+        else:
+            out += [(f"{element.name}.M{c} on {on.name}", "N m", r.moment[:, k])
+                    for k, c in enumerate(axes)]
+    return out
+
+
+def columns(results: Results) -> dict[str, np.ndarray]:
+    """:meth:`Results.columns <mbd3d.io.results.Results.columns>` of ``results``: every time
+    history as a named column with its unit."""
+    cols: dict[str, np.ndarray] = {"t [s]": results.t}
+    for name, unit, values in export_columns(results):
+        cols[f"{name} [{unit}]"] = values
+    return cols
+
+
+def to_csv(results: Results, path: str | os.PathLike, overwrite: bool = True) -> str:
+    """Write :func:`columns` to a CSV file (see :meth:`mbd3d.io.results.Results.to_csv`)."""
+    cols = columns(results)
+    data = np.column_stack(list(cols.values())) if len(results.t) else np.zeros((0, len(cols)))
+
+    def write(f):
+        writer = csv.writer(f, lineterminator="\n")
+        writer.writerow(cols)
+        writer.writerows([repr(float(x)) for x in row] for row in data)
+    return files.atomic_write(path, write, text=True, overwrite=overwrite,
+                              what="the CSV file")
+
+
+def to_pandas(results: Results):
+    """:func:`columns` as a ``pandas.DataFrame`` (see
+    :meth:`mbd3d.io.results.Results.to_pandas`)."""
+    pd = import_pandas()
+    cols = columns(results)
+    t = cols.pop("t [s]")
+    df = pd.DataFrame(cols, index=pd.Index(t, name="t [s]"))
+    df.attrs["units"] = {label: label[label.rindex("[") + 1:-1] for label in df.columns}
+    df.attrs["analysis"], df.attrs["model"] = results.analysis, results.model.name
+    return df
+
+
+def to_npz(results: Results, path: str | os.PathLike | BinaryIO,
+           overwrite: bool = True) -> str | None:
+    """Write the raw arrays to an ``.npz`` file (see :meth:`mbd3d.io.results.Results.to_npz`)."""
+    arrays = dict(t=results.t, q=results.q, qd=results.qd, qdd=results.qdd,
+                  coordinate_labels=np.array(results.model.coordinate_labels),
+                  row_labels=np.array(results.model.row_labels),
+                  analysis=np.array(results.analysis), status=np.array(results.status),
+                  message=np.array(results.message), model=np.array(results.model.name))
+    if results.lam is not None:
+        arrays["lam"] = results.lam
+    if results.charts is not None:
+        arrays["charts"] = results.charts
+    if results.turns is not None:
+        arrays["chart_quaternions"] = results.turns
+
+    def write(f):
+        np.savez_compressed(f, **arrays)
+    if hasattr(path, "write"):
+        write(path)
+        return None
+    return files.atomic_write(path, write, text=False, overwrite=overwrite,
+                              what="the NPZ file")
+
+
+def import_pandas():
+    """pandas, or an error that says how to get it (it is an optional extra)."""
+    try:
+        import pandas  # noqa: PLC0415  (optional)
+    except ImportError:
+        raise MBDError('to_pandas needs pandas: pip install "mbd3d[pandas]" (or pip install '
+                       'pandas)') from None
+    return pandas
+
+
+def format_table(columns: dict[str, Sequence[float]], precision: int = 5,
+                 rows: int | None = None) -> str:
+    """A plain-text table of equally long columns (numbers or text), for printing in a terminal.
+
+    ``rows`` limits a long table to that many rows, evenly spaced, first and last included.
+
+    >>> print(format_table({"t [s]": [0.0, 0.5], "x [m]": [1.0, -0.25]}, precision=3))
+      t [s]  x [m]
+          0      1
+        0.5  -0.25
+    >>> print(format_table({"k": range(11)}, rows=3))
+       k
+       0
+       5
+      10
+    """
+    names = list(columns)
+    length = len(columns[names[0]]) if names else 0
+    shown = range(length)
+    if rows is not None and length > rows:
+        shown = np.unique(np.round(np.linspace(0, length - 1, max(rows, 2))).astype(int))
+    # adding 0.0 turns -0.0 into 0.0, which reads better in a table
+    cells = [[v if isinstance(v, str) else f"{float(v) + 0.0:.{precision}g}"
+              for v in (columns[name][k] for k in shown)] for name in names]
+    widths = [max([len(name)] + [len(c) for c in col]) + 1 for name, col in zip(names, cells)]
+    lines = ["".join(name.rjust(w + 1) for name, w in zip(names, widths))]
+    for row in zip(*cells):
+        lines.append("".join(c.rjust(w + 1) for c, w in zip(row, widths)))
+    return "\n".join(line.rstrip() for line in lines)
