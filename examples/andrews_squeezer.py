@@ -18,13 +18,11 @@ Run: python examples/andrews_squeezer.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 #: Test Set reference at t = 0.03 s: beta, Theta, gamma, Phi, delta, Omega, epsilon [rad]
 REFERENCE = np.array([0.1581077119629904e+2, -0.1575637105984298e+2, 0.4082224013073101e-1,
@@ -73,11 +71,9 @@ def test_set_angles(res: mb.Results) -> np.ndarray:
                             phi[:, 4], phi[:, 5] - phi[:, 6], phi[:, 6]])
 
 
+@check_recording_first
 def main(n_points: int = 301, rtol: float = 1e-11, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 0.03, n_points)
@@ -101,12 +97,4 @@ def main(n_points: int = 301, rtol: float = 1e-11, rrd: str | None = None,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="andrews_squeezer.rrd",
-                        help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "andrews_squeezer.rrd")

@@ -23,14 +23,12 @@ Run: python examples/bricard.py [--duration 10] [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
 from mbd3d.mechanisms import frame_along
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 #: the loop's corners P1..P6 and hinge axes; rod k joins P_k and P_(k+1), the ground P6 and P1
 CORNERS = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1]], float)
@@ -52,11 +50,9 @@ def build() -> mb.Model:
     return b.build()
 
 
+@check_recording_first
 def main(duration: float = 10.0, n_points: int = 1001, step: float = 1e-3,
          rrd: str | None = None, show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     times = np.linspace(0.0, duration, n_points)
@@ -74,12 +70,6 @@ def main(duration: float = 10.0, n_points: int = 1001, step: float = 1e-3,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=10.0, help="simulated time [s]")
-    parser.add_argument("--rrd", default="bricard.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(args.duration, n_points=int(args.duration * 100) + 1, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(lambda duration, **kw: main(duration, n_points=int(duration * 100) + 1, **kw),
+               __doc__, "bricard.rrd",
+               {"--duration": {"type": float, "default": 10.0, "help": "simulated time [s]"}})

@@ -16,14 +16,13 @@ Run: python examples/cam_follower.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import CamFollower, CamProfile, Prismatic, Revolute, RotationDriver
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 BASE, ROLLER, LIFT, BETA = 0.040, 0.010, 0.020, math.radians(120.0)
 MASS, STIFFNESS, G = 0.5, 400.0, 9.81
@@ -71,9 +70,8 @@ def lift_off_speed() -> float:
     return float(np.sqrt(np.min(held[pulling] / (-MASS * lift(theta[pulling], 2)))))
 
 
+@check_recording_first
 def main(n_points: int = 25, rrd: str | None = None, show: bool = False) -> mb.Results:
-    if rrd is not None:
-        check_destination(rrd, show=show)
     speed = 2 * math.pi
     t = np.linspace(0.0, 1.0, n_points)  # one turn
     res = mb.inverse_dynamics(build(speed), t)
@@ -114,11 +112,4 @@ def main(n_points: int = 25, rrd: str | None = None, show: bool = False) -> mb.R
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="cam_follower.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(n_points=71, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(lambda **kw: main(n_points=71, **kw), __doc__, "cam_follower.rrd")

@@ -19,14 +19,13 @@ Run: python examples/differential.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import GearPair, Revolute, RotationDriver
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 MODULE = 0.004  # m
 R_SIDE, R_SPIDER = MODULE * 16 / 2, MODULE * 10 / 2  # pitch radii at the same cone distance
@@ -65,9 +64,8 @@ def build() -> mb.Model:
     return b.build()
 
 
+@check_recording_first
 def main(n_points: int = 9, rrd: str | None = None, show: bool = False) -> mb.Results:
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     res = mb.inverse_dynamics(model, np.linspace(0.0, 0.5, n_points))
@@ -108,11 +106,4 @@ def main(n_points: int = 9, rrd: str | None = None, show: bool = False) -> mb.Re
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="differential.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "differential.rrd")

@@ -26,13 +26,11 @@ Run: python examples/flyball_governor.py [--duration S] [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Distance, Prismatic, Revolute
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 SPIN = 2 * np.pi                 # initial speed of the shaft [rad/s]
 ALPHA = np.radians(30.0)         # arms below the horizontal at t = 0
@@ -103,11 +101,9 @@ def angular_momentum_z(res: mb.Results) -> np.ndarray:
     return total
 
 
+@check_recording_first
 def main(duration: float = 5.0, step: float = 1e-3, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, duration, int(round(duration / 0.01)) + 1)
@@ -134,12 +130,5 @@ def main(duration: float = 5.0, step: float = 1e-3, rrd: str | None = None,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=5.0, help="simulated time [s]")
-    parser.add_argument("--rrd", default="flyball_governor.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(duration=args.duration, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "flyball_governor.rrd",
+               {"--duration": {"type": float, "default": 5.0, "help": "simulated time [s]"}})

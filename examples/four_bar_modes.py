@@ -19,14 +19,13 @@ Run: python examples/four_bar_modes.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import pathlib
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import four_bar
-from mbd3d.viewer import check_destination, record, record_modes
+from mbd3d.viewer import check_recording_first, record, record_modes, run_script
 
 STIFFNESS = 50.0  # [N m/rad] of the coupling between shaft and crank
 
@@ -36,9 +35,8 @@ def build() -> mb.Model:
     return four_bar(shaft_stiffness=STIFFNESS, gravity=0.0)
 
 
+@check_recording_first
 def main(n_points: int = 37, rrd: str | None = None, show: bool = False) -> mb.ModesAlong:
-    if rrd is not None:
-        check_destination(rrd, show=show)
     t = np.linspace(0.0, 1.0, n_points)  # the motor turns once a second
     model = build()
     along = mb.vibration_modes_along(model, t)
@@ -62,8 +60,4 @@ def main(n_points: int = 37, rrd: str | None = None, show: bool = False) -> mb.M
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="four_bar_modes.rrd", help="recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    main(rrd=args.rrd, show=args.show)
+    run_script(main, __doc__, "four_bar_modes.rrd")

@@ -13,13 +13,11 @@ Run: python examples/gear_train.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import GearPair, Revolute, RotationDriver
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 R_SUN, R_PLANET = 0.040, 0.025
 R_RING = R_SUN + 2 * R_PLANET
@@ -56,9 +54,8 @@ def kinetic_energy_rate(res: mb.Results) -> np.ndarray:
     return total
 
 
+@check_recording_first
 def main(n_points: int = 11, rrd: str | None = None, show: bool = False) -> mb.Results:
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     res = mb.inverse_dynamics(model, np.linspace(0.0, 0.5, n_points))
@@ -91,11 +88,4 @@ def main(n_points: int = 11, rrd: str | None = None, show: bool = False) -> mb.R
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="gear_train.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "gear_train.rrd")

@@ -20,7 +20,6 @@ Run: python examples/haug_slider_crank.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import pathlib
 
 import numpy as np
@@ -28,7 +27,7 @@ from scipy.integrate import simpson
 
 import mbd3d as mb
 from mbd3d.joints import PointOnLine, Revolute
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 A = 0.5  # crank length, pivot to crank pin [m]
 #: SUNDIALS' printed rows (t, q, x, p), with their source in data/README.md
@@ -61,11 +60,9 @@ def coordinates(res: mb.Results) -> np.ndarray:
                             res.body("rod").angle])
 
 
+@check_recording_first
 def main(duration: float = 10.0, rtol: float = 1e-11, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     # every 0.01 s: the SUNDIALS rows are every 40th point, and Simpson's rule on this grid
@@ -94,12 +91,4 @@ def main(duration: float = 10.0, rtol: float = 1e-11, rrd: str | None = None,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="haug_slider_crank.rrd",
-                        help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "haug_slider_crank.rrd")

@@ -22,14 +22,13 @@ Run: python examples/iftomm_four_bar.py [--bars 40] [--duration 20] [--rrd FILE]
 
 from __future__ import annotations
 
-import argparse
 import pathlib
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 #: the benchmark\'s reference series, with its source in data/README.md
 REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A02_n_four_bar_B0.txt"
@@ -51,11 +50,9 @@ def build(bars: int) -> mb.Model:
     return b.build()
 
 
+@check_recording_first
 def main(bars: int = 40, duration: float = 20.0, step: float = 1e-3, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     times = np.linspace(0.0, duration, int(round(duration / 0.05)) + 1)  # every 0.05 s
     res = mb.forward_dynamics(build(bars), times, method="generalized-alpha", step=step)
     b0 = res.point("crank0", (0.5, 0.0)).position  # the top of the first crank
@@ -79,13 +76,6 @@ def main(bars: int = 40, duration: float = 20.0, step: float = 1e-3, rrd: str | 
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--bars", type=int, default=40, help="number of four-bars N")
-    parser.add_argument("--duration", type=float, default=20.0, help="simulated time [s]")
-    parser.add_argument("--rrd", default="iftomm_four_bar.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(args.bars, args.duration, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "iftomm_four_bar.rrd",
+               {"--bars": {"type": int, "default": 40, "help": "number of four-bars N"},
+                "--duration": {"type": float, "default": 20.0, "help": "simulated time [s]"}})

@@ -20,14 +20,13 @@ Run: python examples/iftomm_pendulum.py [--duration 2000] [--rtol 1e-12] [--rrd 
 
 from __future__ import annotations
 
-import argparse
 import pathlib
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Distance
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 #: the benchmark\'s reference series, with its source in data/README.md
 REFERENCE = pathlib.Path(__file__).resolve().parent / "data" / "iftomm_A01_simple_pendulum_P1.txt"
@@ -42,11 +41,9 @@ def build() -> mb.Model:
     return b.build()
 
 
+@check_recording_first
 def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     reference = np.loadtxt(REFERENCE, skiprows=1)
     reference = reference[reference[:, 0] <= duration + 1e-9]
     res = mb.forward_dynamics(build(), reference[:, 0], method="DOP853", rtol=rtol,
@@ -65,16 +62,8 @@ def main(duration: float = 2000.0, rtol: float = 1e-12, rrd: str | None = None,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=2000.0, help="simulated time [s]")
-    parser.add_argument("--rtol", type=float, default=1e-12,
-                        help="DOP853 relative tolerance (the phase error accumulates over the "
-                             "845 swings)")
-    parser.add_argument("--rrd", default="iftomm_pendulum.rrd",
-                        help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(args.duration, rtol=args.rtol, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "iftomm_pendulum.rrd",
+               {"--duration": {"type": float, "default": 2000.0, "help": "simulated time [s]"},
+                "--rtol": {"type": float, "default": 1e-12,
+                           "help": "DOP853 relative tolerance (the phase error accumulates "
+                                   "over the 845 swings)"}})

@@ -16,7 +16,6 @@ Run: python examples/mesh_bodies.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
@@ -24,7 +23,7 @@ import trimesh
 
 import mbd3d as mb
 from mbd3d.joints import Fixed, Revolute
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 STEEL = 7850.0  # kg/m^3
 
@@ -48,11 +47,9 @@ def build() -> mb.Model:
     return b.build()
 
 
+@check_recording_first
 def main(periods: float = 3.0, n_points: int = 301, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     length, radius = LENGTH, RADIUS
     model = build()
     arm, disc = model.body("arm"), model.body("disc")
@@ -95,11 +92,4 @@ def main(periods: float = 3.0, n_points: int = 301, rrd: str | None = None,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="mesh_bodies.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "mesh_bodies.rrd")

@@ -17,14 +17,13 @@ Run: python examples/rolling_disc.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import RollingDiscOnPlane
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 G, MASS, RADIUS, THICKNESS = 9.81, 2.0, 0.1, 0.01
 LEAN, PATH = math.radians(10.0), 0.5  # towards the turn's centre; the contact's circle [m]
@@ -59,9 +58,8 @@ def lean_of(res: mb.Results) -> np.ndarray:
     return np.degrees(np.arcsin(res.body("disc").rotation[:, 2, 2]))
 
 
+@check_recording_first
 def main(n_points: int = 41, rrd: str | None = None, show: bool = False) -> mb.Results:
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 2 * math.pi / STEADY, n_points)  # once round the circle
@@ -99,11 +97,4 @@ def main(n_points: int = 41, rrd: str | None = None, show: bool = False) -> mb.R
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="rolling_disc.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "rolling_disc.rrd")

@@ -18,7 +18,6 @@ Run: python examples/slider_crank.py [--rrd FILE] [--show] [--csv FOLDER]
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 
@@ -27,7 +26,7 @@ import numpy as np
 import mbd3d as mb
 from mbd3d.io.files import check_output_folder
 from mbd3d.mechanisms import slider_crank
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 
 def build() -> mb.Model:
@@ -36,12 +35,10 @@ def build() -> mb.Model:
     return slider_crank(crank_angle=math.radians(65.0), crank_speed=2 * math.pi)
 
 
+@check_recording_first
 def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,
          csv_folder: str | None = None, rrd: str | None = None,
          show: bool = False) -> dict[str, mb.Results]:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     if csv_folder is not None:
         check_output_folder(csv_folder, "the CSV files")
     # 1. kinematics: crank at constant speed from 65 degrees
@@ -106,12 +103,6 @@ def main(n_points: int = 201, duration: float = 1.0, moment: float = 2.0,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--csv", metavar="FOLDER", help="also write the results as CSV files")
-    parser.add_argument("--rrd", default="slider_crank.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(csv_folder=args.csv, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "slider_crank.rrd",
+               {"--csv": {"dest": "csv_folder", "metavar": "FOLDER",
+                          "help": "also write the results as CSV files"}})

@@ -13,7 +13,6 @@ Run: python examples/slider_crank_friction.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
@@ -21,7 +20,7 @@ import numpy as np
 import mbd3d as mb
 from mbd3d.joints import Prismatic, Revolute, RotationDriver
 from mbd3d.mechanisms import slider_crank_positions
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 SPEED = 300 * 2 * math.pi / 60  # rad/s
 PIN_RADIUS = 0.010  # m
@@ -70,9 +69,8 @@ def friction_power(res: mb.Results) -> np.ndarray:
     return power
 
 
+@check_recording_first
 def main(n_points: int = 13, rrd: str | None = None, show: bool = False) -> mb.Results:
-    if rrd is not None:
-        check_destination(rrd, show=show)
     t = np.linspace(0.0, 2 * math.pi / SPEED, n_points)  # one revolution
     res = mb.inverse_dynamics(build(), t)
     plain = mb.inverse_dynamics(build(friction=False), t)
@@ -98,12 +96,4 @@ def main(n_points: int = 13, rrd: str | None = None, show: bool = False) -> mb.R
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="slider_crank_friction.rrd",
-                        help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(n_points=73, rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(lambda **kw: main(n_points=73, **kw), __doc__, "slider_crank_friction.rrd")

@@ -12,13 +12,11 @@ Run: python examples/spatial_four_bar.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import spatial_four_bar
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 
 def build() -> mb.Model:
@@ -26,10 +24,8 @@ def build() -> mb.Model:
     return spatial_four_bar(crank_speed=2 * np.pi)
 
 
+@check_recording_first
 def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     print(mb.mobility(spatial_four_bar(all_revolute=True, crank_speed=None)), "\n")
     model = build()
     print(mb.mobility(model), "\n")
@@ -49,12 +45,4 @@ def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="spatial_four_bar.rrd",
-                        help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "spatial_four_bar.rrd")

@@ -13,13 +13,11 @@ Run: python examples/spatial_slider_crank.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.mechanisms import spatial_slider_crank
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 
 def build() -> mb.Model:
@@ -27,10 +25,8 @@ def build() -> mb.Model:
     return spatial_slider_crank(crank_speed=2 * np.pi)
 
 
+@check_recording_first
 def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     model = build()
     print(mb.mobility(model), "\n")
     t = np.linspace(0.0, 1.0, n_points)
@@ -54,12 +50,4 @@ def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> mb.
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="spatial_slider_crank.rrd",
-                        help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "spatial_slider_crank.rrd")

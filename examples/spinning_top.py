@@ -13,7 +13,6 @@ Run: python examples/spinning_top.py [--rrd FILE] [--show]
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
@@ -22,7 +21,7 @@ import trimesh
 import mbd3d as mb
 from mbd3d.numerics import rotations
 from mbd3d.joints import Spherical
-from mbd3d.viewer import check_destination, record
+from mbd3d.viewer import check_recording_first, record, run_script
 
 
 M, J1, J3, L = 0.706858347, 5.30143760e-4, 5.30143760e-4, 0.075  # cone, about its centre
@@ -48,11 +47,9 @@ def build() -> mb.Model:
     return b.build()
 
 
+@check_recording_first
 def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,
          show: bool = False) -> mb.Results:
-    # a bad path, or --show without a display, fails now, not after the computing
-    if rrd is not None:
-        check_destination(rrd, show=show)
     omega_s, omega_p = OMEGA_S, OMEGA_P
     t = np.linspace(0.0, duration, n_points)
     res = mb.forward_dynamics(build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
@@ -73,11 +70,4 @@ def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rrd", default="spinning_top.rrd", help="the Rerun recording to write")
-    parser.add_argument("--show", action="store_true", help="open it in the Rerun viewer")
-    args = parser.parse_args()
-    try:
-        main(rrd=args.rrd, show=args.show)
-    except mb.MBDError as error:  # a bad path, no display, ...: the message says what to do
-        raise SystemExit(f"error: {error}")
+    run_script(main, __doc__, "spinning_top.rrd")

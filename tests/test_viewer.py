@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import pathlib
 import socket
 import sys
 import subprocess
@@ -378,3 +379,42 @@ def test_spawn_without_a_display_fails_at_once_and_says_how_to_view_a_file(monke
     with pytest.raises(RecordingError, match="no display.*run: rerun FILE"):
         Recorder(tmp_path / "run.rrd", spawn=True, viewer_port=free_port())
     assert time.monotonic() - start < 2.0
+
+
+def test_run_script_hands_main_its_options_by_name_after_checking_the_recording(tmp_path):
+    from mbd3d.viewer import check_recording_first, run_script
+
+    seen = {}
+
+    @check_recording_first
+    def main(duration=1.0, csv_folder=None, rrd=None, show=False):
+        seen.update(duration=duration, csv_folder=csv_folder, rrd=rrd, show=show)
+        return "done"
+
+    options = {"--duration": {"type": float, "default": 2.0, "help": "simulated time [s]"},
+               "--csv": {"dest": "csv_folder", "metavar": "FOLDER"}}
+    path = str(tmp_path / "run.rrd")
+    assert run_script(main, "A mechanism.\n\nMore.", "x.rrd", options,
+                      argv=["--duration", "3", "--rrd", path]) == "done"
+    assert seen == {"duration": 3.0, "csv_folder": None, "rrd": path, "show": False}
+    # a recording that cannot be written stops the script before main runs, with the message
+    seen.clear()
+    with pytest.raises(SystemExit, match=r"^error: .*missing"):
+        run_script(main, "A mechanism.", "x.rrd",
+                   argv=["--rrd", str(tmp_path / "missing" / "a.rrd")])
+    assert not seen
+
+
+def test_a_recording_example_says_its_options_and_refuses_a_bad_path_at_once(tmp_path):
+    import subprocess
+    example = pathlib.Path(__file__).resolve().parent.parent / "examples" / "bricard.py"
+    done = subprocess.run([sys.executable, str(example), "--help"], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0
+    assert all(flag in done.stdout for flag in ("--duration", "--rrd", "--show"))
+    start = time.monotonic()
+    done = subprocess.run([sys.executable, str(example), "--rrd",
+                           str(tmp_path / "missing" / "b.rrd")], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 1 and done.stderr.startswith("error: ")
+    assert "Traceback" not in done.stderr and time.monotonic() - start < 60

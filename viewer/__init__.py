@@ -10,7 +10,9 @@ Usage::
 
 Open a recording with ``rerun run.rrd``: the mechanism moves on the left (bodies, joints,
 reaction and effort arrows, point trails); the plots of the kinematic and force analyses, the
-energies and the constraint residuals are on the right.
+energies and the constraint residuals are on the right. A script that records its results
+takes ``--rrd FILE`` and ``--show`` through :func:`run_script`, and checks where its
+recording goes before computing with :func:`check_recording_first`, as the examples do.
 """
 
 from mbd3d.viewer.modes import record_modes
@@ -18,7 +20,9 @@ from mbd3d.viewer.readback import entity_paths, read_component
 from mbd3d.viewer.recorder import (VIEWER_PORT, Recorder, RecordingError, check_destination, record,
                                    require_display, rerun_executable, show, spawn_viewer)
 from mbd3d.viewer.scene import SIM_TIME, STEP
+from mbd3d.viewer.script import check_recording_first, run_script
 
 __all__ = ["Recorder", "RecordingError", "record", "record_modes", "show", "rerun_executable", "entity_paths",
            "read_component", "SIM_TIME", "STEP", "check_destination", "require_display",
-           "spawn_viewer", "VIEWER_PORT"]
+           "spawn_viewer", "VIEWER_PORT", "run_script",
+           "check_recording_first"]
