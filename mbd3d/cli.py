@@ -85,6 +85,9 @@ def _parser() -> argparse.ArgumentParser:
 
     view = commands.add_parser("view", help="open a recording in the Rerun viewer")
     view.add_argument("recording", help="the .rrd file")
+    view.add_argument("--bind", default="127.0.0.1", metavar="ADDRESS",
+                      help="the address the viewer listens on (default 127.0.0.1: this "
+                           "machine only)")
     view.set_defaults(command=_view, name="view")
 
     sweep = commands.add_parser("sweep", help="run the model's analysis over a grid of "
@@ -240,7 +243,7 @@ def _view(args) -> int:
 
     if not os.path.isfile(args.recording):
         raise ModelError(f"no recording '{args.recording}'")
-    show(args.recording)
+    show(args.recording, bind=args.bind)
     return 0
 
 

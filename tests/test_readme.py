@@ -106,7 +106,7 @@ def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
             pytest.skip(f"port {recorder.VIEWER_PORT} is taken: a viewer is running here")
     received = tmp_path / "viewer received.rrd"
     binary = rerun_executable()
-    monkeypatch.setattr(recorder, "_viewer_command", lambda port: with_default_sigint([
+    monkeypatch.setattr(recorder, "_viewer_command", lambda port, bind: with_default_sigint([
         binary, "--bind", "127.0.0.1", "--port", str(port), "--save", str(received)]))
     spawned = []
     spawn = recorder.spawn_viewer

@@ -26,7 +26,7 @@ from conftest import stop_process, with_default_sigint
 from mbd3d.mechanisms import pendulum_chain, slider_crank
 from mbd3d.joints import Spherical
 from mbd3d.viewer import (Recorder, RecordingError, entity_paths, read_component, record,
-                          rerun_executable)
+                          rerun_executable, show)
 
 
 @pytest.fixture(autouse=True)
@@ -351,7 +351,7 @@ def test_spawned_viewer_receives_every_time_point(tmp_path, monkeypatch):
     from mbd3d.viewer import recorder
 
     port, saved = free_port(), tmp_path / "spawned.rrd"
-    monkeypatch.setattr(recorder, "_viewer_command", lambda p: with_default_sigint([
+    monkeypatch.setattr(recorder, "_viewer_command", lambda p, bind: with_default_sigint([
         rerun_executable(), "--bind", "127.0.0.1", "--port", str(p), "--save", str(saved)]))
     monkeypatch.setenv("DISPLAY", ":99")  # what a desktop session has
     monkeypatch.setenv("CI", "true")  # no analytics from the stand-in
@@ -418,3 +418,24 @@ def test_a_recording_example_says_its_options_and_refuses_a_bad_path_at_once(tmp
                           timeout=120)
     assert done.returncode == 1 and done.stderr.startswith("error: ")
     assert "Traceback" not in done.stderr and time.monotonic() - start < 60
+
+
+def test_the_viewers_mbd3d_starts_listen_on_this_machine_only(tmp_path, monkeypatch):
+    """Rerun's viewer listens on every interface by default (0.0.0.0): a spawned viewer, one
+    opened on a file and ``mbd3d view`` are given loopback unless told otherwise."""
+    from mbd3d import cli
+    from mbd3d.viewer import recorder
+
+    assert recorder._viewer_command(9876)[1:] == ["--bind", "127.0.0.1", "--port", "9876"]
+    assert recorder._viewer_command(9876, "0.0.0.0")[1:3] == ["--bind", "0.0.0.0"]
+    started = []
+    monkeypatch.setattr(recorder.subprocess, "Popen", lambda command, **_: started.append(command))
+    monkeypatch.setenv("DISPLAY", ":99")
+    path = tmp_path / "run.rrd"
+    record(mb.kinematic_analysis(slider_crank(crank_speed=1.0), [0.0, 0.1]), path)
+    show(path)
+    assert cli.main(["view", str(path)]) == 0
+    assert cli.main(["view", str(path), "--bind", "0.0.0.0"]) == 0
+    assert [command[1:] for command in started] == [
+        ["--bind", "127.0.0.1", str(path)], ["--bind", "127.0.0.1", str(path)],
+        ["--bind", "0.0.0.0", str(path)]]

@@ -17,12 +17,13 @@ recording goes before computing with :func:`check_recording_first`, as the examp
 
 from mbd3d.viewer.modes import record_modes
 from mbd3d.viewer.readback import entity_paths, read_component
-from mbd3d.viewer.recorder import (VIEWER_PORT, Recorder, RecordingError, check_destination, record,
+from mbd3d.viewer.recorder import (VIEWER_BIND, VIEWER_PORT, Recorder, RecordingError,
+                                   check_destination, record,
                                    require_display, rerun_executable, show, spawn_viewer)
 from mbd3d.viewer.scene import SIM_TIME, STEP
 from mbd3d.viewer.script import check_recording_first, run_script
 
 __all__ = ["Recorder", "RecordingError", "record", "record_modes", "show", "rerun_executable", "entity_paths",
            "read_component", "SIM_TIME", "STEP", "check_destination", "require_display",
-           "spawn_viewer", "VIEWER_PORT", "run_script",
+           "spawn_viewer", "VIEWER_PORT", "VIEWER_BIND", "run_script",
            "check_recording_first"]

@@ -42,10 +42,14 @@ from mbd3d.io.results import Results
 from mbd3d.viewer.scene import Scene, _rerun
 
 __all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable",
-           "check_destination", "require_display", "spawn_viewer", "VIEWER_PORT"]
+           "check_destination", "require_display", "spawn_viewer", "VIEWER_PORT",
+           "VIEWER_BIND"]
 
 #: the gRPC port a Rerun viewer listens on by default
 VIEWER_PORT = 9876
+#: the address the viewers mbd3d starts listen on: this machine only (Rerun's own default,
+#: 0.0.0.0, would let any machine on the network read and send recordings)
+VIEWER_BIND = "127.0.0.1"
 #: how long a spawned viewer may take to start listening [s]
 _VIEWER_START_TIMEOUT = 30.0
 
@@ -85,6 +89,9 @@ class Recorder(Observer):
         without one the Recorder refuses at once and says how to view a file instead).
     viewer_port : int
         The gRPC port of the spawned viewer (default 9876, Rerun's own).
+    viewer_bind : str
+        The address the spawned viewer listens on: ``"127.0.0.1"`` (this machine only) unless
+        another is given, e.g. ``"0.0.0.0"`` to accept recordings from the network.
     connect : str, optional
         Stream to a running viewer or server at this gRPC address, e.g.
         ``"rerun+http://127.0.0.1:9876/proxy"`` (what ``rerun`` listens on by default).
@@ -115,7 +122,8 @@ class Recorder(Observer):
     """
 
     def __init__(self, save: str | os.PathLike | None = None, *, spawn: bool = False,
-                 viewer_port: int = VIEWER_PORT, connect: str | None = None, overwrite: bool = False,
+                 viewer_port: int = VIEWER_PORT, viewer_bind: str = VIEWER_BIND,
+                 connect: str | None = None, overwrite: bool = False,
                  plots: Sequence[str] | None = None,
                  points: Mapping[str, tuple[str, Sequence[float]]] | None = None,
                  reactions: Sequence[str] | None = None,
@@ -128,7 +136,7 @@ class Recorder(Observer):
         if spawn and not _listening(viewer_port):
             require_display(self.path)  # now, not after the analysis has run
         self.spawn, self.connect, self.overwrite = bool(spawn), connect, overwrite
-        self.viewer_port = int(viewer_port)
+        self.viewer_port, self.viewer_bind = int(viewer_port), str(viewer_bind)
         #: the viewer process this Recorder started (None when it used a running one)
         self.viewer_process: subprocess.Popen | None = None
         self.plots = None if plots is None else list(plots)
@@ -183,7 +191,8 @@ class Recorder(Observer):
             check_output_path(self.path, self.overwrite)
             sinks.append(rr.FileSink(self.path))
         if self.spawn:
-            url, self.viewer_process = spawn_viewer(self.viewer_port, self.path)
+            url, self.viewer_process = spawn_viewer(self.viewer_port, self.path,
+                                                    self.viewer_bind)
             sinks.append(rr.GrpcSink(url))
         if self.connect is not None:
             sinks.append(rr.GrpcSink(self.connect))
@@ -321,15 +330,17 @@ def _listening(port: int) -> bool:
         return sock.connect_ex(("127.0.0.1", port)) == 0
 
 
-def _viewer_command(port: int) -> list[str]:
-    """The command line of a Rerun viewer window listening on ``port``."""
-    return [rerun_executable(), "--port", str(port)]
+def _viewer_command(port: int, bind: str = VIEWER_BIND) -> list[str]:
+    """The command line of a Rerun viewer window listening on ``port`` of ``bind``."""
+    return [rerun_executable(), "--bind", bind, "--port", str(port)]
 
 
-def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None
+def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None, bind: str = VIEWER_BIND
                  ) -> tuple[str, subprocess.Popen | None]:
     """The gRPC address of a Rerun viewer on ``port``: the one already listening there, or a
-    new viewer window started now (its own process, which stays open after Python ends).
+    new viewer window started now (its own process, which stays open after Python ends),
+    listening on ``bind`` (this machine only, unless another address is given; Rerun's own
+    default would be every interface).
 
     Returns ``(url, process)``, ``process`` None when a running viewer was used.
 
@@ -346,7 +357,7 @@ def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None
     # reads would block a viewer that keeps printing
     log = tempfile.TemporaryFile()
     try:
-        process = subprocess.Popen(_viewer_command(port), stdin=subprocess.DEVNULL,
+        process = subprocess.Popen(_viewer_command(port, bind), stdin=subprocess.DEVNULL,
                                    stdout=log, stderr=log, start_new_session=True)
     except OSError as exc:
         raise RecordingError(f"could not start the Rerun viewer: {exc}") from exc
@@ -366,13 +377,14 @@ def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None
     return url, process
 
 
-def show(path: str | os.PathLike) -> subprocess.Popen:
-    """Open an ``.rrd`` recording in the Rerun viewer (a separate process; needs a display)."""
+def show(path: str | os.PathLike, bind: str = VIEWER_BIND) -> subprocess.Popen:
+    """Open an ``.rrd`` recording in the Rerun viewer (a separate process; needs a display),
+    whose server listens on ``bind`` (this machine only, unless another address is given)."""
     path = os.path.abspath(os.fspath(path))
     if not os.path.isfile(path):
         raise RecordingError(f"no recording at '{path}'")
     require_display(path)
-    return subprocess.Popen([rerun_executable(), path])
+    return subprocess.Popen([rerun_executable(), "--bind", bind, path])
 
 
 _open_viewer = show  # record() has a parameter called show
