@@ -78,6 +78,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--rrd", metavar="FILE", help="write the Rerun recording there")
     run.add_argument("--csv", metavar="FOLDER", help="write the results as CSV there")
     run.add_argument("--show", action="store_true", help="open the recording in the viewer")
+    run.add_argument("--overwrite", action="store_true",
+                     help="replace existing output files (refused by default)")
     run.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                      help="change a value first, e.g. bodies.crank.mass=2 (repeatable)")
     run.add_argument("--rows", type=int, default=11, help="rows of the summary table")
@@ -162,6 +164,17 @@ def _chosen_analysis(args, loaded):
     return AnalysisSpec(kind, t, options, outputs)
 
 
+def _destinations(args, loaded, spec) -> tuple[str | None, str | None]:
+    """``(recording, CSV file)`` of a run: the command line's, else the file's analysis's
+    (kept inside the model file's folder when it is read), None where nothing is written."""
+    rrd = getattr(args, "rrd", None) or spec.outputs.get("rrd")
+    folder = getattr(args, "csv", None) or spec.outputs.get("csv")
+    csv_path = None
+    if folder is not None:
+        csv_path = os.path.join(folder, f"{pathlib.Path(loaded.path).stem}_{spec.kind}.csv")
+    return rrd, csv_path
+
+
 # -- the commands ------------------------------------------------------------------------------
 def _check(args) -> int:
     from mbd3d.io.model_file import read  # noqa: PLC0415
@@ -186,6 +199,11 @@ def _check(args) -> int:
         problems += needs_drivers
         options = ", ".join(f"{k}={v}" for k, v in spec.options.items())
         print(f"analysis: {spec.kind} over {span}{'; ' + options if options else ''}{note}")
+        for what, path in zip(("recording", "CSV"), _destinations(args, loaded, spec)):
+            if path is not None:
+                exists = " (exists: mbd3d run replaces it only with --overwrite)"
+                print(f"  writes the {what} to {os.path.abspath(path)}"
+                      f"{exists if os.path.exists(path) else ''}")
     return 1 if problems else 0
 
 
@@ -196,15 +214,15 @@ def _run(args) -> int:
 
     loaded = read(args.model, _changes(args.set))
     spec = _chosen_analysis(args, loaded)
-    # the command line's destinations over the file's, checked before the computing
-    rrd = args.rrd if args.rrd is not None else spec.outputs.get("rrd")
-    csv_folder = args.csv if args.csv is not None else spec.outputs.get("csv")
+    # the command line's destinations over the file's, checked before the computing; an
+    # existing file is replaced only with --overwrite
+    rrd, csv_path = _destinations(args, loaded, spec)
     if rrd is not None:
         from mbd3d.viewer import check_destination  # noqa: PLC0415
-        check_destination(rrd, show=args.show)
-    if csv_folder is not None:
-        from mbd3d.io.files import check_output_folder  # noqa: PLC0415
-        check_output_folder(csv_folder, "the CSV files")
+        check_destination(rrd, overwrite=args.overwrite, show=args.show)
+    if csv_path is not None:
+        from mbd3d.io.files import check_output_path  # noqa: PLC0415
+        check_output_path(csv_path, args.overwrite, "the CSV file")
     model = loaded.model
     failure = None
     try:
@@ -225,13 +243,12 @@ def _run(args) -> int:
             columns[f"{body.name}.{label} [m]"] = history.position[:, axis]
     if len(res):
         print(format_table(columns, rows=args.rows))
-    stem = pathlib.Path(args.model).stem
-    if csv_folder is not None:
-        path = res.to_csv(os.path.join(csv_folder, f"{stem}_{spec.kind}.csv"))
+    if csv_path is not None:
+        path = res.to_csv(csv_path, overwrite=args.overwrite)
         print(f"\nCSV written to {path}")
     if rrd is not None:
         from mbd3d.viewer import record  # noqa: PLC0415
-        record(res, rrd, overwrite=True, show=args.show and failure is None)
+        record(res, rrd, overwrite=args.overwrite, show=args.show and failure is None)
     if failure is not None:
         print(f"mbd3d run: error: {failure}", file=sys.stderr)
     return 0 if res.status == "complete" else 1

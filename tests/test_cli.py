@@ -167,3 +167,43 @@ def test_sweep_runs_the_grid_and_keeps_the_table(tmp_path):
     done = mbd3d("sweep", MODELS / "slider_crank.yaml", "--grid", "joints.motr.rate=1",
                  "--serial", "--folder", tmp_path / "bad")
     assert done.returncode == 2 and "no entry 'motr'" in done.stderr
+
+
+def test_a_model_file_writes_only_inside_its_folder_and_replaces_nothing_unasked(tmp_path):
+    """Output paths in a model file stay inside its folder (a file someone else wrote cannot
+    make mbd3d run replace notes.txt elsewhere); check lists every destination; an existing
+    output is replaced only with --overwrite, on the command line's paths too."""
+    folder = tmp_path / "models"
+    folder.mkdir()
+    notes = tmp_path / "notes.txt"
+    notes.write_text("mine")
+    for bad in ("../notes.txt", str(notes), "sub/../../notes.txt"):
+        for key in ("rrd", "csv"):
+            path = folder / "evil.yaml"
+            path.write_text(GOOD.replace("points: 11}}", f"points: 11}}, {key}: '{bad}'}}"))
+            done = mbd3d("run", path)
+            assert done.returncode == 2, (bad, key, done.stdout, done.stderr)
+            assert "evil.yaml:14: analyses[0]." + key in done.stderr
+            assert "leaves the model file's folder" in done.stderr
+            assert notes.read_text() == "mine"
+    path = folder / "good.yaml"
+    path.write_text(GOOD.replace("points: 11}}", "points: 11}, rrd: out/run.rrd, csv: out}"))
+    (folder / "out").mkdir()
+    done = mbd3d("check", path)
+    assert f"writes the recording to {folder / 'out' / 'run.rrd'}" in done.stdout
+    assert f"writes the CSV to {folder / 'out' / 'good_inverse.csv'}" in done.stdout
+    assert mbd3d("run", path).returncode == 0
+    written = {p: p.read_bytes() for p in (folder / "out").iterdir()}
+    assert len(written) == 2
+    done = mbd3d("run", path, "--set", "joints.motor.motion.rate=3.0")
+    assert done.returncode == 2 and "already exists" in done.stderr
+    assert {p: p.read_bytes() for p in (folder / "out").iterdir()} == written
+    assert "(exists: mbd3d run replaces it only with --overwrite)" in mbd3d("check", path).stdout
+    other = tmp_path / "mine.rrd"
+    other.write_text("mine")
+    done = mbd3d("run", path, "--rrd", other, "--overwrite")
+    assert done.returncode == 0 and other.read_bytes() != b"mine"
+    done = mbd3d("run", path, "--overwrite", "--set", "joints.motor.motion.rate=3.0")
+    assert done.returncode == 0
+    assert (folder / "out" / "good_inverse.csv").read_bytes() != written[
+        folder / "out" / "good_inverse.csv"]

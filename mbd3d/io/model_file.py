@@ -435,9 +435,7 @@ class _Reader:
         outputs = {}
         for key in ("rrd", "csv"):
             if key in entry:
-                if not isinstance(entry[key], str):
-                    raise self.error(where + (key,), "a path (relative to this file)")
-                outputs[key] = str(self.folder / entry[key])
+                outputs[key] = self._output(entry[key], where + (key,))
         options = {key: value for key, value in entry.items()
                    if key not in ("kind", "t", "rrd", "csv")}
         function = ANALYSES[kind]
@@ -450,6 +448,22 @@ class _Reader:
                                                  f"{_suggest(key, allowed)} (it takes: "
                                                  f"{', '.join(allowed)})")
         return AnalysisSpec(kind, t, options, outputs)
+
+    def _output(self, value, where: tuple) -> str:
+        """An output path of the file: relative to its folder and inside it, so that a model
+        file (perhaps someone else's) cannot make ``mbd3d run`` write anywhere else."""
+        if not isinstance(value, str) or not value.strip():
+            raise self.error(where, "a path (relative to this file)")
+        relative = pathlib.PurePath(value)
+        if relative.is_absolute() or ".." in relative.parts:
+            raise self.error(where, f"{value!r} leaves the model file's folder; outputs stay "
+                                    "inside it (give a path relative to it, without '..'), or "
+                                    "choose another place with mbd3d run --rrd/--csv")
+        target = (self.folder / relative).resolve()
+        if not target.is_relative_to(self.folder.resolve()):  # through a link out of it
+            raise self.error(where, f"{value!r} leads out of the model file's folder (a link); "
+                                    "outputs stay inside it")
+        return str(self.folder / relative)
 
     def _times(self, value, where: tuple) -> np.ndarray:
         if isinstance(value, dict):
