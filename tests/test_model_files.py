@@ -85,7 +85,7 @@ def write_model_files() -> None:
     MODELS.mkdir(exist_ok=True)
     for name, (make, analysis) in EXAMPLES.items():
         model = make(example(name))
-        path = mb.save(model, MODELS / f"{name}.yaml", analyses=[analysis])
+        path = mb.save(model, MODELS / f"{name}.yaml", analyses=[analysis], overwrite=True)
         print("wrote", path)
 
 
@@ -254,3 +254,37 @@ bodies:
     path.write_text(path.read_text().replace("box: [0.2, 0.1, 0.05]", "cylinder: [0.1]"))
     with pytest.raises(ModelFileError, match=r"box.yaml:3: bodies\[0\]: .*cylinder takes 2"):
         mb.load(path)
+
+
+def test_saving_writes_only_inside_the_folder_and_replaces_nothing_unasked(tmp_path):
+    """Mesh bodies are saved as <stem>.<body>.obj beside the model file: a body named like a
+    path stays a file name there, and no file is replaced without overwrite=True (the
+    mesh files neither), all checked before anything is written."""
+    import trimesh
+    b = mb.ModelBuilder(dim=3)
+    names = ["sub/../../../x", "..", "plain"]
+    for k, name in enumerate(names):
+        b.add_body(name, shape=trimesh.creation.box((0.1, 0.2, 0.3 + 0.1 * k)), density=1000.0,
+                   position=(k, 0.0, 0.0))
+    model = b.build()
+    folder = tmp_path / "deep" / "er"
+    folder.mkdir(parents=True)
+    path = mb.save(model, folder / "m.yaml")
+    written = sorted(p.name for p in folder.iterdir())
+    assert len(written) == 4 and "m.plain.obj" in written  # the file and three meshes
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file() and p.parent != folder) == []
+    again = mb.load(path)
+    for name in names:
+        np.testing.assert_array_equal(again.body(name).inertia, model.body(name).inertia)
+    # a second save replaces nothing, a mesh file left there neither
+    before = {p: p.read_bytes() for p in folder.iterdir()}
+    with pytest.raises(ModelFileError, match="already exists"):
+        mb.save(model, folder / "m.yaml")
+    (folder / "m.yaml").unlink()
+    with pytest.raises(ModelFileError, match=r"\.obj' already exists"):
+        mb.save(model, folder / "m.yaml")
+    assert not (folder / "m.yaml").exists()
+    assert {p: p.read_bytes() for p in folder.iterdir()} == {
+        p: v for p, v in before.items() if p.name != "m.yaml"}
+    mb.save(model, folder / "m.yaml", overwrite=True)
+    assert mb.load(folder / "m.yaml").body("plain").mass == model.body("plain").mass

@@ -51,6 +51,7 @@ joints[3].axis: ...``.
 from __future__ import annotations
 
 import difflib
+import hashlib
 import inspect
 import os
 import pathlib
@@ -498,27 +499,35 @@ def times_from_step(start: float, stop: float, step: float, error=None, where=()
 
 # -- writing ----------------------------------------------------------------------------------
 def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | dict] = (),
-         overwrite: bool = True) -> str:
+         overwrite: bool = False) -> str:
     """Write ``model`` as a model file that rebuilds it (see the module doc).
 
     Each body is written with the arguments of ``add_body`` that made it, each joint, driver
     and force element with those of its constructor. A mesh given as a file is referenced
     (relative to the model file); one given as a trimesh object is written beside the file as
-    ``<stem>.<body>.obj``.
+    ``<stem>.<body>.obj``, the body's name made a file name (characters other than letters,
+    digits, ``.``, ``_`` and ``-`` replaced, and a digest of the name added when any was),
+    so that no name can put a file elsewhere. Every file is checked before any is written,
+    and none that exists is replaced unless ``overwrite``.
 
     Raises
     ------
     ModelFileError
         An element made with a Python function (a ``Function`` motion, a force given as a
-        callable), which a file cannot hold; or a path that cannot be written.
+        callable), which a file cannot hold; or a path that cannot be written (or exists,
+        without ``overwrite``).
     """
     import yaml  # noqa: PLC0415
 
     try:
         target = pathlib.Path(files.check_output_path(path, overwrite, "the model file"))
+        folder = target.parent
+        meshes = {body.name: folder / f"{target.stem}.{_file_name(body.name)}.obj"
+                  for body in model.bodies if _is_mesh(body.arguments.get("shape"))}
+        for mesh_path in meshes.values():
+            files.check_output_path(mesh_path, overwrite, "the mesh file")
     except files.OutputError as exc:
         raise ModelFileError(str(exc)) from None
-    folder = target.parent
     data: dict[str, Any] = {"mbd3d": FORMAT_VERSION, "name": model.name, "dim": model.dim,
                             "gravity": _plain(model.gravity, "gravity")}
     bodies = []
@@ -526,7 +535,8 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
         entry: dict[str, Any] = {"name": body.name}
         for key, value in body.arguments.items():
             if key == "shape":
-                entry[key] = _shape_file(value, body.name, target, folder)
+                entry[key] = _shape_file(value, body.name, meshes.get(body.name), folder,
+                                         overwrite)
             else:
                 entry[key] = _plain(value, f"body '{body.name}': {key}")
         bodies.append(entry)
@@ -603,7 +613,23 @@ def _plain(value: Any, where: str) -> Any:
                          "file")
 
 
-def _shape_file(shape: Any, body: str, target: pathlib.Path, folder: pathlib.Path) -> Any:
+def _is_mesh(shape: Any) -> bool:
+    """Whether a body's shape is a mesh object, which is saved as a file of its own."""
+    return shape is not None and not isinstance(shape, (dict, str, os.PathLike))
+
+
+def _file_name(name: str) -> str:
+    """``name`` as part of a file name: only letters, digits, ``.``, ``_`` and ``-`` (so no
+    folder separator or drive), with a digest of the name when anything was replaced, so
+    that two names never share a file."""
+    safe = "".join(c if c.isascii() and (c.isalnum() or c in "._-") else "_" for c in name)
+    if safe == name and safe.strip("."):
+        return name
+    return f"{safe.strip('.') or 'body'}-{hashlib.sha1(name.encode()).hexdigest()[:8]}"
+
+
+def _shape_file(shape: Any, body: str, mesh_path: pathlib.Path | None, folder: pathlib.Path,
+                overwrite: bool) -> Any:
     if isinstance(shape, dict):  # a primitive: its sizes
         return _plain(shape, f"body '{body}': shape")
     if isinstance(shape, (str, os.PathLike)):
@@ -615,8 +641,11 @@ def _shape_file(shape: Any, body: str, target: pathlib.Path, folder: pathlib.Pat
     from trimesh.exchange.obj import export_obj  # noqa: PLC0415
 
     # OBJ with 20 decimals: the vertices read back as written (STL and PLY hold float32)
-    mesh_path = folder / f"{target.stem}.{body}.obj"
-    mesh_path.write_text(export_obj(shape, digits=20, include_normals=False,
-                                    include_texture=False, include_color=False),
-                         encoding="utf-8")
+    text = export_obj(shape, digits=20, include_normals=False, include_texture=False,
+                      include_color=False)
+    try:
+        files.atomic_write(mesh_path, lambda f: f.write(text), text=True, overwrite=overwrite,
+                           what="the mesh file")
+    except files.OutputError as exc:
+        raise ModelFileError(str(exc)) from None
     return mesh_path.name
