@@ -190,3 +190,25 @@ def test_a_link_inertia_given_in_a_turned_inertial_frame_is_turned_into_the_link
     effort = mb.inverse_dynamics(model, t).driver("hinge_drive").effort
     np.testing.assert_allclose(effort, moment * -amplitude * rate ** 2 * np.sin(rate * t),
                                rtol=0, atol=1e-10 * moment * amplitude * rate ** 2)
+
+
+def test_a_broken_urdf_is_refused_not_loaded_as_part_of_a_robot(tmp_path):
+    """A joint naming a link the file does not have (a typo, or a file cut short that the
+    parser still recovers) would drop every link below it: refused, naming the file, the
+    joint and the link; so is a link with two parents."""
+    text = PUMA.read_text()
+    typo = tmp_path / "typo.urdf"
+    typo.write_text(text.replace('<parent link="link3"/>', '<parent link="lnk3"/>'))
+    with pytest.raises(mb.ModelError, match=r"typo\.urdf.*joint 'joint4' names parent link "
+                                            r"'lnk3'.*did you mean 'link3'"):
+        load_urdf(typo)
+    cut = tmp_path / "cut.urdf"
+    cut.write_text(text[:text.index('<link name="link3">')])
+    with pytest.raises(mb.ModelError, match=r"cut\.urdf.*(joint 'joint3' names child link "
+                                            r"'link3'|cannot be read)"):
+        load_urdf(cut)
+    twice = tmp_path / "twice.urdf"
+    twice.write_text(text.replace('<child link="link6"/>', '<child link="link5"/>'))
+    with pytest.raises(mb.ModelError, match=r"twice\.urdf.*link 'link5' is the child of joints "
+                                            r"'joint5' and 'joint6'"):
+        load_urdf(twice)

@@ -93,6 +93,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         raise ModelError(f"{what} cannot be read: {exc}") from None
     links = {link.name: link for link in robot.robot.links}
     joints = list(robot.robot.joints)
+    _check_tree(joints, links, what)
     children = {joint.child for joint in joints}
     roots = [name for name in links if name not in children]
     if len(roots) != 1:
@@ -124,6 +125,11 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                 joint, float(positions.get(joint.name, 0.0)), what)
             order.append(joint)
             stack.append(joint.child)
+
+    unreached = [name for name in links if name not in frames]
+    if unreached:  # a cycle of joints hanging from no link of the tree
+        raise ModelError(f"{what}: link(s) {', '.join(unreached)} cannot be reached from the "
+                         f"root link '{roots[0]}' through the joints; a URDF robot is one tree")
 
     b = builder if builder is not None else ModelBuilder(
         dim=3, gravity=gravity, name=name or robot.robot.name or path.stem)
@@ -182,6 +188,31 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         warnings.warn(f"{what}: mimic joints are not coupled (each moves freely): "
                       f"{', '.join(mimic)}", UrdfWarning, stacklevel=2)
     return b
+
+
+def _check_tree(joints: list, links: dict, what: str) -> None:
+    """Refuse a robot whose joints name links it does not have, or give a link two parents:
+    loaded anyway, the links below such a joint would silently go missing."""
+    parents: dict[str, str] = {}
+    for joint in joints:
+        for role in ("parent", "child"):
+            link = getattr(joint, role)
+            if link not in links:
+                raise ModelError(
+                    f"{what}: joint '{joint.name}' names {role} link '{link}', which the file "
+                    f"does not have{_did_you_mean(link, links)}; the links below it would be "
+                    "lost (links: " + ", ".join(sorted(links)) + ")")
+        if joint.child in parents:
+            raise ModelError(f"{what}: link '{joint.child}' is the child of joints "
+                             f"'{parents[joint.child]}' and '{joint.name}'; a URDF robot is a "
+                             "tree (close loops in a model file instead)")
+        parents[joint.child] = joint.name
+
+
+def _did_you_mean(word: str, choices) -> str:
+    import difflib  # noqa: PLC0415
+    close = difflib.get_close_matches(word, list(choices), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def _origin(origin) -> np.ndarray:
