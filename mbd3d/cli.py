@@ -306,11 +306,17 @@ def _parameter(field: str) -> str:
 
 class _FileFactory:
     """Builds the model file's model with sweep parameters set (pickled to Dask workers); the
-    file's digest makes an edited file a new sweep."""
+    digest of the file and of the files it reads makes an edit of any of them a new sweep."""
 
     def __init__(self, path: str, fields: dict[str, str]):
+        from mbd3d.io.model_file import read  # noqa: PLC0415
         self.path, self.fields = path, fields
-        self.digest = hashlib.sha1(pathlib.Path(path).read_bytes()).hexdigest()
+        # the file and every file it builds from (a URDF, meshes): an edit of any of them
+        # makes a new sweep, whose rows are computed again
+        digest = hashlib.sha1(pathlib.Path(path).read_bytes())
+        for source in sorted(read(path).sources):
+            digest.update(source.encode() + b"\0" + pathlib.Path(source).read_bytes())
+        self.digest = digest.hexdigest()
 
     def sweep_identity(self) -> str:
         return f"model file {self.path} {self.digest} {sorted(self.fields.items())}"

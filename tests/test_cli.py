@@ -207,3 +207,32 @@ def test_a_model_file_writes_only_inside_its_folder_and_replaces_nothing_unasked
     assert done.returncode == 0
     assert (folder / "out" / "good_inverse.csv").read_bytes() != written[
         folder / "out" / "good_inverse.csv"]
+
+
+def test_a_sweep_of_a_model_file_is_keyed_on_every_file_it_reads(tmp_path):
+    """Rows of a sweep are reused while its key is the same: the key covers the model file,
+    the URDF it starts from and that URDF's meshes, so an edit of any makes a new sweep."""
+    import trimesh
+
+    from mbd3d.cli import _FileFactory
+    shutil.copy(ROOT / "tests" / "data" / "puma560.urdf", tmp_path / "arm.urdf")
+    urdf = (tmp_path / "arm.urdf").read_text()
+    trimesh.creation.box((0.1, 0.1, 0.1)).export(tmp_path / "hand.stl")
+    (tmp_path / "arm.urdf").write_text(urdf.replace(
+        '<geometry><cylinder radius="0.04" length="0.1"/></geometry>',
+        '<geometry><mesh filename="hand.stl"/></geometry>', 1))
+    path = tmp_path / "arm.yaml"
+    path.write_text("mbd3d: 1\ndim: 3\nurdf: {file: arm.urdf}\n")
+    key = _FileFactory(str(path), {}).sweep_identity()
+    assert key == _FileFactory(str(path), {}).sweep_identity()
+    edits = [(tmp_path / "arm.urdf", ('<mass value="4.8"/>', '<mass value="4.9"/>')),
+             (tmp_path / "hand.stl", None)]
+    for edited, change in edits:
+        if change is None:
+            trimesh.creation.box((0.1, 0.1, 0.2)).export(edited)
+        else:
+            assert change[0] in edited.read_text()
+            edited.write_text(edited.read_text().replace(*change))
+        new = _FileFactory(str(path), {}).sweep_identity()
+        assert new != key, edited
+        key = new

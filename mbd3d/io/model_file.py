@@ -109,6 +109,9 @@ class ModelFile:
     analyses: list[AnalysisSpec]
     data: dict
     path: str
+    #: every other file the model was built from (a URDF and its meshes, mesh files of
+    #: bodies), absolute paths: what a result made from the file also depends on
+    sources: tuple[str, ...] = ()
 
 
 # -- reading ----------------------------------------------------------------------------------
@@ -261,6 +264,7 @@ class _Reader:
         except ModelError as exc:
             raise self.error(("gravity",), str(exc)) from None
         named: dict[str, Any] = {"ground": builder.ground}
+        self.sources: list[str] = []
         self.places: dict[str, tuple[tuple, dict]] = {}  # name -> (field path, entry)
         if "urdf" in data:
             self._urdf(data["urdf"], builder, named)
@@ -278,6 +282,7 @@ class _Reader:
             name = str(arguments.pop("name"))
             if isinstance(arguments.get("shape"), str):
                 arguments["shape"] = str(self.folder / arguments["shape"])
+                self.sources.append(str(pathlib.Path(arguments["shape"]).resolve()))
             with self._at(where):
                 named[name] = builder.add_body(name, **arguments)
             self.places[name] = (where, entry)
@@ -299,7 +304,7 @@ class _Reader:
         analyses = [self._analysis(self._mapping(entry, ("analyses", index)),
                                    ("analyses", index))
                     for index, entry in enumerate(self._list(data, "analyses"))]
-        return ModelFile(model, analyses, data, self.path)
+        return ModelFile(model, analyses, data, self.path, tuple(dict.fromkeys(self.sources)))
 
     def _urdf(self, entry, builder, named: dict) -> None:
         """The robot of a URDF file, the start of the model (bodies and joints by name)."""
@@ -324,7 +329,7 @@ class _Reader:
             urdf_builder(self.folder / str(entry["file"]),
                          fixed_base=entry.get("fixed_base", True),
                          joint_positions=entry.get("joint_positions"), drive=drive,
-                         builder=builder)
+                         builder=builder, files_read=self.sources)
         named.update({body.name: body for body in builder._bodies})
         named.update({element.name: element for element in builder._elements})
 

@@ -49,7 +49,8 @@ def load_urdf(path: str | os.PathLike, **options: Any):
 
 def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float] | None = None,
                  fixed_base: bool = True, drive: Mapping[str, Motion | float] | None = None,
-                 gravity=(0.0, 0.0, -9.81), name: str | None = None, builder=None):
+                 gravity=(0.0, 0.0, -9.81), name: str | None = None, builder=None,
+                 files_read: list[str] | None = None):
     """A :class:`ModelBuilder` holding the robot of a URDF file, to extend before building
     (drivers on its joints, loop-closing joints, forces).
 
@@ -70,6 +71,9 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         The model's name (default the robot's).
     builder : ModelBuilder, optional
         Add the robot to this spatial builder (its link names must be free) instead of a new one.
+    files_read : list, optional
+        Appended with the path of every file read (the URDF and its meshes), e.g. to tell
+        when a result made from the robot is stale.
 
     Raises
     ------
@@ -86,6 +90,8 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
 
     path = pathlib.Path(path)
     what = f"URDF '{path}'"
+    files_read = files_read if files_read is not None else []
+    files_read.append(str(path.resolve()))
     try:
         robot = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
                                    load_collision_meshes=False)
@@ -140,7 +146,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     if fixed_base:
         bodies[root.name] = b.ground
     else:
-        bodies[root.name] = _add_link(b, root, frames[root.name], path, what)
+        bodies[root.name] = _add_link(b, root, frames[root.name], path, what, files_read)
     limited, mimic = [], []
     for joint in order:
         child = links[joint.child]
@@ -155,7 +161,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                                  f"{joint.type} joint '{joint.name}'; give it an <inertial>")
             bodies[child.name] = parent_body  # hangs on its parent
             continue
-        body = _add_link(b, child, frame, path, what)
+        body = _add_link(b, child, frame, path, what, files_read)
         bodies[child.name] = body
         if joint.type in ("revolute", "continuous"):
             element = b.add(Revolute(joint.name, parent_body, body, at=point, axis=axis))
@@ -239,7 +245,7 @@ def _motion(joint, q: float, what: str) -> np.ndarray:
     return T
 
 
-def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str):
+def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str, files_read: list):
     """A body for a link: frame at its centre of mass, axes the link's."""
     inertial = link.inertial
     if inertial is None or not inertial.mass > 0:
@@ -251,7 +257,8 @@ def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str):
     centre_in_link = T_inertial[:3, 3]
     position = frame[:3, :3] @ centre_in_link + frame[:3, 3]
     return b.add_body(link.name, mass=float(inertial.mass), inertia=inertia, position=position,
-                      orientation=frame[:3, :3], shape=_shape(link, centre_in_link, path, what))
+                      orientation=frame[:3, :3],
+                      shape=_shape(link, centre_in_link, path, what, files_read))
 
 
 def _drive_offset(body_i, body_j, axis: np.ndarray) -> float:
@@ -274,7 +281,7 @@ def _rodrigues_matrix(g: np.ndarray) -> np.ndarray:
     return from_rodrigues(np.asarray(g, dtype=float))
 
 
-def _shape(link, centre: np.ndarray, path: pathlib.Path, what: str):
+def _shape(link, centre: np.ndarray, path: pathlib.Path, what: str, files_read: list):
     """The link's visual (else collision) geometry as one mesh in the body frame (link axes,
     origin at the centre of mass), or None."""
     import trimesh  # noqa: PLC0415
@@ -286,6 +293,7 @@ def _shape(link, centre: np.ndarray, path: pathlib.Path, what: str):
             continue
         if geometry.mesh is not None:
             file = _mesh_file(geometry.mesh.filename, path, what)
+            files_read.append(str(pathlib.Path(file).resolve()))
             mesh = trimesh.load(str(file), force="mesh")
             if geometry.mesh.scale is not None:
                 mesh.apply_scale(np.broadcast_to(np.asarray(geometry.mesh.scale, float), 3))
