@@ -288,3 +288,38 @@ def test_spatial_block_slides_against_the_friction_of_its_whole_normal_force():
     np.testing.assert_allclose(res.body("block").position[:, 0], 0.1 + t + 0.5 * accel * t * t,
                                rtol=0, atol=1e-10)
     np.testing.assert_allclose(res.friction("friction"), -mu * m * normal, rtol=1e-10)
+
+
+@pytest.mark.parametrize("kind", ["revolute", "prismatic"])
+def test_friction_between_two_free_bodies_keeps_their_momentum(kind):
+    """A spinning pair of free bodies joined by a pin or a slot with friction, no gravity:
+    the friction is internal, so linear and angular momentum stay what they were while the
+    sliding loses energy (every joint test above has the ground as one side)."""
+    b = mb.ModelBuilder(dim=2, gravity=None)
+    a = b.add_body("a", mass=2.0, inertia=0.1, position=(0.0, 0.0), velocity=(0.3, -0.2),
+                   angular_velocity=3.0)
+    c = b.add_body("c", mass=1.0, inertia=0.05, position=(0.5, 0.0), velocity=(0.1, 1.2),
+                   angular_velocity=-2.0)
+    if kind == "revolute":
+        joint = b.add(Revolute("pin", a, c, at=(0.25, 0.0)))
+        b.add(mb.JointFriction("friction", joint, 0.3, pin_radius=0.02))
+    else:
+        joint = b.add(Prismatic("slot", a, c, axis=(1.0, 0.0)))
+        b.add(mb.JointFriction("friction", joint, 0.3))
+    t = np.linspace(0.0, 1.0, 11)
+    with pytest.warns(mb.InitialStateWarning):  # the given rates break the joint: projected
+        res = mb.forward_dynamics(b.build(), t, **INTEGRATORS[0])
+    masses = {"a": 2.0, "c": 1.0}
+    inertias = {"a": 0.1, "c": 0.05}
+    momentum = sum(m * res.body(n).velocity for n, m in masses.items())
+    def moment(n):  # about the origin: m (x vy - y vx) + I omega
+        (x, y), (vx, vy) = res.body(n).position.T, res.body(n).velocity.T
+        return masses[n] * (x * vy - y * vx) + inertias[n] * res.body(n).angular_velocity
+
+    angular = sum(moment(n) for n in masses)
+    np.testing.assert_allclose(momentum, np.broadcast_to(momentum[0], momentum.shape), rtol=0,
+                               atol=1e-9)
+    np.testing.assert_allclose(angular, angular[0], rtol=0, atol=1e-9)
+    assert np.max(np.abs(res.friction("friction"))) > 1e-2  # it acts
+    energy = res.kinetic_energy
+    assert energy[-1] < energy[0] - 1e-3
