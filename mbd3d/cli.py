@@ -215,18 +215,21 @@ def _run(args) -> int:
     loaded = read(args.model, _changes(args.set))
     spec = _chosen_analysis(args, loaded)
     # the command line's destinations over the file's, checked before the computing; an
-    # existing file is replaced only with --overwrite
+    # existing file is replaced only with --overwrite; both are written as the time points
+    # are computed, so that a run stopped by any means (even killed) leaves what it did
     rrd, csv_path = _destinations(args, loaded, spec)
+    observers = []
     if rrd is not None:
-        from mbd3d.viewer import check_destination  # noqa: PLC0415
+        from mbd3d.viewer import Recorder, check_destination  # noqa: PLC0415
         check_destination(rrd, overwrite=args.overwrite, show=args.show)
+        observers.append(Recorder(rrd, overwrite=args.overwrite))
     if csv_path is not None:
-        from mbd3d.io.files import check_output_path  # noqa: PLC0415
-        check_output_path(csv_path, args.overwrite, "the CSV file")
+        from mbd3d.io.exports import CsvWriter  # noqa: PLC0415
+        observers.append(CsvWriter(csv_path, overwrite=args.overwrite))
     model = loaded.model
     failure = None
     try:
-        res = spec.run(model)
+        res = spec.run(model, observers=observers)
     except mb.MBDError as exc:  # what was computed before the failure is still written
         if getattr(exc, "results", None) is None:
             raise
@@ -244,11 +247,10 @@ def _run(args) -> int:
     if len(res):
         print(format_table(columns, rows=args.rows))
     if csv_path is not None:
-        path = res.to_csv(csv_path, overwrite=args.overwrite)
-        print(f"\nCSV written to {path}")
-    if rrd is not None:
-        from mbd3d.viewer import record  # noqa: PLC0415
-        record(res, rrd, overwrite=args.overwrite, show=args.show and failure is None)
+        print(f"\nCSV written to {os.path.abspath(csv_path)}")
+    if rrd is not None and args.show and failure is None:
+        from mbd3d.viewer import show  # noqa: PLC0415
+        show(rrd)
     if failure is not None:
         print(f"mbd3d run: error: {failure}", file=sys.stderr)
     return 0 if res.status == "complete" else 1

@@ -236,3 +236,57 @@ def test_a_sweep_of_a_model_file_is_keyed_on_every_file_it_reads(tmp_path):
         new = _FileFactory(str(path), {}).sweep_identity()
         assert new != key, edited
         key = new
+
+
+FREE_PENDULUM = """\
+mbd3d: 1
+name: pendulum
+dim: 2
+gravity: [0.0, -9.81]
+bodies:
+  - {name: bar, mass: 1.0, inertia: 0.1, position: [0.5, 0.0]}
+joints:
+  - {type: Revolute, name: O, body_i: ground, body_j: bar, at: [0.0, 0.0]}
+"""
+
+
+def test_run_writes_as_it_computes_so_that_a_killed_run_leaves_what_it_did(tmp_path):
+    """mbd3d run writes the CSV and the recording as the time points are computed: killed
+    (SIGKILL, nothing to clean up) part way, it leaves complete rows in a CSV that reads
+    back and a recording of them; run to the end, its CSV is the one to_csv writes."""
+    import signal
+    import time
+
+    path = tmp_path / "free.yaml"
+    path.write_text(FREE_PENDULUM)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "mbd3d.cli", "run", str(path), "--analysis", "forward", "--t",
+         "0:20000:1", "--method", "DOP853", "--rtol", "1e-13", "--rrd", "run.rrd", "--csv", "."],
+        cwd=tmp_path, env={**os.environ, "MBD3D_PROGRESS": "0"}, stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL)
+    csv_path = tmp_path / "free_forward.csv"
+    try:
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and process.poll() is None:
+            if csv_path.exists() and csv_path.read_text().count("\n") >= 4:
+                break
+            time.sleep(0.2)
+    finally:
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+    table = np.genfromtxt(csv_path, delimiter=",", names=True)
+    assert 3 <= len(table) < 20001
+    np.testing.assert_array_equal(table["t_s"], np.arange(len(table)))
+    assert np.all(np.isfinite(table.view((float, len(table.dtype.names)))))
+    steps, _ = read_component(tmp_path / "run.rrd", "/world/bodies/bar",
+                              "Transform3D:translation")
+    assert len(steps) >= 1
+    # to the end: the rows written as they came are those of the finished results
+    (tmp_path / "out").mkdir()
+    done = mbd3d("run", path, "--analysis", "forward", "--t", "0:0.5:0.01", "--csv", "out",
+                 cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    res = mb.forward_dynamics(mb.load(path), np.linspace(0.0, 0.5, 51))
+    res.to_csv(tmp_path / "api.csv")
+    assert (tmp_path / "out" / "free_forward.csv").read_text() == (
+        tmp_path / "api.csv").read_text()
