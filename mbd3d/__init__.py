@@ -42,7 +42,7 @@ from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_m
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io.results import Results, format_table
 from mbd3d.io.model_file import load, save
-from mbd3d.io.urdf import load_urdf, urdf_builder
+from mbd3d.io.urdf import UrdfWarning, load_urdf, urdf_builder
 
 __version__ = "0.1.0"
 
@@ -58,6 +58,7 @@ __all__ = [
     "forward_accelerations",
     "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "load", "save", "load_urdf", "urdf_builder",
+    "UrdfWarning",
     "format_table", "kinetic_energy", "potential_energy",
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",

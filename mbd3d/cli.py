@@ -101,7 +101,8 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--analysis", choices=_KINDS[:3], help="default: as for run")
     sweep.add_argument("--t", metavar="START:STOP:STEP", help="output times [s]")
     sweep.add_argument("--folder", default=None,
-                       help="where runs and table.csv are kept (default: MODEL_sweep); "
+                       help="where runs and table.csv are kept (default: MODEL_sweep in "
+                            "the working directory); "
                             "a sweep run again there resumes")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
                        help="a Dask scheduler, e.g. tcp://host:8786 (default: worker "
@@ -262,6 +263,10 @@ def _view(args) -> int:
 
     if not os.path.isfile(args.recording):
         raise ModelError(f"no recording '{args.recording}'")
+    with open(args.recording, "rb") as f:
+        if f.read(4) != b"RRF2":  # every .rrd begins so (Rerun's file header)
+            raise ModelError(f"'{args.recording}' is not a Rerun recording (.rrd); mbd3d run "
+                             "--rrd FILE writes one")
     show(args.recording, bind=args.bind)
     return 0
 
@@ -293,7 +298,9 @@ def _sweep(args) -> int:
             "forward": "forward dynamics"}[spec.kind]
     analysis = sweeps.Analysis(kind, spec.t, spec.options)
     metrics = _default_metrics(loaded.model)
-    folder = args.folder or str(pathlib.Path(args.model).with_suffix("")) + "_sweep"
+    # by default in the working directory, not beside the model file (which may be in a
+    # repository, or someone else's folder)
+    folder = args.folder or pathlib.Path(args.model).stem + "_sweep"
     table = sweeps.sweep(_FileFactory(path, dict(zip(map(_parameter, axes), axes))), points,
                          analysis, metrics, folder, client=args.scheduler,
                          backend="serial" if args.serial else "auto")

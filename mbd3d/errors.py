@@ -7,6 +7,7 @@ joint, force or parameter at fault and says what to do about it.
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 
@@ -80,3 +81,12 @@ class IntegrationError(AnalysisError):
 class StiffnessWarning(UserWarning):
     """An explicit integrator is crawling: its steps are limited by a stiff element (a stiff
     spring or damper), not by the accuracy asked for; the message names the element."""
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` for :func:`warnings.warn`, called where the warning is raised, that
+    points the warning at the first caller outside mbd3d: the user's line, not mbd3d's."""
+    frame, level = sys._getframe(1), 1
+    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] == "mbd3d":
+        frame, level = frame.f_back, level + 1
+    return level

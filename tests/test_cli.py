@@ -290,3 +290,15 @@ def test_run_writes_as_it_computes_so_that_a_killed_run_leaves_what_it_did(tmp_p
     res.to_csv(tmp_path / "api.csv")
     assert (tmp_path / "out" / "free_forward.csv").read_text() == (
         tmp_path / "api.csv").read_text()
+
+
+def test_view_names_a_file_that_is_no_recording_and_sweep_writes_where_it_is_run(tmp_path):
+    (tmp_path / "x.csv").write_text("t [s]\n0.0\n")
+    done = mbd3d("view", tmp_path / "x.csv")
+    assert done.returncode == 2 and "is not a Rerun recording" in done.stderr
+    # the default sweep folder is made in the working directory, not beside the model file
+    done = mbd3d("sweep", MODELS / "slider_crank.yaml", "--grid", "joints.motor.motion.rate=3",
+                 "--t", "0:0.1:0.05", "--serial", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "slider_crank_sweep" / "table.csv").is_file()
+    assert not (MODELS / "slider_crank_sweep").exists()

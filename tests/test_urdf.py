@@ -212,3 +212,12 @@ def test_a_broken_urdf_is_refused_not_loaded_as_part_of_a_robot(tmp_path):
     with pytest.raises(mb.ModelError, match=r"twice\.urdf.*link 'link5' is the child of joints "
                                             r"'joint5' and 'joint6'"):
         load_urdf(twice)
+
+
+def test_urdf_warnings_are_mbd3d_s_and_point_at_the_callers_line():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        load_urdf(PUMA)
+    urdf_warnings = [w for w in caught if issubclass(w.category, mb.UrdfWarning)]
+    assert urdf_warnings and mb.UrdfWarning is UrdfWarning
+    assert {w.filename for w in urdf_warnings} == {__file__}

@@ -17,14 +17,12 @@ with the other bodies at rest does not start at 0.36 rad/s without a word.
 
 from __future__ import annotations
 
-import os
-import sys
 import warnings
 from typing import Mapping
 
 import numpy as np
 
-from mbd3d.errors import ModelError
+from mbd3d.errors import ModelError, user_stacklevel
 from mbd3d.model import constraints
 from mbd3d.model.equations import mass_matrix
 from mbd3d.numerics.linalg import SingularMatrix, augmented_scaling, solve_augmented
@@ -275,16 +273,7 @@ def report_changes(model, stats: dict, q_given, q: np.ndarray, qd_given: np.ndar
                "'body.coordinate'); strict=True makes this an error.")
     if strict:
         raise ModelError(message)
-    warnings.warn(message, InitialStateWarning, stacklevel=_caller_level())
-
-
-def _caller_level() -> int:
-    """The ``stacklevel`` of the first frame outside mbd3d: the user's call."""
-    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    frame, level = sys._getframe(1), 1
-    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
-        frame, level = frame.f_back, level + 1
-    return level
+    warnings.warn(message, InitialStateWarning, stacklevel=user_stacklevel())
 
 
 def _physical_rates(model, q_given, qd_given, q, qd, chart):

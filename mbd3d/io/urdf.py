@@ -32,7 +32,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mbd3d.errors import ModelError
+from mbd3d.errors import ModelError, user_stacklevel
 from mbd3d.model.motion import Constant, Motion, as_motion
 
 __all__ = ["urdf_builder", "load_urdf", "UrdfWarning"]
@@ -189,10 +189,10 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                 raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
     if limited:
         warnings.warn(f"{what}: joint limits are not enforced: {', '.join(limited)}",
-                      UrdfWarning, stacklevel=2)
+                      UrdfWarning, stacklevel=user_stacklevel())
     if mimic:
         warnings.warn(f"{what}: mimic joints are not coupled (each moves freely): "
-                      f"{', '.join(mimic)}", UrdfWarning, stacklevel=2)
+                      f"{', '.join(mimic)}", UrdfWarning, stacklevel=user_stacklevel())
     return b
 
 
