@@ -302,3 +302,10 @@ def test_view_names_a_file_that_is_no_recording_and_sweep_writes_where_it_is_run
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "slider_crank_sweep" / "table.csv").is_file()
     assert not (MODELS / "slider_crank_sweep").exists()
+
+
+@pytest.mark.parametrize("times, message", [("0:inf:0.1", "need finite numbers"),
+                                            ("0:1e9:1e-9", "output times, more than")])
+def test_impossible_time_grids_on_the_command_line_are_refused(times, message):
+    done = mbd3d("run", MODELS / "slider_crank.yaml", "--t", times)
+    assert done.returncode == 2 and message in done.stderr and "Traceback" not in done.stderr

@@ -288,3 +288,26 @@ def test_saving_writes_only_inside_the_folder_and_replaces_nothing_unasked(tmp_p
         p: v for p, v in before.items() if p.name != "m.yaml"}
     mb.save(model, folder / "m.yaml", overwrite=True)
     assert mb.load(folder / "m.yaml").body("plain").mass == model.body("plain").mass
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"\xff\xfe\x00\x01binary", r"m\.yaml:1: not UTF-8 text"),
+    (GOOD.replace("name: pendulum", "name: caf\xe9").encode("latin-1"),
+     r"m\.yaml:2: not UTF-8 text"),
+    (GOOD.replace("dim: 2", "dim: 2.0").encode(), r"m\.yaml:3: dim: must be 2"),
+    (GOOD.replace("points: 11", "points: -5").encode(),
+     r"m\.yaml:14: analyses\[0\]\.t\.points: a whole number of output times"),
+    (GOOD.replace("points: 11", "points: 2.5").encode(), r"t\.points: a whole number"),
+    (GOOD.replace("stop: 1.0, points: 11", "stop: .inf, step: 0.1").encode(),
+     r"analyses\[0\]\.t: times from 0.0 to inf by 0.1: need finite"),
+    (GOOD.replace("stop: 1.0, points: 11", "stop: 1.0e9, step: 1.0e-9").encode(),
+     r"analyses\[0\]\.t: that makes 1e\+18 output times"),
+    (GOOD.replace("stop: 1.0, points: 11", "stop: 1.0, step: fast").encode(),
+     r"analyses\[0\]\.t: start, stop and step are numbers"),
+    (("[" * 5000 + "]" * 5000).encode(), r"m\.yaml.*(nested too deeply|not valid YAML)"),
+])
+def test_careless_files_are_refused_by_name_not_with_a_traceback(tmp_path, content, message):
+    path = tmp_path / "m.yaml"
+    path.write_bytes(content)
+    with pytest.raises(ModelFileError, match=message):
+        read(path)

@@ -140,14 +140,21 @@ def read(path: str | os.PathLike, changes: dict[str, Any] | None = None) -> Mode
         text = pathlib.Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ModelFileError(f"model file '{path}' cannot be read: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        line = pathlib.Path(path).read_bytes()[:exc.start].count(b"\n") + 1
+        raise ModelFileError(f"{path}:{line}: not UTF-8 text (byte {exc.object[exc.start]:#x}); "
+                             "a model file is YAML in UTF-8: save it so, or check that "
+                             "this is the model file") from None
     try:
         node = yaml.compose(text, Loader=yaml.SafeLoader)
         data = yaml.safe_load(text)
+        lines = _line_map(node)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"{path}:{mark.line + 1}" if mark is not None else path
         raise ModelFileError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
-    lines = _line_map(node)
+    except RecursionError:
+        raise ModelFileError(f"{path}: nested too deeply to be a model file") from None
     reader = _Reader(path, lines)
     if not isinstance(data, dict):
         raise reader.error((), "a model file is a mapping with bodies:, joints:, ...")
@@ -256,7 +263,7 @@ class _Reader:
             raise self.error(("mbd3d",), f"format version {version!r}; this mbd3d reads "
                                          f"version {FORMAT_VERSION}")
         dim = data.get("dim", 2)
-        if dim not in (2, 3):
+        if type(dim) is not int or dim not in (2, 3):  # not 2.0 or True
             raise self.error(("dim",), f"must be 2 (planar) or 3 (spatial), got {dim!r}")
         try:
             builder = ModelBuilder(dim=dim, gravity=data.get("gravity"),
@@ -477,10 +484,23 @@ class _Reader:
             if unknown or "stop" not in value or ("step" in value) == ("points" in value):
                 raise self.error(where, "times are {start, stop, step} or {start, stop, "
                                         f"points}}, got {value!r}")
-            start, stop = float(value.get("start", 0.0)), float(value["stop"])
+            try:
+                start, stop = float(value.get("start", 0.0)), float(value["stop"])
+                step = float(value["step"]) if "step" in value else None
+            except (TypeError, ValueError):
+                raise self.error(where, f"start, stop and step are numbers [s], got {value!r}"
+                                 ) from None
             if "points" in value:
-                return np.linspace(start, stop, int(value["points"]))
-            return times_from_step(start, stop, float(value["step"]), self.error, where)
+                points = value["points"]
+                if type(points) is not int or points < 2:
+                    raise self.error(where + ("points",), f"a whole number of output times, 2 "
+                                                          f"or more, got {points!r}")
+                if not (np.isfinite(start) and np.isfinite(stop) and stop > start):
+                    raise self.error(where, f"times from {start} to {stop}: need finite "
+                                            "start < stop")
+                _check_count(points, self.error, where)
+                return np.linspace(start, stop, points)
+            return times_from_step(start, stop, step, self.error, where)
         try:
             t = np.asarray(value, dtype=float).reshape(-1)
         except (TypeError, ValueError):
@@ -490,11 +510,26 @@ class _Reader:
         return t
 
 
+#: the most output times an analysis is given from a start, stop and step or points: ten
+#: million rows of a slider-crank's results take about 2 GB
+MAX_POINTS = 10_000_000
+
+
+def _check_count(count: float, error=None, where=()) -> None:
+    if count > MAX_POINTS:
+        message = (f"that makes {count:.3g} output times, more than {MAX_POINTS:.0e}: give a "
+                   "larger step or fewer points (the results of each are kept in memory)")
+        raise error(where, message) if error else ModelError(message)
+
+
 def times_from_step(start: float, stop: float, step: float, error=None, where=()) -> np.ndarray:
     """``start, start + step, ..., stop`` (the last point is ``stop``)."""
-    if not step > 0 or not stop > start:
-        message = f"times from {start} to {stop} by {step}: need stop > start and step > 0"
+    if not (np.isfinite(start) and np.isfinite(stop) and np.isfinite(step) and step > 0
+            and stop > start):
+        message = (f"times from {start} to {stop} by {step}: need finite numbers with "
+                   "stop > start and step > 0")
         raise error(where, message) if error else ModelError(message)
+    _check_count((stop - start) / step + 1, error, where)
     count = int(round((stop - start) / step))
     if not np.isclose(start + count * step, stop, rtol=1e-9, atol=0.0):
         count = int(np.floor((stop - start) / step))
