@@ -221,3 +221,55 @@ def test_urdf_warnings_are_mbd3d_s_and_point_at_the_callers_line():
     urdf_warnings = [w for w in caught if issubclass(w.category, mb.UrdfWarning)]
     assert urdf_warnings and mb.UrdfWarning is UrdfWarning
     assert {w.filename for w in urdf_warnings} == {__file__}
+
+
+def test_driven_revolute_and_prismatic_joints_with_unnormalised_axes_move_as_drawn(tmp_path):
+    """A yaw hinge about a non-unit axis, its origin turned, carrying a slide along a
+    non-unit axis, both driven by motions that do not start at zero: the slider's centre
+    follows the URDF's chain of transforms, composed here with SciPy."""
+    from scipy.spatial.transform import Rotation
+
+    urdf = tmp_path / "slide.urdf"
+    urdf.write_text("""<robot name="slide">
+  <link name="base"/>
+  <joint name="yaw" type="revolute">
+    <parent link="base"/><child link="arm"/>
+    <origin xyz="0.1 -0.2 0.3" rpy="0.4 -0.3 0.2"/>
+    <axis xyz="0 0.6 1.8"/>
+  </joint>
+  <link name="arm">
+    <inertial><origin xyz="0.2 0 0"/><mass value="2.0"/>
+      <inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="slide" type="prismatic">
+    <parent link="arm"/><child link="slider"/>
+    <origin xyz="0.5 0.1 0" rpy="0 0.5 0"/>
+    <axis xyz="3 0 4"/>
+  </joint>
+  <link name="slider">
+    <inertial><origin xyz="0 0.05 0.02"/><mass value="1.0"/>
+      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+</robot>""")
+    yaw, slide = mb.Harmonic(0.6, 2.0, phase=0.5, offset=0.3), mb.Harmonic(0.1, 3.0, 1.0, 0.2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UrdfWarning)
+        model = load_urdf(urdf, gravity=(0.0, 0.0, 0.0), drive={"yaw": yaw, "slide": slide})
+    t = np.linspace(0.0, 1.0, 6)
+    res = mb.kinematic_analysis(model, t)
+
+    def turned(rpy):
+        return Rotation.from_euler("xyz", rpy)
+
+    expected = []
+    for tk in t:
+        theta, s = yaw.evaluate(tk)[0], slide.evaluate(tk)[0]
+        hinge = Rotation.from_rotvec(theta * np.array([0.0, 0.6, 1.8]) / np.hypot(0.6, 1.8))
+        # the slide's axis is in its joint frame, turned from the arm's by the joint's origin
+        in_arm = np.array([0.5, 0.1, 0.0]) + turned([0.0, 0.5, 0.0]).apply(
+            s * np.array([0.6, 0.0, 0.8]) + np.array([0.0, 0.05, 0.02]))
+        expected.append(np.array([0.1, -0.2, 0.3])
+                        + (turned([0.4, -0.3, 0.2]) * hinge).apply(in_arm))
+    np.testing.assert_allclose(res.body("slider").position, expected, rtol=0, atol=1e-12)
+    with pytest.raises(mb.ModelError, match="no joint 'pitch'"):
+        urdf_builder(urdf, joint_positions={"pitch": 0.1})
