@@ -208,3 +208,33 @@ def test_forces_in_the_compiled_core_equal_forces_written_here(dim):
     arm = runs[0].body("arm").position
     assert np.ptp(np.arctan2(arm[:, 1], arm[:, 0])) > 0.3  # the spring and torsion do work
     np.testing.assert_allclose(runs[0].lam, runs[1].lam, rtol=1e-8, atol=1e-8)
+
+
+@pytest.mark.parametrize("moving", [False, True])
+def test_a_spring_between_two_free_bodies_rests_as_drawn_and_keeps_its_energy(moving):
+    """An undamped spring between off-centre points of two free spatial bodies, no gravity:
+    drawn at rest it stays so (its free length is the drawing's); set moving, kinetic plus
+    the spring's potential energy stays what it was."""
+    from scipy.spatial.transform import Rotation
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    turns = Rotation.random(2, random_state=3).as_matrix()
+    kw = [dict(velocity=(0.3, -0.2, 0.1), angular_velocity=(1.0, 0.5, -2.0)),
+          dict(velocity=(-0.1, 0.4, 0.2), angular_velocity=(-0.7, 1.5, 0.4))] if moving else [
+          {}, {}]
+    a = b.add_body("a", mass=2.0, inertia=(0.02, 0.03, 0.04), position=(0.0, 0.0, 0.0),
+                   orientation=turns[0], **kw[0])
+    c = b.add_body("c", mass=1.0, inertia=(0.01, 0.02, 0.025), position=(0.6, 0.2, -0.1),
+                   orientation=turns[1], **kw[1])
+    b.add(mb.SpringDamper("spring", a, c, at_i=(0.1, 0.05, 0.0), at_j=(0.5, 0.1, -0.2),
+                          stiffness=80.0))
+    model = b.build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 2.0, 21), method="DOP853", rtol=1e-12,
+                              atol=1e-13)
+    energy = res.kinetic_energy + res.potential_energy
+    if not moving:
+        np.testing.assert_array_equal(res.body("c").position,
+                                      np.broadcast_to(res.body("c").position[0], (21, 3)))
+        assert np.all(energy == 0.0)
+        return
+    assert np.ptp(res.potential_energy) > 0.1 * energy[0]  # the spring is worked hard
+    np.testing.assert_allclose(energy, energy[0], rtol=1e-10)
