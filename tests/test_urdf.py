@@ -226,7 +226,9 @@ def test_urdf_warnings_are_mbd3d_s_and_point_at_the_callers_line():
 def test_driven_revolute_and_prismatic_joints_with_unnormalised_axes_move_as_drawn(tmp_path):
     """A yaw hinge about a non-unit axis, its origin turned, carrying a slide along a
     non-unit axis, both driven by motions that do not start at zero: the slider's centre
-    follows the URDF's chain of transforms, composed here with SciPy."""
+    follows the URDF's chain of transforms, composed here with SciPy. Both the ground's and
+    the arm's x axes lean on the hinge's, so the driver must read the drawn angle in the
+    plane normal to it."""
     from scipy.spatial.transform import Rotation
 
     urdf = tmp_path / "slide.urdf"
@@ -235,7 +237,7 @@ def test_driven_revolute_and_prismatic_joints_with_unnormalised_axes_move_as_dra
   <joint name="yaw" type="revolute">
     <parent link="base"/><child link="arm"/>
     <origin xyz="0.1 -0.2 0.3" rpy="0.4 -0.3 0.2"/>
-    <axis xyz="0 0.6 1.8"/>
+    <axis xyz="0.5 0.6 1.8"/>
   </joint>
   <link name="arm">
     <inertial><origin xyz="0.2 0 0"/><mass value="2.0"/>
@@ -264,7 +266,8 @@ def test_driven_revolute_and_prismatic_joints_with_unnormalised_axes_move_as_dra
     expected = []
     for tk in t:
         theta, s = yaw.evaluate(tk)[0], slide.evaluate(tk)[0]
-        hinge = Rotation.from_rotvec(theta * np.array([0.0, 0.6, 1.8]) / np.hypot(0.6, 1.8))
+        axis = np.array([0.5, 0.6, 1.8])
+        hinge = Rotation.from_rotvec(theta * axis / np.linalg.norm(axis))
         # the slide's axis is in its joint frame, turned from the arm's by the joint's origin
         in_arm = np.array([0.5, 0.1, 0.0]) + turned([0.0, 0.5, 0.0]).apply(
             s * np.array([0.6, 0.0, 0.8]) + np.array([0.0, 0.05, 0.02]))
@@ -273,3 +276,31 @@ def test_driven_revolute_and_prismatic_joints_with_unnormalised_axes_move_as_dra
     np.testing.assert_allclose(res.body("slider").position, expected, rtol=0, atol=1e-12)
     with pytest.raises(mb.ModelError, match="no joint 'pitch'"):
         urdf_builder(urdf, joint_positions={"pitch": 0.1})
+
+
+@pytest.mark.parametrize("reference", ["meshes/part.stl", "package://robot/meshes/part.stl",
+                                       "file://{root}/robot/meshes/part.stl"])
+def test_visual_meshes_are_found_where_urdf_says(tmp_path, reference):
+    """A link's mesh relative to the URDF, in a ROS package found from the URDF's folder
+    upwards, or as a file URL: drawn as that mesh, about the link's centre of mass."""
+    import trimesh
+    (tmp_path / "robot" / "meshes").mkdir(parents=True)
+    (tmp_path / "robot" / "urdf").mkdir()
+    box = trimesh.creation.box((0.1, 0.2, 0.3))
+    box.export(tmp_path / "robot" / "meshes" / "part.stl")
+    folder = tmp_path / "robot" / ("" if reference.startswith("meshes") else "urdf")
+    urdf = folder / "r.urdf"
+    urdf.write_text(f"""<robot name="r">
+  <link name="base"/>
+  <joint name="hinge" type="continuous">
+    <parent link="base"/><child link="part"/><axis xyz="0 0 1"/>
+  </joint>
+  <link name="part">
+    <inertial><origin xyz="0.01 0.02 0.03"/><mass value="1.0"/>
+      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry><mesh filename="{reference.format(root=tmp_path)}"/></geometry></visual>
+  </link>
+</robot>""")
+    shape = load_urdf(urdf).body("part").shape
+    np.testing.assert_allclose(shape.bounds, box.bounds - [0.01, 0.02, 0.03], rtol=0,
+                               atol=1e-6)
