@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -237,4 +238,28 @@ def test_a_spring_between_two_free_bodies_rests_as_drawn_and_keeps_its_energy(mo
         assert np.all(energy == 0.0)
         return
     assert np.ptp(res.potential_energy) > 0.1 * energy[0]  # the spring is worked hard
+    np.testing.assert_allclose(energy, energy[0], rtol=1e-10)
+
+
+@pytest.mark.parametrize("moving", [False, True])
+def test_a_torsion_spring_between_two_moving_bodies_rests_as_drawn_and_keeps_energy(moving):
+    """Two free bars pinned together at angles 0.3 and 1.1 rad with a torsion spring across
+    the pin, no gravity: drawn at rest they stay so (the spring's free angle is the drawn
+    relative angle, not either bar's); spun, the energy stays, the spring's included."""
+    b = mb.ModelBuilder(dim=2, gravity=None)
+    spin = {"angular_velocity": 2.0} if moving else {}
+    a = b.add_body("a", mass=1.0, inertia=0.05, position=(0.0, 0.0), angle=0.3, **spin)
+    c = b.add_body("c", mass=0.5, inertia=0.02, position=(0.6, 0.3), angle=1.1)
+    b.add(Revolute("pin", a, c, at=(0.3, 0.15)))
+    b.add(mb.RotationalSpringDamper("torsion", a, c, stiffness=4.0))
+    t = np.linspace(0.0, 2.0, 21)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.InitialStateWarning)  # the spin is projected
+        res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-13)
+    energy = res.kinetic_energy + res.potential_energy
+    if not moving:
+        np.testing.assert_array_equal(res.body("c").angle, 1.1)
+        assert np.all(energy == 0.0)
+        return
+    assert np.ptp(res.potential_energy) > 0.1 * energy[0]
     np.testing.assert_allclose(energy, energy[0], rtol=1e-10)
