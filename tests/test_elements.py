@@ -241,25 +241,104 @@ def test_a_spring_between_two_free_bodies_rests_as_drawn_and_keeps_its_energy(mo
     np.testing.assert_allclose(energy, energy[0], rtol=1e-10)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("moving", [False, True])
-def test_a_torsion_spring_between_two_moving_bodies_rests_as_drawn_and_keeps_energy(moving):
+def test_a_torsion_spring_between_two_moving_bodies_rests_as_drawn_and_keeps_energy(moving,
+                                                                                   dim):
     """Two free bars pinned together at angles 0.3 and 1.1 rad with a torsion spring across
     the pin, no gravity: drawn at rest they stay so (the spring's free angle is the drawn
     relative angle, not either bar's); spun, the energy stays, the spring's included."""
-    b = mb.ModelBuilder(dim=2, gravity=None)
-    spin = {"angular_velocity": 2.0} if moving else {}
-    a = b.add_body("a", mass=1.0, inertia=0.05, position=(0.0, 0.0), angle=0.3, **spin)
-    c = b.add_body("c", mass=0.5, inertia=0.02, position=(0.6, 0.3), angle=1.1)
-    b.add(Revolute("pin", a, c, at=(0.3, 0.15)))
-    b.add(mb.RotationalSpringDamper("torsion", a, c, stiffness=4.0))
+    b = mb.ModelBuilder(dim=dim, gravity=None)
+    z = np.array([0.0, 0.0, 1.0])
+
+    def placed(angle, position):
+        if dim == 2:
+            return {"angle": angle, "position": position}
+        return {"orientation": mb.rotations.axis_angle(z, angle),
+                "position": tuple(position) + (0.0,)}
+
+    spin = ({"angular_velocity": 2.0 if dim == 2 else 2.0 * z} if moving else {})
+    inertia = (lambda j: j if dim == 2 else (j, j, j))
+    a = b.add_body("a", mass=1.0, inertia=inertia(0.05), **placed(0.3, (0.0, 0.0)), **spin)
+    c = b.add_body("c", mass=0.5, inertia=inertia(0.02), **placed(1.1, (0.6, 0.3)))
+    pin = b.add(Revolute("pin", a, c, at=(0.3, 0.15) + (() if dim == 2 else (0.0,)),
+                         **({} if dim == 2 else {"axis": tuple(z)})))
+    b.add(mb.RotationalSpringDamper("torsion", stiffness=4.0,
+                                    **({"body_i": a, "body_j": c} if dim == 2 else
+                                       {"joint": pin})))
     t = np.linspace(0.0, 2.0, 21)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", mb.InitialStateWarning)  # the spin is projected
         res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-13)
     energy = res.kinetic_energy + res.potential_energy
     if not moving:
-        np.testing.assert_array_equal(res.body("c").angle, 1.1)
+        np.testing.assert_allclose(res.body("c").position, np.broadcast_to(
+            res.body("c").position[0], res.body("c").position.shape), rtol=0, atol=1e-15)
         assert np.all(energy == 0.0)
         return
     assert np.ptp(res.potential_energy) > 0.1 * energy[0]
     np.testing.assert_allclose(energy, energy[0], rtol=1e-10)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("moving", [False, True])
+def test_the_spring_tangent_generalized_alpha_iterates_with_is_the_forces_derivative(
+        dim, moving):
+    """``K + w D`` of springs (what generalized-alpha's iteration matrix adds) against central
+    differences of the generalized forces, ``K = -dQ/dq``, ``D = -dQ/dqd``. The tangent
+    leaves out the turning of the point Jacobians, so the springs here join centres of mass
+    (constant Jacobians), and the damper rate's change with the line's direction,
+    ``c e d'^T (I - e e^T) / l`` on the centres' coordinates, written out here and taken off
+    the differences; the rest is the exact derivative."""
+    from mbd3d.analyses.implicit import _force_tangent
+    from mbd3d.model import constraints
+
+    rng = np.random.default_rng(dim + 2 * moving)
+    b = mb.ModelBuilder(dim=dim, gravity=None)
+    bodies = [b.add_body(f"b{k}", mass=1.0, inertia=0.1 if dim == 2 else (0.1, 0.2, 0.3),
+                         position=rng.normal(size=dim)) for k in range(3)]
+    damping = 0.7
+    b.add(mb.SpringDamper("s01", bodies[0], bodies[1], stiffness=30.0, damping=damping,
+                          free_length=0.4))
+    b.add(mb.SpringDamper("s12", bodies[1], bodies[2], stiffness=20.0, damping=damping,
+                          free_length=2.5, actuator=1.5))
+    b.add(mb.SpringDamper("s2g", b.ground, bodies[2], stiffness=10.0, damping=damping,
+                          at_i=tuple(rng.normal(size=dim)), free_length=0.3))
+    model = b.build()
+    q = model.q0 + 0.2 * rng.normal(size=model.n_coordinates)
+    qd = rng.normal(size=model.n_coordinates) if moving else np.zeros(model.n_coordinates)
+    charts = model.charts0
+    w = 37.0  # generalized-alpha's gamma' (1/s), any value
+
+    def Q(x, v):  # the springs' generalized forces alone (no gravity, no gyroscopic terms)
+        fr = constraints.frames(model, x, v, charts)
+        out = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+        for group in model.force_groups:
+            group.apply(model, 0.3, fr, out)
+        return out[:model.n_bodies].ravel()
+
+    h = 1e-6
+    K = np.column_stack([-(Q(q + h * e, qd) - Q(q - h * e, qd)) / (2 * h)
+                         for e in np.eye(len(q))])
+    D = np.column_stack([-(Q(q, qd + h * e) - Q(q, qd - h * e)) / (2 * h)
+                         for e in np.eye(len(q))])
+    nc, n_bodies = model.n_coords_per_body, model.n_bodies
+    fr = constraints.frames(model, q, qd, charts)
+    left_out = np.zeros_like(K)
+    for element in model.forces:
+        ends = [model.padded_index(body) for body in (element.body_i, element.body_j)]
+        R = [fr.Q[k, :dim] for k in ends]
+        R[0] = R[0] + (np.array(element.at_i) if element.at_i is not None else 0.0)
+        d, d_rate = R[1] - R[0], fr.Qd[ends[1], :dim] - fr.Qd[ends[0], :dim]
+        length = np.linalg.norm(d)
+        e = d / length
+        block = damping * np.outer(e, d_rate @ (np.eye(dim) - np.outer(e, e))) / length
+        for a, sign_a in zip(ends, (-1.0, 1.0)):
+            for c, sign_c in zip(ends, (-1.0, 1.0)):
+                if a < n_bodies and c < n_bodies:
+                    left_out[a * nc:a * nc + dim, c * nc:c * nc + dim] += sign_a * sign_c * block
+    tangent = _force_tangent(model, 0.3, q, qd, charts, w)
+    np.testing.assert_allclose(tangent, K - left_out + w * D, rtol=0,
+                               atol=1e-6 * np.abs(K).max())
+    if moving:  # the left-out term is what the test says it is, not zero
+        assert np.abs(left_out).max() > 1e-3 * np.abs(K).max()
