@@ -209,6 +209,7 @@ def test_a_model_file_writes_only_inside_its_folder_and_replaces_nothing_unasked
         folder / "out" / "good_inverse.csv"]
 
 
+@pytest.mark.filterwarnings("ignore::mbd3d.io.urdf.UrdfWarning")  # the PUMA's joint limits
 def test_a_sweep_of_a_model_file_is_keyed_on_every_file_it_reads(tmp_path):
     """Rows of a sweep are reused while its key is the same: the key covers the model file,
     the URDF it starts from and that URDF's meshes, so an edit of any makes a new sweep."""
