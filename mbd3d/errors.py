@@ -7,6 +7,7 @@ joint, force or parameter at fault and says what to do about it.
 
 from __future__ import annotations
 
+import difflib
 import sys
 from typing import Any
 
@@ -90,3 +91,10 @@ def user_stacklevel() -> int:
     while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] == "mbd3d":
         frame, level = frame.f_back, level + 1
     return level
+
+
+def did_you_mean(word: Any, choices) -> str:
+    """`` (did you mean 'x'?)`` with the choice nearest ``word``, or nothing when none is
+    near: the end of a message about a misspelt name."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""

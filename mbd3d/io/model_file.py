@@ -50,7 +50,6 @@ joints[3].axis: ...``.
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 import inspect
 import os
@@ -61,7 +60,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from mbd3d.errors import ModelError
+from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io import files
 
 __all__ = ["AnalysisSpec", "ModelFile", "load", "read", "save", "FORMAT_VERSION"]
@@ -202,16 +201,11 @@ def _apply_change(reader, data: dict, key: str, value: Any) -> None:
                 target[part] = value
             elif part not in target:
                 raise reader.error((), f"change '{key}': no field '{part}'"
-                                       f"{_suggest(part, target)}")
+                                       f"{did_you_mean(part, target)}")
             else:
                 target = target[part]
         else:
             raise reader.error((), f"change '{key}': '{part}' is inside a value, not a field")
-
-
-def _suggest(word: str, choices) -> str:
-    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
@@ -256,7 +250,7 @@ class _Reader:
 
         for key in data:
             if key not in _TOP_LEVEL:
-                raise self.error((key,), f"unknown field{_suggest(key, _TOP_LEVEL)} (fields: "
+                raise self.error((key,), f"unknown field{did_you_mean(key, _TOP_LEVEL)} (fields: "
                                          f"{', '.join(_TOP_LEVEL)})")
         version = data.get("mbd3d", FORMAT_VERSION)
         if version != FORMAT_VERSION:
@@ -283,7 +277,7 @@ class _Reader:
             for key in entry:
                 if key not in _BODY_FIELDS:
                     raise self.error(where + (key,), f"unknown body field"
-                                                     f"{_suggest(key, _BODY_FIELDS)} (fields: "
+                                                     f"{did_you_mean(key, _BODY_FIELDS)} (fields: "
                                                      f"{', '.join(_BODY_FIELDS)})")
             arguments = dict(entry)
             name = str(arguments.pop("name"))
@@ -322,7 +316,7 @@ class _Reader:
         for key in entry:
             if key not in _URDF_FIELDS:
                 raise self.error(where + (key,), f"unknown urdf field"
-                                                 f"{_suggest(key, _URDF_FIELDS)} (fields: "
+                                                 f"{did_you_mean(key, _URDF_FIELDS)} (fields: "
                                                  f"{', '.join(_URDF_FIELDS)})")
         if "file" not in entry:
             raise self.error(where, "urdf needs its file (relative to this file)")
@@ -383,7 +377,7 @@ class _Reader:
         if kind not in types:
             what = "joint or driver" if where[0] == "joints" else "force element"
             raise self.error(where + ("type",), f"unknown {what} type {kind!r}"
-                                                f"{_suggest(kind, types)} (types: "
+                                                f"{did_you_mean(kind, types)} (types: "
                                                 f"{', '.join(sorted(types))})")
         cls = types[kind]
         arguments = {key: value for key, value in entry.items() if key != "type"}
@@ -393,7 +387,7 @@ class _Reader:
                 if value not in named:
                     raise self.error(where + (key,), f"no body or joint '{value}' (so far: "
                                                      f"{', '.join(named)})"
-                                                     f"{_suggest(value, named)}")
+                                                     f"{did_you_mean(value, named)}")
                 arguments[key] = named[value]
             elif isinstance(value, dict) and "type" in value:
                 arguments[key] = self._motion(value, where + (key,), motion_types)
@@ -408,7 +402,7 @@ class _Reader:
         for key in arguments:
             if key not in accepted:
                 raise self.error(where + (key,), f"{kind} takes no '{key}'"
-                                                 f"{_suggest(key, accepted)} (it takes: "
+                                                 f"{did_you_mean(key, accepted)} (it takes: "
                                                  f"{', '.join(accepted)})")
         for name in accepted:
             if parameters[name].default is inspect.Parameter.empty and name not in arguments:
@@ -428,7 +422,7 @@ class _Reader:
             return total
         if kind not in motion_types:
             raise self.error(where + ("type",), f"unknown motion type {kind!r}"
-                                                f"{_suggest(kind, motion_types)} (types: "
+                                                f"{did_you_mean(kind, motion_types)} (types: "
                                                 f"{', '.join(motion_types)}, Sum)")
         arguments = {key: v for key, v in value.items() if key != "type"}
         self._check_arguments(motion_types[kind], arguments, where, kind)
@@ -439,7 +433,7 @@ class _Reader:
         kind = entry.get("kind")
         if kind not in ANALYSES:
             raise self.error(where + ("kind",), f"unknown analysis {kind!r}"
-                                                f"{_suggest(kind, ANALYSES)} (kinds: "
+                                                f"{did_you_mean(kind, ANALYSES)} (kinds: "
                                                 f"{', '.join(ANALYSES)})")
         if "t" not in entry:
             raise self.error(where, "an analysis needs its times t: a list, or {start, stop, "
@@ -458,7 +452,7 @@ class _Reader:
         for key in options:
             if key not in allowed:
                 raise self.error(where + (key,), f"{function.__name__} takes no '{key}'"
-                                                 f"{_suggest(key, allowed)} (it takes: "
+                                                 f"{did_you_mean(key, allowed)} (it takes: "
                                                  f"{', '.join(allowed)})")
         return AnalysisSpec(kind, t, options, outputs)
 

@@ -32,7 +32,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mbd3d.errors import ModelError, user_stacklevel
+from mbd3d.errors import ModelError, did_you_mean, user_stacklevel
 from mbd3d.model.motion import Constant, Motion, as_motion
 
 __all__ = ["urdf_builder", "load_urdf", "UrdfWarning"]
@@ -206,19 +206,13 @@ def _check_tree(joints: list, links: dict, what: str) -> None:
             if link not in links:
                 raise ModelError(
                     f"{what}: joint '{joint.name}' names {role} link '{link}', which the file "
-                    f"does not have{_did_you_mean(link, links)}; the links below it would be "
+                    f"does not have{did_you_mean(link, links)}; the links below it would be "
                     "lost (links: " + ", ".join(sorted(links)) + ")")
         if joint.child in parents:
             raise ModelError(f"{what}: link '{joint.child}' is the child of joints "
                              f"'{parents[joint.child]}' and '{joint.name}'; a URDF robot is a "
                              "tree (close loops in a model file instead)")
         parents[joint.child] = joint.name
-
-
-def _did_you_mean(word: str, choices) -> str:
-    import difflib  # noqa: PLC0415
-    close = difflib.get_close_matches(word, list(choices), n=1)
-    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def _origin(origin) -> np.ndarray:
