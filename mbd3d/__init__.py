@@ -23,6 +23,7 @@ _map_siblings(__path__[0])
 from mbd3d.numerics import rotations  # noqa: E402 (the sub-packages are found from here on)
 from mbd3d.model.body import Body
 from mbd3d.analyses.dynamics import METHODS, forward_accelerations, forward_dynamics, project_state
+from mbd3d.analyses.driver import Event
 from mbd3d.model.equations import kinetic_energy, potential_energy
 from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
                           NotFullyDrivenError, OverDrivenError, SingularJacobianError,
@@ -41,7 +42,8 @@ from mbd3d.analyses.linearization import LinearModel, linearize
 from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io.results import Results, format_table
-from mbd3d.io.model_file import load, save
+from mbd3d.io.model_file import load
+from mbd3d.io.model_writer import save
 from mbd3d.io.urdf import UrdfWarning, load_urdf, urdf_builder
 
 __version__ = "0.1.0"
@@ -54,7 +56,7 @@ __all__ = [
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "static_equilibrium", "vibration_modes", "Modes",
     "vibration_modes_along", "ModesAlong", "linearize",
-    "LinearModel", "forward_dynamics",
+    "LinearModel", "forward_dynamics", "Event",
     "forward_accelerations",
     "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "load", "save", "load_urdf", "urdf_builder",

@@ -230,7 +230,7 @@ def test_a_collapsed_explicit_step_is_put_down_to_a_singular_position_only_where
     taken there is reported as a singular position with its joints; for a simple pendulum,
     whose Jacobian is regular, the failure stays an IntegrationError."""
     from mbd3d.joints import Revolute
-    from mbd3d.analyses.dynamics import _step_failure
+    from mbd3d.analyses.explicit import _step_failure
 
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     first = b.add_body("first", mass=1.0, inertia=1.0 / 12, position=(0.5, 0.0))

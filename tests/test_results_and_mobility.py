@@ -154,7 +154,7 @@ def test_reactions_need_multipliers():
 def test_interrupt_keeps_the_results_so_far(monkeypatch):
     model = pendulum_chain(2)
     calls = {"n": 0}
-    import mbd3d.analyses.dynamics as dynamics
+    import mbd3d.analyses.explicit as dynamics
     real = dynamics.project_state
 
     def interrupted(*args):  # Ctrl-C while an output is being stored

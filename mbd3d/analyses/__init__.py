@@ -1,10 +1,16 @@
 """The analyses: position (Newton-Raphson), velocity and acceleration analysis, kinematic
-analysis and inverse dynamics, forward dynamics with the explicit integrators and with
-generalized-alpha, the mobility report, and the watch for singular positions.
+analysis and inverse dynamics, statics, forward dynamics, modes and linearisation, the mobility
+report, and the watch for singular positions.
 
-Modules: :mod:`.position`, :mod:`.kinematics`, :mod:`.dynamics` (forward dynamics, the explicit
-integrators' driver), :mod:`.implicit` (generalized-alpha), :mod:`.mobility` and
-:mod:`.passages`.
+Forward dynamics takes one path (:mod:`.driver` has the diagram): :mod:`.dynamics` checks the
+request and picks the integrator, :mod:`.driver` runs it (initial state, step loop, events,
+outputs, observers), :mod:`.explicit` (the compiled Runge-Kutta pairs) and :mod:`.implicit`
+(generalized-alpha) are the integrators, :mod:`.accelerations` the accelerations and multipliers
+at a state, :mod:`.initial` the consistent initial state. The others: :mod:`.position`,
+:mod:`.kinematics`, :mod:`.statics`, :mod:`.modes`, :mod:`.linearization`, :mod:`.mobility`
+and :mod:`.passages`. What belongs here: an analysis of a model, taking ``(model, t, q, qd)``
+and returning arrays or Results; not a model element (``mbd3d.model``) nor a file format
+(``mbd3d.io``).
 """
 
 from mbd3d.analyses.dynamics import forward_dynamics

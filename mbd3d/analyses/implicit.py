@@ -43,23 +43,15 @@ import scipy.sparse as sp
 
 from mbd3d.model import constraints
 from mbd3d.numerics.checks import finite_scalar
-from mbd3d.model.equations import (augmented_accelerations, generalized_forces, mass_matrix,
-                                   python_parts)
+from mbd3d.model.equations import augmented_accelerations, generalized_forces, python_parts
 from mbd3d.errors import IntegrationError, ModelError
-from mbd3d.model.friction import raise_friction_with_redundancy
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
 from mbd3d.numerics.rotations import to_quaternion
-from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, solve_augmented_lagrangian,
-                                   solve_model_augmented)
-from mbd3d.io.observers import Watch
+from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
+from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.passages import PassageWatch
-from mbd3d.analyses.initial import consistent_initial_state
-from mbd3d.analyses.position import singular_error
-from mbd3d.io.results import Results
-from mbd3d.io.store import ResultsBuffer, run_keeping_results
 
-__all__ = ["GeneralizedAlpha", "consistent_accelerations", "rows_dependent",
-           "integrate_generalized_alpha"]
+__all__ = ["GeneralizedAlpha", "GeneralizedAlphaIntegrator"]
 
 
 @dataclass(frozen=True)
@@ -89,68 +81,6 @@ class GeneralizedAlpha:
     @property
     def beta(self) -> float:
         return 0.25 * (self.gamma + 0.5) ** 2
-
-
-def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, charts=None,
-                             lam: np.ndarray | None = None, redundant: bool = False,
-                             fallback: bool = True) -> tuple[np.ndarray, np.ndarray, bool]:
-    """``qdd`` and ``lam`` of the augmented equations, also where ``Cq`` loses rank.
-
-    The augmented matrix is factored by LU as in :func:`mbd3d.forward_accelerations`; where it
-    is singular (a singular configuration, redundant constraints) the augmented-Lagrangian
-    iteration gives the accelerations of the consistent equations and the multipliers without
-    a component in the null space of ``Cq^T`` (minimum-norm from ``lam = 0``). With
-    ``redundant`` (rows known to be dependent) the LU is skipped: rounding can lift its
-    smallest pivot above the singularity threshold, and the solution would be noise. Without
-    ``fallback`` a singular matrix raises instead (the explicit integrators' rule).
-
-    Returns
-    -------
-    qdd, lam : ndarray
-    regular : bool
-        False when the augmented matrix was singular (multipliers not unique).
-    """
-    n = model.n_coordinates
-    if not redundant:
-        try:
-            x = augmented_accelerations(model, t, q, qd, charts)
-        except SingularMatrix:
-            if not fallback:
-                raise singular_error(model, constraints.jacobian(model, t, q, constraints.frames(
-                    model, q, charts=charts)), t, f"forward dynamics of '{model.name}'") from None
-        else:
-            if x is None:
-                raise IntegrationError(f"forward dynamics of '{model.name}': the state is not "
-                                       f"finite at t = {t:.6g} s (the integration diverged)",
-                                       time=t)
-            return x[:n], x[n:], True
-    if model.friction is not None:
-        raise_friction_with_redundancy(model, t)
-    fr = constraints.frames(model, q, qd, charts)
-    _, jac_data, gamma = constraints.evaluate(model, t, fr, value=False, jacobian=True, gamma=True)
-    Qe = generalized_forces(model, t, fr)
-    M = mass_matrix(model, fr)
-    Cq = constraints.jacobian_matrix(model, jac_data)
-    try:
-        qdd, lam, _ = solve_augmented_lagrangian(M, Cq, Qe, gamma, lam=lam,
-                                                 scaling=augmented_scaling(model))
-    except SingularMatrix:
-        raise singular_error(model, Cq, t, f"forward dynamics of '{model.name}'") from None
-    return qdd, lam, False
-
-
-def rows_dependent(model, t: float, q: np.ndarray, charts=None) -> bool:
-    """Whether the augmented matrix ``[M Cq^T; Cq 0]`` is singular at ``q``: constraint rows
-    that depend on each other (redundant constraints, or a singular configuration)."""
-    fr = constraints.frames(model, q, charts=charts)
-    _, jac_data, _ = constraints.evaluate(model, t, fr, value=False)
-    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
-    try:
-        solve_model_augmented(model, blocks, jac_data,
-                              np.zeros(model.n_coordinates + model.n_constraints))
-    except SingularMatrix:
-        return True
-    return False
 
 
 def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
@@ -249,56 +179,202 @@ def _tangent_storage(model, tangent) -> tuple[np.ndarray, bool]:
     return band.ravel(order="F"), False
 
 
-def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | None,
-                                rho_inf: float,
-                                constraint_tol: float, max_step: float, hold, observers,
-                                progress, initial_rates=None, initial_positions=None,
-                                strict: bool = False,
-                                newton_tol: float = 1e-10,
-                                relative_penalty: float = 1e8,
-                                max_newton_iterations: int = 30) -> Results:
-    """Generalized-alpha integration over the output times ``t``; see
-    :func:`mbd3d.forward_dynamics` (``method="generalized-alpha"``) for the parameters.
+class GeneralizedAlphaIntegrator(Integrator):
+    """Generalized-alpha with the fixed step ``request.step`` as the driver runs it (see
+    :func:`mbd3d.forward_dynamics`, ``method="generalized-alpha"``).
 
-    The step is fixed: shortened only to land on output times, or for one step to a
-    quarter when Newton does not converge (near a singular configuration).
+    The step is shortened only to land on output times, or for one step to a quarter when
+    Newton does not converge (near a singular configuration).
     """
-    coefficients = GeneralizedAlpha(rho_inf)
-    am, af = coefficients.alpha_m, coefficients.alpha_f
-    beta, gamma = coefficients.beta, coefficients.gamma
-    if step is None:
-        raise ModelError("method='generalized-alpha' needs a fixed step [s], e.g. step=1e-3 "
-                         "(the error of this second-order method scales with step^2)")
-    step = finite_scalar(step, "step (the fixed time step of generalized-alpha) [s]",
-                         positive=True)
-    n = model.n_coordinates
-    projection_tol = constraint_tol * 1e-3
-    stats = {"method": "generalized-alpha", "rho_inf": rho_inf, "steps": 0,
-             "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
-             "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [], "wall_time": 0.0}
-    k_max = len(t)
-    out = ResultsBuffer(model, "forward dynamics", t, stats)
 
-    redundant = False  # set at the start: the constraint rows depend on each other
-    passages = PassageWatch(model)
-    # spatial models: the charts as quaternions whose signs follow the motion
-    turns = None if model.charts0 is None else to_quaternion(model.charts0)
-    stats["singular_passages"] = passages.passages
+    #: Newton's tolerance on the residual, the penalty ratio and the iterations per step
+    newton_tol, relative_penalty, max_newton_iterations = 1e-10, 1e8, 30
 
-    def record(q, qd, chart, lam_guess):
-        tk = t[out.done]
+    def __init__(self, request: DynamicsRequest):
+        model = self.model = request.model
+        constraints.require_holonomic(model, "forward dynamics with generalized-alpha "
+                                             "(an index-3 method, on positions)")
+        if request.step is None:
+            raise ModelError("method='generalized-alpha' needs a fixed step [s], e.g. "
+                             "step=1e-3 (the error of this second-order method scales with "
+                             "step^2)")
+        self.step = finite_scalar(request.step, "step (the fixed time step of "
+                                  "generalized-alpha) [s]", positive=True)
+        self.request, self.coefficients = request, GeneralizedAlpha(request.rho_inf)
+        self.stats = {"method": "generalized-alpha", "rho_inf": request.rho_inf, "steps": 0,
+                      "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
+                      "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [],
+                      "wall_time": 0.0}
+        self.redundant = False  # set at the start: the constraint rows depend on each other
+        self.passages = PassageWatch(model)
+        self.stats["singular_passages"] = self.passages.passages
+        # spatial models: the charts as quaternions whose signs follow the motion
+        self._turns = None if model.charts0 is None else to_quaternion(model.charts0)
+        self.charts = model.charts0
+        self.meshes = constraints.has_spatial_meshes(model)
+        self.newton = _NewtonStep(model, self.coefficients, self.stats, self.newton_tol,
+                                  self.relative_penalty, self.max_newton_iterations,
+                                  request.projection_tol)
+
+    def chart(self) -> np.ndarray | None:
+        return self.charts
+
+    def turns(self) -> np.ndarray | None:
+        return None if self._turns is None else self._turns.copy()
+
+    def rows_dependent(self, q: np.ndarray) -> bool:
+        return rows_dependent(self.model, self.request.t[0], q, self.charts)
+
+    def session(self):
+        return self.newton.run
+
+    def close(self) -> None:
+        self.passages.close()  # a passage still open at the end (or at a failure)
+
+    def _accelerations(self, tt: float, q: np.ndarray, qd: np.ndarray, lam_guess) -> tuple:
         # from lam = 0 where the rows depend on each other: the minimum-norm multipliers
-        qdd, lam, regular = consistent_accelerations(model, tk, q, qd, chart,
-                                                     None if redundant else lam_guess,
-                                                     redundant)
+        qdd, lam, regular = consistent_accelerations(self.model, tt, q, qd, self.charts,
+                                                     None if self.redundant else lam_guess,
+                                                     self.redundant)
         if not regular:
-            stats["singular_outputs"].append(float(tk))
-        out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
+            self.stats["singular_outputs"].append(float(tt))
         return qdd, lam
 
-    def project_velocity(tt, q, qd, chart, lu, penalty):
+    def start(self, t0: float, q: np.ndarray, qd: np.ndarray, redundant: bool) -> tuple:
+        self.redundant = redundant
+        self.qdd, self.lam = self._accelerations(t0, q, qd, None)
+        self.q, self.qd, self.a = q, qd, self.qdd.copy()
+        self.tt, self.h = t0, min(self.step, self.request.max_step)
+        return self.qdd, self.lam
+
+    def _trial_step(self, target: float) -> float:
+        """The next step towards ``target``: the nominal one, shortened to land on it."""
+        tt, h = self.tt, self.h
+        h_try = min(h, target - tt)
+        if target - (tt + h_try) < 1e-9 * max(h, 1e-300):
+            h_try = target - tt
+        elif target - (tt + h_try) < 0.05 * h:
+            h_try = 0.5 * (target - tt)  # two even steps instead of a sliver
+        if self.meshes:
+            # spatial gears know their angles modulo a tooth of the reduced ratio: no step may
+            # turn a mesh's gears by a quarter of one (half what lets Newton's guess be a tooth
+            # off, a factor of two left for gears speeding up)
+            speed = constraints.mesh_turn_speed(self.model, self.q, self.qd, self.charts)
+            if speed * h_try > 0.5 * math.pi:
+                h_try = 0.5 * math.pi / speed
+        return h_try
+
+    def advance(self, t_target: float, every_step: bool) -> Segment:
+        while True:
+            h_try = self._trial_step(t_target)
+            result = self.newton(self.tt + h_try, h_try, self.q, self.qd, self.qdd, self.a,
+                                 self.lam, self.charts)
+            if result is not None:
+                break
+            self.stats["rejected_steps"] += 1
+            self.h = 0.25 * h_try
+            if self.h < 1e-14 * max(1.0, abs(self.tt)):
+                raise IntegrationError(
+                    f"forward dynamics of '{self.model.name}': generalized-alpha Newton "
+                    f"iterations do not converge at t = {self.tt:.6g} s even with a step of "
+                    f"{h_try:.3g} s. Check the model's stiffness and masses, or try a smaller "
+                    "step.", time=self.tt)
+        (q, qd, qdd, a, lam), S = result
+        t_old, q_old, qd_old = self.tt, self.q, self.qd
+        self.tt += h_try
+        self.stats["steps"] += 1
+        self.q, self.qd, self.qdd, self.a, self.lam, self.S = q, qd, qdd, a, lam, S
+        # back to the nominal step after a recovery, doubling: jumping straight back from a
+        # quarter step, the free slider-crank at h = 1e-3 (crank at 80 rad/s) cycled between
+        # rejection and return with the predictor's error growing every cycle, to 1e18 m at
+        # t = 0.113 s, where no step converged any more
+        self.h = min(self.step, self.request.max_step, 2.0 * self.h)
+        t_step = self.tt  # where passages are noted: the step's end before it is snapped
+        if self.tt >= t_target - 1e-12 * max(1.0, abs(t_target)):
+            self.tt = t_target
+        t_new = self.tt
+
+        def state_at(t: float) -> tuple[np.ndarray, np.ndarray]:
+            """The step's end, or between its ends the cubic Hermite interpolant of the
+            positions (and its derivative), for locating events."""
+            if t >= t_new:
+                return q, qd
+            h = t_new - t_old
+            s = (t - t_old) / h
+            h00, h10, h01, h11 = (2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s,
+                                  -2 * s**3 + 3 * s**2, s**3 - s**2)
+            d00, d10, d01, d11 = ((6 * s**2 - 6 * s) / h, 3 * s**2 - 4 * s + 1,
+                                  (-6 * s**2 + 6 * s) / h, 3 * s**2 - 2 * s)
+            return (h00 * q_old + h10 * h * qd_old + h01 * q + h11 * h * qd,
+                    d00 * q_old + d10 * qd_old + d01 * q + d11 * qd)
+        return Segment(t_old, t_new, state_at, info={"indicator": S.indicator, "t_step": t_step})
+
+    def check(self, segment: Segment) -> None:
+        self.passages.step(segment.info["t_step"], segment.info["indicator"], self.q, self.charts)
+        if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.qd)):
+            raise IntegrationError(f"forward dynamics of '{self.model.name}': the state "
+                                   f"became non-finite at t = {segment.info['t_step']:.6g} s",
+                                   time=segment.info["t_step"])
+
+    def output(self, t: float, segment: Segment) -> tuple:
+        # outputs are step ends; the reported velocities are projected onto Cq qd = -Ct, while
+        # the recursion keeps its own, because projecting them inside it costs the method its
+        # order
+        q, S = self.q, self.S
+        qd = self.newton.project_velocity(t, q, self.qd, self.charts, S, S.penalty)
+        return (q, qd) + self._accelerations(t, q, qd, self.lam)
+
+    def after_step(self, segment: Segment) -> None:
+        q, qd, chart, moved = self.model.body_type.reset_charts(self.q, self.qd, self.charts,
+                                                                turns=self._turns)
+        if moved:
+            # new orientation coordinates: restart the recursion from consistent
+            # accelerations in the new charts (as at the initial time)
+            self.stats["chart_resets"] += 1
+            self.charts = chart
+            self.restart(self.tt, q, qd)
+
+    def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        self.tt, self.q, self.qd = t, q, qd
+        self.qdd, self.lam, _ = consistent_accelerations(self.model, t, q, qd, self.charts,
+                                                         self.lam, self.redundant)
+        self.a = self.qdd.copy()
+
+
+class _NewtonStep:
+    """One generalized-alpha step: the Newton iteration on the new positions (compiled:
+    :func:`mbd3d.numerics.compiled.generalized_alpha.newton_step`), with the iteration
+    matrix's records and buffers made once per run."""
+
+    def __init__(self, model, coefficients: GeneralizedAlpha, stats: dict, newton_tol: float,
+                 relative_penalty: float, max_iterations: int, projection_tol: float):
+        self.model, self.stats, self.projection_tol = model, stats, projection_tol
+        self.am, self.af = coefficients.alpha_m, coefficients.alpha_f
+        self.beta, self.gamma = coefficients.beta, coefficients.gamma
+        self.newton_tol, self.relative_penalty = newton_tol, relative_penalty
+        self.max_iterations = max_iterations
+        n, m = model.n_coordinates, model.n_constraints
+        self.spatial = model.dim == 3
+        self.work = model._core.workspace()
+        self.arrays = model._core.penalty_arrays(model)
+        self.penalty, self.lam_effective = np.empty(m), np.empty(m)
+        layout = model._penalty_pattern.layout
+        self.buffers = (np.empty((n, n) if layout == "dense" else (0, 0)),
+                        np.empty(model._penalty_pattern.band_rows * n if layout == "banded"
+                                 else 0),
+                        np.empty(n, dtype=np.int64))
+        self.counters = np.zeros(2, dtype=np.int64)
+        # joint friction: every Newton iterate takes the friction of its own state's
+        # multipliers (consistent with the reactions there, see mbd3d.model.friction), neither
+        # a previous step's nor the iteration's penalty estimates, which are noisy at 1e-4
+        self.run = callbacks.Run(
+            lambda tt, q, qd, charts: python_parts(model, tt, q, qd, charts, friction=True),
+            factor=lambda values, tangent: model._penalty_pattern.factor(values, tangent))
+
+    def project_velocity(self, tt, q, qd, chart, lu, penalty):
         """Mass-orthogonal projection onto ``Cq qd = -Ct`` with the iteration matrix's
         factors: each pass cuts the violation by the penalty ratio."""
+        model, stats = self.model, self.stats
         fr = constraints.frames(model, q, charts=chart)
         C, jac_data, _ = constraints.evaluate(model, tt, fr)
         nu = constraints.velocity_rhs(model, tt, fr)
@@ -307,17 +383,17 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
                                  constraints.largest_relative(model, C),
                                  constraints.largest_relative(model, violation))
         for _ in range(8):
-            if constraints.largest_relative(model, violation) <= projection_tol:
+            if constraints.largest_relative(model, violation) <= self.projection_tol:
                 break
             qd = qd - lu.solve(constraints.jacobian_transpose_times(model, jac_data,
                                                                      penalty * violation))
             violation = constraints.jacobian_times(model, jac_data, qd) - nu
         return qd
 
-    def newton(tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
+    def __call__(self, tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
         """One step: the new state and the iteration matrix's factors, or None when Newton
-        does not converge (the iteration itself is compiled:
-        :func:`mbd3d.numerics.compiled.generalized_alpha.newton_step`)."""
+        does not converge."""
+        model, am, af, beta, gamma = self.model, self.am, self.af, self.beta, self.gamma
         shift = (af * qdd_n - am * a_n) / (1.0 - am)
         q_hat = q_n + h * qd_n + h * h * (0.5 - beta) * a_n + h * h * beta * shift
         qd_hat = qd_n + h * (1.0 - gamma) * a_n + h * gamma * shift
@@ -329,7 +405,7 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         tangent = _force_tangent(model, tt, q, qd_hat + gamma_prime * (q - q_hat), chart,
                                  gamma_prime)
         extra, python_factor = _tangent_storage(model, tangent)
-        run.tangent = tangent
+        self.run.tangent = tangent
         # The iteration matrix is factored at every iterate (full Newton): the constraint
         # force p C Cq^T is normal to the free directions only at the configuration where Cq
         # is evaluated, and it is large (p is the penalty ratio times the mass term); with
@@ -342,11 +418,12 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         # it (p C is far larger than lam between iterates, so neither is the curvature the
         # next iterate sees).
         outcome = kernel.newton_step(
-            work, arrays, run.key, tt, q, q_hat, qd_hat, beta_prime, gamma_prime, lam,
-            chart if spatial else None, extra, python_factor, relative_penalty, newton_tol,
-            projection_tol, max_newton_iterations, penalty, lam_effective, *buffers, counters)
-        stats["newton_iterations"], stats["factorizations"] = (int(counters[0]),
-                                                               int(counters[1]))
+            self.work, self.arrays, self.run.key, tt, q, q_hat, qd_hat, beta_prime,
+            gamma_prime, lam, chart if self.spatial else None, extra, python_factor,
+            self.relative_penalty, self.newton_tol, self.projection_tol, self.max_iterations,
+            self.penalty, self.lam_effective, *self.buffers, self.counters)
+        self.stats["newton_iterations"], self.stats["factorizations"] = (
+            int(self.counters[0]), int(self.counters[1]))
         if outcome == kernel.SINGULAR_MATRIX:
             raise IntegrationError(
                 f"forward dynamics of '{model.name}': the generalized-alpha iteration "
@@ -364,105 +441,8 @@ def integrate_generalized_alpha(model, t: np.ndarray, q0, qd0, *, step: float | 
         qdd = beta_prime * (q - q_hat)
         qd = qd_hat + gamma_prime * (q - q_hat)
         a = shift + (1.0 - af) / (1.0 - am) * qdd
-        S = _IterationFactors(arrays, buffers, run.factors if python_factor else None,
-                              penalty.copy(), beta_prime, kernel.last_mass_blocks(work))
-        return (q, qd, qdd, a, lam_effective.copy()), S
-
-    meshes = constraints.has_spatial_meshes(model)
-
-    def loop() -> None:
-        nonlocal redundant
-        chart = model.charts0
-        q, qd, redundant = consistent_initial_state(
-            model, t[0], q0, qd0, hold=hold, initial_rates=initial_rates,
-            initial_positions=initial_positions, strict=strict,
-            tol=constraint_tol, chart=chart, stats=stats,
-            what=f"forward dynamics of '{model.name}'",
-            redundant_rows=lambda qq: rows_dependent(model, t[0], qq, chart))
-        qdd, lam = record(q, qd, chart, None)
-        a = qdd.copy()
-        watch.tick(t[0], 0)
-        tt = float(t[0])
-        h = min(step, max_step)
-        while out.done < k_max:
-            target = float(t[out.done])
-            h_try = min(h, target - tt)
-            if target - (tt + h_try) < 1e-9 * max(h, 1e-300):
-                h_try = target - tt
-            elif target - (tt + h_try) < 0.05 * h:
-                h_try = 0.5 * (target - tt)  # two even steps instead of a sliver
-            if meshes:
-                # spatial gears know their angles modulo a tooth of the reduced ratio: no
-                # step may turn a mesh's gears by a quarter of one (half what lets Newton's
-                # guess be a tooth off, a factor of two left for gears speeding up)
-                speed = constraints.mesh_turn_speed(model, q, qd, chart)
-                if speed * h_try > 0.5 * math.pi:
-                    h_try = 0.5 * math.pi / speed
-            result = newton(tt + h_try, h_try, q, qd, qdd, a, lam, chart)
-            if result is None:
-                stats["rejected_steps"] += 1
-                h = 0.25 * h_try
-                if h < 1e-14 * max(1.0, abs(tt)):
-                    raise IntegrationError(
-                        f"forward dynamics of '{model.name}': generalized-alpha Newton "
-                        f"iterations do not converge at t = {tt:.6g} s even with a step of "
-                        f"{h_try:.3g} s. Check the model's stiffness and masses, or try a "
-                        "smaller step.", time=tt)
-                continue
-            (q_new, qd_new, qdd_new, a_new, lam_new), S = result
-            tt += h_try
-            stats["steps"] += 1
-            q, qd, qdd, a, lam = q_new, qd_new, qdd_new, a_new, lam_new
-            passages.step(tt, S.indicator, q, chart)
-            if not np.all(np.isfinite(q)) or not np.all(np.isfinite(qd)):
-                raise IntegrationError(f"forward dynamics of '{model.name}': the state became "
-                                       f"non-finite at t = {tt:.6g} s", time=tt)
-            # back to the nominal step after a recovery, doubling: jumping straight back
-            # from a quarter step, the free slider-crank at h = 1e-3 (crank at 80 rad/s)
-            # cycled between rejection and return with the predictor's error growing every
-            # cycle, to 1e18 m at t = 0.113 s, where no step converged any more
-            h = min(step, max_step, 2.0 * h)
-            if tt >= target - 1e-12 * max(1.0, abs(target)):
-                tt = target
-                # the reported velocities are projected onto Cq qd = -Ct; the recursion keeps
-                # its own, because projecting them inside it costs the method its order
-                record(q, project_velocity(tt, q, qd, chart, S, S.penalty), chart, lam)
-            watch.tick(tt, stats["steps"])
-            q_moved, qd_moved, chart_new, moved = model.body_type.reset_charts(q, qd, chart,
-                                                                               turns=turns)
-            if moved:
-                # new orientation coordinates: restart the recursion from consistent
-                # accelerations in the new charts (as at the initial time)
-                stats["chart_resets"] += 1
-                q, qd, chart = q_moved, qd_moved, chart_new
-                qdd, lam, _ = consistent_accelerations(model, tt, q, qd, chart, lam, redundant)
-                a = qdd.copy()
-
-    # the compiled iteration's records and buffers, made once per run
-    spatial = model.dim == 3
-    work = model._core.workspace()
-    arrays = model._core.penalty_arrays(model)
-    m = model.n_constraints
-    penalty, lam_effective = np.empty(m), np.empty(m)
-    layout = model._penalty_pattern.layout
-    buffers = (np.empty((n, n) if layout == "dense" else (0, 0)),
-               np.empty(model._penalty_pattern.band_rows * n if layout == "banded" else 0),
-               np.empty(n, dtype=np.int64))
-    counters = np.zeros(2, dtype=np.int64)
-    # joint friction: every Newton iterate takes the friction of its own state's multipliers
-    # (consistent with the reactions there, see mbd3d.model.friction), neither a previous
-    # step's nor the iteration's penalty estimates, which are noisy at 1e-4
-    run = callbacks.Run(lambda tt, q, qd, charts: python_parts(model, tt, q, qd, charts,
-                                                               friction=True),
-                        factor=lambda values, tangent: model._penalty_pattern.factor(values,
-                                                                                     tangent))
-
-    def run_steps() -> None:
-        try:
-            with run:
-                loop()
-        finally:
-            passages.close()  # a passage still open at the end (or at a failure)
-
-    watch = Watch(observers, progress, model, t, "forward dynamics", out.partial)
-    return run_keeping_results(run_steps, out.partial, watch)
+        S = _IterationFactors(self.arrays, self.buffers,
+                              self.run.factors if python_factor else None,
+                              self.penalty.copy(), beta_prime,
+                              kernel.last_mass_blocks(self.work))
+        return (q, qd, qdd, a, self.lam_effective.copy()), S

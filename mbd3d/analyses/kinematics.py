@@ -30,7 +30,8 @@ from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
 
-__all__ = ["solve_velocity", "solve_acceleration", "kinematic_analysis", "inverse_dynamics",
+__all__ = ["project_state", "solve_velocity", "solve_acceleration", "kinematic_analysis",
+           "inverse_dynamics",
            "check_times"]
 
 
@@ -131,6 +132,15 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
     except SingularMatrix:
         pass
     raise singular_error(model, Cq[:m], t, f"velocity analysis of '{model.name}'")
+
+
+def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
+                  charts: np.ndarray | None = None, redundant: bool = False
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest (mass-weighted) state that satisfies the position and velocity constraints
+    (``redundant``: see :func:`mbd3d.solve_position`)."""
+    q = solve_position(model, q, t, tol=tol, charts=charts, redundant=redundant)
+    return q, solve_velocity(model, q, t, qd_guess=qd, charts=charts, redundant=redundant)
 
 
 def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
@@ -304,6 +314,60 @@ def _mesh_pieces(model, q: np.ndarray, qd: np.ndarray, chart, h: float) -> int:
     return max(1, int(math.ceil(speed * h / (0.5 * math.pi))))
 
 
+class _PointSolver:
+    """One time point of a kinematic sweep: positions from a guess, then velocities,
+    accelerations and (``forces``) multipliers, all from the factors of ``Cq``."""
+
+    def __init__(self, model, tol: float, surplus: bool, turns, analysis: str):
+        self.model, self.tol, self.surplus, self.turns = model, tol, surplus, turns
+        self.analysis, self.what = analysis, f"{analysis} of '{model.name}'"
+        self.reference = 1.0  # the Jacobian's conditioning at the first time point
+
+    def __call__(self, tk: float, q: np.ndarray, chart, first: bool, forces: bool):
+        """Positions from the guess ``q``, velocities, accelerations and (``forces``) the
+        multipliers at ``tk``: ``(q, qd, qdd, lam, chart)``."""
+        model = self.model
+        # keep orientation coordinates away from their singularity (spatial bodies)
+        q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=self.turns)
+        q = solve_position(model, q, tk, tol=self.tol, charts=chart, redundant=self.surplus)
+        if self.surplus:
+            if first:
+                _require_redundant_but_driven(model, tk, q, chart, self.analysis)
+            qd, qdd, lam = _redundant_rates(model, tk, q, chart, forces, self.analysis)
+            return q, qd, qdd, lam, chart
+        fr = constraints.frames(model, q, charts=chart)
+        Cq = constraints.jacobian(model, tk, q, fr)
+        try:
+            lu = Factorization(Cq, scaling=jacobian_scaling(model))
+        except SingularMatrix:
+            raise singular_error(model, Cq, float(tk), self.what) from None
+        # A singular position (a dead centre of a driven slider, a toggle) has a finite
+        # position but unbounded velocities: stop there rather than report them
+        conditioning = lu.reciprocal_condition()
+        if first:
+            self.reference = conditioning
+        if conditioning < SINGULAR_CONDITIONING * self.reference:
+            raise singular_error(model, Cq, float(tk), f"{self.what} (the velocities are "
+                                 f"unbounded here: the Jacobian's conditioning fell from "
+                                 f"{self.reference:.1e} at the start to {conditioning:.1e})")
+        nu = constraints.velocity_rhs(model, tk, fr)
+        qd = lu.solve(nu)
+        _check_velocities(model, Cq, qd, nu, float(tk), self.what)
+        fr = constraints.frames(model, q, qd, chart)
+        qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
+        lam = None
+        if forces:
+            # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
+            rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
+            lam = lu.solve(rhs, transpose=True)
+            if model.friction is not None:
+                # the friction forces depend on the reactions they change
+                lam = consistent_multipliers(
+                    model, float(tk), fr,
+                    lambda extra: (lu.solve(rhs + extra, transpose=True), None), lam)[0]
+        return q, qd, qdd, lam, chart
+
+
 def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observers,
            progress) -> Results:
     t = check_times(times)
@@ -322,50 +386,7 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
     turns = None if model.charts0 is None else to_quaternion(model.charts0)
 
     what = f"{analysis} of '{model.name}'"
-    reference = [1.0]  # the Jacobian's conditioning at the first time point
-
-    def solve_point(tk: float, q: np.ndarray, chart, first: bool, forces: bool):
-        """Positions from the guess ``q``, velocities, accelerations and (``forces``) the
-        multipliers at ``tk``: ``(q, qd, qdd, lam, chart)``."""
-        # keep orientation coordinates away from their singularity (spatial bodies)
-        q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=turns)
-        q = solve_position(model, q, tk, tol=tol, charts=chart, redundant=surplus)
-        if surplus:
-            if first:
-                _require_redundant_but_driven(model, tk, q, chart, analysis)
-            qd, qdd, lam = _redundant_rates(model, tk, q, chart, forces, analysis)
-            return q, qd, qdd, lam, chart
-        fr = constraints.frames(model, q, charts=chart)
-        Cq = constraints.jacobian(model, tk, q, fr)
-        try:
-            lu = Factorization(Cq, scaling=jacobian_scaling(model))
-        except SingularMatrix:
-            raise singular_error(model, Cq, float(tk), what) from None
-        # A singular position (a dead centre of a driven slider, a toggle) has a finite
-        # position but unbounded velocities: stop there rather than report them
-        conditioning = lu.reciprocal_condition()
-        if first:
-            reference[0] = conditioning
-        if conditioning < SINGULAR_CONDITIONING * reference[0]:
-            raise singular_error(model, Cq, float(tk), f"{what} (the velocities are "
-                                 f"unbounded here: the Jacobian's conditioning fell from "
-                                 f"{reference[0]:.1e} at the start to {conditioning:.1e})")
-        nu = constraints.velocity_rhs(model, tk, fr)
-        qd = lu.solve(nu)
-        _check_velocities(model, Cq, qd, nu, float(tk), what)
-        fr = constraints.frames(model, q, qd, chart)
-        qdd = lu.solve(constraints.acceleration_rhs(model, tk, q, qd, fr))
-        lam = None
-        if forces:
-            # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
-            rhs = generalized_forces(model, tk, fr) - mass_matrix(model, fr) @ qdd
-            lam = lu.solve(rhs, transpose=True)
-            if model.friction is not None:
-                # the friction forces depend on the reactions they change
-                lam = consistent_multipliers(
-                    model, float(tk), fr,
-                    lambda extra: (lu.solve(rhs + extra, transpose=True), None), lam)[0]
-        return q, qd, qdd, lam, chart
+    solve_point = _PointSolver(model, tol, surplus, turns, analysis)
 
     def predicted(q, qd, qdd, h):
         # second-order Taylor predictor: Newton-Raphson then needs one or two iterations and

@@ -118,6 +118,109 @@ def _least_change_step(model, q, charts, J, C, m, held):
     return dq if np.all(np.isfinite(dq)) else None
 
 
+class _PositionEquations:
+    """``C(q, t)`` of the Newton-Raphson iteration, with the held coordinates' rows appended,
+    its Jacobian, and how far a residual is from converged."""
+
+    def __init__(self, model, t: float, charts, held: np.ndarray, q_held: np.ndarray,
+                 tol: float):
+        self.model, self.t, self.charts, self.tol = model, t, charts, tol
+        self.held, self.q_held, self.n = held, q_held, model.n_coordinates
+        # A spatial rotation driver's row sin(e), e = theta - f, also vanishes at e = pi, and
+        # so does a gear pair's L sin(e) (e: the centre line's angle from where rolling puts
+        # it). Where cos(e) < 0 the row is replaced by sign(e) L (2 - |sin e|), which keeps
+        # rising to e = pi: the row is then monotone in e on (-pi, pi] with its only root at
+        # e = 0, and its Jacobian is the sin row's with the sign of cos(e) (the derivative
+        # |cos e|). Newton reaches the right branch from any guess, never the half turn.
+        self.rotating = constraints.has_branches(model)
+        self.far_at: dict = {}  # the rows beyond a quarter turn at the last residual's q
+        # Residuals are judged relative to the model's scale: length rows (and held
+        # positions) in units of its length, angle rows in radians, so that a micrometre
+        # mechanism converges as tightly as a metre one. The rounding floor of each kind
+        # comes from the coordinates that kind sums: positions for lengths, angles for angles
+        # (which keep counting turns), so that a wild angle cannot loosen the test of the
+        # points.
+        self.scale = np.concatenate([model.row_scale, model.coordinate_scale[held]])
+        self.is_length = np.concatenate([model.length_rows, model.position_coordinates[held]])
+
+    def residual(self, qq: np.ndarray) -> np.ndarray:
+        model, t, held = self.model, self.t, self.held
+        fr = constraints.frames(model, qq, charts=self.charts)
+        C = constraints.residual(model, t, qq, fr)
+        if self.rotating:
+            rows, cosine, amplitude = constraints.branch_cosines(model, t, fr)
+            far, amplitude = rows[cosine < 0], amplitude[cosine < 0]
+            self.far_at.clear()
+            self.far_at[qq.tobytes()] = far
+            C[far] = np.sign(C[far]) * (2.0 * amplitude - np.abs(C[far]))
+        return np.concatenate([C, qq[held] - self.q_held]) if len(held) else C
+
+    def jacobian(self, qq: np.ndarray):
+        model, t, held, n = self.model, self.t, self.held, self.n
+        fr = constraints.frames(model, qq, charts=self.charts)
+        Cq = constraints.jacobian(model, t, qq, fr)
+        if self.rotating:
+            far = self.far_at.get(qq.tobytes())
+            if far is None:
+                rows, cosine, _ = constraints.branch_cosines(model, t, fr)
+                far = rows[cosine < 0]
+            if len(far):
+                sign = np.ones(Cq.shape[0])
+                sign[far] = -1.0
+                Cq = sp.diags(sign) @ Cq if sp.issparse(Cq) else sign[:, None] * Cq
+        if not len(held):
+            return Cq
+        H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))
+        return sp.vstack([Cq, H], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H.toarray()])
+
+    def relative(self, C: np.ndarray) -> np.ndarray:
+        return C / self.scale
+
+    def worst_and_limit(self, C: np.ndarray, qq: np.ndarray) -> tuple[float, float]:
+        """The largest residual over its limit (converged at most 1), and the largest
+        relative residual."""
+        model, positions = self.model, self.model.position_coordinates
+        eps100 = 100 * np.finfo(float).eps
+        size = np.abs(self.relative(C))
+        floor_length = eps100 * (1.0 + float(np.max(np.abs(qq[positions]), initial=0.0))
+                                 / model.length_scale)
+        floor_angle = eps100 * (1.0 + float(np.max(np.abs(qq[~positions]), initial=0.0)))
+        limit = np.where(self.is_length, max(self.tol, floor_length), max(self.tol, floor_angle))
+        return float(np.max(size / limit, initial=0.0)), float(np.max(size, initial=0.0))
+
+
+def _no_convergence(model, equations: _PositionEquations, q: np.ndarray, C: np.ndarray,
+                    t: float, history: list, stuck: bool, max_iterations: int) -> Exception:
+    """The error of a Newton-Raphson iteration that did not converge: stuck at a singular
+    configuration (no descent direction) or out of iterations; names the worst rows."""
+    m = model.n_constraints
+    order = np.argsort(-np.abs(equations.relative(C)[:m]))[:3]
+    worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e} "
+                           f"{'m' if model.length_rows[r] else 'rad'}" for r in order)
+    # the largest residual per iteration, relative: lengths in units of the model's length
+    trace = ", ".join(f"{h:.1e}" for h in history[-6:])
+    trace += f" (relative to {model.length_scale:.3g} m for lengths)"
+    if stuck:
+        # No descent direction: |C| has a local minimum with C != 0, where the gradient
+        # Cq^T C vanishes, so Cq is singular there. The drivers ask for a position beyond a
+        # lock-up or toggle, or the joints cannot all be assembled.
+        J = equations.jacobian(q)
+        J = J.tocsr()[:m] if sp.issparse(J) else J[:m]
+        error = singular_error(model, J, t, f"position analysis of '{model.name}'")
+        return SingularJacobianError(
+            f"position analysis of '{model.name}' is stuck at t = {t:.6g} s at a singular "
+            f"configuration (max |C| per iteration: {trace}; largest residuals: {worst_rows}). "
+            f"The mechanism cannot reach the position its drivers and joints ask for: it is at a "
+            f"lock-up or toggle position, or cannot be assembled. Joints involved, most first: "
+            f"{summarize(error.joints)}.", joints=error.joints, time=t)
+    return AssemblyError(
+        f"position analysis of '{model.name}' did not converge at t = {t:.6g} s after "
+        f"{max_iterations} Newton-Raphson iterations (max |C| per iteration: {trace}). "
+        f"Largest residuals: {worst_rows}. Check that these joints can be assembled (lengths, "
+        "points in body frames) and give initial guesses closer to an assembled configuration.",
+        time=t)
+
+
 def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
                    tol: float = 1e-12, max_iterations: int = 50,
                    hold: Iterable[str | int] | None = None,
@@ -174,77 +277,19 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             "there are redundant constraints (see mbd3d.analyses.mobility) or too many held coordinates",
             time=t)
 
-    # A spatial rotation driver's row sin(e), e = theta - f, also vanishes at e = pi, and so
-    # does a gear pair's L sin(e) (e: the centre line's angle from where rolling puts it).
-    # Where cos(e) < 0 the row is replaced by sign(e) L (2 - |sin e|), which keeps rising to
-    # e = pi: the row is then monotone in e on (-pi, pi] with its only root at e = 0, and its
-    # Jacobian is the sin row's with the sign of cos(e) (the derivative |cos e|). Newton
-    # reaches the right branch from any guess, never the half turn.
-    rotating = constraints.has_branches(model)
-
-    far_at: dict = {}  # the rows beyond a quarter turn at the last residual's q
-
-    def full_residual(qq):
-        fr = constraints.frames(model, qq, charts=charts)
-        C = constraints.residual(model, t, qq, fr)
-        if rotating:
-            rows, cosine, amplitude = constraints.branch_cosines(model, t, fr)
-            far, amplitude = rows[cosine < 0], amplitude[cosine < 0]
-            far_at.clear()
-            far_at[qq.tobytes()] = far
-            C[far] = np.sign(C[far]) * (2.0 * amplitude - np.abs(C[far]))
-        return np.concatenate([C, qq[held] - q_held]) if len(held) else C
-
-    def full_jacobian(qq):
-        fr = constraints.frames(model, qq, charts=charts)
-        Cq = constraints.jacobian(model, t, qq, fr)
-        if rotating:
-            far = far_at.get(qq.tobytes())
-            if far is None:
-                rows, cosine, _ = constraints.branch_cosines(model, t, fr)
-                far = rows[cosine < 0]
-            if len(far):
-                sign = np.ones(Cq.shape[0])
-                sign[far] = -1.0
-                Cq = sp.diags(sign) @ Cq if sp.issparse(Cq) else sign[:, None] * Cq
-        if not len(held):
-            return Cq
-        H = sp.csr_matrix((np.ones(len(held)), (np.arange(len(held)), held)), shape=(len(held), n))
-        return sp.vstack([Cq, H], format="csr") if sp.issparse(Cq) else np.vstack([Cq, H.toarray()])
-
-    # Residuals are judged relative to the model's scale: length rows (and held positions)
-    # in units of its length, angle rows in radians, so that a micrometre mechanism converges
-    # as tightly as a metre one. The rounding floor of each kind comes from the coordinates
-    # that kind sums: positions for lengths, angles for angles (which keep counting turns),
-    # so that a wild angle cannot loosen the test of the points.
-    scale = np.concatenate([model.row_scale, model.coordinate_scale[held]])
-    is_length = np.concatenate([model.length_rows, model.position_coordinates[held]])
-    positions = model.position_coordinates
-    eps100 = 100 * np.finfo(float).eps
-
-    def relative(C):
-        return C / scale
-
-    def worst_and_limit(C, qq):
-        size = np.abs(relative(C))
-        floor_length = eps100 * (1.0 + float(np.max(np.abs(qq[positions]), initial=0.0))
-                                 / model.length_scale)
-        floor_angle = eps100 * (1.0 + float(np.max(np.abs(qq[~positions]), initial=0.0)))
-        limit = np.where(is_length, max(tol, floor_length), max(tol, floor_angle))
-        return float(np.max(size / limit, initial=0.0)), float(np.max(size, initial=0.0))
-
-    C = full_residual(q)
-    norm = float(np.linalg.norm(relative(C)))
+    equations = _PositionEquations(model, t, charts, held, q_held, tol)
+    C = equations.residual(q)
+    norm = float(np.linalg.norm(equations.relative(C)))
     history = []
     M = None
     for iteration in range(max_iterations + 1):
-        ratio, worst = worst_and_limit(C, q)
+        ratio, worst = equations.worst_and_limit(C, q)
         history.append(worst)
         if ratio <= 1.0:
             return q
         if iteration == max_iterations:
             break
-        J = full_jacobian(q)
+        J = equations.jacobian(q)
         try:
             if redundant:
                 raise SingularMatrix("dependent rows")
@@ -265,8 +310,8 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         step = 1.0
         while True:
             q_try = q + step * dq
-            C_try = full_residual(q_try)
-            norm_try = float(np.linalg.norm(relative(C_try)))
+            C_try = equations.residual(q_try)
+            norm_try = float(np.linalg.norm(equations.relative(C_try)))
             if np.isfinite(norm_try) and norm_try < (1.0 - 1e-4 * step) * norm:
                 break
             step *= 0.5
@@ -276,28 +321,5 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             break
         q, C, norm = q_try, C_try, norm_try
 
-    order = np.argsort(-np.abs(relative(C)[:m]))[:3]
-    worst_rows = "; ".join(f"{model.row_labels[r]} = {C[r]:.3e} "
-                           f"{'m' if model.length_rows[r] else 'rad'}" for r in order)
-    # the largest residual per iteration, relative: lengths in units of the model's length
-    trace = ", ".join(f"{h:.1e}" for h in history[-6:])
-    trace += f" (relative to {model.length_scale:.3g} m for lengths)"
-    if iteration < max_iterations:
-        # No descent direction: |C| has a local minimum with C != 0, where the gradient
-        # Cq^T C vanishes, so Cq is singular there. The drivers ask for a position beyond a
-        # lock-up or toggle, or the joints cannot all be assembled.
-        J = full_jacobian(q)
-        J = J.tocsr()[:m] if sp.issparse(J) else J[:m]
-        error = singular_error(model, J, t, f"position analysis of '{model.name}'")
-        raise SingularJacobianError(
-            f"position analysis of '{model.name}' is stuck at t = {t:.6g} s at a singular "
-            f"configuration (max |C| per iteration: {trace}; largest residuals: {worst_rows}). "
-            f"The mechanism cannot reach the position its drivers and joints ask for: it is at a "
-            f"lock-up or toggle position, or cannot be assembled. Joints involved, most first: "
-            f"{summarize(error.joints)}.", joints=error.joints, time=t)
-    raise AssemblyError(
-        f"position analysis of '{model.name}' did not converge at t = {t:.6g} s after "
-        f"{max_iterations} Newton-Raphson iterations (max |C| per iteration: {trace}). "
-        f"Largest residuals: {worst_rows}. Check that these joints can be assembled (lengths, "
-        "points in body frames) and give initial guesses closer to an assembled configuration.",
-        time=t)
+    raise _no_convergence(model, equations, q, C, t, history, iteration < max_iterations,
+                          max_iterations)

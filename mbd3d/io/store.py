@@ -58,10 +58,13 @@ class ResultsBuffer:
                        turns=None if self.turns is None else self.turns[:k])
 
 
-def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], "Results"],
+def run_keeping_results(loop: Callable[[], tuple[str, str] | None],
+                        partial: Callable[[str, str], "Results"],
                         watch: Any = None) -> "Results":
     """Run an analysis ``loop`` so that no computed time point is lost.
 
+    ``loop()`` returns None when it ran to the end, or ``(status, message)`` when it ended
+    early by design (an event that stops the run).
     ``partial(status, message)`` builds the results of the time points done so far. On an error
     they are attached to it (``error.results``) before it propagates; on Ctrl-C they are
     returned with status "interrupted". ``watch`` (:class:`mbd3d.io.observers.Watch`) is started
@@ -71,7 +74,7 @@ def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], 
     if watch is not None:
         watch.start()
     try:
-        loop()
+        ending = loop()
     except KeyboardInterrupt:
         results = partial("interrupted", "interrupted by the user; the results end at the last "
                                          "completed time point")
@@ -85,7 +88,7 @@ def run_keeping_results(loop: Callable[[], None], partial: Callable[[str, str], 
             watch.finish(results, failing=True)
         raise
     else:
-        results = partial("complete", "")
+        results = partial(*(ending or ("complete", "")))
     if watch is not None:
         watch.finish(results, failing=False)
     return results

@@ -1,0 +1,342 @@
+"""The one path of a time integration, from the request to the Results::
+
+    forward_dynamics(model, times, ...)                    analyses/dynamics.py
+      request = DynamicsRequest(...)                       the arguments, checked once
+      integrator = INTEGRATORS[request.method](request)    analyses/explicit.py, implicit.py
+      drive(request, integrator)                           this module
+        1. the consistent initial state                    analyses/initial.py
+        2. the step loop, until the last output time:
+             segment = integrator.advance(next output)     compiled steps
+             integrator.check(segment)                     collapses, stiffness, passages
+             events: zero crossings on the segment's dense output, located and acted on
+             outputs inside the segment -> ResultsBuffer -> observers
+             integrator.after_step(segment)                projections, chart resets
+        3. the buffer -> Results                           io/store.py
+
+An integrator (:class:`Integrator`) owns its method's state between steps; the driver owns the
+order of the stages, the outputs, the events and the observers, so that a new integrator or a
+new kind of event is written once and every method has it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+from scipy.optimize import brentq
+
+from mbd3d.errors import ModelError
+from mbd3d.io.observers import Observer, Watch
+from mbd3d.io.results import Results
+from mbd3d.io.store import ResultsBuffer, run_keeping_results
+from mbd3d.analyses.initial import consistent_initial_state
+from mbd3d.analyses.kinematics import check_times, project_state
+
+__all__ = ["DynamicsRequest", "Event", "Integrator", "Segment", "drive"]
+
+
+def _is_number(value) -> bool:
+    """A real number (not a flag, a string or an array)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(
+        value, (bool, np.bool_))
+
+
+@dataclass(frozen=True)
+class Event:
+    """A zero crossing of a function of the state that forward dynamics locates and acts on.
+
+    Parameters
+    ----------
+    name : str
+        How the event is reported (``results.stats["events"]``).
+    function : callable
+        ``function(t, q, qd) -> float`` with ``t`` [s] and the model's coordinates and rates;
+        continuous in the state. The event is where it changes sign, located on the
+        integrator's dense output to the precision of the time. The function is sampled at
+        a few points of every step, so a crossing and its return within a fraction of a step
+        can go unseen. Spatial models: the positions in ``q`` are absolute, the Rodrigues
+        parameters relative to the integrator's current charts (which move); write events on
+        positions and rates.
+    direction : {0, 1, -1}
+        1: only crossings from negative to positive; -1: from positive to negative; 0: both.
+    action : "record", "stop" or callable
+        "record": note the time and go on; "stop": end the run at the event (the outputs
+        before it are kept, ``status == "stopped"``); a callable ``action(t, q, qd) -> (q, qd)``
+        gives the state to go on from (an impact map: new velocities), which is projected onto
+        the constraints before the integrator restarts there.
+    """
+
+    name: str
+    function: Callable[[float, np.ndarray, np.ndarray], float]
+    direction: int = 0
+    action: Any = "record"
+
+    def __post_init__(self):
+        if not callable(self.function):
+            raise ModelError(f"event '{self.name}': function must be callable as "
+                             f"function(t, q, qd) -> float, got {self.function!r}")
+        if self.direction not in (0, 1, -1):
+            raise ModelError(f"event '{self.name}': direction must be 0, 1 or -1, got "
+                             f"{self.direction!r}")
+        if not (self.action in ("record", "stop") or callable(self.action)):
+            raise ModelError(f"event '{self.name}': action must be 'record', 'stop' or a "
+                             f"callable (t, q, qd) -> (q, qd), got {self.action!r}")
+
+    def value(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        g = self.function(t, q, qd)
+        if not (_is_number(g) and np.isfinite(g)):
+            raise ModelError(f"event '{self.name}': function(t, q, qd) must return a finite "
+                             f"number, returned {g!r} at t = {t:.6g} s")
+        return float(g)
+
+    def crosses(self, g_old: float, g_new: float) -> bool:
+        """A crossing in the event's direction between two values (from exactly zero, where
+        the run restarted at this event, is none)."""
+        up, down = g_old < 0.0 <= g_new, g_old > 0.0 >= g_new
+        return (up and self.direction >= 0) or (down and self.direction <= 0)
+
+
+@dataclass(frozen=True)
+class DynamicsRequest:
+    """The arguments of :func:`mbd3d.forward_dynamics`, checked and normalised once (see there
+    for their meaning and units)."""
+
+    model: Any
+    t: np.ndarray
+    q0: Sequence[float] | None
+    qd0: Sequence[float] | None
+    method: str
+    rtol: float
+    atol: float
+    constraint_tol: float
+    max_step: float
+    step: float | None
+    rho_inf: float
+    hold: Sequence[str | int] | None
+    initial_rates: Mapping[str, float] | None
+    initial_positions: Mapping[str, float] | None
+    strict: bool
+    observers: Sequence[Observer] | None
+    progress: bool | None
+    events: tuple[Event, ...] = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "t", check_times(self.t))
+        if len(self.t) < 2:
+            raise ModelError("forward_dynamics needs at least two output times (start and end)")
+        for label in ("rtol", "atol", "constraint_tol"):
+            value = getattr(self, label)
+            if not (_is_number(value) and np.isfinite(value) and value > 0):
+                raise ModelError(f"{label} must be positive and finite, got {value!r}")
+        if not (_is_number(self.max_step) and self.max_step > 0):  # inf (no limit) is allowed
+            raise ModelError(f"max_step must be a positive time [s] (or inf: no limit), got "
+                             f"{self.max_step!r}")
+        events = tuple(self.events or ())
+        for event in events:
+            if not isinstance(event, Event):
+                raise ModelError(f"events must be mbd3d.Event objects, got {event!r}")
+        object.__setattr__(self, "events", events)
+
+    @property
+    def projection_tol(self) -> float:
+        """Tolerance of the projections of reported states, below ``constraint_tol``."""
+        return self.constraint_tol * 1e-3
+
+    @property
+    def what(self) -> str:
+        return f"forward dynamics of '{self.model.name}'"
+
+
+@dataclass
+class Segment:
+    """What one call of :meth:`Integrator.advance` covered: the accepted steps from ``t_old``
+    to ``t_new`` [s], the last of which has a dense output ``state_at(t) -> (q, qd)`` on
+    ``[t_start, t_new]`` (the coordinates in the integrator's current charts)."""
+
+    t_start: float
+    t_new: float
+    state_at: Callable[[float], tuple[np.ndarray, np.ndarray]]
+    flags: int = 0
+    info: dict = field(default_factory=dict)
+
+
+class Integrator:
+    """One integration method as the driver runs it; see the module doc for the order of the
+    calls. ``stats`` is the run's statistics, which the integrator keeps up to date."""
+
+    stats: dict
+
+    def chart(self) -> np.ndarray | None:
+        """A copy of the current reference rotations (spatial models), else None."""
+        raise NotImplementedError
+
+    def turns(self) -> np.ndarray | None:
+        """A copy of the charts' sign-continuous quaternions (where tracked), else None."""
+        raise NotImplementedError
+
+    def session(self):
+        """A context manager the whole run happens in (the compiled loop's callbacks)."""
+        raise NotImplementedError
+
+    def start(self, t0: float, q: np.ndarray, qd: np.ndarray, redundant: bool) -> tuple:
+        """Set up at the consistent initial state; return its ``(qdd, lam)``."""
+        raise NotImplementedError
+
+    def advance(self, t_target: float, every_step: bool) -> Segment:
+        """Take accepted steps towards ``t_target`` (one when ``every_step``)."""
+        raise NotImplementedError
+
+    def check(self, segment: Segment) -> None:
+        """The method's own watch over a segment: raise on failure, warn, note passages."""
+
+    def output(self, t: float, segment: Segment) -> tuple:
+        """``(q, qd, qdd, lam)`` reported at output time ``t`` inside ``segment``."""
+        raise NotImplementedError
+
+    def after_step(self, segment: Segment) -> None:
+        """Between segments: projections, chart resets."""
+
+    def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """Go on from a new consistent state at ``t`` (after an event's action)."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """At the end of the run, however it ends."""
+
+
+def initial_state(request: DynamicsRequest, integrator: Integrator, redundant_rows
+                  ) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``(q, qd, redundant)`` at ``t[0]``: consistent with the constraints, the holds and the
+    given joint positions and rates (:mod:`mbd3d.analyses.initial`)."""
+    r = request
+    return consistent_initial_state(
+        r.model, r.t[0], r.q0, r.qd0, hold=r.hold, initial_rates=r.initial_rates,
+        initial_positions=r.initial_positions, strict=r.strict, tol=r.constraint_tol,
+        chart=integrator.chart(), stats=integrator.stats, what=r.what,
+        redundant_rows=redundant_rows)
+
+
+#: points of each segment's dense output at which the events' functions are sampled, so that
+#: a function that crosses zero and back within one step (a ball's whole flight in one step of
+#: an integrator that is exact on parabolas) is still seen
+_SAMPLES = 8
+
+
+class _Events:
+    """The events of one run and their functions' values at the last segment's end (None
+    right after a restart at that event: no crossing counts until the state has left it)."""
+
+    def __init__(self, events: tuple[Event, ...], stats: dict):
+        self.events = events
+        self.found = stats.setdefault("events", []) if events else []
+        self.g: list[float | None] = []
+
+    def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        self.g = [event.value(t, q, qd) for event in self.events]
+
+    def locate(self, segment: Segment) -> tuple[float, Event] | None:
+        """The first crossing that acts (stops or restarts the run) in the segment, as
+        ``(time, event)``; the crossings of recording events before it are noted."""
+        if not self.events:
+            return None
+        a, b = segment.t_start, segment.t_new
+        times = [a + (b - a) * j / _SAMPLES for j in range(1, _SAMPLES)] + [b]
+        states = [segment.state_at(t) for t in times]
+        crossings, g_end = [], []
+        for k, event in enumerate(self.events):
+            values = [event.value(t, *state) for t, state in zip(times, states)]
+            t_prev, g_prev = a, self.g[k]
+            for t, g in zip(times, values):
+                if g_prev is not None and event.crosses(g_prev, g):
+                    crossings.append((self._root(event, segment, t_prev, t), k))
+                    break
+                t_prev, g_prev = t, g
+            g_end.append(values[-1])
+        self.g = g_end
+        for te, k in sorted(crossings):
+            event = self.events[k]
+            if event.action != "record":
+                return te, event
+            self.found.append({"name": event.name, "time": te})
+        return None
+
+    @staticmethod
+    def _root(event: Event, segment: Segment, a: float, b: float) -> float:
+        """Where the event's function changes sign between ``a`` and ``b`` [s] on the
+        segment's dense output."""
+        def g(t: float) -> float:
+            return event.value(t, *segment.state_at(t))
+        ga, gb = g(a), g(b)
+        if ga == 0.0:
+            return a
+        if not ga * gb < 0.0:
+            # the dense output ends at the crossing itself, or starts past it (the ends'
+            # values changed sign across a projection between segments): at the end
+            return b
+        eps = np.finfo(float).eps
+        return float(brentq(g, a, b, xtol=4 * eps * max(abs(a), abs(b)), rtol=4 * eps))
+
+    def restarted(self, event: Event, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        self.found.append({"name": event.name, "time": t})
+        self.start(t, q, qd)
+        self.g[self.events.index(event)] = None  # no crossing counts from where it acted
+
+
+def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
+    """Run ``integrator`` over ``request.t`` (see the module doc); the Results of the outputs,
+    kept however the run ends (:func:`mbd3d.io.store.run_keeping_results`)."""
+    t, model = request.t, request.model
+    stats = integrator.stats
+    out = ResultsBuffer(model, "forward dynamics", t, stats)
+    events = _Events(request.events, stats)
+
+    def store(q, qd, qdd, lam) -> None:
+        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns())
+
+    def loop() -> tuple[str, str] | None:
+        q, qd, redundant = initial_state(request, integrator, integrator.rows_dependent)
+        store(q, qd, *integrator.start(float(t[0]), q, qd, redundant))
+        events.start(float(t[0]), q, qd)
+        watch.tick(t[0], 0)
+        while out.done < len(t):
+            segment = integrator.advance(float(t[out.done]), bool(request.events))
+            integrator.check(segment)
+            hit = events.locate(segment)
+            t_end = segment.t_new if hit is None else hit[0]
+            while out.done < len(t) and t[out.done] <= t_end:
+                store(*integrator.output(float(t[out.done]), segment))
+            watch.tick(t_end, stats["steps"])
+            if hit is not None:
+                ending = _act(hit, segment)
+                if ending is not None:
+                    return ending
+                continue
+            if out.done >= len(t):
+                break
+            integrator.after_step(segment)
+        return None
+
+    def _act(hit: tuple[float, Event], segment: Segment) -> tuple[str, str] | None:
+        te, event = hit
+        q, qd = segment.state_at(te)
+        if event.action == "stop":
+            events.found.append({"name": event.name, "time": te})
+            return "stopped", f"stopped by event '{event.name}' at t = {te:.9g} s"
+        q, qd = event.action(te, q.copy(), qd.copy())
+        q, qd = project_state(model, te, np.asarray(q, float), np.asarray(qd, float),
+                              request.projection_tol, integrator.chart(), integrator.redundant)
+        integrator.restart(te, q, qd)
+        events.restarted(event, te, q, qd)
+        return None
+
+    def run() -> tuple[str, str] | None:
+        try:
+            with integrator.session():
+                return loop()
+        finally:
+            integrator.close()
+
+    watch = Watch(request.observers, request.progress, model, t, "forward dynamics",
+                  out.partial)
+    return run_keeping_results(run, out.partial, watch)
