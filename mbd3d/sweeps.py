@@ -20,11 +20,9 @@ its run done again.
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import inspect
 import io
-import itertools
 import json
 import math
 import os
@@ -32,14 +30,15 @@ import sys
 import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
 from mbd3d.errors import MBDError
 from mbd3d.io.files import atomic_write
-from mbd3d.io.exports import format_table, import_pandas
 from mbd3d.io.results import Results
+from mbd3d.sampling import _plain, grid, monte_carlo
+from mbd3d.sweep_table import SweepTable
 
 __all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable"]
 
@@ -92,85 +91,6 @@ class Analysis:
 
     def __call__(self, model) -> Results:
         return self._function()(model, self.t, **{**self.options, "progress": False})
-
-
-def grid(**axes: Iterable) -> list[dict]:
-    """Every combination of the values given per parameter (the last one varies fastest).
-
-    Floats are kept to 15 significant digits, so that ``np.linspace(0.1, 0.5, 9)`` gives
-    0.15, as written, where its binary value prints as 0.15000000000000002.
-
-    >>> grid(speed=[1.0, 2.0], rod=[0.3, 0.4])
-    [{'speed': 1.0, 'rod': 0.3}, {'speed': 1.0, 'rod': 0.4}, {'speed': 2.0, 'rod': 0.3}, {'speed': 2.0, 'rod': 0.4}]
-    >>> grid(speed=np.array([1.0, 2.0]), mode="fast")
-    [{'speed': 1.0, 'mode': 'fast'}, {'speed': 2.0, 'mode': 'fast'}]
-    >>> grid(rod=np.linspace(0.1, 0.2, 3))
-    [{'rod': 0.1}, {'rod': 0.15}, {'rod': 0.2}]
-    """
-    names = list(axes)
-    values = []
-    for name in names:
-        given = axes[name]
-        if isinstance(given, (str, bytes)) or np.ndim(given) == 0:
-            given = [given]  # one value: the parameter is held fixed
-        axis = [_as_given(v) for v in given]
-        if not axis:
-            raise MBDError(f"grid: parameter '{name}' needs a non-empty sequence of values, got "
-                           f"{axes[name]!r}")
-        values.append(axis)
-    return [dict(zip(names, combination)) for combination in itertools.product(*values)]
-
-
-def monte_carlo(n: int, seed: int, **distributions: Any) -> list[dict]:
-    """``n`` random samples of the parameters, reproducible from ``seed``.
-
-    Each parameter is a ``(low, high)`` pair (uniform), a SciPy frozen distribution
-    (``scipy.stats.norm(0.26, 0.001)``), or a function of a ``numpy.random.Generator``
-    returning one value. Parameters are drawn in the order given, sample after sample.
-
-    >>> samples = monte_carlo(3, seed=1, rod=(0.25, 0.27))
-    >>> len(samples), all(0.25 <= s["rod"] <= 0.27 for s in samples)
-    (3, True)
-    """
-    if not (isinstance(n, (int, np.integer)) and n > 0):
-        raise MBDError(f"monte_carlo: n must be a positive number of samples, got {n!r}")
-    rng = np.random.default_rng(seed)
-    draws = {}
-    for name, spec in distributions.items():
-        if hasattr(spec, "rvs"):
-            draws[name] = lambda spec=spec: float(spec.rvs(random_state=rng))
-        elif callable(spec):
-            draws[name] = lambda spec=spec: spec(rng)
-        elif (isinstance(spec, (tuple, list)) and len(spec) == 2
-              and all(np.isfinite(float(v)) for v in spec) and spec[0] < spec[1]):
-            draws[name] = lambda spec=spec: float(rng.uniform(spec[0], spec[1]))
-        else:
-            raise MBDError(f"monte_carlo: parameter '{name}' must be a (low, high) pair with "
-                           "low < high, a scipy.stats frozen distribution or a function of a "
-                           f"numpy Generator, got {spec!r}")
-    samples = []
-    for _ in range(n):
-        samples.append({name: _plain(draw()) for name, draw in draws.items()})
-    return samples
-
-
-def _plain(value: Any) -> Any:
-    """NumPy scalars and arrays as Python numbers and lists, so values serialize to JSON."""
-    if isinstance(value, np.generic) or (isinstance(value, np.ndarray) and value.ndim == 0):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    return value
-
-
-def _as_given(value: Any) -> Any:
-    """A grid value as the user means it: floats rounded to 15 significant digits, which
-    drops the representation error of ``linspace`` and ``arange`` (0.15000000000000002 is
-    0.15) and never changes a number written with 15 digits or fewer."""
-    value = _plain(value)
-    if isinstance(value, float) and math.isfinite(value):
-        return float(f"{value:.15g}")
-    return value
 
 
 def _key(params: Mapping[str, Any], signature: str = "") -> str:
@@ -273,109 +193,6 @@ def _run_one(factory: Callable[..., Any], analysis: Callable[[Any], Results],
         record["metrics"] = {}
     record["wall_time"] = time.perf_counter() - start
     return record
-
-
-class SweepTable:
-    """The outcome of a sweep: one row per run (``dict`` with ``key``, the parameters, the
-    metrics, ``status`` ("ok" or "failed"), ``error`` and ``wall_time`` [s]).
-
-    Attributes
-    ----------
-    rows : list of dict
-        In the order of the points given.
-    parameters, metrics : list of str
-        Column names.
-    folder : str
-        Where the runs are stored.
-    summary : dict
-        ``runs``, ``ok``, ``failed``, ``skipped`` (done before, resumed), ``wall_time`` [s]
-        of this session, ``run_time`` [s] (sum over the runs of this session), ``speedup``
-        (their ratio), ``workers``, ``interrupted``.
-    """
-
-    def __init__(self, rows: list[dict], parameters: list[str], metrics: list[str], folder: str,
-                 summary: dict):
-        self.rows, self.parameters, self.metrics = rows, parameters, metrics
-        self.folder, self.summary = folder, summary
-
-    def __len__(self) -> int:
-        return len(self.rows)
-
-    def __iter__(self):
-        return iter(self.rows)
-
-    def column(self, name: str) -> np.ndarray:
-        """One parameter or metric over the rows; NaN where a run failed (numbers), or an
-        object array (text)."""
-        if name not in self.columns:
-            raise MBDError(f"sweep table has no column '{name}'; columns: "
-                           f"{', '.join(self.columns)}")
-        values = [row.get(name) for row in self.rows]
-        try:
-            return np.array([np.nan if v is None else v for v in values], dtype=float)
-        except (TypeError, ValueError):
-            return np.array(values, dtype=object)
-
-    @property
-    def columns(self) -> list[str]:
-        return ["key", *self.parameters, *self.metrics, "status", "error", "wall_time"]
-
-    @property
-    def failed(self) -> list[dict]:
-        """The rows whose run failed, with their parameters and error messages."""
-        return [row for row in self.rows if row["status"] != "ok"]
-
-    def results(self, row: Mapping[str, Any]) -> dict[str, np.ndarray]:
-        """The full results of a run swept with ``keep_results=True``: the arrays of
-        :meth:`mbd3d.Results.to_npz` (``t``, ``q``, ``qd``, ``qdd``, ``lam``, labels)."""
-        path = os.path.join(self.folder, "runs", f"{row['key']}.npz")
-        if row["status"] != "ok":
-            raise MBDError(f"run {row['key']} ({_describe(row, self)}) failed, so it has no "
-                           f"results: {row['error']}")
-        if not os.path.exists(path):
-            raise MBDError(f"no full results for run {row['key']} ({_describe(row, self)}): "
-                           "sweep with keep_results=True to keep them")
-        with np.load(path) as data:
-            return {name: data[name] for name in data.files}
-
-    def to_pandas(self):
-        """The table as a ``pandas.DataFrame``, one row per run, columns as :attr:`columns`
-        (metric names carry the units their authors gave them). Needs pandas
-        (``pip install "mbd3d[pandas]"``)."""
-        pd = import_pandas()
-        return pd.DataFrame([{c: row.get(c) for c in self.columns} for row in self.rows],
-                            columns=self.columns)
-
-    def to_csv(self, path: str | os.PathLike) -> None:
-        """Write the table (one row per run) to a CSV file, atomically."""
-        def write(f):
-            writer = csv.writer(f, lineterminator="\n")
-            writer.writerow(self.columns)
-            for row in self.rows:
-                writer.writerow(["" if row.get(c) is None else _cell(row.get(c))
-                                 for c in self.columns])
-        atomic_write(path, write, text=True)
-
-    def __repr__(self) -> str:
-        shown = [c for c in self.columns if c not in ("key", "error")]
-        table = format_table({c: [_text(row.get(c)) for row in self.rows] for c in shown},
-                             rows=20)
-        return f"SweepTable({len(self)} runs, {len(self.failed)} failed)\n{table}"
-
-
-def _cell(value: Any) -> Any:
-    # str() of a float is already its shortest round-tripping form
-    return json.dumps(value) if isinstance(value, (list, dict)) else value
-
-
-def _text(value: Any) -> Any:
-    if value is None:
-        return "-"
-    return value if isinstance(value, (int, float)) and not isinstance(value, bool) else str(value)
-
-
-def _describe(row: Mapping[str, Any], table: SweepTable) -> str:
-    return ", ".join(f"{name}={row.get(name)!r}" for name in table.parameters)
 
 
 def sweep(factory: Callable[..., Any], points: Sequence[Mapping[str, Any]],

@@ -7,7 +7,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d.model import constraints
-from mbd3d.numerics import linalg
+from mbd3d.numerics import linalg, patterns
 from mbd3d.model.equations import generalized_forces, mass_matrix
 from mbd3d.mechanisms import pendulum_chain, spatial_chain
 
@@ -16,9 +16,9 @@ def _build(factory, n_links, layout, monkeypatch):
     """The chain with its linear algebra forced to ``layout``."""
     with monkeypatch.context() as patch:
         if layout == "sparse":
-            patch.setattr(linalg, "BANDED_WORK_LIMIT", -1)
+            patch.setattr(patterns, "BANDED_WORK_LIMIT", -1)
         if layout == "banded":
-            patch.setattr(linalg, "RANGE_SPACE_WORK_LIMIT", -1)
+            patch.setattr(patterns, "RANGE_SPACE_WORK_LIMIT", -1)
         model = factory(n_links, sparse=layout != "dense")
     assert model._augmented_pattern.layout == layout
     return model
@@ -103,8 +103,8 @@ def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):
         return b.build(sparse=sparse)
 
     outcomes = []
-    add_to_band = linalg._FixedPattern._add_to_band
-    monkeypatch.setattr(linalg._FixedPattern, "_add_to_band",
+    add_to_band = patterns._FixedPattern._add_to_band
+    monkeypatch.setattr(patterns._FixedPattern, "_add_to_band",
                         lambda self, ab, extra: outcomes.append(add_to_band(self, ab, extra))
                         or outcomes[-1])
     runs = [mb.forward_dynamics(chain(sparse), np.linspace(0.0, 0.05, 6),

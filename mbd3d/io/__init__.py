@@ -6,6 +6,7 @@ Results by concern: :mod:`.results` (:class:`Results`, the one object every anal
 :mod:`.joint_views` (what the results say of a body, a point, a joint), :mod:`.history` (the
 per-quantity histories they are computed from), :mod:`.exports` (columns, CSV, pandas, NPZ,
 terminal tables), :mod:`.joint_coordinates`. Files: :mod:`.files` (written so that they stay
-valid when a run is interrupted), :mod:`.model_file` (YAML model files), :mod:`.urdf`
+valid when a run is interrupted), :mod:`.model_file` (reading YAML model files),
+:mod:`.model_writer` (writing them), :mod:`.urdf`
 (robots). :mod:`.observers`: observers and progress of running analyses.
 """

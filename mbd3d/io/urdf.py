@@ -47,6 +47,51 @@ def load_urdf(path: str | os.PathLike, **options: Any):
     return urdf_builder(path, **options).build()
 
 
+def _read_robot(yourdfpy, path: pathlib.Path, what: str) -> tuple:
+    """The URDF's robot, its links by name, its joints and its root link (in a list of one),
+    refused unless it is one tree."""
+    try:
+        robot = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
+                                   load_collision_meshes=False)
+    except Exception as exc:  # noqa: BLE001 (lxml and yourdfpy raise many kinds)
+        raise ModelError(f"{what} cannot be read: {exc}") from None
+    links = {link.name: link for link in robot.robot.links}
+    joints = list(robot.robot.joints)
+    _check_tree(joints, links, what)
+    children = {joint.child for joint in joints}
+    roots = [name for name in links if name not in children]
+    if len(roots) != 1:
+        raise ModelError(f"{what}: a robot is a tree with one root link; found roots "
+                         f"{', '.join(roots) or 'none'}")
+    return robot, links, joints, roots
+
+
+def _drawing_frames(links: dict, joints: list, root: str, positions: Mapping[str, float],
+                    what: str) -> tuple[dict, list]:
+    """Every link's frame in the drawing (4x4, in the root's frame), from the root down, at
+    the given joint coordinates; and the joints in that order."""
+    frames = {root: np.eye(4)}
+    by_parent: dict[str, list] = {}
+    for joint in joints:
+        by_parent.setdefault(joint.parent, []).append(joint)
+    order = []
+    stack = [root]
+    while stack:
+        parent = stack.pop()
+        for joint in by_parent.get(parent, []):
+            frames[joint.child] = frames[parent] @ _origin(joint.origin) @ _motion(
+                joint, float(positions.get(joint.name, 0.0)), what)
+            order.append(joint)
+            stack.append(joint.child)
+
+    unreached = [name for name in links if name not in frames]
+    if unreached:  # a cycle of joints hanging from no link of the tree
+        raise ModelError(f"{what}: link(s) {', '.join(unreached)} cannot be reached from the "
+                         f"root link '{root}' through the joints; a URDF robot is one tree")
+
+    return frames, order
+
+
 def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float] | None = None,
                  fixed_base: bool = True, drive: Mapping[str, Motion | float] | None = None,
                  gravity=(0.0, 0.0, -9.81), name: str | None = None, builder=None,
@@ -92,19 +137,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     what = f"URDF '{path}'"
     files_read = files_read if files_read is not None else []
     files_read.append(str(path.resolve()))
-    try:
-        robot = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
-                                   load_collision_meshes=False)
-    except Exception as exc:  # noqa: BLE001 (lxml and yourdfpy raise many kinds)
-        raise ModelError(f"{what} cannot be read: {exc}") from None
-    links = {link.name: link for link in robot.robot.links}
-    joints = list(robot.robot.joints)
-    _check_tree(joints, links, what)
-    children = {joint.child for joint in joints}
-    roots = [name for name in links if name not in children]
-    if len(roots) != 1:
-        raise ModelError(f"{what}: a robot is a tree with one root link; found roots "
-                         f"{', '.join(roots) or 'none'}")
+    robot, links, joints, roots = _read_robot(yourdfpy, path, what)
     positions = dict(joint_positions or {})
     names = {joint.name for joint in joints}
     for key in list(positions) + list(drive or {}):
@@ -117,25 +150,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     for key, motion in drive.items():
         positions.setdefault(key, motion.evaluate(0.0)[0])
 
-    # link frames in the drawing, from the root down
-    frames = {roots[0]: np.eye(4)}
-    by_parent: dict[str, list] = {}
-    for joint in joints:
-        by_parent.setdefault(joint.parent, []).append(joint)
-    order = []
-    stack = [roots[0]]
-    while stack:
-        parent = stack.pop()
-        for joint in by_parent.get(parent, []):
-            frames[joint.child] = frames[parent] @ _origin(joint.origin) @ _motion(
-                joint, float(positions.get(joint.name, 0.0)), what)
-            order.append(joint)
-            stack.append(joint.child)
-
-    unreached = [name for name in links if name not in frames]
-    if unreached:  # a cycle of joints hanging from no link of the tree
-        raise ModelError(f"{what}: link(s) {', '.join(unreached)} cannot be reached from the "
-                         f"root link '{roots[0]}' through the joints; a URDF robot is one tree")
+    frames, order = _drawing_frames(links, joints, roots[0], positions, what)
 
     b = builder if builder is not None else ModelBuilder(
         dim=3, gravity=gravity, name=name or robot.robot.name or path.stem)

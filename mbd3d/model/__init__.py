@@ -1,8 +1,8 @@
 """The model and its elements: bodies and their body types, joints' constraint primitives,
 force elements, motions, and the equations they make.
 
-Modules: :mod:`.builder` (:class:`ModelBuilder` and the built :class:`Model`), :mod:`.body`
-(bodies, the body-type interface, frames), :mod:`.spatial` (spatial bodies in Rodrigues
+Modules: :mod:`.builder` (:class:`ModelBuilder`), :mod:`.built` (the built :class:`Model`),
+:mod:`.body` (bodies, the body-type interface, frames), :mod:`.spatial` (spatial bodies in Rodrigues
 parameters; planar bodies are :mod:`mbd3d.planar`), :mod:`.element` and :mod:`.primitives`
 (constraint elements and the primitives they are made of), :mod:`.constraints` (evaluating
 ``C``, ``Cq`` and the velocity and acceleration right-hand sides), :mod:`.equations` (mass

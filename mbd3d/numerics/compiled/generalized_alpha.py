@@ -73,7 +73,7 @@ def penalties_into(model, penalty_arrays, blocks, data, beta_prime, relative_pen
 def iteration_values_into(penalty_arrays, beta_prime, blocks, penalty, data, jac_rows,
                           values):
     """The entries of ``beta' M + Cq^T diag(p) Cq`` in the order of the model's
-    :class:`~mbd3d.numerics.linalg.PenaltyPattern` into ``values``: the mass blocks, then the
+    :class:`~mbd3d.numerics.patterns.PenaltyPattern` into ``values``: the mass blocks, then the
     products of every pair of Jacobian entries of one row, each added at its target."""
     target, first, second = penalty_arrays.target, penalty_arrays.first, penalty_arrays.second
     values[:] = 0.0

@@ -7,7 +7,7 @@ block per body) is, eliminating ``qdd = M^-1 (Q - Cq^T lam)``::
 
 ``S`` couples two constraint rows only when they act on a common body: for a chain it is
 block tridiagonal, and after a reverse Cuthill-McKee ordering of the rows
-(:class:`mbd3d.numerics.linalg.RangeSpacePattern`) it is a narrow band whatever the chain's length.
+(:class:`mbd3d.numerics.patterns.RangeSpacePattern`) it is a narrow band whatever the chain's length.
 Each body contributes ``Y_b^T Y_b`` with ``Y_b = L_b^-1 Cq_b^T`` (``M_b = L_b L_b^T``), and
 ``S`` is factored by a banded Cholesky. On a chain that takes several times fewer operations
 than the LU of the augmented matrix, whose band is twice as wide and indefinite.
@@ -130,7 +130,7 @@ def range_space_factor(nc, blocks, data, slot, body_start, positions, k, pivot_t
     ``nc``: coordinates per body, a constant where the body type is (the loops over a body's
     coordinates are then unrolled). ``blocks`` (bodies, nc, nc): the mass blocks, overwritten
     by their factors. ``data`` (nnz,): the Jacobian's entries in the model's order. The
-    pattern (:class:`mbd3d.numerics.linalg.RangeSpacePattern`): entry ``p`` goes to
+    pattern (:class:`mbd3d.numerics.patterns.RangeSpacePattern`): entry ``p`` goes to
     ``jacobian[slot[p]]``; body ``b``'s rows ``Cq_b`` are rows ``body_start[b]`` to
     ``body_start[b + 1]`` of ``jacobian`` (nc values each; overwritten by ``Y_b^T``) and the
     rows at positions ``positions[...]`` (increasing) of the ordering of ``S``, of

@@ -84,11 +84,11 @@ MODEL_FIELDS = (
 )
 
 #: the structure of Cq M^-1 Cq^T of a model of the RANGE layout
-#: (mbd3d.numerics.linalg.RangeSpacePattern; see mbd3d.numerics.compiled.range_space); None for
+#: (mbd3d.numerics.patterns.RangeSpacePattern; see mbd3d.numerics.compiled.range_space); None for
 #: the other layouts, whose compiled functions then contain none of that solve
 RANGE_FIELDS = ("slot", "body_start", "positions", "row_position", "bandwidth")
 
-#: generalized-alpha's iteration matrix (mbd3d.numerics.linalg.PenaltyPattern: where the mass
+#: generalized-alpha's iteration matrix (mbd3d.numerics.patterns.PenaltyPattern: where the mass
 #: blocks and the products of Jacobian entries go, its layout and scale; see
 #: mbd3d.numerics.compiled.generalized_alpha), and the model's coordinate and mass scales
 PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat", "kl", "ku",
