@@ -15,6 +15,10 @@ against the body kinematics, so the same classes serve every body type that supp
   :class:`CamProfile`), :class:`FlatFaceFollower`, :class:`RollingDisc` (on a straight
   track); spatial, :class:`RollingDiscOnPlane` (nonholonomic).
 - Drivers: :class:`CoordinateDriver`, :class:`RotationDriver`, :class:`TranslationDriver`.
+
+What belongs here: constraint elements a user adds to a model, each a composition of
+primitives; a new kind of constraint row belongs in :mod:`mbd3d.model.primitives` and
+:mod:`mbd3d.numerics.compiled.rows`, and the joint that uses it here.
 """
 
 from mbd3d.joints.cams import CamFollower, CamProfile, FlatFaceFollower

@@ -13,6 +13,10 @@ reaction and effort arrows, point trails); the plots of the kinematic and force 
 energies and the constraint residuals are on the right. A script that records its results
 takes ``--rrd FILE`` and ``--show`` through :func:`run_script`, and checks where its
 recording goes before computing with :func:`check_recording_first`, as the examples do.
+
+What belongs here: everything that talks to Rerun (recording, viewing, reading recordings
+back); nothing in the analyses depends on it, and it only reads :class:`mbd3d.Results` and
+the model.
 """
 
 from mbd3d.viewer.modes import record_modes

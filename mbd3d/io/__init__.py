@@ -7,6 +7,8 @@ Results by concern: :mod:`.results` (:class:`Results`, the one object every anal
 per-quantity histories they are computed from), :mod:`.exports` (columns, CSV, pandas, NPZ,
 terminal tables), :mod:`.joint_coordinates`. Files: :mod:`.files` (written so that they stay
 valid when a run is interrupted), :mod:`.model_file` (reading YAML model files),
-:mod:`.model_writer` (writing them), :mod:`.urdf`
-(robots). :mod:`.observers`: observers and progress of running analyses.
+:mod:`.model_writer` (writing them), :mod:`.urdf` (robots). :mod:`.observers`: observers and progress of running analyses.
+
+What belongs here: what crosses the boundary of a run, into it (model files, URDF) or out
+of it (results, tables, exports, observers); not the equations or the analyses themselves.
 """
