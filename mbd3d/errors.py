@@ -84,6 +84,11 @@ class StiffnessWarning(UserWarning):
     spring or damper), not by the accuracy asked for; the message names the element."""
 
 
+class LiftOffWarning(UserWarning):
+    """A cam's contact force had to pull: a real follower would leave the cam there, and the
+    motion reported after that time (the follower held on the cam) is not physical."""
+
+
 def user_stacklevel() -> int:
     """The ``stacklevel`` for :func:`warnings.warn`, called where the warning is raised, that
     points the warning at the first caller outside mbd3d: the user's line, not mbd3d's."""

@@ -8,6 +8,7 @@ follower conserve energy; flat-faced followers read the support function.
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -124,7 +125,8 @@ def test_contact_points_lie_on_roller_and_face():
 def test_lift_off_is_reported_where_the_contact_would_pull():
     speed = 4 * SPEED  # four turns a second: the return decelerates faster than g
     t = np.linspace(0.0, 0.25, 91)
-    fast = mb.inverse_dynamics(cam_and_follower(spring=0.0, speed=speed), t)  # weight only
+    with pytest.warns(mb.LiftOffWarning, match="cam 'contact' would have to pull"):
+        fast = mb.inverse_dynamics(cam_and_follower(spring=0.0, speed=speed), t)  # weight only
     force = fast.joint("contact").contact_force
     assert np.any(force < 0) and np.any(force > 0)
     np.testing.assert_array_equal(fast.joint("contact").lift_off, t[force < 0])
@@ -132,6 +134,26 @@ def test_lift_off_is_reported_where_the_contact_would_pull():
     # it down faster than g
     pulling = speed ** 2 * law(speed * t, 2) < -G
     np.testing.assert_array_equal(force < 0, pulling)
+
+
+@pytest.mark.parametrize("analysis", ["inverse dynamics", "forward dynamics"])
+def test_lift_off_is_warned_at_the_first_time_the_contact_would_pull(analysis):
+    speed = 4 * SPEED
+    t = np.linspace(0.0, 0.25, 91)
+    model = cam_and_follower(spring=0.0, speed=speed)
+    # by hand, as above: the weight alone holds the follower on
+    first = t[np.argmax(speed ** 2 * law(speed * t, 2) < -G)]
+    run = mb.inverse_dynamics if analysis == "inverse dynamics" else mb.forward_dynamics
+    with pytest.warns(mb.LiftOffWarning) as caught:
+        run(model, t)
+    (warning,) = [w for w in caught if w.category is mb.LiftOffWarning]
+    assert f"{analysis} of 'cam': cam 'contact'" in str(warning.message)
+    assert f"at t = {first:.6g} s" in str(warning.message)
+    assert warning.filename == __file__  # points at the caller's line, not into mbd3d
+    # held on by a spring strong enough, it never has to pull: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.LiftOffWarning)
+        run(cam_and_follower(spring=2000.0, speed=speed), t)
 
 
 @pytest.mark.parametrize("flat", [False, True], ids=["roller", "flat face"])

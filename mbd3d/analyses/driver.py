@@ -32,6 +32,7 @@ from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
 from mbd3d.analyses.initial import consistent_initial_state
 from mbd3d.analyses.kinematics import check_times, project_state
+from mbd3d.analyses.lift_off import warn_lift_off
 
 __all__ = ["DynamicsRequest", "Event", "Integrator", "Segment", "drive"]
 
@@ -339,4 +340,6 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
 
     watch = Watch(request.observers, request.progress, model, t, "forward dynamics",
                   out.partial)
-    return run_keeping_results(run, out.partial, watch)
+    results = run_keeping_results(run, out.partial, watch)
+    warn_lift_off(results, "forward dynamics")
+    return results

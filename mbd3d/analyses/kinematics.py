@@ -29,6 +29,7 @@ from mbd3d.analyses.position import (MAX_AUGMENTED_LAGRANGIAN, hold_indices, sin
 from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
+from mbd3d.analyses.lift_off import warn_lift_off
 
 __all__ = ["project_state", "solve_velocity", "solve_acceleration", "kinematic_analysis",
            "inverse_dynamics",
@@ -416,7 +417,10 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
             watch.tick(tk, out.done)
 
     watch = Watch(observers, progress, model, t, analysis, out.partial)
-    return run_keeping_results(loop, out.partial, watch)
+    results = run_keeping_results(loop, out.partial, watch)
+    if with_forces:
+        warn_lift_off(results, analysis)
+    return results
 
 
 def kinematic_analysis(model, times: Sequence[float], q_guess: Sequence[float] | None = None, *,
