@@ -27,7 +27,7 @@ from mbd3d.analyses.driver import Event
 from mbd3d.model.equations import kinetic_energy, potential_energy
 from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
                           NotFullyDrivenError, OverDrivenError, SingularJacobianError,
-                          LiftOffWarning, StiffnessWarning)
+                          AccuracyWarning, LiftOffWarning, StiffnessWarning)
 from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.model.friction import JointFriction
 from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
@@ -65,5 +65,5 @@ __all__ = [
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",
     "AssemblyError",
-    "SingularJacobianError", "IntegrationError", "StiffnessWarning", "LiftOffWarning", "InitialStateWarning",
+    "SingularJacobianError", "IntegrationError", "StiffnessWarning", "LiftOffWarning", "AccuracyWarning", "InitialStateWarning",
 ]

@@ -84,6 +84,11 @@ class StiffnessWarning(UserWarning):
     spring or damper), not by the accuracy asked for; the message names the element."""
 
 
+class AccuracyWarning(UserWarning):
+    """An integration whose settings cannot give the accuracy its results seem to have (a
+    fixed step far too long for the motion); the message says what to change."""
+
+
 class LiftOffWarning(UserWarning):
     """A cam's contact force had to pull: a real follower would leave the cam there, and the
     motion reported after that time (the follower held on the cam) is not physical."""

@@ -5,6 +5,7 @@ the explicit integrators on the same model, and its own order of convergence."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -227,3 +228,18 @@ def test_spring_damper_tangent_equals_finite_differences_at_free_length(dim):
              for state in ((q + e, qd), (q - e, qd), (q, qd + e), (q, qd - e))]
         numeric[:, j] = -(Q[0] - Q[1]) / 2e-6 - weight * (Q[2] - Q[3]) / 2e-6
     np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
+
+
+def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
+    # the pendulum released from the horizontal swings through the bottom at about 5.4 rad/s
+    # (energy: omega^2 = 3 g / L for a uniform rod): a step of 10 s (landing on t = 1 s) takes
+    # it a radian and more per step, a wrong swing (-4.13 rad at t = 1 s, against -3.13)
+    model = pendulum_chain(1, link_length=1.0, link_mass=1.0, angle=0.0)
+    with pytest.warns(mb.AccuracyWarning, match="body 'link1' turned by .* rad in the step"):
+        mb.forward_dynamics(model, [0.0, 1.0], method="generalized-alpha", step=10.0)
+    # 0.11 rad per step at the bottom: no warning, and the swing within 1e-3 rad of DOP853's
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.AccuracyWarning)
+        res = mb.forward_dynamics(model, [0.0, 1.0], method="generalized-alpha", step=0.02)
+    exact = mb.forward_dynamics(model, [0.0, 1.0], method="DOP853", rtol=1e-10)
+    assert abs(res.body("link1").angle[-1] - exact.body("link1").angle[-1]) < 1e-3

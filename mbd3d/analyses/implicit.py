@@ -36,6 +36,7 @@ method is second order.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,14 +45,18 @@ import scipy.sparse as sp
 from mbd3d.model import constraints
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.model.equations import augmented_accelerations, generalized_forces, python_parts
-from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.errors import AccuracyWarning, IntegrationError, ModelError, user_stacklevel
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
 from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.passages import PassageWatch
 
-__all__ = ["GeneralizedAlpha", "GeneralizedAlphaIntegrator"]
+__all__ = ["GeneralizedAlpha", "GeneralizedAlphaIntegrator", "LARGEST_TURN"]
+
+#: the largest turn of a body in one step [rad] before generalized-alpha warns that its step is
+#: too long for the motion (its phase error per step is about (h omega)^2 / 12: 8 % here)
+LARGEST_TURN = 1.0
 
 
 @dataclass(frozen=True)
@@ -212,6 +217,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self._turns = None if model.charts0 is None else to_quaternion(model.charts0)
         self.charts = model.charts0
         self.meshes = constraints.has_spatial_meshes(model)
+        self._turn_warned = False
         self.newton = _NewtonStep(model, self.coefficients, self.stats, self.newton_tol,
                                   self.relative_penalty, self.max_newton_iterations,
                                   request.projection_tol)
@@ -310,11 +316,31 @@ class GeneralizedAlphaIntegrator(Integrator):
         return Segment(t_old, t_new, state_at, info={"indicator": S.indicator, "t_step": t_step})
 
     def check(self, segment: Segment) -> None:
+        self._check_turn(segment.t_new - segment.t_start, segment.t_new)
         self.passages.step(segment.info["t_step"], segment.info["indicator"], self.q, self.charts)
         if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.qd)):
             raise IntegrationError(f"forward dynamics of '{self.model.name}': the state "
                                    f"became non-finite at t = {segment.info['t_step']:.6g} s",
                                    time=segment.info["t_step"])
+
+    def _check_turn(self, h: float, t: float) -> None:
+        """Warn once when a body turned by more than :data:`LARGEST_TURN` in the step ``h``:
+        a second-order method's error per step grows as (h omega)^2, and such a step gives a
+        wrong motion however well Newton converges."""
+        if self._turn_warned or not np.all(np.isfinite(self.qd)):
+            return
+        model = self.model
+        v = model.body_type.velocities(self.q, self.qd).reshape(model.n_bodies, -1)
+        turn = h * np.linalg.norm(v[:, model.dim:], axis=1)
+        k = int(np.argmax(turn)) if len(turn) else 0
+        if len(turn) and turn[k] > LARGEST_TURN:
+            self._turn_warned = True
+            warnings.warn(AccuracyWarning(
+                f"forward dynamics of '{model.name}' (generalized-alpha): body "
+                f"'{model.bodies[k].name}' turned by {turn[k]:.3g} rad in the step of {h:.3g} s "
+                f"ending at t = {t:.6g} s; a step this long for the motion gives a wrong swing "
+                f"(the error grows as step^2). Use step <= {h * 0.1 / turn[k]:.2g} s (a tenth "
+                "of a radian per step) or less."), stacklevel=user_stacklevel())
 
     def output(self, t: float, segment: Segment) -> tuple:
         # outputs are step ends; the reported velocities are projected onto Cq qd = -Ct, while
