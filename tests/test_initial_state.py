@@ -126,3 +126,10 @@ def test_initial_positions_that_cannot_hold_together_are_named():
     with pytest.raises(mb.AssemblyError, match="O = 2, rail = 0.5"):
         mb.forward_dynamics(slider_crank(crank_speed=None), [0.0, 0.01],
                             initial_positions={"O": 2.0, "rail": 0.5})
+    # a name that is neither a joint nor a coordinate is reported as the argument it came in
+    with pytest.raises(mb.ModelError, match="initial_positions names 'nope'"):
+        mb.forward_dynamics(slider_crank(crank_speed=None), [0.0, 0.01],
+                            initial_positions={"nope": 1.0})
+    with pytest.raises(mb.ModelError, match="initial_rates names 'nope'"):
+        mb.forward_dynamics(slider_crank(crank_speed=None), [0.0, 0.01],
+                            initial_rates={"nope": 1.0})

@@ -87,7 +87,8 @@ def place_joints(model, t: float, q: np.ndarray, chart, positions: Mapping[str, 
     angular = np.zeros(len(names), dtype=bool)
     q = np.array(q, dtype=float)
     for _ in range(50):
-        H, _, _ = rate_rows(model, t, q, chart, {name: 1.0 for name in names}, what)
+        H, _, _ = rate_rows(model, t, q, chart, {name: 1.0 for name in names}, what,
+                            "initial_positions")
         sample = Results(model, "positions", np.array([t]), q[None], np.zeros((1, len(q))),
                          np.zeros((1, len(q))), charts=None if chart is None else chart[None])
         values = np.empty(len(names))
@@ -152,9 +153,10 @@ def given_rates(model, qd0) -> np.ndarray:
     return given
 
 
-def rate_rows(model, t: float, q: np.ndarray, chart, rates: Mapping[str, float], what: str
-              ) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """``(H (r, n), values (r,), labels)``: each asked rate as a row linear in ``qd``."""
+def rate_rows(model, t: float, q: np.ndarray, chart, rates: Mapping[str, float], what: str,
+              argument: str = "initial_rates") -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(H (r, n), values (r,), labels)``: each asked rate as a row linear in ``qd``
+    (``argument``: the user's argument that named them, for the messages)."""
     from mbd3d.io.results import Results  # noqa: PLC0415
 
     n = model.n_coordinates
@@ -163,7 +165,7 @@ def rate_rows(model, t: float, q: np.ndarray, chart, rates: Mapping[str, float],
     unit = None
     for name, value in rates.items():
         if not np.isfinite(value):
-            raise ModelError(f"{what}: initial_rates['{name}'] must be a finite number")
+            raise ModelError(f"{what}: {argument}['{name}'] must be a finite number")
         body, _, coordinate = name.rpartition(".")
         if body in {b.name for b in model.bodies} and coordinate in \
                 model.body_type.coordinate_names:
@@ -173,7 +175,7 @@ def rate_rows(model, t: float, q: np.ndarray, chart, rates: Mapping[str, float],
             joint, kind = (body, coordinate) if coordinate in ("angle", "displacement") \
                 else (name, None)
             if joint not in {e.name for e in model.joints}:
-                raise ModelError(f"{what}: initial_rates names '{name}', neither a joint nor a "
+                raise ModelError(f"{what}: {argument} names '{name}', neither a joint nor a "
                                  "coordinate ('body.coordinate'); joints: "
                                  f"{', '.join(e.name for e in model.joints)}")
             if unit is None:
@@ -185,7 +187,7 @@ def rate_rows(model, t: float, q: np.ndarray, chart, rates: Mapping[str, float],
                 row = (history.displacement_rate if kind == "displacement" else
                        history.angle_rate if kind == "angle" else _single_rate(history))
             except ModelError as exc:
-                raise ModelError(f"{what}: initial_rates['{name}']: {exc}") from None
+                raise ModelError(f"{what}: {argument}['{name}']: {exc}") from None
         rows.append(np.array(row, dtype=float))
         values.append(float(value))
         labels.append(name)
