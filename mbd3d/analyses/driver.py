@@ -7,7 +7,7 @@
         1. the consistent initial state                    analyses/initial.py
         2. the step loop, until the last output time:
              segment = integrator.advance(next output)     compiled steps
-             integrator.check(segment)                     collapses, stiffness, passages
+             integrator.check(segment)                     collapses, stiffness
              events: zero crossings on the segment's dense output, located and acted on
              outputs inside the segment -> ResultsBuffer -> observers
              integrator.after_step(segment)                projections, chart resets
@@ -189,7 +189,8 @@ class Integrator:
         raise NotImplementedError
 
     def check(self, segment: Segment) -> None:
-        """The method's own watch over a segment: raise on failure, warn, note passages."""
+        """The method's own watch over a segment: raise on failure, warn (what it checks at
+        every step, such as generalized-alpha's passages, it checks inside :meth:`advance`)."""
 
     def output(self, t: float, segment: Segment) -> tuple:
         """``(q, qd, qdd, lam)`` reported at output time ``t`` inside ``segment``."""
