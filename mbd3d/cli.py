@@ -114,7 +114,7 @@ def _parser() -> argparse.ArgumentParser:
 
 # -- helpers -----------------------------------------------------------------------------------
 def _changes(settings: Sequence[str]) -> dict:
-    import yaml  # noqa: PLC0415
+    from mbd3d.io.yaml12 import load_value  # noqa: PLC0415
 
     from mbd3d.errors import ModelError  # noqa: PLC0415
     changes = {}
@@ -122,7 +122,7 @@ def _changes(settings: Sequence[str]) -> dict:
         key, sep, text = setting.partition("=")
         if not sep or not key:
             raise ModelError(f"--set {setting!r}: give FIELD=VALUE, e.g. bodies.crank.mass=2")
-        changes[key] = yaml.safe_load(text)  # a number, a list [1, 2], a word
+        changes[key] = load_value(text)  # a number, a list [1, 2], a word
     return changes
 
 
@@ -272,7 +272,7 @@ def _view(args) -> int:
 
 
 def _sweep(args) -> int:
-    import yaml  # noqa: PLC0415
+    from mbd3d.io.yaml12 import load_value  # noqa: PLC0415
 
     from mbd3d import sweeps  # noqa: PLC0415
     from mbd3d.errors import ModelError  # noqa: PLC0415
@@ -282,7 +282,7 @@ def _sweep(args) -> int:
     axes = {}
     for item in args.grid:
         key, sep, text = item.partition("=")
-        values = yaml.safe_load(f"[{text}]") if sep else None
+        values = load_value(f"[{text}]") if sep else None
         if not key or not values:
             raise ModelError(f"--grid {item!r}: give FIELD=V1,V2,..., e.g. "
                              "joints.motor.motion.rate=5,10,20")

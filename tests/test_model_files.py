@@ -177,6 +177,47 @@ analyses:
 """
 
 
+def test_values_are_read_as_yaml_1_2(tmp_path):
+    # YAML 1.1 (PyYAML's reading) makes 1e-10 a string, 010 eight, 1:30 ninety and no False
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD.replace("mass: 1.0", "mass: 010").replace("name: bar", "name: no")
+                    .replace("body_j: bar", "body_j: no").replace("name: motor", "name: 1:30")
+                    .replace("points: 11}}", "points: 11}, tol: 1e-10}"))
+    read_back = read(path)
+    assert read_back.model.body("no").mass == 10.0
+    assert "1:30" in [joint.name for joint in read_back.model.joints]
+    assert read_back.analyses[0].options["tol"] == 1e-10
+
+
+@pytest.mark.parametrize("text, message", [
+    (GOOD.replace("name: motor\n", "name: motor\n    name: motors\n"),
+     r"m.yaml:11: the key 'name' appears twice in this mapping \(lines 10 and 11\)"),
+    (GOOD.replace("position: [0.5, 0.0]", "position: &p [0.5, 0.0]")
+     .replace("at: [0.0, 0.0]", "at: *p"), r"m.yaml:8: anchors and aliases .* are not read"),
+    (GOOD.replace("mass: 1.0", "mass: !!python/object/apply:os.system [echo]"),
+     r"m.yaml:6: the tag 'tag:yaml.org,2002:python/object/apply:os.system' is not read"),
+    ("a: " + "[" * 200 + "]" * 200, r"m.yaml(:1)?: (not valid YAML: exceeded maximum nesting|"
+                                      r"nested more than 64 levels)"),
+])
+def test_duplicate_keys_aliases_and_foreign_tags_are_refused_by_line(tmp_path, text, message):
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    with pytest.raises(ModelFileError, match=message):
+        read(path)
+
+
+def test_an_alias_bomb_is_refused_at_once(tmp_path):
+    # nine levels of nine aliases: 9^9 strings once expanded (the 822-byte file of the report
+    # exhausted memory through the line map), refused at the first alias without expanding
+    lines = ['bodies: &a ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    for k in range(1, 9):
+        lines.append(f"b{k}: &{chr(97 + k)} [" + ", ".join([f"*{chr(96 + k)}"] * 9) + "]")
+    path = tmp_path / "bomb.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ModelFileError, match=r"bomb.yaml:2: anchors and aliases"):
+        read(path)
+
+
 @pytest.mark.parametrize("change, message", [
     (("bodies:", "bodys:"), r"m.yaml:5: bodys: unknown field \(did you mean 'bodies'\?"),
     (("body_j: bar", "body_j: bra"), r"m.yaml:8: joints\[0\].body_j: no body or joint 'bra'.*"
@@ -311,3 +352,14 @@ def test_careless_files_are_refused_by_name_not_with_a_traceback(tmp_path, conte
     path.write_bytes(content)
     with pytest.raises(ModelFileError, match=message):
         read(path)
+
+
+def test_a_file_too_large_to_be_a_model_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    import mbd3d.io.model_file as model_file
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD)
+    monkeypatch.setattr(model_file, "MAX_FILE_BYTES", len(GOOD) - 1)
+    with pytest.raises(ModelFileError, match=r"m.yaml: 0 MB is not a model file"):
+        read(path)
+    monkeypatch.setattr(model_file, "MAX_FILE_BYTES", len(GOOD))
+    assert read(path).model.name == "pendulum"

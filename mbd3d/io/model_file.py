@@ -44,8 +44,10 @@ arguments of that analysis function, and optionally where ``mbd3d run`` writes t
 mesh file or a primitive (``{box: [x, y, z]}``, ``{cylinder: [radius, height]}``,
 ``{sphere: radius}``).
 
-A mistake is reported with the file, the line and the field: ``model.yaml:14:
-joints[3].axis: ...``.
+The file is read as YAML 1.2 (:mod:`mbd3d.io.yaml12`): ``1e-10`` is a number, ``010`` is ten,
+``no`` and ``1:30`` are strings; a key given twice, anchors and aliases, and tags other than
+YAML's own are refused. A mistake is reported with the file, the line and the field:
+``model.yaml:14: joints[3].axis: ...``.
 """
 
 from __future__ import annotations
@@ -60,10 +62,14 @@ from typing import Any, Callable
 import numpy as np
 
 from mbd3d.errors import ModelError, did_you_mean
+from mbd3d.io.yaml12 import YamlError, load_yaml
 
 __all__ = ["AnalysisSpec", "ModelFile", "load", "read", "FORMAT_VERSION"]
 
 FORMAT_VERSION = 1
+#: the largest model file read [bytes]: reading takes about 2 s per MB (libyaml's tree and the
+#: YAML 1.2 reading of it), so a hostile file cannot hold a run for more than a few minutes
+MAX_FILE_BYTES = 64_000_000
 _TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "urdf", "bodies", "joints", "forces",
               "analyses")
 _URDF_FIELDS = ("file", "fixed_base", "joint_positions", "drive")
@@ -130,10 +136,13 @@ def read(path: str | os.PathLike, changes: dict[str, Any] | None = None) -> Mode
     ``{"bodies.crank.mass": 2.0, "joints.motor.motion.rate": 10.0}`` (bodies and elements
     by name, list entries by index), as a parameter sweep does.
     """
-    import yaml  # noqa: PLC0415
-
     path = str(path)
     try:
+        size = pathlib.Path(path).stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise ModelFileError(f"{path}: {size / 1e6:.0f} MB is not a model file (at most "
+                                 f"{MAX_FILE_BYTES / 1e6:.0f} MB are read: a model file "
+                                 "describes a mechanism; its reading time grows with its size)")
         text = pathlib.Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ModelFileError(f"model file '{path}' cannot be read: {exc.strerror}") from None
@@ -143,37 +152,16 @@ def read(path: str | os.PathLike, changes: dict[str, Any] | None = None) -> Mode
                              "a model file is YAML in UTF-8: save it so, or check that "
                              "this is the model file") from None
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-        lines = _line_map(node)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark is not None else path
-        raise ModelFileError(f"{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
-    except RecursionError:
-        raise ModelFileError(f"{path}: nested too deeply to be a model file") from None
+        data, lines = load_yaml(text)
+    except YamlError as exc:
+        where = path if exc.line is None else f"{path}:{exc.line}"
+        raise ModelFileError(f"{where}: {exc}") from None
     reader = _Reader(path, lines)
     if not isinstance(data, dict):
         raise reader.error((), "a model file is a mapping with bodies:, joints:, ...")
     for key, value in (changes or {}).items():
         _apply_change(reader, data, key, value)
     return reader.build(data)
-
-
-def _line_map(node, path: tuple = ()) -> dict[tuple, int]:
-    """The line (1-based) of every value in the composed YAML tree, by field path."""
-    import yaml  # noqa: PLC0415
-
-    lines = {path: node.start_mark.line + 1} if node is not None else {}
-    if isinstance(node, yaml.MappingNode):
-        for key, value in node.value:
-            lines[path + (key.value,)] = key.start_mark.line + 1
-            lines.update({k: v for k, v in _line_map(value, path + (key.value,)).items()
-                          if k != path + (key.value,)})
-    elif isinstance(node, yaml.SequenceNode):
-        for index, item in enumerate(node.value):
-            lines.update(_line_map(item, path + (index,)))
-    return lines
 
 
 def _apply_change(reader, data: dict, key: str, value: Any) -> None:
