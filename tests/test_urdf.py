@@ -125,7 +125,7 @@ def test_what_urdf_import_does_not_model_is_reported(tmp_path):
     with pytest.raises(mb.ModelError, match="no joint 'joint9'"):
         urdf_builder(PUMA, drive={"joint9": 0.0})
     (tmp_path / "broken.urdf").write_text(text[:500])
-    with pytest.raises(mb.ModelError, match="cannot be read"):
+    with pytest.raises(mb.ModelError, match=r"broken\.urdf' is not well-formed XML \(.*line 7"):
         urdf_builder(tmp_path / "broken.urdf")
 
 
@@ -205,13 +205,44 @@ def test_a_broken_urdf_is_refused_not_loaded_as_part_of_a_robot(tmp_path):
     cut = tmp_path / "cut.urdf"
     cut.write_text(text[:text.index('<link name="link3">')])
     with pytest.raises(mb.ModelError, match=r"cut\.urdf.*(joint 'joint3' names child link "
-                                            r"'link3'|cannot be read)"):
+                                            r"'link3'|is not well-formed XML)"):
         load_urdf(cut)
     twice = tmp_path / "twice.urdf"
     twice.write_text(text.replace('<child link="link6"/>', '<child link="link5"/>'))
     with pytest.raises(mb.ModelError, match=r"twice\.urdf.*link 'link5' is the child of joints "
                                             r"'joint5' and 'joint6'"):
         load_urdf(twice)
+
+
+ONE_JOINT = """<robot name="r">
+  <link name="base"/>
+  <link name="arm"><inertial><mass value="MASS"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="AXIS"/>
+  </joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("text, message", [
+    ("hello, robot\n", r"bad\.urdf' is not well-formed XML \(Start tag expected"),
+    ("<foo/>\n", r"bad\.urdf': the root element is <foo>; a URDF's is <robot"),
+    ("<robot/>\n", r"bad\.urdf': <robot> has no name attribute"),
+    (ONE_JOINT.replace("MASS", "nan").replace("AXIS", "0 0 1"),
+     r"bad\.urdf': link 'arm': <mass value> must be a finite number >= 0 \[kg\], got nan"),
+    (ONE_JOINT.replace("MASS", "-2").replace("AXIS", "0 0 1"),
+     r"bad\.urdf': link 'arm': <mass value> must be a finite number >= 0 \[kg\], got -2"),
+    (ONE_JOINT.replace("MASS", "2").replace("AXIS", "0 0 0"),
+     r"bad\.urdf': joint 'j1': <axis xyz> \[0.0, 0.0, 0.0\] is not a direction"),
+])
+def test_urdf_mistakes_are_named_with_the_file_and_the_element(tmp_path, text, message):
+    path = tmp_path / "bad.urdf"
+    path.write_text(text)
+    with pytest.raises(mb.ModelError, match=message):
+        urdf_builder(path)
+    # the control: the same robot with a mass and an axis loads
+    path.write_text(ONE_JOINT.replace("MASS", "2").replace("AXIS", "0 0 1"))
+    assert urdf_builder(path).build().n_coordinates == 6
 
 
 def test_urdf_warnings_are_mbd3d_s_and_point_at_the_callers_line():

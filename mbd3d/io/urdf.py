@@ -47,9 +47,30 @@ def load_urdf(path: str | os.PathLike, **options: Any):
     return urdf_builder(path, **options).build()
 
 
+def _check_xml(path: pathlib.Path, what: str) -> None:
+    """Refuse a file that is not XML, or XML whose root is not a named ``<robot>``, before the
+    URDF parser sees it (its own messages name neither)."""
+    from lxml import etree  # noqa: PLC0415 (yourdfpy's own XML library)
+
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
+    try:
+        root = etree.parse(str(path), parser).getroot()
+    except OSError as exc:
+        raise ModelError(f"{what} cannot be read: {exc}") from None
+    except etree.XMLSyntaxError as exc:
+        raise ModelError(f"{what} is not well-formed XML ({exc.msg}); a URDF is an XML file whose root "
+                         "element is <robot name=\"...\">") from None
+    if root.tag != "robot":
+        raise ModelError(f"{what}: the root element is <{root.tag}>; a URDF's is "
+                         "<robot name=\"...\">")
+    if not root.get("name"):
+        raise ModelError(f"{what}: <robot> has no name attribute; give it one")
+
+
 def _read_robot(yourdfpy, path: pathlib.Path, what: str) -> tuple:
     """The URDF's robot, its links by name, its joints and its root link (in a list of one),
     refused unless it is one tree."""
+    _check_xml(path, what)
     try:
         robot = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
                                    load_collision_meshes=False)
@@ -168,7 +189,11 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         parent_body = bodies[joint.parent]
         frame = frames[joint.child]
         point = frame[:3, 3]
-        axis = frame[:3, :3] @ _axis(joint)
+        axis = frame[:3, :3] @ _axis(joint, what)
+        if child.inertial is not None and not (np.isfinite(child.inertial.mass)
+                                               and child.inertial.mass >= 0):
+            raise ModelError(f"{what}: link '{child.name}': <mass value> must be a finite "
+                             f"number >= 0 [kg], got {child.inertial.mass}")
         massive = child.inertial is not None and child.inertial.mass > 0
         if not massive:
             if joint.type != "fixed":
@@ -234,9 +259,13 @@ def _origin(origin) -> np.ndarray:
     return np.eye(4) if origin is None else np.asarray(origin, dtype=float)
 
 
-def _axis(joint) -> np.ndarray:
+def _axis(joint, what: str = "URDF") -> np.ndarray:
     axis = np.array([1.0, 0.0, 0.0] if joint.axis is None else joint.axis, dtype=float)
-    return axis / np.linalg.norm(axis)
+    length = float(np.linalg.norm(axis))
+    if not (np.isfinite(length) and length > 1e-12):
+        raise ModelError(f"{what}: joint '{joint.name}': <axis xyz> {axis.tolist()} is not a "
+                         "direction; give a nonzero axis, e.g. xyz=\"0 0 1\"")
+    return axis / length
 
 
 def _motion(joint, q: float, what: str) -> np.ndarray:
@@ -244,7 +273,7 @@ def _motion(joint, q: float, what: str) -> np.ndarray:
     T = np.eye(4)
     if joint.type in ("revolute", "continuous"):
         from mbd3d.numerics.rotations import axis_angle  # noqa: PLC0415
-        T[:3, :3] = axis_angle(_axis(joint), q)
+        T[:3, :3] = axis_angle(_axis(joint, what), q)
     elif joint.type == "prismatic":
         T[:3, 3] = q * _axis(joint)
     elif joint.type != "fixed":
@@ -257,6 +286,9 @@ def _motion(joint, q: float, what: str) -> np.ndarray:
 def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str, files_read: list):
     """A body for a link: frame at its centre of mass, axes the link's."""
     inertial = link.inertial
+    if inertial is not None and not np.isfinite(inertial.mass):
+        raise ModelError(f"{what}: link '{link.name}': <mass value> must be a finite number "
+                         f">= 0 [kg], got {inertial.mass}")
     if inertial is None or not inertial.mass > 0:
         raise ModelError(f"{what}: link '{link.name}' has no mass; give it an <inertial> or "
                          "weld it to the ground (fixed_base=True)")
