@@ -60,6 +60,7 @@ try:
     # property-based tests: a short default run, thousands of examples on demand with
     # HYPOTHESIS_PROFILE=thorough
     settings.register_profile("default", max_examples=40, deadline=None, derandomize=True,
+                              database=None,
                               suppress_health_check=[HealthCheck.too_slow])
     settings.register_profile("thorough", max_examples=2000, deadline=None,
                               suppress_health_check=[HealthCheck.too_slow])

@@ -14,6 +14,8 @@ thousands (see conftest.py).
 from __future__ import annotations
 
 import collections
+import contextlib
+import unittest.mock
 import math
 
 import numpy as np
@@ -21,6 +23,7 @@ import pytest
 
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import given, strategies as st  # noqa: E402
+from hypothesis.internal.conjecture import providers  # noqa: E402
 
 import mbd3d as mb  # noqa: E402
 from mbd3d.joints import Prismatic, Revolute, Spherical  # noqa: E402
@@ -117,7 +120,16 @@ def run_examples(strategy, check) -> collections.Counter:
     def each(example):
         counts[check(example)] += 1
 
-    each()
+    # Hypothesis mixes into its draws constants it finds in the modules imported so far, so
+    # the same derandomized test drew other mechanisms after another test had run (alone 6 of
+    # 40 were refused; after any test of test_bad_input, 14): the suite passed or failed by
+    # its order. Without those constants the examples depend on the test alone.
+    provider = getattr(providers, "HypothesisProvider", None)
+    with contextlib.ExitStack() as stack:
+        if provider is not None and hasattr(provider, "_maybe_draw_constant"):
+            stack.enter_context(unittest.mock.patch.object(
+                provider, "_maybe_draw_constant", lambda self, *args, **kwargs: None))
+        each()
     return counts
 
 
