@@ -7,7 +7,10 @@ reduced stiffness on the motion the pin allows), and checks the angle against th
 moments k theta = -m g (L/2) cos(theta). Then a motor on the pin holds the bar still at angles
 along a quarter turn: the static torque it needs at each.
 
-Run: python examples/pendulum_spring_equilibrium.py
+Recorded to pendulum_spring_equilibrium.rrd (the bar held along the quarter turn, with the
+motor's torque): rerun pendulum_spring_equilibrium.rrd
+
+Run: python examples/pendulum_spring_equilibrium.py [--rrd FILE] [--show]
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute, RotationDriver
+from mbd3d.viewer import check_recording_first, record, run_script
 
 MASS, LENGTH, GRAVITY = 2.0, 0.8, 9.81
 
@@ -33,7 +37,8 @@ def pendulum(stiffness: float, motor: bool = False) -> mb.Model:
     return b.build()
 
 
-def main(n_points: int = 7) -> list[mb.Results]:
+@check_recording_first
+def main(n_points: int = 7, rrd: str | None = None, show: bool = False) -> list[mb.Results]:
     rests = []
     for k in (2.0, 10.0, 50.0):
         res = mb.static_equilibrium(pendulum(k))
@@ -48,8 +53,10 @@ def main(n_points: int = 7) -> list[mb.Results]:
     print("\nHeld still by a motor on the pin (spring of 10 N m/rad):")
     print(mb.format_table({"angle [deg]": np.degrees(held.body("bar").angle),
                            "motor torque [N m]": held.driver("motor").effort}))
+    if rrd is not None:
+        record(held, rrd, overwrite=True, show=show)
     return rests + [held]
 
 
 if __name__ == "__main__":
-    main()
+    run_script(main, __doc__, "pendulum_spring_equilibrium.rrd")
