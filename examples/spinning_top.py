@@ -55,13 +55,18 @@ def main(duration: float = 1.0, n_points: int = 201, rrd: str | None = None,
     res = mb.forward_dynamics(build(), t, method="DOP853", rtol=1e-11, atol=1e-12)
 
     symmetry_axis = res.body("top").rotation[:, :, 2]
+    nutation = np.degrees(np.arccos(symmetry_axis[:, 2]))
+    azimuth = np.unwrap(np.arctan2(symmetry_axis[:, 1], symmetry_axis[:, 0]))
+    tip_z = res.joint("tip").reaction(on="top").force[:, 2]
     print(f"spin {omega_s:.2f} rad/s about the axis, precession {omega_p} rad/s\n")
-    print(mb.format_table({
-        "t [s]": t,
-        "nutation [deg]": np.degrees(np.arccos(symmetry_axis[:, 2])),
-        "azimuth [rad]": np.unwrap(np.arctan2(symmetry_axis[:, 1], symmetry_axis[:, 0])),
-        "tip force z [N]": res.joint("tip").reaction(on="top").force[:, 2],
-    }, precision=8, rows=11))
+    print(mb.format_table({"t [s]": t, "nutation [deg]": nutation, "azimuth [rad]": azimuth,
+                           "tip force z [N]": tip_z}, precision=8, rows=11))
+    # steady precession by hand: the nutation stays at alpha, the azimuth is omega_p t, and the
+    # centre of mass circles at a constant height, so the tip carries the weight m g
+    print(f"\nlargest departures from steady precession: nutation "
+          f"{np.max(np.abs(nutation - math.degrees(ALPHA))):.1e} deg, azimuth "
+          f"{np.max(np.abs(azimuth - omega_p * t)):.1e} rad, tip force "
+          f"{np.max(np.abs(tip_z - M * 9.81)):.1e} N (m g = {M * 9.81:.4f} N)")
     print(f"\n{res.stats['steps']} steps, {res.stats['chart_resets']} chart resets "
           f"(the top turns {omega_s * duration / (2 * math.pi):.0f} times about its axis)")
     if rrd is not None:

@@ -129,7 +129,7 @@ def main(speeds=np.linspace(5.0, 50.0, 10), rods=np.linspace(0.10, 0.50, 9),
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("--folder", default="sweep_slider_crank",
                         help="results folder (runs found there are not run again)")
     parser.add_argument("--rrd", default="sweep_slider_crank.rrd", help="recording of the maps")

@@ -213,7 +213,12 @@ def test_spatial_slider_crank_example(capsys, tmp_path):
 
 def test_spinning_top_example(capsys, tmp_path):
     res = load("spinning_top").main(duration=0.2, n_points=3, rrd=str(tmp_path / "top.rrd"))
-    assert "chart resets" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "chart resets" in out
+    # the printed check against steady precession (nutation, azimuth, tip force = m g)
+    nutation, azimuth, force = (float(x) for x in re.search(
+        r"nutation (\S+) deg, azimuth (\S+) rad, tip force (\S+) N", out).groups())
+    assert nutation < 1e-6 and azimuth < 1e-8 and force < 1e-7
     # drawn as the cone with its apex at the tip: 0.075 m below the centre of mass
     _, vertices = read_component(tmp_path / "top.rrd", "/world/bodies/top/shape",
                                  "Mesh3D:vertex_positions", None)
@@ -228,6 +233,9 @@ def test_spatial_four_bar_example(capsys, tmp_path):
     out = capsys.readouterr().out
     assert "2 redundant constraint equation(s)" in out and "fully driven" in out
     assert np.all(np.isfinite(res.driver("motor").effort))
+    # the rocker follows the loop closure solved by hand
+    difference = float(re.search(r"solved by hand: largest difference (\S+) rad", out).group(1))
+    assert difference < 1e-9
 
 
 def test_mesh_bodies_example(capsys, tmp_path):

@@ -47,7 +47,8 @@ def run_script(main: Callable[..., Any], description: str, rrd: str,
     main : callable
         Called as ``main(rrd=..., show=..., **options)``.
     description : str
-        The script's docstring; its first line is the ``--help`` description.
+        The script's docstring; its first paragraph (its first sentence or sentences, up to a
+        blank line) is the ``--help`` description, whole.
     rrd : str
         The default recording file.
     options : mapping, optional
@@ -60,7 +61,8 @@ def run_script(main: Callable[..., Any], description: str, rrd: str,
     -------
     What ``main`` returns.
     """
-    parser = argparse.ArgumentParser(description=description.strip().splitlines()[0])
+    first = description.strip().split("\n\n")[0]
+    parser = argparse.ArgumentParser(description=" ".join(first.split()))
     for flag, keywords in (options or {}).items():
         parser.add_argument(flag, **keywords)
     parser.add_argument("--rrd", default=rrd, help="the Rerun recording to write")
