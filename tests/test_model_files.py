@@ -243,6 +243,22 @@ def test_mistakes_are_reported_with_file_line_and_field(tmp_path, change, messag
         mb.load(path)
 
 
+def test_a_wrong_value_is_reported_at_its_own_line_not_its_entry_s(tmp_path):
+    # the body's fields one per line: the position's line, not the body's first
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD.replace("  - {name: bar, mass: 1.0, inertia: 0.1, position: [0.5, 0.0]}",
+                                 "  - name: bar\n    mass: 1.0\n    inertia: 0.1\n"
+                                 "    position: [0.5, 0.0, 1.0]"))
+    with pytest.raises(ModelFileError, match=r"m.yaml:9: bodies\[0\].position: body 'bar': "
+                                             r"position must have 2 components"):
+        read(path)
+    path.write_text(GOOD.replace("    motion: {type: Ramp, initial: 0.0, rate: 6.0}",
+                                 "    motion:\n      type: Ramp\n      initial: 0.0\n"
+                                 "      rate: .nan"))
+    with pytest.raises(ModelFileError, match=r"m.yaml:15: joints\[1\].motion.rate: "):
+        read(path)
+
+
 @pytest.mark.parametrize("spec, expected", [
     ("{start: 0.5, stop: 1.5, points: 5}", [0.5, 0.75, 1.0, 1.25, 1.5]),
     ("{stop: 1.0, points: 3}", [0.0, 0.5, 1.0]),

@@ -213,6 +213,15 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
     return joint_types, force_types, motion_types
 
 
+def _field_named(message: str, where: tuple, entry: dict) -> tuple:
+    """``where``, or ``where`` and the field of ``entry`` the message is about (named as
+    ``field must``, ``field [`` or ``field:``)."""
+    for key in entry:
+        if re.search(rf"(^|[\s:(]){re.escape(str(key))}\b( must| \[|:)", message):
+            return where + (key,)
+    return where
+
+
 class _Reader:
     """Builds a model from plain data, naming the file, line and field of each mistake."""
 
@@ -270,7 +279,7 @@ class _Reader:
             if isinstance(arguments.get("shape"), str):
                 arguments["shape"] = str(self.folder / arguments["shape"])
                 self.sources.append(str(pathlib.Path(arguments["shape"]).resolve()))
-            with self._at(where):
+            with self._at(where, entry):
                 named[name] = builder.add_body(name, **arguments)
             self.places[name] = (where, entry)
         joint_types, force_types, motion_types = _types()
@@ -325,11 +334,7 @@ class _Reader:
         the message names in quotes, and the field it names, if any."""
         for name in re.findall(r"'([^']+)'", message):
             if name in self.places:
-                where, entry = self.places[name]
-                for key in entry:
-                    if re.search(rf"(^|[\s:(]){re.escape(str(key))}\b( must| \[|:)", message):
-                        return where + (key,)
-                return where
+                return _field_named(message, *self.places[name])
         return ()
 
     def _list(self, data: dict, key: str) -> list:
@@ -344,7 +349,9 @@ class _Reader:
             raise self.error(where, f"must be a mapping of fields, got {entry!r}")
         return entry
 
-    def _at(self, where: tuple):
+    def _at(self, where: tuple, entry: dict | None = None):
+        """A context in which a ModelError is reported at ``where``, or at the field of
+        ``entry`` its message names (``position must ...``)."""
         reader = self
 
         class _Context:
@@ -353,7 +360,8 @@ class _Reader:
 
             def __exit__(self, kind, exc, traceback):
                 if isinstance(exc, ModelError) and not isinstance(exc, ModelFileError):
-                    raise reader.error(where, str(exc)) from None
+                    raise reader.error(_field_named(str(exc), where, entry or {}),
+                                       str(exc)) from None
                 return False
 
         return _Context()
@@ -377,7 +385,7 @@ class _Reader:
                 arguments[key] = named[value]
             elif isinstance(value, dict) and "type" in value:
                 arguments[key] = self._motion(value, where + (key,), motion_types)
-        with self._at(where):
+        with self._at(where, entry):
             return cls(**arguments)
 
     def _check_arguments(self, function: Callable, arguments: dict, where: tuple,
@@ -412,7 +420,7 @@ class _Reader:
                                                 f"{', '.join(motion_types)}, Sum)")
         arguments = {key: v for key, v in value.items() if key != "type"}
         self._check_arguments(motion_types[kind], arguments, where, kind)
-        with self._at(where):
+        with self._at(where, value):
             return motion_types[kind](**arguments)
 
     def _analysis(self, entry: dict, where: tuple) -> AnalysisSpec:
