@@ -151,7 +151,11 @@ def test_forces_in_the_compiled_core_equal_forces_written_here(dim):
     force and the torque are Python functions of time (values handed into the loop)."""
     from mbd3d.mechanisms import frame_along
 
-    anchor, free_length = np.array([0.0, 1.0, 0.0])[:dim], math.hypot(1.5, 1.0)
+    # the spring acts at a point off the tip's centre, so that the point's velocity has its
+    # rotation part (omega x s) and the damper sees it
+    offset = np.array([0.2, 0.1, 0.05])[:dim]
+    anchor = np.array([0.0, 1.0, 0.0])[:dim]
+    free_length = float(np.linalg.norm(np.array([1.5, 0.0, 0.0])[:dim] + offset - anchor))
 
     def spring_on_tip(t, state):
         # tension k (l - l0) + c dl/dt + 2 sin(3 t) pulls the tip towards the anchor
@@ -181,11 +185,12 @@ def test_forces_in_the_compiled_core_equal_forces_written_here(dim):
         hinge = b.add(Revolute("hinge", b.ground, arm, at=pos(0.0, 0.0, 0.0), **axis))
         b.add(Revolute("elbow", arm, tip, at=pos(1.0, 0.0, 0.0), **axis))
         if python:
-            b.add(mb.PointForce("spring", tip, spring_on_tip))
+            b.add(mb.PointForce("spring", tip, spring_on_tip, point=tuple(offset)))
             b.add(mb.Torque("torsion", arm, torsion_on_arm))
         else:
             b.add(mb.SpringDamper("spring", b.ground, tip, at_i=tuple(anchor),
-                                  at_j=pos(1.5, 0.0, 0.0), stiffness=40.0, damping=0.5,
+                                  at_j=tuple(np.array(pos(1.5, 0.0, 0.0)) + offset),
+                                  stiffness=40.0, damping=0.5,
                                   actuator=mb.Harmonic(2.0, 3.0)))
             joint = {"joint": hinge} if dim == 3 else {"body_i": b.ground, "body_j": arm}
             b.add(mb.RotationalSpringDamper("torsion", stiffness=3.0, damping=0.1,
@@ -239,6 +244,42 @@ def test_a_spring_between_two_free_bodies_rests_as_drawn_and_keeps_its_energy(mo
         return
     assert np.ptp(res.potential_energy) > 0.1 * energy[0]  # the spring is worked hard
     np.testing.assert_allclose(energy, energy[0], rtol=1e-10)
+
+
+def test_a_damper_between_two_turning_bodies_dissipates_c_times_its_rate_squared():
+    """A spring-damper between off-centre points of two tumbling free bodies: the energy
+    falls at c (dl/dt)^2, dl/dt from the points' velocities written here (v = v_c + omega x
+    (A s), global axes), so every term of the points' velocities inside the kernel counts."""
+    from scipy.spatial.transform import Rotation
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    turns = Rotation.random(2, random_state=5).as_matrix()
+    a = b.add_body("a", mass=2.0, inertia=(0.02, 0.03, 0.04), position=(0.0, 0.0, 0.0),
+                   orientation=turns[0], velocity=(0.3, -0.2, 0.1),
+                   angular_velocity=(3.0, 1.5, -4.0))
+    c = b.add_body("c", mass=1.0, inertia=(0.01, 0.02, 0.025), position=(0.6, 0.2, -0.1),
+                   orientation=turns[1], velocity=(-0.1, 0.4, 0.2),
+                   angular_velocity=(-2.7, 3.5, 1.4))
+    at_i, at_j = np.array([0.1, 0.05, 0.0]), np.array([0.5, 0.1, -0.2])
+    b.add(mb.SpringDamper("spring", a, c, at_i=tuple(at_i), at_j=tuple(at_j), stiffness=80.0,
+                          damping=0.7))
+    t = np.linspace(0.0, 1.0, 4001)
+    res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-12, atol=1e-13)
+
+    def point(name, drawn):
+        body = res.body(name)
+        s = body.rotation @ (body.rotation[0].T @ (drawn - body.position[0]))  # A s, global
+        return body.position + s, body.velocity + np.cross(body.angular_velocity, s)
+
+    (p_i, v_i), (p_j, v_j) = point("a", at_i), point("c", at_j)
+    d = p_j - p_i
+    rate = np.einsum("ka,ka->k", d, v_j - v_i) / np.linalg.norm(d, axis=1)
+    energy = res.kinetic_energy + res.potential_energy
+    dissipated = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] ** 2 + rate[:-1] ** 2)
+                                                  * np.diff(t))]) * 0.7
+    assert dissipated[-1] > 0.1 * energy[0]  # the damper works
+    # the trapezoid rule's error on 4000 intervals: about 1e-8 of what is dissipated
+    np.testing.assert_allclose(energy[0] - energy, dissipated, rtol=0,
+                               atol=1e-6 * dissipated[-1])
 
 
 @pytest.mark.parametrize("dim", [2, 3])
