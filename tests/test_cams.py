@@ -214,3 +214,21 @@ def test_undercut_and_concave_cams_are_refused():
     with pytest.raises(mb.ModelError, match="'contact'.*not convex"):
         b.build()
 
+
+
+def test_the_compiled_curve_evaluates_the_profile_s_spline_anywhere_on_any_turn():
+    """The compiled evaluation of a cam's profile (the wrap to one turn, the search for the
+    interval, the cubic and its derivatives) against SciPy's evaluation of the same periodic
+    spline, for a profile whose first angle is not zero, at angles in every interval, on the
+    knots, in the last interval and turns away on both sides."""
+    from mbd3d.numerics.compiled.curves import periodic_curve
+    rng = np.random.default_rng(4)
+    angles = 0.4 + np.sort(rng.uniform(0.0, 2 * math.pi - 0.1, 9))
+    profile = CamProfile(angles, 0.05 + 0.01 * rng.uniform(size=9))
+    curves, count = profile.table(), len(angles)
+    last = angles[-1] + 0.5 * (angles[0] + 2 * math.pi - angles[-1])
+    x = np.concatenate([angles, [last, last - 2 * math.pi, last + 6 * math.pi],
+                        rng.uniform(-20.0, 20.0, 200)])
+    ours = np.array([periodic_curve(curves, 0, count, float(v)) for v in x])
+    scipy_says = np.stack([profile(x, derivative) for derivative in (0, 1, 2)], axis=1)
+    np.testing.assert_allclose(ours, scipy_says, rtol=1e-12, atol=1e-12)

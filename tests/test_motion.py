@@ -87,3 +87,29 @@ def test_compiled_and_python_motions_drive_the_same_motion():
     assert runs[0].model._core.python_parts is False and runs[1].model._core.python_parts
     np.testing.assert_allclose(runs[0].q, runs[1].q, rtol=0, atol=1e-12)
     np.testing.assert_allclose(runs[0].lam, runs[1].lam, rtol=1e-9, atol=1e-9)
+
+
+def test_every_motion_and_a_sum_of_them_through_the_compiled_table_equal_their_formulas():
+    """The motions' values as the compiled loop evaluates them (the table of terms the
+    model's drivers and actuators become) against the formulas written here, with offsets,
+    initial values and phases that are not zero."""
+    from mbd3d.numerics.compiled.motions import motion_values_into, table
+    ramp, wave = mb.Ramp(0.7, -2.0), mb.Harmonic(0.3, 5.0, phase=0.2, offset=-0.4)
+    step = mb.SmoothStep(0.2, 1.1, start=0.5, end=-1.5)
+    motions = [mb.Constant(1.25), ramp, wave, step, ramp + wave + mb.Constant(1.25)]
+    first, kinds, starts, params = table([m.terms() for m in motions])
+    for t in (0.0, 0.35, 0.9, 1.7):
+        out = np.empty((len(motions), 3))
+        motion_values_into(first, kinds, starts, params, t, out)
+        a = 5.0 * t + 0.2
+        s = min(max((t - 0.2) / 0.9, 0.0), 1.0)
+        expected = [
+            (1.25, 0.0, 0.0),
+            (0.7 - 2.0 * t, -2.0, 0.0),
+            (-0.4 + 0.3 * np.sin(a), 1.5 * np.cos(a), -7.5 * np.sin(a)),
+            (0.5 - 2.0 * (10 * s**3 - 15 * s**4 + 6 * s**5),
+             -2.0 * 30 * s**2 * (1 - s) ** 2 / 0.9,
+             -2.0 * 60 * s * (1 - s) * (1 - 2 * s) / 0.9**2),
+        ]
+        expected.append(tuple(np.sum([expected[0], expected[1], expected[2]], axis=0)))
+        np.testing.assert_allclose(out, expected, rtol=0, atol=1e-13)
