@@ -84,7 +84,7 @@ def test_run_with_a_changed_value_and_another_analysis(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (("run", "{bad}"), r"bad.yaml:8: joints\[0\].body_j: no body or joint 'bra'"),
     (("run", "{good}", "--t", "0:1"), "give START:STOP:STEP"),
-    (("run", "{good}", "--set", "bodies.bar.mass=-2"), r"good.yaml:6: bodies\[0\]: body 'bar'"
+    (("run", "{good}", "--set", "bodies.bar.mass=-2"), r"good.yaml:6: bodies\[0\]\.mass: body 'bar'"
                                                        ": mass"),
     (("run", "{good}", "--analysis", "inverse", "--method", "RK45"), "--method is for forward"),
     (("check", "{missing}"), "cannot be read"),

@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbd3d as mb
-from mbd3d.joints import Prismatic, Revolute
+from mbd3d.joints import Prismatic
 from mbd3d.mechanisms import pendulum_chain, slider_crank, spatial_chain
 from test_examples import load
 from test_published_problems import four_bar_oscillator
