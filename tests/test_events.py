@@ -112,3 +112,7 @@ def test_bad_events_are_refused_by_name():
     nan = mb.Event("broken", lambda t, q, qd: float("nan"))
     with pytest.raises(mb.ModelError, match="event 'broken'.*finite number"):
         mb.forward_dynamics(model, [0.0, 0.1], events=[nan])
+    careless = mb.Event("bottom", lambda t, q, qd: q[k] + math.pi / 2, action=lambda t, q, qd: qd)
+    with pytest.raises(mb.ModelError, match=r"event 'bottom' at t = 0.48333\d* s: its action "
+                                            r"must return \(q, qd\), two arrays of 3 finite"):
+        mb.forward_dynamics(model, [0.0, 1.0], events=[careless])

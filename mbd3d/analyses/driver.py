@@ -164,9 +164,16 @@ class Segment:
 
 class Integrator:
     """One integration method as the driver runs it; see the module doc for the order of the
-    calls. ``stats`` is the run's statistics, which the integrator keeps up to date."""
+    calls. ``stats`` is the run's statistics, which the integrator keeps up to date;
+    ``redundant`` says whether the constraint rows depend on each other (set by
+    :meth:`start`)."""
 
     stats: dict
+    redundant: bool = False
+
+    def rows_dependent(self, q: np.ndarray) -> bool:
+        """Whether the constraint rows depend on each other at the initial positions ``q``."""
+        raise NotImplementedError
 
     def chart(self) -> np.ndarray | None:
         """A copy of the current reference rotations (spatial models), else None."""
@@ -285,6 +292,18 @@ class _Events:
         self.g[self.events.index(event)] = None  # no crossing counts from where it acted
 
 
+def _new_state(event: Event, t: float, given: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``(q, qd)`` an event's action returned, checked."""
+    try:
+        q, qd = (np.asarray(x, dtype=float).reshape(-1) for x in given)
+    except (TypeError, ValueError):
+        q = qd = np.empty(0)
+    if not (q.shape == qd.shape == (n,) and np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise ModelError(f"event '{event.name}' at t = {t:.9g} s: its action must return "
+                         f"(q, qd), two arrays of {n} finite numbers, got {given!r}")
+    return q, qd
+
+
 def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
     """Run ``integrator`` over ``request.t`` (see the module doc); the Results of the outputs,
     kept however the run ends (:func:`mbd3d.io.store.run_keeping_results`)."""
@@ -325,9 +344,9 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
         if event.action == "stop":
             events.found.append({"name": event.name, "time": te})
             return "stopped", f"stopped by event '{event.name}' at t = {te:.9g} s"
-        q, qd = event.action(te, q.copy(), qd.copy())
-        q, qd = project_state(model, te, np.asarray(q, float), np.asarray(qd, float),
-                              request.projection_tol, integrator.chart(), integrator.redundant)
+        q, qd = _new_state(event, te, event.action(te, q.copy(), qd.copy()), len(q))
+        q, qd = project_state(model, te, q, qd, request.projection_tol, integrator.chart(),
+                              integrator.redundant)
         integrator.restart(te, q, qd)
         events.restarted(event, te, q, qd)
         return None
