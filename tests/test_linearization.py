@@ -240,3 +240,13 @@ def test_a_motor_released_as_the_input_about_the_position_it_holds():
     np.testing.assert_allclose(lin.D[1], [m * L / 2 * math.cos(angle) / inertia], rtol=1e-6)
     with pytest.raises(mb.ModelError, match="0 degrees of freedom.*release"):
         mb.linearize(model, rest.q[0], coordinates=["bar.theta"])
+
+
+def test_a_singular_position_is_reported_as_the_linearisation_s():
+    from mbd3d.mechanisms import four_bar
+    # a parallelogram four-bar lying flat: every body on one line, the Jacobian singular
+    flat = four_bar(ground_length=0.3, crank_length=0.1, coupler_length=0.3, rocker_length=0.1,
+                    crank_angle=0.0, crank_speed=None)
+    with pytest.raises(mb.SingularJacobianError,
+                       match=r"^linearisation of 'four-bar': the constraint Jacobian is singular"):
+        mb.linearize(flat, mb.solve_position(flat))

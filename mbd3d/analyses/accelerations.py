@@ -24,11 +24,13 @@ __all__ = ["forward_accelerations", "consistent_accelerations", "rows_dependent"
 
 
 def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
-                          charts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                          charts: np.ndarray | None = None, *, what: str | None = None
+                          ) -> tuple[np.ndarray, np.ndarray]:
     """Accelerations ``qdd`` and multipliers ``lam`` from the augmented equations at ``(t, q, qd)``.
 
     ``charts``: spatial models, the reference rotations ``q`` is relative to (default the
-    model's initial charts).
+    model's initial charts). ``what``: the analysis its errors name (default forward
+    dynamics of the model).
 
     Raises
     ------
@@ -38,17 +40,22 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     try:
         x = augmented_accelerations(model, t, q, qd, charts)
     except SingularMatrix:
-        return consistent_accelerations(model, t, q, qd, charts, fallback=False)[:2]
+        return consistent_accelerations(model, t, q, qd, charts, fallback=False, what=what)[:2]
     if x is None:
-        raise IntegrationError(f"forward dynamics of '{model.name}': the state is not finite "
-                               f"at t = {t:.6g} s (the integration diverged)", time=t)
+        raise IntegrationError(f"{what or _what(model)}: the state is not finite at "
+                               f"t = {t:.6g} s (the integration diverged)", time=t)
     n = model.n_coordinates
     return x[:n], x[n:]
 
 
+def _what(model) -> str:
+    return f"forward dynamics of '{model.name}'"
+
+
 def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, charts=None,
                              lam: np.ndarray | None = None, redundant: bool = False,
-                             fallback: bool = True) -> tuple[np.ndarray, np.ndarray, bool]:
+                             fallback: bool = True, what: str | None = None
+                             ) -> tuple[np.ndarray, np.ndarray, bool]:
     """``qdd`` and ``lam`` of the augmented equations, also where ``Cq`` loses rank.
 
     The augmented matrix is factored by LU as in :func:`mbd3d.forward_accelerations`; where it
@@ -57,7 +64,8 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
     a component in the null space of ``Cq^T`` (minimum-norm from ``lam = 0``). With
     ``redundant`` (rows known to be dependent) the LU is skipped: rounding can lift its
     smallest pivot above the singularity threshold, and the solution would be noise. Without
-    ``fallback`` a singular matrix raises instead (the explicit integrators' rule).
+    ``fallback`` a singular matrix raises instead (the explicit integrators' rule). ``what``:
+    the analysis its errors name (default forward dynamics of the model).
 
     Returns
     -------
@@ -66,18 +74,18 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
         False when the augmented matrix was singular (multipliers not unique).
     """
     n = model.n_coordinates
+    what = what or _what(model)
     if not redundant:
         try:
             x = augmented_accelerations(model, t, q, qd, charts)
         except SingularMatrix:
             if not fallback:
                 raise singular_error(model, constraints.jacobian(model, t, q, constraints.frames(
-                    model, q, charts=charts)), t, f"forward dynamics of '{model.name}'") from None
+                    model, q, charts=charts)), t, what) from None
         else:
             if x is None:
-                raise IntegrationError(f"forward dynamics of '{model.name}': the state is not "
-                                       f"finite at t = {t:.6g} s (the integration diverged)",
-                                       time=t)
+                raise IntegrationError(f"{what}: the state is not finite at t = {t:.6g} s "
+                                       "(the integration diverged)", time=t)
             return x[:n], x[n:], True
     if model.friction is not None:
         raise_friction_with_redundancy(model, t)
@@ -90,7 +98,7 @@ def consistent_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray, cha
         qdd, lam, _ = solve_augmented_lagrangian(M, Cq, Qe, gamma, lam=lam,
                                                  scaling=augmented_scaling(model))
     except SingularMatrix:
-        raise singular_error(model, Cq, t, f"forward dynamics of '{model.name}'") from None
+        raise singular_error(model, Cq, t, what) from None
     return qdd, lam, False
 
 

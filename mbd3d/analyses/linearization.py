@@ -195,7 +195,7 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
     Cq = system.jacobian(q)
     _check_state(model, t, system, q, qd, Cq, tol, what)
     # the reference effort of a released driver keeps the reference motion
-    _, lam_full = forward_accelerations(model, t, q, qd, charts)
+    _, lam_full = forward_accelerations(model, t, q, qd, charts, what=what)
     system.efforts = np.array([-lam_full[model.rows_of(name)[0]] for name in released])
 
     # state units: a rotation about a body axis is 2 g at g = 0, its rate omega_bar = 2 g_dot
