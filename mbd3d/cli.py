@@ -10,7 +10,8 @@
                            [--scheduler tcp://host:8786]
 
 Exit status: 0 done, 1 the analysis failed or the model has a problem, 2 a bad command line or
-model file. Messages go to stderr; results and reports to stdout.
+model file, 130 interrupted (Ctrl-C; a sweep keeps the runs done). Messages go to stderr;
+results and reports to stdout.
 """
 
 from __future__ import annotations
@@ -27,6 +28,10 @@ import numpy as np
 __all__ = ["main"]
 
 _KINDS = ("kinematic", "inverse", "forward", "equilibrium")
+#: what --help says of the exit status (the module doc says the same)
+EXIT_STATUS = ("exit status: 0 done, 1 the analysis failed or the model has a problem, 2 a bad "
+               "command line or model file, 130 interrupted (a sweep keeps the runs done: run "
+               "it again to finish)")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -54,7 +59,8 @@ def _is_input_error(exc) -> bool:
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mbd3d", description="Kinematic and dynamic analysis of mechanisms described in "
-                                  "model files (YAML; see mbd3d.io.model_file).")
+                                  "model files (YAML; see mbd3d.io.model_file).",
+        epilog=EXIT_STATUS)
     commands = parser.add_subparsers(required=True, metavar="COMMAND")
 
     check = commands.add_parser("check", help="report the model's mobility and problems "
@@ -305,6 +311,10 @@ def _sweep(args) -> int:
                          analysis, metrics, folder, client=args.scheduler,
                          backend="serial" if args.serial else "auto")
     print(table)
+    if table.summary.get("interrupted"):
+        print("mbd3d sweep: interrupted; the runs done are kept in the folder: run the same "
+              "sweep again to finish", file=sys.stderr)
+        return 130
     return 1 if table.failed else 0
 
 

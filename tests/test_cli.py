@@ -302,3 +302,27 @@ def test_view_names_a_file_that_is_no_recording_and_sweep_writes_where_it_is_run
 def test_impossible_time_grids_on_the_command_line_are_refused(times, message):
     done = mbd3d("run", MODELS / "slider_crank.yaml", "--t", times)
     assert done.returncode == 2 and message in done.stderr and "Traceback" not in done.stderr
+
+
+def test_an_interrupted_sweep_exits_130_and_help_states_the_exit_codes(tmp_path, monkeypatch,
+                                                                      capsys):
+    import mbd3d.cli as cli
+    built = cli._FileFactory.__call__
+    calls = []
+
+    def interrupted_at_the_second(self, **params):  # Ctrl-C while the second point is built
+        calls.append(params)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return built(self, **params)
+
+    monkeypatch.setattr(cli._FileFactory, "__call__", interrupted_at_the_second)
+    status = cli.main(["sweep", str(MODELS / "slider_crank.yaml"), "--grid",
+                       "joints.motor.motion.rate=3,6,9", "--t", "0:0.2:0.05", "--serial",
+                       "--folder", str(tmp_path / "sweep")])
+    assert status == 130
+    assert "interrupted; the runs done are kept" in capsys.readouterr().err
+    assert len(list((tmp_path / "sweep" / "runs").glob("*.json"))) == 1  # the first run kept
+    done = mbd3d("--help")
+    assert "exit status: 0 done, 1 the analysis failed" in done.stdout
+    assert "130 interrupted" in done.stdout
