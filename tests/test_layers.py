@@ -95,3 +95,29 @@ def test_the_imports_make_no_circle():
     for module in sorted(graph):
         if module not in state:
             visit(module, [module])
+
+
+#: a module holds one concern: above this many lines it holds several (the compiled kernels,
+#: loops over instances written out once, are measured apart)
+LONGEST_MODULE = 600
+#: a function that does one thing fits on a screen: code lines, its docstring left out
+LONGEST_FUNCTION = 85
+
+
+def test_modules_and_functions_stay_of_one_concern():
+    too_long = []
+    for name, path in modules().items():
+        if ".numerics.compiled" in name:
+            continue
+        text = path.read_text()
+        if len(text.splitlines()) > LONGEST_MODULE:
+            too_long.append(f"module {name}: {len(text.splitlines())} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                first = node.body[0]
+                documented = (isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant)
+                              and isinstance(first.value.value, str))
+                start = first.end_lineno + 1 if documented else node.lineno
+                if node.end_lineno - start + 1 > LONGEST_FUNCTION:
+                    too_long.append(f"{name}.{node.name}: {node.end_lineno - start + 1} lines")
+    assert not too_long, too_long

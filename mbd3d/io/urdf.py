@@ -190,11 +190,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         frame = frames[joint.child]
         point = frame[:3, 3]
         axis = frame[:3, :3] @ _axis(joint, what)
-        if child.inertial is not None and not (np.isfinite(child.inertial.mass)
-                                               and child.inertial.mass >= 0):
-            raise ModelError(f"{what}: link '{child.name}': <mass value> must be a finite "
-                             f"number >= 0 [kg], got {child.inertial.mass}")
-        massive = child.inertial is not None and child.inertial.mass > 0
+        massive = _mass(child, what) > 0
         if not massive:
             if joint.type != "fixed":
                 raise ModelError(f"{what}: link '{child.name}' has no mass but moves on "
@@ -283,13 +279,21 @@ def _motion(joint, q: float, what: str) -> np.ndarray:
     return T
 
 
+def _mass(link, what: str) -> float:
+    """The link's mass [kg], 0 without an <inertial>; refused unless finite and >= 0."""
+    if link.inertial is None:
+        return 0.0
+    mass = link.inertial.mass
+    if not (np.isfinite(mass) and mass >= 0):
+        raise ModelError(f"{what}: link '{link.name}': <mass value> must be a finite number "
+                         f">= 0 [kg], got {mass}")
+    return float(mass)
+
+
 def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str, files_read: list):
     """A body for a link: frame at its centre of mass, axes the link's."""
     inertial = link.inertial
-    if inertial is not None and not np.isfinite(inertial.mass):
-        raise ModelError(f"{what}: link '{link.name}': <mass value> must be a finite number "
-                         f">= 0 [kg], got {inertial.mass}")
-    if inertial is None or not inertial.mass > 0:
+    if not _mass(link, what) > 0:
         raise ModelError(f"{what}: link '{link.name}' has no mass; give it an <inertial> or "
                          "weld it to the ground (fixed_base=True)")
     T_inertial = _origin(inertial.origin)
