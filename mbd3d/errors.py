@@ -94,6 +94,12 @@ class LiftOffWarning(UserWarning):
     motion reported after that time (the follower held on the cam) is not physical."""
 
 
+class ContactWarning(UserWarning):
+    """Shapes of a contact overlap in the drawing: the contact starts with the force of that
+    penetration (right for a body placed at rest in its static penetration, a mistake for
+    one placed inside another); the message names the contact and the depth."""
+
+
 def user_stacklevel() -> int:
     """The ``stacklevel`` for :func:`warnings.warn`, called where the warning is raised, that
     points the warning at the first caller outside mbd3d: the user's line, not mbd3d's."""

@@ -30,6 +30,7 @@ from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_int
                                             spatial_mass_blocks_into,
                                             spatial_quadratic_velocity_into)
 from mbd3d.numerics.compiled.dense import solve_banded_pattern_into, solve_pattern_into
+from mbd3d.numerics.compiled.contacts import REPORT_COLUMNS, contact_forces_into
 from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_into,
                                             spring_forces_into, torques_into)
 from mbd3d.numerics.compiled.motions import motion_values_into
@@ -82,8 +83,8 @@ def _finite_rows(x: np.ndarray) -> bool:
 def forces_into(forces, work, t: float, rhs) -> bool:
     """Add the generalized forces of the force elements ``forces``
     (:class:`~mbd3d.numerics.compiled.structures.ForceArrays`) at ``t`` to ``rhs`` (n,), from the
-    frames and coordinates in ``work``; False when a spring's points coincide or an actuator
-    is not finite. ``forces`` is None for a model without compiled force elements: Numba then
+    frames and coordinates in ``work``; False when a spring's points or two contact spheres'
+    centres coincide or an actuator is not finite. ``forces`` is None for a model without compiled force elements: Numba then
     compiles nothing of this (the branch is decided by the argument's type), so that such
     models pay neither run time nor compile time for it."""
     if forces is None:
@@ -106,6 +107,10 @@ def forces_into(forces, work, t: float, rhs) -> bool:
                       forces.point_body_frame, out)
     torques_into(A, axes, forces.torque_bodies, forces.torque_values, forces.torque_body_frame,
                  out)
+    if contact_forces_into(A, axes, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
+                           forces.contact_values, out,
+                           np.empty((0, REPORT_COLUMNS))) >= 0:
+        return False
     nc = out.shape[1]
     for b in range(out.shape[0] - 1):
         for c in range(nc):

@@ -97,7 +97,8 @@ PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat",
 
 #: the force elements of a model as the compiled core evaluates them
 #: (mbd3d.numerics.compiled.forces; filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
-#: rotational ones, point forces and torques, and their actuators' motions. A model without
+#: rotational ones, point forces and torques, and their actuators' motions, and the compliant
+#: contacts (mbd3d.numerics.compiled.contacts). A model without
 #: force elements, or with a value given as a Python function, has None instead, and its
 #: compiled functions contain no force code (the branch is decided by the field's type)
 FORCE_FIELDS = (
@@ -106,6 +107,7 @@ FORCE_FIELDS = (
     "torque_bodies", "torque_values", "torque_body_frame",
     "spring_first", "spring_kinds", "spring_starts", "spring_params",
     "rotary_first", "rotary_kinds", "rotary_starts", "rotary_params",
+    "contact_bodies", "contact_points", "contact_values",
 )
 
 #: the model the scratch arrays are sized for (so that a call from Python passes one record,

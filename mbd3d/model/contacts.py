@@ -1,0 +1,268 @@
+"""Compliant contacts between shapes attached to bodies: a sphere (planar: a circle) against a
+plane (planar: a line) or against another sphere, pushed apart by a normal force law
+(:mod:`mbd3d.model.contact_laws`) and dragged by regularised Coulomb friction.
+
+A contact is a force element: it acts only while the shapes overlap, and the compiled core
+evaluates all contacts of a model in one loop (:mod:`mbd3d.numerics.compiled.contacts`), in
+the planar and the spatial model alike. :func:`contact_states` reports each contact's gap,
+forces, point and normal at a state.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mbd3d.errors import ContactWarning, ModelError, user_stacklevel
+from mbd3d.model.body import Body
+from mbd3d.model.contact_laws import ContactLaw
+from mbd3d.model.forces import ForceElement, _CompiledForces, resolve_point
+from mbd3d.numerics.checks import finite_scalar
+from mbd3d.numerics.compiled import contacts as kernel
+
+if TYPE_CHECKING:
+    from mbd3d.model.builder import BuildContext, Model
+
+__all__ = ["Sphere", "Plane", "Contact", "ContactStates", "contact_states"]
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """A sphere (planar model: a circle) of ``radius`` [m] fixed to ``body``, centred at
+    ``point`` (body frame [m]) or at ``at`` (global point of the drawing); default the body's
+    reference point."""
+
+    body: Body
+    radius: float
+    point: Any = None
+    at: Any = None
+
+
+@dataclass(frozen=True)
+class Plane:
+    """The half-space (planar model: half-plane) of ``body`` bounded by the plane (line)
+    through ``point`` (body frame) or ``at`` (drawing) with outward ``normal`` (body frame,
+    or ``normal_at`` in the drawing's axes): the side the normal points to is free."""
+
+    body: Body
+    normal: Any = None
+    point: Any = None
+    at: Any = None
+    normal_at: Any = None
+
+
+class Contact(ForceElement):
+    """A compliant contact between a sphere and a plane or between two spheres.
+
+    The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
+    friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
+    ``v_t`` of the second shape on the first at the contact point (regularised Coulomb: the
+    full ``friction F_n`` beyond a few ``slip_velocity``).
+
+    Parameters
+    ----------
+    name : str
+    first : Sphere
+    second : Plane or Sphere
+    law : ContactLaw
+        :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact` or
+        :class:`~mbd3d.HuntCrossley`. Laws calibrated to a restitution use the pair's effective
+        mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
+        free bodies, not the inertia the pair has through joints (give ``effective_mass``).
+    friction : float
+        Coulomb coefficient ``mu`` >= 0.
+    slip_velocity : float
+        [m/s] > 0, the slip below which friction falls off smoothly to zero.
+    effective_mass : float, optional
+        [kg], overrides ``m*`` in the laws' calibration.
+
+    Examples
+    --------
+    >>> import mbd3d as mb
+    >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    >>> ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 1.0))
+    >>> _ = b.add(mb.Contact("bounce", mb.Sphere(ball, radius=0.1),
+    ...                      mb.Plane(b.ground, normal=(0.0, 1.0)),
+    ...                      law=mb.HertzContact(stiffness=1e7, restitution=0.8)))
+    """
+
+    def __init__(self, name: str, first: Sphere, second: Plane | Sphere, *, law: ContactLaw,
+                 friction: float = 0.0, slip_velocity: float = 1e-3,
+                 effective_mass: float | None = None):
+        if not isinstance(first, Sphere) or not isinstance(second, (Sphere, Plane)):
+            raise ModelError(f"contact '{name}': give a Sphere and then a Plane or a Sphere, "
+                             f"got {type(first).__name__} and {type(second).__name__}")
+        if not isinstance(law, ContactLaw):
+            raise ModelError(f"contact '{name}': law must be a LinearContact, HertzContact or "
+                             f"HuntCrossley, got {law!r}")
+        self.name, self.first, self.second, self.law = name, first, second, law
+        self.friction, self.slip_velocity = friction, slip_velocity
+        self.effective_mass = effective_mass
+        self.body_i, self.body_j = first.body, second.body
+
+    def bodies(self) -> list[tuple[str, Body]]:
+        return [("first", self.body_i), ("second", self.body_j)]
+
+    @classmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        return _Contacts(elements, ctx)
+
+    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray]:
+        """``(points (3, dim), values (9,))`` of the compiled core (see
+        :mod:`mbd3d.numerics.compiled.contacts`), checked."""
+        what = f"contact '{self.name}'"
+        first, second = self.first, self.second
+        if self.body_i is self.body_j:
+            raise ModelError(f"{what}: both shapes are on body '{self.body_i.name}'")
+        r_i = finite_scalar(first.radius, f"{what}: radius of the sphere", positive=True)
+        c_i = resolve_point(ctx, first.body, first.point, first.at, f"{what}: sphere centre")
+        p_j = resolve_point(ctx, second.body, second.point, second.at,
+                            f"{what}: {'plane point' if isinstance(second, Plane) else 'centre'}")
+        normal = np.zeros(ctx.dim)
+        if isinstance(second, Plane):
+            kind, r_j, radius = kernel.SPHERE_PLANE, 0.0, r_i
+            normal = _plane_normal(ctx, second, what)
+        else:
+            kind = kernel.SPHERE_SPHERE
+            r_j = finite_scalar(second.radius, f"{what}: radius of the second sphere",
+                                positive=True)
+            radius = r_i * r_j / (r_i + r_j)
+        mu = finite_scalar(self.friction, f"{what}: friction")
+        slip = finite_scalar(self.slip_velocity, f"{what}: slip_velocity", positive=True)
+        if mu < 0.0:
+            raise ModelError(f"{what}: friction must be >= 0, got {self.friction!r}")
+        K, n, D, p = self.law.constants(self._effective_mass(what), radius, what)
+        values = np.array([kind, r_i, r_j, K, n, D, p, mu, slip], dtype=float)
+        return np.stack([c_i, p_j, normal]), values
+
+    def _effective_mass(self, what: str) -> float:
+        if self.effective_mass is not None:
+            return finite_scalar(self.effective_mass, f"{what}: effective_mass", positive=True)
+        inverse = sum(0.0 if b.is_ground else 1.0 / b.mass for b in (self.body_i, self.body_j))
+        return 1.0 / inverse if inverse > 0.0 else math.inf
+
+
+def _plane_normal(ctx: "BuildContext", plane: Plane, what: str) -> np.ndarray:
+    if (plane.normal is None) == (plane.normal_at is None):
+        raise ModelError(f"{what}: give the plane's normal in the body frame (normal) or in "
+                         "the drawing (normal_at), one of them")
+    if plane.normal is not None:
+        return ctx.direction(plane.normal, f"{what}: plane normal")
+    return ctx.to_local_vector(plane.body, ctx.direction(plane.normal_at, f"{what}: plane normal"))
+
+
+class _Contacts(_CompiledForces):
+    def __init__(self, elements: list[Contact], ctx: "BuildContext"):
+        self.elements = elements
+        arrays = [e.arrays(ctx) for e in elements]
+        self._points = np.ascontiguousarray(np.stack([a[0] for a in arrays]))
+        self._values = np.ascontiguousarray(np.stack([a[1] for a in arrays]))
+        self._rows = None
+        self._check_apart(ctx)
+
+    def _check_apart(self, ctx: "BuildContext") -> None:
+        """Shapes that overlap in the drawing are reported with the depth (a
+        :class:`~mbd3d.errors.ContactWarning`): an integration starts with that force."""
+        fr = ctx.body_type.frames(ctx.frames.Q, np.zeros_like(ctx.frames.Q), charts=ctx.charts)
+        bodies = np.array([[ctx.row(e.body_i), ctx.row(e.body_j)]
+                                           for e in self.elements], dtype=np.int64)
+        report = self._report(fr, bodies)
+        for k in np.flatnonzero(report[:, kernel.GAP] < 0.0):
+            warnings.warn(f"contact '{self.elements[k].name}': the shapes overlap by "
+                          f"{-report[k, kernel.GAP]:.6g} m in the drawing, with a normal force "
+                          f"of {report[k, kernel.NORMAL_FORCE]:.6g} N; place the bodies apart "
+                          "(or touching) unless that is their static penetration",
+                          ContactWarning, stacklevel=user_stacklevel())
+
+    def _report(self, fr, bodies: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(fr.Q)
+        report = np.zeros((len(self.elements), kernel.REPORT_COLUMNS))
+        failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
+                                            self._points, self._values, out, report)
+        if failed >= 0:
+            raise ModelError(f"contact '{self.elements[failed].name}': the two spheres' "
+                             "centres coincide; the contact normal is undefined")
+        return report
+
+    def _bodies(self, model) -> np.ndarray:
+        if self._rows is None:
+            self._rows = np.array([[model.padded_index(e.body_i), model.padded_index(e.body_j)]
+                                   for e in self.elements], dtype=np.int64)
+        return self._rows
+
+    def apply(self, model, t, fr, Q):
+        failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd,
+                                            self._bodies(model), self._points, self._values,
+                                            Q, np.zeros((0, kernel.REPORT_COLUMNS)))
+        if failed >= 0:
+            raise ModelError(f"contact '{self.elements[failed].name}': the two spheres' "
+                             f"centres coincide at t = {t:g} s; the contact normal is undefined")
+
+    def table(self, model):
+        return {"contact_bodies": self._bodies(model), "contact_points": self._points,
+                "contact_values": self._values}
+
+    def potential(self, model, fr) -> float:
+        return float(np.sum(self._report(fr, self._bodies(model))[:, kernel.POTENTIAL]))
+
+    def states(self, model, fr) -> np.ndarray:
+        return self._report(fr, self._bodies(model))
+
+
+@dataclass(frozen=True)
+class ContactStates:
+    """The contacts of a model at one state, one row per contact, in the order they were
+    added.
+
+    Attributes
+    ----------
+    names : list of str
+    gap : ndarray (k,)
+        Distance between the surfaces [m]; negative: the penetration.
+    gap_rate : ndarray (k,)
+        [m/s], positive while they separate.
+    normal_force : ndarray (k,)
+        [N], >= 0.
+    friction_force : ndarray (k, 3)
+        On the second shape [N], global axes (the opposite acts on the first).
+    point : ndarray (k, 3)
+        Midway between the surfaces [m], global.
+    normal : ndarray (k, 3)
+        Unit normal from the first shape to the second, global.
+    potential_energy : ndarray (k,)
+        Of the law's spring part [J].
+    """
+
+    names: list
+    gap: np.ndarray
+    gap_rate: np.ndarray
+    normal_force: np.ndarray
+    friction_force: np.ndarray
+    point: np.ndarray
+    normal: np.ndarray
+    potential_energy: np.ndarray
+
+
+def contact_states(model: "Model", q: np.ndarray, qd: np.ndarray | None = None,
+                   charts: np.ndarray | None = None) -> ContactStates:
+    """The state of every contact of ``model`` at ``(q, qd)`` (``qd`` default zero)."""
+    from mbd3d.model.constraints import frames  # noqa: PLC0415
+
+    q = np.asarray(q, dtype=float)
+    fr = frames(model, q, np.zeros_like(q) if qd is None else np.asarray(qd, dtype=float), charts)
+    groups = [g for g in model.force_groups if isinstance(g, _Contacts)]
+    if not groups:
+        raise ModelError(f"model '{model.name}' has no contacts")
+    group = groups[0]
+    r = group.states(model, fr)
+    k = kernel
+    return ContactStates(names=[e.name for e in group.elements], gap=r[:, k.GAP].copy(),
+                         gap_rate=r[:, k.GAP_RATE].copy(), normal_force=r[:, k.NORMAL_FORCE].copy(),
+                         friction_force=r[:, k.FRICTION:k.FRICTION + 3].copy(),
+                         point=r[:, k.POINT:k.POINT + 3].copy(),
+                         normal=r[:, k.NORMAL:k.NORMAL + 3].copy(),
+                         potential_energy=r[:, k.POTENTIAL].copy())

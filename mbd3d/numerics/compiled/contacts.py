@@ -1,0 +1,149 @@
+"""Compliant contacts between shapes on bodies, compiled: the gap, the normal force of the
+contact law and the regularised Coulomb friction, for all contacts in one loop.
+
+Contact ``k`` acts between body ``i = bodies[k, 0]`` and ``j = bodies[k, 1]``; ``kinds[k]``:
+
+- ``SPHERE_PLANE``: a sphere (planar: a circle) of radius ``r_i`` centred at body point
+  ``points[k, 0]`` of ``i`` against the half-space of ``j`` bounded by the plane (planar: the
+  line) through body point ``points[k, 1]`` with outward unit normal ``points[k, 2]`` (body
+  frame of ``j``): ``g = m . (c_i - P) - r_i``;
+- ``SPHERE_SPHERE``: spheres (circles) of radii ``r_i``, ``r_j`` centred at ``points[k, 0]``
+  of ``i`` and ``points[k, 1]`` of ``j``: ``g = |c_j - c_i| - r_i - r_j``.
+
+With ``n`` the unit normal from ``i`` to ``j`` (``-m`` against a plane, ``(c_j - c_i) / |c_j -
+c_i|`` between spheres), both bodies are pushed apart at the point ``x = c_i + (r_i + g / 2)
+n`` midway between the two surfaces, each at its own material point there, so that the pair
+exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
+v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
+normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip)``::
+
+    F_n = max(0, K delta^n_K + D delta^n_D delta')       while delta > 0, else 0
+
+[N], which is the linear spring-damper (``n_K = 1, n_D = 0``), Hertz with the Tsuji damping
+(``n_K = 3/2, n_D = 1/4``) and the Hunt-Crossley family (``n_D = n_K``) with their constants
+(see :mod:`mbd3d.model.contacts`). The friction force on ``j`` is ``-mu F_n tanh(|v_t| /
+v_slip) v_t / |v_t|`` with ``v_t`` the tangential part of ``v_j - v_i`` (the opposite on
+``i``). The potential of the law's spring part is ``K delta^(n_K + 1) / (n_K + 1)`` [J].
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.forces import _add_force, _turn
+
+#: the kinds of shape pairs
+SPHERE_PLANE, SPHERE_SPHERE = 0, 1
+#: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
+#: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J]
+GAP, GAP_RATE, NORMAL_FORCE, FRICTION, POINT, NORMAL, POTENTIAL = 0, 1, 2, 3, 6, 9, 12
+REPORT_COLUMNS = 13
+
+
+@jit
+def _point(A, Q, b, u, out):
+    """``out`` = the global position of body point ``u`` of body ``b``, embedded in 3D."""
+    _turn(A, b, u, out)
+    for x in range(u.shape[0]):
+        out[x] += Q[b, x]
+
+
+@jit
+def _velocity(Qd, omega, dim, b, s, out):
+    """``out`` = the velocity of the material point at offset ``s`` (3,) from body ``b``'s
+    reference point (``dim`` translation coordinates)."""
+    w = omega[b]
+    for x in range(3):
+        y, z = (x + 1) % 3, (x + 2) % 3
+        out[x] = (Qd[b, x] if x < dim else 0.0) + w[y] * s[z] - w[z] * s[y]
+
+
+@jit
+def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n) -> float:
+    """The unit normal ``n`` from body ``i`` to body ``j`` and the gap of contact ``k`` (NaN
+    when two spheres' centres coincide: the normal is undefined)."""
+    _point(A, Q, i, points[k, 0], c_i)
+    _point(A, Q, j, points[k, 1], c_j)
+    if kind == SPHERE_PLANE:
+        _turn(A, j, points[k, 2], n)
+        gap = 0.0
+        for x in range(3):
+            gap += n[x] * (c_i[x] - c_j[x])
+            n[x] = -n[x]
+        return gap - values[k, 1]
+    distance = 0.0
+    for x in range(3):
+        n[x] = c_j[x] - c_i[x]
+        distance += n[x] * n[x]
+    distance = math.sqrt(distance)
+    if not distance > 0.0:
+        return math.nan
+    for x in range(3):
+        n[x] /= distance
+    return distance - values[k, 1] - values[k, 2]
+
+
+@jit
+def normal_force(values, k, delta: float, delta_rate: float) -> float:
+    """The normal force [N] of contact ``k``'s law at penetration ``delta`` [m] and rate
+    ``delta_rate`` [m/s] (zero when apart, never pulling)."""
+    if not delta > 0.0:
+        return 0.0
+    force = (values[k, 3] * delta ** values[k, 4]
+             + values[k, 5] * delta ** values[k, 6] * delta_rate)
+    return force if force > 0.0 else 0.0
+
+
+@jit
+def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, report) -> int:
+    """Add the generalized forces of the contacts into ``out`` (bodies + ground, n_coords),
+    and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``). Returns -1,
+    or the first contact whose normal is undefined."""
+    c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
+    s_i, s_j, v_i, v_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    dim = points.shape[2]
+    for k in range(bodies.shape[0]):
+        i, j = bodies[k, 0], bodies[k, 1]
+        gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
+        if gap != gap:
+            return k
+        reach = values[k, 1] + 0.5 * gap
+        for x in range(3):
+            point = c_i[x] + reach * n[x]
+            s_i[x] = point - (Q[i, x] if x < dim else 0.0)
+            s_j[x] = point - (Q[j, x] if x < dim else 0.0)
+        _velocity(Qd, omega, dim, i, s_i, v_i)
+        _velocity(Qd, omega, dim, j, s_j, v_j)
+        rate = 0.0
+        for x in range(3):
+            v_j[x] -= v_i[x]
+            rate += n[x] * v_j[x]
+        force = normal_force(values, k, -gap, -rate)
+        slip = 0.0
+        for x in range(3):
+            v_j[x] -= rate * n[x]
+            slip += v_j[x] * v_j[x]
+        slip = math.sqrt(slip)
+        # tanh(s / v) / s, which tends to 1 / v as the slip vanishes
+        scale = values[k, 8]
+        weight = math.tanh(slip / scale) / slip if slip > 1e-9 * scale else 1.0 / scale
+        friction = -values[k, 7] * force * weight
+        for x in range(3):
+            F[x] = force * n[x] + friction * v_j[x]
+        _add_force(axes, j, s_j, F, out)
+        for x in range(3):
+            F[x] = -F[x]
+        _add_force(axes, i, s_i, F, out)
+        if report.shape[0] > 0:
+            delta = -gap if gap < 0.0 else 0.0
+            report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, rate, force
+            for x in range(3):
+                report[k, FRICTION + x] = friction * v_j[x]
+                report[k, POINT + x] = c_i[x] + reach * n[x]
+                report[k, NORMAL + x] = n[x]
+            power = values[k, 4] + 1.0
+            report[k, POTENTIAL] = values[k, 3] * delta ** power / power
+    return -1
