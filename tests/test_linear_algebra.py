@@ -19,7 +19,8 @@ def _build(factory, n_links, layout, monkeypatch):
             patch.setattr(patterns, "BANDED_WORK_LIMIT", -1)
         if layout == "banded":
             patch.setattr(patterns, "RANGE_SPACE_WORK_LIMIT", -1)
-        model = factory(n_links, sparse=layout != "dense")
+        # masses and lengths other than 1, so that no scaling by them can be left out unseen
+        model = factory(n_links, sparse=layout != "dense", link_mass=2.7, link_length=0.8)
     assert model._augmented_pattern.layout == layout
     return model
 
@@ -58,6 +59,10 @@ def test_every_layout_solves_the_augmented_equations(factory, n_links, monkeypat
         for b in rhs:
             np.testing.assert_allclose(K @ factors.solve(b), b, rtol=0,
                                        atol=1e-10 * np.abs(b).max(), err_msg=layout)
+            # and solved in one call, as a Python right-hand side does
+            once = linalg.solve_model_augmented(each, blocks, jac_data, b)
+            np.testing.assert_allclose(K @ once, b, rtol=0, atol=1e-10 * np.abs(b).max(),
+                                       err_msg=layout)
 
 
 def test_banded_factors_give_the_determinant_and_refuse_singular_matrices():
@@ -158,6 +163,26 @@ def test_band_cholesky_solves_and_refuses_dependent_rows():
     B[20, 21] += 1e-3  # independent again (by 1e-3 of its size; S's bandwidth now 2)
     S = B @ B.T
     assert band_cholesky(_band_storage(S, k), m, k, np.diag(S).copy(), 1e-12)
+    # the test is relative to the row's own size: at any scale, a row 1e-7 of its size out
+    # of the span of the row before (squared sine 1e-14 < 1e-12) is dependent, 1e-5 is not
+    for scale in (1e-4, 1e4):
+        for offset, regular in ((1e-7, False), (1e-5, True)):
+            C = np.zeros((m, m + k))
+            for i in range(m):
+                C[i, i:i + 2] = rng.normal(size=2)
+            C[20] = C[19]
+            C[20, 21] += offset * np.linalg.norm(C[19])
+            S = (scale * C) @ (scale * C).T
+            assert band_cholesky(_band_storage(S, k), m, k, np.diag(S).copy(), 1e-12) == regular
+
+
+def test_dense_pivot_test_is_relative_to_the_largest_pivot():
+    from mbd3d.numerics.compiled.dense import lu_factor
+
+    for scale in (1e-6, 1e6):
+        for ratio, regular in ((1e-13, False), (1e-11, True)):
+            A = np.diag([scale, 2.0 * scale, ratio * scale])
+            assert lu_factor(A.copy(), 1e-12)[1] == regular
 
 
 def test_a_long_chain_is_not_singular_for_its_length():
