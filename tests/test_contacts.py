@@ -14,6 +14,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
+from mbd3d.joints import Prismatic, Revolute, Spherical
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces
 
@@ -226,8 +227,9 @@ def test_elastic_bounces_conserve_energy(dim):
     t = np.linspace(0.0, 2.5, 501)
     model, res, height = _bouncing_ball(1e8, e=1.0, dim=dim, t=t, rtol=1e-12)
     assert np.sum(np.diff(np.sign(np.diff(height))) < 0) >= 2  # two bounces at least
-    energy = np.array([mb.kinetic_energy(model, q, qd) + mb.potential_energy(model, q)
-                       for q, qd in zip(res.q, res.qd)])
+    charts = [None] * len(res.t) if res.charts is None else res.charts
+    energy = np.array([mb.kinetic_energy(model, q, qd, c) + mb.potential_energy(model, q, c)
+                       for q, qd, c in zip(res.q, res.qd, charts)])
     np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-9 * energy[0])
 
 
@@ -294,7 +296,126 @@ def test_bad_contacts_are_named():
     b.add(mb.Contact("bounce", mb.Sphere(ball, 0.1), floor,
                      law=mb.LinearContact(stiffness=1e5, damping=1.0)))
     with pytest.warns(mb.ContactWarning,
-                      match=r"contact 'bounce': the shapes overlap by 0\.05 m .* force of 5000 N"):
+                      match=r"contact 'bounce': the shapes overlap by 0\.05 m .* force of 5000 N;"):
         b.build()
     with pytest.raises(mb.ModelError, match="a Sphere and then a Plane"):
         mb.Contact("bad", floor, floor, law=mb.LinearContact(stiffness=1.0, damping=0.0))
+
+
+def _slider(dim, law, v=1.5):
+    """A block on a prismatic joint along x, sent at ``v`` towards the upper stop."""
+    b = mb.ModelBuilder(dim=dim)
+    inertia = 0.01 if dim == 2 else np.eye(3) * 0.01
+    block = b.add_body("block", mass=2.0, inertia=inertia, position=(0.0,) * dim,
+                       velocity=(v,) + (0.0,) * (dim - 1))
+    slide = b.add(Prismatic("slide", b.ground, block, axis=(1.0,) + (0.0,) * (dim - 1)))
+    b.add(mb.JointLimit("ends", slide, lower=-0.3, upper=0.2, law=law))
+    return b.build()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_slider_rebounds_from_both_stops_with_the_restitution(dim):
+    # a free mass on a fixed stop: the calibration's own impact, exact
+    e, v = 0.6, 1.5
+    for law in (mb.LinearContact(stiffness=1e6, restitution=e),
+                mb.HertzContact(stiffness=1e8, restitution=e)):
+        model = _slider(dim, law, v)
+        res = mb.forward_dynamics(model, [0.0, 0.4, 1.2], method="DOP853", rtol=1e-11,
+                                  atol=1e-13)
+        np.testing.assert_allclose(res.qd[1:, 0], [-e * v, e * e * v], rtol=1e-8, atol=0)
+        slide = res.joint("slide").displacement
+        assert -0.3 < slide[1] < 0.2
+
+
+def _pendulum(dim, law, lower):
+    """A rod of 1 m pinned at its end, released horizontal, with a stop at ``lower``."""
+    m, L = 1.5, 1.0
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) if dim == 2 else (0.0, -G, 0.0))
+    inertia = m * L * L / 12
+    rod = b.add_body("rod", mass=m, inertia=inertia if dim == 2 else np.diag([1e-4, inertia, inertia]),
+                     position=(L / 2, 0.0) if dim == 2 else (L / 2, 0.0, 0.0))
+    pin = b.add(Revolute("pin", b.ground, rod, at=(0.0,) * dim,
+                         axis=None if dim == 2 else (0.0, 0.0, 1.0)))
+    b.add(mb.JointLimit("stop", pin, lower=lower, law=law))
+    return b.build(), m * L * L / 3, m * G * L / 2
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_pendulum_rebounds_from_its_stop(dim):
+    # hanging straight down at the stop, gravity has no moment there: the rate after the
+    # bounce is e times the rate before, sqrt(2 m g (L/2) / I_O); after it the rod swings
+    # freely, so omega^2 + 2 m g (L/2) (1 + sin theta) / I_O keeps its value
+    e = 0.7
+    law = mb.HertzContact(stiffness=1e7, restitution=e)
+    model, I_O, moment = _pendulum(dim, law, -math.pi / 2)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 1.0, 11), method="DOP853", rtol=1e-11,
+                              atol=1e-13)
+    pin = res.joint("pin")
+    before = math.sqrt(2 * moment / I_O)
+    after = np.sqrt(pin.angle_rate ** 2 + 2 * moment * (1 + np.sin(pin.angle)) / I_O)
+    rebounded = (res.t > 0.75) & (pin.angle > -math.pi / 2 + 1e-3)
+    assert rebounded.sum() >= 2
+    np.testing.assert_allclose(after[rebounded], e * before, rtol=1e-5, atol=0)
+    np.testing.assert_allclose(after[res.t < 0.5], before, rtol=1e-9, atol=0)
+
+
+def test_a_spatial_pendulum_in_the_plane_bounces_as_the_planar_one():
+    law = mb.LinearContact(stiffness=1e5, restitution=0.5)
+    t = np.linspace(0.0, 2.0, 21)
+    angles = []
+    for dim in (2, 3):
+        model, _, _ = _pendulum(dim, law, -1.2)
+        res = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-13)
+        angles.append(res.joint("pin").angle)
+    np.testing.assert_allclose(angles[1], angles[0], rtol=0, atol=1e-8)
+    assert angles[0].min() < -1.2  # it reached the stop
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_elastic_stops_keep_the_energy(dim):
+    model, _, moment = _pendulum(dim, mb.HertzContact(stiffness=1e6), -1.0)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 3.0, 61), method="DOP853", rtol=1e-12,
+                              atol=1e-14)
+    charts = [None] * len(res.t) if res.charts is None else res.charts
+    energy = np.array([mb.kinetic_energy(model, q, qd, c) + mb.potential_energy(model, q, c)
+                       for q, qd, c in zip(res.q, res.qd, charts)])
+    np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-9 * moment)
+    assert res.joint("pin").angle.min() < -1.0
+
+
+def test_bad_joint_limits_are_named():
+    b = mb.ModelBuilder(dim=3)
+    body = b.add_body("body", mass=1.0, inertia=np.eye(3), position=(0.0, 0.0, 0.0))
+    hinge = Revolute("hinge", b.ground, body, at=(0, 0, 0), axis=(0, 0, 1))
+    law = mb.LinearContact(stiffness=1e4, damping=1.0)
+    with pytest.raises(mb.ModelError, match="joint limit 'stop': give a Revolute or Prismatic"):
+        mb.JointLimit("stop", Spherical("ball", b.ground, body, at=(0, 0, 0)), upper=1.0, law=law)
+    for kwargs, words in [(dict(lower=1.0, upper=0.5), "lower must be below upper"),
+                          (dict(lower=-4.0), r"inside it")]:
+        builder = mb.ModelBuilder(dim=3)
+        body = builder.add_body("body", mass=1.0, inertia=np.eye(3), position=(0.0, 0.0, 0.0))
+        hinge = builder.add(Revolute("hinge", builder.ground, body, at=(0, 0, 0), axis=(0, 0, 1)))
+        builder.add(mb.JointLimit("stop", hinge, law=law, **kwargs))
+        with pytest.raises(mb.ModelError, match=f"joint limit 'stop': .*{words}"):
+            builder.build()
+
+
+def test_contacts_and_limits_round_trip_through_a_model_file(tmp_path):
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G), name="bounce and stop")
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.3, 1.0),
+                      velocity=(0.5, 0.0))
+    b.add(mb.Contact("floor", mb.Sphere(ball, 0.1), mb.Plane(b.ground, normal=(0.1, 1.0)),
+                     law=mb.HuntCrossley(1e7, 0.8, 2.0, calibration="flores"), friction=0.3))
+    slider = b.add_body("slider", mass=2.0, inertia=0.01, position=(0.0, 2.0),
+                        velocity=(1.0, 0.0))
+    slide = b.add(Prismatic("slide", b.ground, slider, axis=(1.0, 0.0)))
+    b.add(mb.JointLimit("ends", slide, upper=0.1, law=mb.LinearContact(frequency=50.0,
+                                                                       restitution=0.5)))
+    model = b.build()
+    again = mb.load(mb.save(model, tmp_path / "contacts.yaml"))
+    t = np.linspace(0.0, 0.6, 7)
+    first, second = (mb.forward_dynamics(m, t, method="DOP853") for m in (model, again))
+    np.testing.assert_array_equal(second.q, first.q)
+    assert first.qd[-1, 3] < 0.0  # the slider came back from its stop
+    text = (tmp_path / "contacts.yaml").read_text()
+    assert "type: HuntCrossley" in text and "body: ball" in text

@@ -142,6 +142,23 @@ def test_differential_example(capsys, tmp_path):
     np.testing.assert_allclose(origins[:, 0], res.joint("left mesh").mesh_force.point, rtol=1e-6)
 
 
+def test_bouncing_ball_example(capsys, tmp_path):
+    rrd = tmp_path / "ball.rrd"
+    res = load("bouncing_ball").main(n_points=201, rrd=str(rrd))
+    out = capsys.readouterr().out
+    rows = re.findall(r"^\s+(\d)\s+\S+\s+(\S+)\s+(\S+)$", out, re.MULTILINE)
+    assert len(rows) >= 3
+    for bounce, apex, rigid in rows:  # the rigid ball's e^(2n) h0, to the dent's loss
+        assert float(rigid) == pytest.approx(0.8 ** (2 * int(bounce)), rel=1e-7)
+        assert float(apex) == pytest.approx(float(rigid), rel=1e-3)
+        assert float(apex) < float(rigid)
+    dent = float(re.search(r"dent (\S+) um", out).group(1))
+    assert dent == pytest.approx(153.93, abs=0.01)  # contact.md 1.3 for K of 1.2
+    speed = float(re.search(r"first bounce: (\S+) m/s", out).group(1))
+    assert speed == pytest.approx(2.5 / 7, rel=2e-3) and speed > 2.5 / 7
+    assert recorded_steps(rrd, "ball") == len(res.t) == 201
+
+
 def test_rolling_disc_example(capsys, tmp_path):
     rrd = tmp_path / "disc.rrd"
     res = load("rolling_disc").main(n_points=5, rrd=str(rrd))

@@ -70,6 +70,8 @@ EXAMPLES = {
                                       "method": "generalized-alpha", "step": 1e-3}),
     "gear_train": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 0.5, 0.05)}),
     "differential": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 0.5, 0.0625)}),
+    "bouncing_ball": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 2.5, 0.0025),
+                                            "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}),
     "rolling_disc": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 4.0, 0.1),
                                            "method": "DOP853", "rtol": 1e-11, "atol": 1e-12}),
     "slider_crank_friction": (lambda m: m.build(), {"kind": "inverse",

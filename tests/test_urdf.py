@@ -107,8 +107,9 @@ def test_puma_inverse_dynamics_along_a_trajectory_matches_newton_euler():
 
 
 def test_what_urdf_import_does_not_model_is_reported(tmp_path):
-    with pytest.warns(UrdfWarning, match="joint limits are not enforced: joint1"):
-        urdf_builder(PUMA)
+    with pytest.warns(UrdfWarning, match=r"joint limits are not enforced \(joint_limits='ignore'"
+                                         r"\): joint1"):
+        urdf_builder(PUMA, joint_limits="ignore")
     text = PUMA.read_text()
     (tmp_path / "floating.urdf").write_text(text.replace('name="joint4" type="revolute"',
                                                          'name="joint4" type="floating"'))
@@ -248,7 +249,7 @@ def test_urdf_mistakes_are_named_with_the_file_and_the_element(tmp_path, text, m
 def test_urdf_warnings_are_mbd3d_s_and_point_at_the_callers_line():
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        load_urdf(PUMA)
+        load_urdf(PUMA, joint_limits="ignore")
     urdf_warnings = [w for w in caught if issubclass(w.category, mb.UrdfWarning)]
     assert urdf_warnings and mb.UrdfWarning is UrdfWarning
     assert {w.filename for w in urdf_warnings} == {__file__}
@@ -335,3 +336,37 @@ def test_visual_meshes_are_found_where_urdf_says(tmp_path, reference):
     shape = load_urdf(urdf).body("part").shape
     np.testing.assert_allclose(shape.bounds, box.bounds - [0.01, 0.02, 0.03], rtol=0,
                                atol=1e-6)
+
+
+def test_a_urdf_limit_stops_the_joint_at_its_ends_in_urdf_terms(tmp_path):
+    """A hinge whose origin is turned and whose axis is skew (so the angle mbd3d measures
+    differs from the URDF's coordinate by an offset), spinning freely at 2 rad/s from
+    q = 0.1 towards its upper limit 0.5: it bounces at t = 0.2 s with the default stop's
+    restitution 0.5 (its inertia about the hinge, a fixed axis), then travels 0.8 rad at 1 rad/s
+    to the lower limit -0.3 and bounces again at t = 1.0 s. The stop's contact lasts half its
+    100 Hz period, 5 ms."""
+    urdf = tmp_path / "limited.urdf"
+    urdf.write_text("""<robot name="limited">
+  <link name="base"/>
+  <joint name="hinge" type="revolute">
+    <parent link="base"/><child link="arm"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 -0.5"/>
+    <axis xyz="0.2 0.5 0.84"/>
+    <limit lower="-0.3" upper="0.5" effort="10" velocity="5"/>
+  </joint>
+  <link name="arm">
+    <inertial>
+      <origin xyz="0.3 -0.1 0.2" rpy="0.7 -0.4 1.9"/>
+      <mass value="1.3"/>
+      <inertia ixx="0.02" ixy="0.001" ixz="-0.002" iyy="0.03" iyz="0.003" izz="0.025"/>
+    </inertial>
+  </link>
+</robot>""")
+    model = load_urdf(urdf, gravity=(0.0, 0.0, 0.0), joint_positions={"hinge": 0.1})
+    t = [0.0, 0.19, 0.21, 0.99, 1.01]
+    res = mb.forward_dynamics(model, t, initial_rates={"hinge": 2.0}, method="DOP853",
+                              rtol=1e-11, atol=1e-13)
+    rate = res.joint("hinge").angle_rate
+    np.testing.assert_allclose(rate, [2.0, 2.0, -1.0, -1.0, 0.5], rtol=1e-7, atol=0)
+    with pytest.raises(mb.ModelError, match="joint_limits must be 'stop', 'ignore' or a"):
+        load_urdf(urdf, joint_limits="yes")

@@ -31,9 +31,11 @@ The format, version 1 (every field in SI units)::
          rrd: run.rrd, csv: results}
 
 Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd3d`
-(``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``,
-whose ``joint`` names a joint); their fields are
-their constructors' keyword arguments, as documented there. A motion is a number (constant)
+(``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``
+and ``JointLimit``, whose ``joint`` names a joint, ``Contact``); their fields are
+their constructors' keyword arguments, as documented there. A contact's shapes and law are
+``{type: Sphere | Plane, body: ..., ...}`` and ``{type: LinearContact | HertzContact |
+HuntCrossley, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
 cam's profile is ``{type: CamProfile, angles: [...], radii: [...]}``.
@@ -197,7 +199,7 @@ def _apply_change(reader, data: dict, key: str, value: Any) -> None:
 def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
     """Joint, force and motion classes by name."""
     import mbd3d.joints as joints  # noqa: PLC0415
-    from mbd3d.model import forces, friction, motion  # noqa: PLC0415
+    from mbd3d.model import contact_laws, contacts, forces, friction, motion  # noqa: PLC0415
     from mbd3d.model.element import ConstraintElement  # noqa: PLC0415
 
     joint_types = {name: getattr(joints, name) for name in joints.__all__
@@ -206,10 +208,15 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
     force_types = {cls.__name__: cls for cls in (forces.PointForce, forces.Torque,
                                                   forces.SpringDamper,
                                                   forces.RotationalSpringDamper,
-                                                  friction.JointFriction)}
+                                                  friction.JointFriction, contacts.Contact,
+                                                  contacts.JointLimit)}
     motion_types = {cls.__name__: cls for cls in (motion.Constant, motion.Ramp,
                                                    motion.Harmonic, motion.Polynomial,
-                                                   motion.SmoothStep, joints.CamProfile)}
+                                                   motion.SmoothStep, joints.CamProfile,
+                                                   contacts.Sphere, contacts.Plane,
+                                                   contact_laws.LinearContact,
+                                                   contact_laws.HertzContact,
+                                                   contact_laws.HuntCrossley)}
     return joint_types, force_types, motion_types
 
 
@@ -384,7 +391,7 @@ class _Reader:
                                                      f"{did_you_mean(value, named)}")
                 arguments[key] = named[value]
             elif isinstance(value, dict) and "type" in value:
-                arguments[key] = self._motion(value, where + (key,), motion_types)
+                arguments[key] = self._motion(value, where + (key,), motion_types, named)
         with self._at(where, entry):
             return cls(**arguments)
 
@@ -402,7 +409,9 @@ class _Reader:
             if parameters[name].default is inspect.Parameter.empty and name not in arguments:
                 raise self.error(where, f"{kind} needs '{name}'")
 
-    def _motion(self, value: dict, where: tuple, motion_types: dict):
+    def _motion(self, value: dict, where: tuple, motion_types: dict, named: dict | None = None):
+        """A value given as ``{type: ...}``: a motion, a cam profile, a contact's shape (whose
+        ``body`` names a body of ``named``) or law."""
         kind = value.get("type")
         if kind == "Sum":
             terms = value.get("terms")
@@ -420,6 +429,12 @@ class _Reader:
                                                 f"{', '.join(motion_types)}, Sum)")
         arguments = {key: v for key, v in value.items() if key != "type"}
         self._check_arguments(motion_types[kind], arguments, where, kind)
+        if named is not None and isinstance(arguments.get("body"), str):
+            if arguments["body"] not in named:
+                raise self.error(where + ("body",), f"no body '{arguments['body']}' (so far: "
+                                                    f"{', '.join(named)})"
+                                                    f"{did_you_mean(arguments['body'], named)}")
+            arguments["body"] = named[arguments["body"]]
         with self._at(where, value):
             return motion_types[kind](**arguments)
 

@@ -5,6 +5,7 @@ sanitised names, and nothing existing is replaced unless asked.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 import pathlib
@@ -106,6 +107,10 @@ def _plain(value: Any, where: str) -> Any:
 
     if isinstance(value, CamProfile):
         return {"type": "CamProfile", **{k: _plain(v, where) for k, v in value.arguments.items()}}
+    if _is_contact_part(value):
+        return {"type": type(value).__name__,
+                **{f.name: _plain(getattr(value, f.name), where)
+                   for f in dataclasses.fields(value) if getattr(value, f.name) != f.default}}
     if isinstance(value, Motion):
         if value.terms() is None:
             raise ModelFileError(f"{where}: a motion given by Python functions cannot be "
@@ -131,6 +136,14 @@ def _plain(value: Any, where: str) -> Any:
                              "SmoothStep)")
     raise ModelFileError(f"{where}: {type(value).__name__} values cannot be written to a model "
                          "file")
+
+
+def _is_contact_part(value: Any) -> bool:
+    """A contact's shape or law (frozen dataclasses, written field by field)."""
+    from mbd3d.model.contact_laws import ContactLaw  # noqa: PLC0415
+    from mbd3d.model.contacts import Plane, Sphere  # noqa: PLC0415
+
+    return isinstance(value, (Sphere, Plane, ContactLaw)) and dataclasses.is_dataclass(value)
 
 
 def _is_mesh(shape: Any) -> bool:

@@ -13,8 +13,9 @@ the robot at ``joint_positions`` (default all zero):
 - ``floating`` and ``planar``: refused, naming the joint.
 
 The root link is welded to the ground (``fixed_base=True``, it becomes the ground) or left
-free. Joint limits are not enforced and mimic joints are not coupled: both are reported in a
-:class:`UrdfWarning`. Visual geometry (collision geometry where a link has none) becomes the
+free. A revolute or prismatic joint's ``<limit>`` becomes a :class:`~mbd3d.JointLimit` at its
+lower and upper ends (``joint_limits``: the contact law, or ``"ignore"``); mimic joints are not
+coupled, which a :class:`UrdfWarning` reports. Visual geometry (collision geometry where a link has none) becomes the
 body's shape for the viewer: meshes (paths relative to the URDF, ``package://`` resolved from
 the URDF's folder upwards), boxes, cylinders and spheres.
 
@@ -116,7 +117,7 @@ def _drawing_frames(links: dict, joints: list, root: str, positions: Mapping[str
 def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float] | None = None,
                  fixed_base: bool = True, drive: Mapping[str, Motion | float] | None = None,
                  gravity=(0.0, 0.0, -9.81), name: str | None = None, builder=None,
-                 files_read: list[str] | None = None):
+                 files_read: list[str] | None = None, joint_limits: Any = "stop"):
     """A :class:`ModelBuilder` holding the robot of a URDF file, to extend before building
     (drivers on its joints, loop-closing joints, forces).
 
@@ -140,6 +141,11 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     files_read : list, optional
         Appended with the path of every file read (the URDF and its meshes), e.g. to tell
         when a result made from the robot is stale.
+    joint_limits : "stop", "ignore" or ContactLaw
+        What a joint's ``<limit lower upper>`` becomes: a :class:`~mbd3d.JointLimit` named
+        ``"<joint>_limit"`` with the given law, or by default (``"stop"``) a
+        :class:`~mbd3d.LinearContact` of natural frequency 100 Hz with the link's inertia
+        about the joint and restitution 0.5; ``"ignore"``: none (reported in a warning).
 
     Raises
     ------
@@ -151,7 +157,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         import yourdfpy  # noqa: PLC0415
     except ImportError:
         raise ModelError('URDF import needs yourdfpy: pip install "mbd3d[urdf]"') from None
-    from mbd3d.joints import Fixed, Prismatic, Revolute, RotationDriver, TranslationDriver
+    from mbd3d.joints import Fixed, Prismatic, Revolute
     from mbd3d.model.builder import ModelBuilder  # noqa: PLC0415
 
     path = pathlib.Path(path)
@@ -183,6 +189,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         bodies[root.name] = b.ground
     else:
         bodies[root.name] = _add_link(b, root, frames[root.name], path, what, files_read)
+    limit_law = _limit_law(joint_limits, what)
     limited, mimic = [], []
     for joint in order:
         child = links[joint.child]
@@ -207,24 +214,19 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
             element = b.add(Fixed(joint.name, parent_body, body, at=point))
         if joint.limit is not None and joint.type in ("revolute", "prismatic") and (
                 joint.limit.lower is not None or joint.limit.upper is not None):
-            limited.append(f"{joint.name} [{joint.limit.lower}, {joint.limit.upper}]")
+            q0 = float(positions.get(joint.name, 0.0))
+            if not _add_limit(b, joint, element, axis, q0, limit_law):
+                limited.append(f"{joint.name} [{joint.limit.lower}, {joint.limit.upper}]")
         if joint.mimic is not None:
             mimic.append(f"{joint.name} = {joint.mimic.multiplier or 1.0} x "
                          f"{joint.mimic.joint} + {joint.mimic.offset or 0.0}")
         if joint.name in drive:
-            motion = drive[joint.name]
-            q0 = float(positions.get(joint.name, 0.0))
-            if joint.type == "prismatic":
-                b.add(TranslationDriver(f"{joint.name}_drive", element,
-                                        motion=motion + Constant(-q0)))
-            elif joint.type in ("revolute", "continuous"):
-                offset = _drive_offset(parent_body, body, axis) - q0
-                b.add(RotationDriver(f"{joint.name}_drive", element,
-                                     motion=motion + Constant(offset) if offset else motion))
-            else:
-                raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
+            _add_driver(b, joint, element, axis, drive[joint.name],
+                        float(positions.get(joint.name, 0.0)), what)
     if limited:
-        warnings.warn(f"{what}: joint limits are not enforced: {', '.join(limited)}",
+        why = ("joint_limits='ignore'" if limit_law is None
+               else "a spatial hinge's angle is measured within half a turn of the drawing")
+        warnings.warn(f"{what}: joint limits are not enforced ({why}): {', '.join(limited)}",
                       UrdfWarning, stacklevel=user_stacklevel())
     if mimic:
         warnings.warn(f"{what}: mimic joints are not coupled (each moves freely): "
@@ -304,6 +306,53 @@ def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str, files_r
     return b.add_body(link.name, mass=float(inertial.mass), inertia=inertia, position=position,
                       orientation=frame[:3, :3],
                       shape=_shape(link, centre_in_link, path, what, files_read))
+
+
+def _add_driver(b, joint, element, axis: np.ndarray, motion: Motion, q0: float,
+                what: str) -> None:
+    """Drive the URDF joint's coordinate (``q0`` in the drawing) by ``motion``."""
+    from mbd3d.joints import RotationDriver, TranslationDriver  # noqa: PLC0415
+
+    if joint.type == "prismatic":
+        b.add(TranslationDriver(f"{joint.name}_drive", element, motion=motion + Constant(-q0)))
+    elif joint.type in ("revolute", "continuous"):
+        offset = _drive_offset(element.body_i, element.body_j, axis) - q0
+        b.add(RotationDriver(f"{joint.name}_drive", element,
+                             motion=motion + Constant(offset) if offset else motion))
+    else:
+        raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
+
+
+def _add_limit(b, joint, element, axis: np.ndarray, q0: float, law) -> bool:
+    """Add the URDF joint's ``<limit>`` as a JointLimit on ``element`` (its ends moved from
+    the URDF coordinate, ``q0`` in the drawing, to the angle or slide mbd3d measures); False
+    when it is not added (no law, or a hinge's ends beyond half a turn of the drawing)."""
+    from mbd3d.model.contacts import JointLimit  # noqa: PLC0415
+
+    offset = -q0
+    if joint.type == "revolute":
+        offset += _drive_offset(element.body_i, element.body_j, axis)
+    ends = [None if end is None else float(end) + offset
+            for end in (joint.limit.lower, joint.limit.upper)]
+    if law is None or (joint.type == "revolute" and any(
+            end is not None and not -np.pi < end < np.pi for end in ends)):
+        return False
+    b.add(JointLimit(f"{joint.name}_limit", element, lower=ends[0], upper=ends[1], law=law))
+    return True
+
+
+def _limit_law(joint_limits: Any, what: str):
+    """The contact law of the URDF's joint limits, or None (``"ignore"``)."""
+    from mbd3d.model.contact_laws import ContactLaw, LinearContact  # noqa: PLC0415
+
+    if isinstance(joint_limits, ContactLaw):
+        return joint_limits
+    if joint_limits == "stop":
+        return LinearContact(frequency=100.0, restitution=0.5)
+    if joint_limits == "ignore":
+        return None
+    raise ModelError(f"{what}: joint_limits must be 'stop', 'ignore' or a contact law "
+                     f"(mbd3d.LinearContact, ...), got {joint_limits!r}")
 
 
 def _drive_offset(body_i, body_j, axis: np.ndarray) -> float:

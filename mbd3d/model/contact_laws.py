@@ -70,8 +70,12 @@ class LinearContact(ContactLaw):
 
     Parameters
     ----------
-    stiffness : float
-        ``k`` [N/m], > 0.
+    stiffness : float, optional
+        ``k`` [N/m], > 0. Or ``frequency``.
+    frequency : float, optional
+        [Hz] > 0: ``k = m* (2 pi frequency)^2``, the natural frequency of the pair's effective
+        mass ``m*`` on the spring (of a joint limit's effective moment of inertia: ``k`` in
+        N m/rad).
     damping : float, optional
         ``c`` [N s/m], >= 0. Give this or ``restitution``.
     restitution : float, optional
@@ -80,12 +84,23 @@ class LinearContact(ContactLaw):
         impact speed.
     """
 
-    stiffness: float
+    stiffness: float | None = None
     damping: float | None = None
     restitution: float | None = None
+    frequency: float | None = None
 
     def constants(self, effective_mass, radius, what):
-        k = _stiffness(self.stiffness, f"{what}: stiffness")
+        if (self.stiffness is None) == (self.frequency is None):
+            raise ModelError(f"{what}: give the LinearContact a stiffness or a frequency, one "
+                             "of them")
+        if self.stiffness is not None:
+            k = _stiffness(self.stiffness, f"{what}: stiffness")
+        elif not math.isfinite(effective_mass):
+            raise ModelError(f"{what}: a frequency needs a body that moves (the effective "
+                             "mass is infinite)")
+        else:
+            k = effective_mass * (2 * math.pi * _stiffness(self.frequency,
+                                                           f"{what}: frequency")) ** 2
         if (self.damping is None) == (self.restitution is None):
             raise ModelError(f"{what}: give the damping or the restitution of the "
                              f"LinearContact, one of them")

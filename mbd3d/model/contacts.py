@@ -27,7 +27,7 @@ from mbd3d.numerics.compiled import contacts as kernel
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext, Model
 
-__all__ = ["Sphere", "Plane", "Contact", "ContactStates", "contact_states"]
+__all__ = ["Sphere", "Plane", "Contact", "JointLimit", "ContactStates", "contact_states"]
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,8 @@ class Plane:
 
 
 class Contact(ForceElement):
+    #: contacts and joint limits are one group of the compiled core
+    group_key = "contacts"
     """A compliant contact between a sphere and a plane or between two spheres.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
@@ -103,6 +105,7 @@ class Contact(ForceElement):
         self.friction, self.slip_velocity = friction, slip_velocity
         self.effective_mass = effective_mass
         self.body_i, self.body_j = first.body, second.body
+        self.what, self.units = f"contact '{name}'", ("m", "N")
 
     def bodies(self) -> list[tuple[str, Body]]:
         return [("first", self.body_i), ("second", self.body_j)]
@@ -142,8 +145,7 @@ class Contact(ForceElement):
     def _effective_mass(self, what: str) -> float:
         if self.effective_mass is not None:
             return finite_scalar(self.effective_mass, f"{what}: effective_mass", positive=True)
-        inverse = sum(0.0 if b.is_ground else 1.0 / b.mass for b in (self.body_i, self.body_j))
-        return 1.0 / inverse if inverse > 0.0 else math.inf
+        return _pair_mass([b.mass for b in (self.body_i, self.body_j) if not b.is_ground])
 
 
 def _plane_normal(ctx: "BuildContext", plane: Plane, what: str) -> np.ndarray:
@@ -153,6 +155,115 @@ def _plane_normal(ctx: "BuildContext", plane: Plane, what: str) -> np.ndarray:
     if plane.normal is not None:
         return ctx.direction(plane.normal, f"{what}: plane normal")
     return ctx.to_local_vector(plane.body, ctx.direction(plane.normal_at, f"{what}: plane normal"))
+
+
+
+class JointLimit(ForceElement):
+    """A stop at each end of a joint's travel: the joint coordinate stays in ``[lower,
+    upper]`` up to the compliance of ``law``, which pushes it back when it passes an end.
+
+    The coordinate is the one results report for the joint
+    (``results.joint(name).angle`` or ``.displacement``): a revolute's angle [rad] of body j
+    about the hinge (planar ``theta_j - theta_i``; spatial, from body i's reference direction,
+    in (-pi, pi]), a prismatic joint's slide [m] of body j's point along the axis.
+
+    Parameters
+    ----------
+    name : str
+    joint : Revolute or Prismatic
+        A joint of the model.
+    lower, upper : float, optional
+        The ends [rad or m] (either may be left out: no stop there).
+    law : ContactLaw
+        As for :class:`Contact`; a law calibrated to a restitution uses ``effective_mass``:
+        default the pair's effective mass (prismatic) or moment of inertia about the hinge
+        [kg m^2] (revolute), ``m_i m_j / (m_i + m_j)``, of the free bodies.
+    effective_mass : float, optional
+        [kg or kg m^2].
+
+    Examples
+    --------
+    >>> import mbd3d as mb
+    >>> from mbd3d.joints import Revolute
+    >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    >>> arm = b.add_body("arm", mass=1.0, inertia=0.08, position=(0.5, 0.0))
+    >>> pin = b.add(Revolute("pin", b.ground, arm, at=(0.0, 0.0)))
+    >>> _ = b.add(mb.JointLimit("pin stop", pin, lower=-1.0, upper=1.0,
+    ...                         law=mb.LinearContact(stiffness=1e4, restitution=0.5)))
+    """
+
+    group_key = "contacts"
+
+    def __init__(self, name: str, joint: Any, *, lower: float | None = None,
+                 upper: float | None = None, law: ContactLaw,
+                 effective_mass: float | None = None):
+        kind = getattr(joint, "friction_kind", None)
+        if kind not in ("revolute", "prismatic") or not hasattr(joint, "reaction_frame"):
+            raise ModelError(f"joint limit '{name}': give a Revolute or Prismatic joint, got "
+                             f"{joint!r}")
+        if not isinstance(law, ContactLaw):
+            raise ModelError(f"joint limit '{name}': law must be a LinearContact, HertzContact "
+                             f"or HuntCrossley, got {law!r}")
+        self.name, self.joint, self.law = name, joint, law
+        self.lower, self.upper, self.effective_mass = lower, upper, effective_mass
+        self.body_i, self.body_j = joint.body_i, joint.body_j
+        self.hinge = kind == "revolute"
+        self.what = f"joint limit '{name}'"
+        self.units = ("rad", "N m") if self.hinge else ("m", "N")
+
+    def bodies(self) -> list[tuple[str, Body]]:
+        return [("body_i", self.body_i), ("body_j", self.body_j)]
+
+    @classmethod
+    def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
+        return _Contacts(elements, ctx)
+
+    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray]:
+        """``(points (3, dim), values (9,))`` of the compiled core, checked."""
+        what = f"joint limit '{self.name}'"
+        lower = -math.inf if self.lower is None else finite_scalar(self.lower, f"{what}: lower")
+        upper = math.inf if self.upper is None else finite_scalar(self.upper, f"{what}: upper")
+        if not lower < upper:
+            raise ModelError(f"{what}: lower must be below upper, got {self.lower!r} and "
+                             f"{self.upper!r}")
+        u_i, u_j, axes = self.joint.reaction_frame(ctx)
+        points = np.zeros((3, ctx.dim))
+        if self.hinge and ctx.dim == 3:
+            if not (-math.pi < lower or self.lower is None) or not (
+                    upper < math.pi or self.upper is None):
+                raise ModelError(f"{what}: a spatial hinge's angle is measured in (-pi, pi]; "
+                                 f"give limits inside it, got {self.lower!r}, {self.upper!r}")
+            points[:] = self.joint.hinge_directions(ctx, what)
+        elif not self.hinge:
+            points[:] = u_i, u_j, axes[:, 0]
+        kind = kernel.HINGE_STOP if self.hinge else kernel.SLIDE_STOP
+        mass = self._effective_mass(ctx, u_i, u_j, axes, what)
+        K, n, D, p = self.law.constants(mass, math.inf, what)
+        return points, np.array([kind, lower, upper, K, n, D, p, 0.0, 1.0])
+
+    def _effective_mass(self, ctx, u_i, u_j, axes, what) -> float:
+        if self.effective_mass is not None:
+            return finite_scalar(self.effective_mass, f"{what}: effective_mass", positive=True)
+        if not self.hinge:
+            return _pair_mass([b.mass for b in (self.body_i, self.body_j) if not b.is_ground])
+        h = ctx.rotation(self.body_i) @ axes[:, 2] if ctx.dim == 3 else None
+        moments = []
+        for body, u in ((self.body_i, u_i), (self.body_j, u_j)):
+            if body.is_ground:
+                continue
+            if ctx.dim == 2:
+                moments.append(float(body.inertia) + body.mass * float(u @ u))
+                continue
+            axis = ctx.rotation(body).T @ h
+            arm = u - (u @ axis) * axis
+            moments.append(float(axis @ np.asarray(body.inertia) @ axis) + body.mass * float(arm @ arm))
+        return _pair_mass(moments)
+
+
+def _pair_mass(masses: list) -> float:
+    """``1 / sum(1 / m)`` of the moving bodies' masses or moments (inf: none moves)."""
+    inverse = sum(1.0 / m for m in masses)
+    return 1.0 / inverse if inverse > 0.0 else math.inf
 
 
 class _Contacts(_CompiledForces):
@@ -172,11 +283,13 @@ class _Contacts(_CompiledForces):
                                            for e in self.elements], dtype=np.int64)
         report = self._report(fr, bodies)
         for k in np.flatnonzero(report[:, kernel.GAP] < 0.0):
-            warnings.warn(f"contact '{self.elements[k].name}': the shapes overlap by "
-                          f"{-report[k, kernel.GAP]:.6g} m in the drawing, with a normal force "
-                          f"of {report[k, kernel.NORMAL_FORCE]:.6g} N; place the bodies apart "
-                          "(or touching) unless that is their static penetration",
-                          ContactWarning, stacklevel=user_stacklevel())
+            e, depth, force = self.elements[k], -report[k, kernel.GAP], report[k, kernel.NORMAL_FORCE]
+            where = ("the shapes overlap by" if isinstance(e, Contact)
+                     else "the joint is past its limit by")
+            warnings.warn(f"{e.what}: {where} {depth:.6g} {e.units[0]} in the drawing, with "
+                          f"a force of {force:.6g} {e.units[1]}; place the bodies apart (or at the limit) unless that "
+                          "is their static penetration", ContactWarning,
+                          stacklevel=user_stacklevel())
 
     def _report(self, fr, bodies: np.ndarray) -> np.ndarray:
         out = np.zeros_like(fr.Q)
@@ -184,8 +297,8 @@ class _Contacts(_CompiledForces):
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
                                             self._points, self._values, out, report)
         if failed >= 0:
-            raise ModelError(f"contact '{self.elements[failed].name}': the two spheres' "
-                             "centres coincide; the contact normal is undefined")
+            raise ModelError(f"{self.elements[failed].what}: the two spheres' centres "
+                             "coincide; the contact normal is undefined")
         return report
 
     def _bodies(self, model) -> np.ndarray:
@@ -199,7 +312,7 @@ class _Contacts(_CompiledForces):
                                             self._bodies(model), self._points, self._values,
                                             Q, np.zeros((0, kernel.REPORT_COLUMNS)))
         if failed >= 0:
-            raise ModelError(f"contact '{self.elements[failed].name}': the two spheres' "
+            raise ModelError(f"{self.elements[failed].what}: the two spheres' "
                              f"centres coincide at t = {t:g} s; the contact normal is undefined")
 
     def table(self, model):

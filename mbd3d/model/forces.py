@@ -61,6 +61,8 @@ class ForceElement(RecordsArguments, ABC):
     """Base class of applied force elements."""
 
     name: str
+    #: classes with the same key are compiled into one group (by the first one's compile)
+    group_key: str | None = None
 
     @abstractmethod
     def bodies(self) -> list[tuple[str, Body]]:
@@ -544,8 +546,9 @@ class _RotationalSprings(_SpringGroup):
 
 
 def compile_forces(elements: tuple, ctx: "BuildContext") -> list[_CompiledForces]:
-    """Group force elements by class and compile each group."""
-    by_class: dict[type, list] = {}
+    """Group force elements by class (or by their shared ``group_key``) and compile each
+    group."""
+    groups: dict[Any, list] = {}
     for e in elements:
-        by_class.setdefault(type(e), []).append(e)
-    return [cls.compile(items, ctx) for cls, items in by_class.items()]
+        groups.setdefault(type(e).group_key or type(e), []).append(e)
+    return [type(items[0]).compile(items, ctx) for items in groups.values()]

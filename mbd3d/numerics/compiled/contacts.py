@@ -1,5 +1,5 @@
-"""Compliant contacts between shapes on bodies, compiled: the gap, the normal force of the
-contact law and the regularised Coulomb friction, for all contacts in one loop.
+"""Compliant contacts between shapes on bodies and joint stops, compiled: the gap, the normal
+force of the contact law and the regularised Coulomb friction, for all of them in one loop.
 
 Contact ``k`` acts between body ``i = bodies[k, 0]`` and ``j = bodies[k, 1]``; ``kinds[k]``:
 
@@ -24,6 +24,19 @@ normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_sl
 (see :mod:`mbd3d.model.contacts`). The friction force on ``j`` is ``-mu F_n tanh(|v_t| /
 v_slip) v_t / |v_t|`` with ``v_t`` the tangential part of ``v_j - v_i`` (the opposite on
 ``i``). The potential of the law's spring part is ``K delta^(n_K + 1) / (n_K + 1)`` [J].
+
+Joint stops keep a joint coordinate ``x`` in ``[lower, upper] = values[k, 1:3]`` by the same
+law, ``delta = x - upper`` or ``lower - x``, pushing back along the coordinate (no friction;
+the coordinates are those :mod:`mbd3d.io.joint_coordinates` reports):
+
+- ``HINGE_STOP``: the angle of body j about a hinge of body i, planar ``theta_j - theta_i``,
+  spatial ``atan2(f_j . g_i, f_j . f_i)`` in (-pi, pi] with ``points[k] = (f_i, g_i, f_j)``
+  in the body frames; the torque acts about ``h = f_i x g_i``; the reported point is body
+  j's reference point;
+- ``SLIDE_STOP``: the slide ``s = h . (P_j - P_i)`` of body j's point ``P_j`` along body i's
+  axis ``h`` from ``P_i``, ``points[k] = (u_i, u_j, h_i)`` in the body frames; the force acts
+  along ``h`` at ``P_j`` (on body i at its material point there), whose virtual work is the
+  force times the slide's variation.
 """
 
 from __future__ import annotations
@@ -33,10 +46,10 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
-from mbd3d.numerics.compiled.forces import _add_force, _turn
+from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
 
 #: the kinds of shape pairs
-SPHERE_PLANE, SPHERE_SPHERE = 0, 1
+SPHERE_PLANE, SPHERE_SPHERE, HINGE_STOP, SLIDE_STOP = 0, 1, 2, 3
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
 #: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J]
 GAP, GAP_RATE, NORMAL_FORCE, FRICTION, POINT, NORMAL, POTENTIAL = 0, 1, 2, 3, 6, 9, 12
@@ -107,6 +120,9 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
     dim = points.shape[2]
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
+        if values[k, 0] >= HINGE_STOP:
+            _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report)
+            continue
         gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
         if gap != gap:
             return k
@@ -147,3 +163,85 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
             power = values[k, 4] + 1.0
             report[k, POTENTIAL] = values[k, 3] * delta ** power / power
     return -1
+
+
+@jit
+def _hinge(A, omega, Q, Qd, k, i, j, points, h) -> tuple:
+    """``(theta, theta')`` of hinge stop ``k`` and its axis ``h`` (global, 3D)."""
+    if points.shape[2] == 2:
+        h[0], h[1], h[2] = 0.0, 0.0, 1.0
+        return Q[j, 2] - Q[i, 2], Qd[j, 2] - Qd[i, 2]
+    f_i, g_i, f_j = np.zeros(3), np.zeros(3), np.zeros(3)
+    _turn(A, i, points[k, 0], f_i)
+    _turn(A, i, points[k, 1], g_i)
+    _turn(A, j, points[k, 2], f_j)
+    along, across, rate = 0.0, 0.0, 0.0
+    for x in range(3):
+        y, z = (x + 1) % 3, (x + 2) % 3
+        h[x] = f_i[y] * g_i[z] - f_i[z] * g_i[y]
+        along += f_j[x] * f_i[x]
+        across += f_j[x] * g_i[x]
+    for x in range(3):
+        rate += h[x] * (omega[j, x] - omega[i, x])
+    return math.atan2(across, along), rate
+
+
+@jit
+def _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j) -> tuple:
+    """``(s, s')`` of slide stop ``k``, its axis ``h`` (global, 3D) and the offsets ``s_i``,
+    ``s_j`` of ``P_j`` from the bodies' reference points."""
+    dim = points.shape[2]
+    p_i, v_i, v_j = np.zeros(3), np.zeros(3), np.zeros(3)
+    _point(A, Q, i, points[k, 0], p_i)
+    _point(A, Q, j, points[k, 1], s_j)
+    _turn(A, i, points[k, 2], h)
+    slide, rate = 0.0, 0.0
+    for x in range(3):
+        d = s_j[x] - p_i[x]
+        slide += h[x] * d
+        s_i[x] = s_j[x] - (Q[i, x] if x < dim else 0.0)
+        s_j[x] -= Q[j, x] if x < dim else 0.0
+    _velocity(Qd, omega, dim, i, s_i, v_i)
+    _velocity(Qd, omega, dim, j, s_j, v_j)
+    for x in range(3):
+        # s' = h . (v_Pj - v_Pi) + (omega_i x h) . d: the velocity of P_j relative to the
+        # material point of body i it passes
+        rate += h[x] * (v_j[x] - v_i[x])
+    return slide, rate
+
+
+@jit
+def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> None:
+    """Stop ``k``: the law's force back into ``[lower, upper]`` along its joint coordinate."""
+    h, s_i, s_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    hinge = values[k, 0] == HINGE_STOP
+    if hinge:
+        x, rate = _hinge(A, omega, Q, Qd, k, i, j, points, h)
+    else:
+        x, rate = _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
+    lower, upper = values[k, 1], values[k, 2]
+    # the side nearer to being passed; sign: the direction the stop pushes body j
+    if x - lower < upper - x:
+        gap, gap_rate, sign = x - lower, rate, 1.0
+    else:
+        gap, gap_rate, sign = upper - x, -rate, -1.0
+    force = normal_force(values, k, -gap, -gap_rate)
+    if hinge:
+        _add_torque(axes, j, h, sign * force, out)
+        _add_torque(axes, i, h, -sign * force, out)
+    else:
+        for x_ in range(3):
+            F[x_] = sign * force * h[x_]
+        _add_force(axes, j, s_j, F, out)
+        for x_ in range(3):
+            F[x_] = -F[x_]
+        _add_force(axes, i, s_i, F, out)
+    if report.shape[0] > 0:
+        delta = -gap if gap < 0.0 else 0.0
+        report[k, :] = 0.0
+        report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, gap_rate, force
+        for x_ in range(3):
+            report[k, NORMAL + x_] = sign * h[x_]
+            report[k, POINT + x_] = s_j[x_] + (Q[j, x_] if x_ < points.shape[2] else 0.0)
+        power = values[k, 4] + 1.0
+        report[k, POTENTIAL] = values[k, 3] * delta ** power / power
