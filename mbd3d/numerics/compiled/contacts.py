@@ -245,3 +245,41 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> N
             report[k, POINT + x_] = s_j[x_] + (Q[j, x_] if x_ < points.shape[2] else 0.0)
         power = values[k, 4] + 1.0
         report[k, POTENTIAL] = values[k, 3] * delta ** power / power
+
+
+@jit
+def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
+    """``out[k]``: a continuous function of the state that is positive exactly while contact
+    (or stop) ``k``'s law pushes, ``min(delta, F_n / K)`` with the unclipped force, else
+    ``delta`` (<= 0): the integrators end a step where it changes sign, so that no step
+    straddles the kink of a touch or a release."""
+    c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
+    s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    dim = points.shape[2]
+    for k in range(bodies.shape[0]):
+        i, j = bodies[k, 0], bodies[k, 1]
+        if values[k, 0] >= HINGE_STOP:
+            if values[k, 0] == HINGE_STOP:
+                x, rate = _hinge(A, omega, Q, Qd, k, i, j, points, h)
+            else:
+                x, rate = _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
+            lower, upper = values[k, 1], values[k, 2]
+            delta, delta_rate = (lower - x, -rate) if x - lower < upper - x else (x - upper, rate)
+        else:
+            gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
+            reach = values[k, 1] + 0.5 * gap
+            for x_ in range(3):
+                point = c_i[x_] + reach * n[x_]
+                s_i[x_] = point - (Q[i, x_] if x_ < dim else 0.0)
+                s_j[x_] = point - (Q[j, x_] if x_ < dim else 0.0)
+            _velocity(Qd, omega, dim, i, s_i, v_i)
+            _velocity(Qd, omega, dim, j, s_j, v_j)
+            delta, delta_rate = -gap, 0.0
+            for x_ in range(3):
+                delta_rate -= n[x_] * (v_j[x_] - v_i[x_])
+        if not delta > 0.0:
+            out[k] = delta if delta == delta else 0.0
+            continue
+        pushing = (delta ** values[k, 4]
+                   + values[k, 5] / values[k, 3] * delta ** values[k, 6] * delta_rate)
+        out[k] = min(delta, pushing)

@@ -24,6 +24,7 @@ from mbd3d.numerics.compiled.accelerations import (NOT_FINITE, SOLVED, accelerat
 from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
                                             spatial_frames_into, spatial_rates_into,
                                             spatial_reset_charts, spatial_velocity_derivative_into)
+from mbd3d.numerics.compiled.contacts import switches_into
 from mbd3d.numerics.compiled.rows import constraint_rows_into
 from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, dop853_coefficients,
                                                  error_norm, polynomial_coefficients, stage_state,
@@ -41,6 +42,10 @@ STEP_TOO_SMALL, SINGULAR, DIVERGED = 8, 16, 32
 STEPS, RHS_EVALUATIONS, CHART_RESETS, REJECTED = 0, 1, 2, 3
 #: a trial step whose stages could not be evaluated is retried this many times shorter
 _FAILED_STEP_FACTOR = 0.25
+#: a step across a contact's touch or release is retried shorter until the switch lies in
+#: this last fraction of it (at most _SWITCH_TRIES times), so that the kink of the contact
+#: force falls between steps instead of inside one, where no error estimate sees it
+_SWITCH_BAND, _SWITCH_TRIES = 1e-3, 8
 
 
 @jit_calling_python
@@ -153,6 +158,55 @@ def drift(model, key, t, y, charts, work):
 
 
 @jit
+def switch_count(forces) -> int:
+    """How many contacts and joint stops a model's ``forces`` hold (None: no force elements;
+    Numba drops the branch by the argument's type, which it does not for a field)."""
+    if forces is None:
+        return 0
+    return forces.contact_bodies.shape[0]
+
+
+@jit
+def _contact_switches(forces, A, omega, Q, Qd, out) -> None:
+    if forces is None:
+        return
+    switches_into(A, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
+                  forces.contact_values, out)
+
+
+@jit
+def switches(model, y, charts, work, out) -> None:
+    """The contacts' switching functions at ``y`` into ``out`` (see
+    :func:`.contacts.switches_into`)."""
+    n = model.n
+    qd = np.empty(n)
+    if charts is not None:
+        spatial_rates_into(y[:n], y[n:], qd)
+    else:
+        qd[:] = y[n:]
+    Q, Qd, A, axes, omega, kappa = work.Q, work.Qd, work.A, work.axes, work.omega, work.kappa
+    padded_into(y[:n], Q)
+    padded_into(qd, Qd)
+    yes = n >= 0  # a run-time flag (see accelerations_into)
+    if charts is not None:
+        spatial_frames_into(Q, Qd, charts, yes, A, axes, omega, kappa, work.Gb, work.omega_bar)
+    else:
+        planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
+    _contact_switches(model.forces, A, omega, Q, Qd, out)
+
+
+@jit
+def first_switch(before, after) -> float:
+    """The fraction of a step at which the first switching function changes sign, by linear
+    interpolation between its values at the step's ends (2: none does)."""
+    earliest = 2.0
+    for k in range(before.shape[0]):
+        if (before[k] > 0.0) != (after[k] > 0.0):
+            earliest = min(earliest, before[k] / (before[k] - after[k]))
+    return earliest
+
+
+@jit
 def error_scale(spatial, n, y, y_new, atol, rtol):
     """What each component's local error is measured against: ``atol + rtol max(|y|,
     |y_new|)``, except for the Rodrigues parameters of spatial bodies, whose error is measured
@@ -207,6 +261,8 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
     ys = np.empty(2 * n)
     y_new = np.empty(2 * n)
     rates = np.empty(n)
+    n_switch = switch_count(model.forces)
+    switch_old, switch_new = np.empty(n_switch), np.empty(n_switch)
     spatial = charts is not None  # a run-time flag, where no spatial-only code depends on it
     while True:
         if charts is not None:
@@ -219,6 +275,9 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
         h_abs = min(h, max_step)
         if h_abs < min_step:
             h_abs = min_step
+        if n_switch > 0:
+            switches(model, y, charts, work, switch_old)
+        tries = 0
         rejected = False
         failure = SOLVED  # the status of the last trial step's failing evaluation
         t_failure = t
@@ -258,6 +317,16 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
                 continue
             scale = error_scale(spatial, n, y, y_new, atol, rtol)
             error = error_norm(K, E, E_low, scale, step, dense_kind)
+            if error < 1.0 and n_switch > 0 and tries < _SWITCH_TRIES:
+                switches(model, y_new, charts, work, switch_new)
+                fraction = first_switch(switch_old, switch_new)
+                if fraction < 1.0 - _SWITCH_BAND and fraction * step > min_step:
+                    # end the step just past the switch (secant on the switching function)
+                    h_abs = step * fraction * (1.0 + 0.5 * _SWITCH_BAND)
+                    tries += 1
+                    rejected = True
+                    stats[REJECTED] += 1
+                    continue
             if error < 1.0:
                 factor = step_factor(error, error_order)
                 if rejected:
