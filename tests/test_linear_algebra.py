@@ -205,6 +205,20 @@ def test_a_long_chain_is_not_singular_for_its_length():
     assert qdd[model.n_coordinates - 6 + 2] == pytest.approx(-9.81, rel=1e-9)
 
 
+def test_generalized_alpha_steps_a_long_chain():
+    """Generalized-alpha's iteration matrix ``beta' M + Cq^T p Cq`` has pivots that span the
+    penalty ratio times the masses' spread, more with every link: its test is each pivot
+    against its own column, so a 1000-link spatial chain (refused by a test against the
+    largest pivot) steps; released at rest, its far link falls at g, which the method
+    integrates exactly (a constant acceleration)."""
+    model = spatial_chain(1000)
+    assert model._penalty_pattern.layout == "banded"
+    res = mb.forward_dynamics(model, [0.0, 0.001, 0.002], method="generalized-alpha",
+                              step=1e-3)
+    fall = res.q[:, -4] - res.q[0, -4]
+    np.testing.assert_allclose(fall, -9.81 * res.t ** 2 / 2, rtol=1e-9, atol=0)
+
+
 def test_springs_inside_the_band_are_factored_in_band_storage(monkeypatch):
     """Torsion springs at every pin of a chain give generalized-alpha a force tangent inside
     the band of the iteration matrix: it is factored in band storage by the compiled Newton

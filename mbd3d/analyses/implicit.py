@@ -477,10 +477,10 @@ class _NewtonStep:
         if outcome == kernel.SINGULAR_MATRIX:
             raise IntegrationError(
                 f"forward dynamics of '{model.name}': the generalized-alpha iteration "
-                f"matrix is numerically singular at t = {tt:.6g} s. Its pivots span the "
-                "penalty ratio times the spread of the bodies' masses and inertias: check "
-                "for bodies many orders of magnitude lighter than the others (or give "
-                "them mass).", time=tt)
+                f"matrix is numerically singular at t = {tt:.6g} s: a pivot fell to the "
+                "rounding level of its column, a direction with neither inertia nor "
+                "constraint stiffness. Check for bodies many orders of magnitude lighter "
+                "than the others (or give them mass).", time=tt)
         if outcome == kernel.NOT_FINITE and np.all(np.isfinite(q)):
             # a force element or motion that cannot be evaluated there is named
             constraints.driver_values(model, tt)

@@ -351,7 +351,8 @@ class PenaltyPattern(_FixedPattern):
 
     The matrix is symmetric positive definite (positive masses), and its pivots span the
     penalty ratio times the spread of the bodies' masses and inertias by design: only pivots
-    at the rounding level mean singular.
+    at the rounding level mean singular, and the compiled factorization tests each against
+    its own column (:func:`mbd3d.numerics.compiled.generalized_alpha.factor_into`).
     """
 
     pivot_tolerance = 64 * np.finfo(float).eps

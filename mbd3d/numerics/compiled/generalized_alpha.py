@@ -93,7 +93,11 @@ def factor_into(penalty_arrays, values, extra, matrix, band, piv) -> bool:
     """Factor ``D A D`` (``D`` the pattern's scale) of the matrix with entries ``values``, plus
     ``extra`` (already scaled, in the storage of the layout: (n, n) dense or the band; empty
     for none), into ``matrix`` (dense) or ``band``, row interchanges into ``piv``; returns
-    whether it is regular (the pivot test of :mod:`mbd3d.numerics.linalg`)."""
+    whether it is regular: every pivot above ``pivot_tolerance`` times the largest entry of
+    its own column before factoring. The test is local because the pivots of ``beta' M +
+    Cq^T p Cq`` span the penalty ratio times the spread of the masses by design, and a long
+    chain spreads them further (a test against the largest pivot refused a 1000-link chain
+    whose smallest pivot was still 1e-10 of its column, 1e4 times the tolerance)."""
     pattern = penalty_arrays
     if pattern.layout == DENSE:
         matrix[:, :] = 0.0
@@ -103,15 +107,30 @@ def factor_into(penalty_arrays, values, extra, matrix, band, piv) -> bool:
             flat = matrix.ravel()
             for i in range(extra.shape[0]):
                 flat[i] += extra[i]
-        interchanges, regular = lu_factor(matrix, pattern.pivot_tolerance)
+        size = matrix.shape[0]
+        reference = np.zeros(size)
+        for i in range(size):
+            for j in range(size):
+                reference[j] = max(reference[j], abs(matrix[i, j]))
+        interchanges, regular = lu_factor(matrix, 0.0)
+        for k in range(size):
+            regular = regular and abs(matrix[k, k]) > pattern.pivot_tolerance * reference[k]
     else:
         band[:] = 0.0
         for p in range(values.shape[0]):
             band[pattern.flat[p]] = values[p] * pattern.entry_scale[p]
         for i in range(extra.shape[0]):
             band[i] += extra[i]
-        interchanges, regular = band_factor(band, pattern.scale.shape[0], pattern.kl,
-                                            pattern.ku, pattern.pivot_tolerance)
+        size, rows = pattern.scale.shape[0], 2 * pattern.kl + pattern.ku + 1
+        reference = np.zeros(size)
+        for j in range(size):
+            for i in range(j * rows, (j + 1) * rows):
+                reference[j] = max(reference[j], abs(band[i]))
+        interchanges, regular = band_factor(band, size, pattern.kl, pattern.ku, 0.0)
+        diagonal = pattern.kl + pattern.ku
+        for k in range(size):
+            regular = regular and (abs(band[k * rows + diagonal])
+                                   > pattern.pivot_tolerance * reference[k])
     piv[:] = interchanges
     return regular
 
