@@ -104,8 +104,9 @@ def _material_point_jacobian(q, charts, body, x, h=1e-7):
     for k in range(6 * body, 6 * body + 6):
         e = np.zeros(12)
         e[k] = h
-        plus = (q + e)[6 * body:6 * body + 3] + _rotation(charts[body], (q + e)[6 * body + 3:6 * body + 6]) @ u
-        minus = (q - e)[6 * body:6 * body + 3] + _rotation(charts[body], (q - e)[6 * body + 3:6 * body + 6]) @ u
+        plus, minus = ((x[6 * body:6 * body + 3]
+                        + _rotation(charts[body], x[6 * body + 3:6 * body + 6]) @ u)
+                       for x in (q + e, q - e))
         J[:, k] = (plus - minus) / (2 * h)
     return J
 
@@ -122,7 +123,8 @@ def test_damped_normal_force_and_friction_act_at_the_contact_point(second):
     qd = rng.normal(size=12)
     h = 1e-7
     gap = _gap(q, charts, data, second)
-    rate = (_gap(q + h * qd, charts, data, second) - _gap(q - h * qd, charts, data, second)) / (2 * h)
+    rate = (_gap(q + h * qd, charts, data, second)
+            - _gap(q - h * qd, charts, data, second)) / (2 * h)
     chi = law.constants(1.0, 1.0, "law")[2] * v0 / K
     # the exact calibration: chi (1 + e) = ln((1 + chi) / (1 - chi e)) (contact.md 1.5)
     assert chi * (1 + e) == pytest.approx(math.log((1 + chi) / (1 - chi * e)), rel=1e-12)
@@ -332,7 +334,8 @@ def _pendulum(dim, law, lower):
     m, L = 1.5, 1.0
     b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) if dim == 2 else (0.0, -G, 0.0))
     inertia = m * L * L / 12
-    rod = b.add_body("rod", mass=m, inertia=inertia if dim == 2 else np.diag([1e-4, inertia, inertia]),
+    rod = b.add_body("rod", mass=m,
+                     inertia=inertia if dim == 2 else np.diag([1e-4, inertia, inertia]),
                      position=(L / 2, 0.0) if dim == 2 else (L / 2, 0.0, 0.0))
     pin = b.add(Revolute("pin", b.ground, rod, at=(0.0,) * dim,
                          axis=None if dim == 2 else (0.0, 0.0, 1.0)))

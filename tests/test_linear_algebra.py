@@ -85,6 +85,21 @@ def test_banded_factors_give_the_determinant_and_refuse_singular_matrices():
     ab[kl + ku, 5] = 1.0
     with pytest.raises(linalg.SingularMatrix):
         linalg.BandedFactorization(ab, kl, ku)
+    # a zero diagonal whose only pivots lie on the band's lowest row (blocks of a cyclic
+    # permutation): the compiled factorization must search the whole band below
+    from mbd3d.numerics.compiled.dense import band_factor, band_solve_into
+
+    size, kl, ku = 30, 2, 2
+    A = np.kron(np.eye(size // 3), np.array([[0.0, 2.0, 0.0], [0.0, 0.0, 3.0], [4.0, 0.0, 0.0]]))
+    rows = 2 * kl + ku + 1
+    flat = np.zeros(rows * size)
+    for i, j in zip(*np.nonzero(A)):
+        flat[j * rows + kl + ku + i - j] = A[i, j]
+    piv, regular = band_factor(flat, size, kl, ku, 1e-12)
+    assert regular
+    x = b.copy()[:size]
+    band_solve_into(flat, size, kl, ku, piv, x)
+    np.testing.assert_allclose(A @ x, b[:size], rtol=0, atol=1e-12)
 
 
 def test_a_spring_across_the_band_gives_the_same_motion(monkeypatch):

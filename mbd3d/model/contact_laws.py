@@ -4,13 +4,10 @@ restitution.
 Every law is ``F_n = max(0, K delta^n + D delta^p delta')`` [N] at penetration ``delta`` [m]
 and penetration rate ``delta'`` [m/s], evaluated by :mod:`mbd3d.numerics.compiled.contacts`:
 
-=====================  =====================================  ===========================
-law                    ``K delta^n``                          damping ``D delta^p delta'``
-=====================  =====================================  ===========================
-:class:`LinearContact`  ``k delta``                           ``c delta'``
-:class:`HertzContact`   ``K delta^(3/2)``                     ``alpha sqrt(m* K) delta^(1/4) delta'`` (Tsuji)
-:class:`HuntCrossley`   ``K delta^n``                         ``K (chi / v0) delta^n delta'``
-=====================  =====================================  ===========================
+- :class:`LinearContact`: ``k delta + c delta'``;
+- :class:`HertzContact`: ``K delta^(3/2) + alpha sqrt(m* K) delta^(1/4) delta'`` (Tsuji's
+  damping);
+- :class:`HuntCrossley`: ``K delta^n + K (chi / v0) delta^n delta'``.
 
 The first two dissipate a fraction of an impact's energy that does not depend on the impact
 speed: their damping is calibrated exactly to the restitution asked for, the force never

@@ -256,7 +256,8 @@ class JointLimit(ForceElement):
                 continue
             axis = ctx.rotation(body).T @ h
             arm = u - (u @ axis) * axis
-            moments.append(float(axis @ np.asarray(body.inertia) @ axis) + body.mass * float(arm @ arm))
+            moments.append(float(axis @ np.asarray(body.inertia) @ axis)
+                           + body.mass * float(arm @ arm))
         return _pair_mass(moments)
 
 
@@ -283,11 +284,13 @@ class _Contacts(_CompiledForces):
                                            for e in self.elements], dtype=np.int64)
         report = self._report(fr, bodies)
         for k in np.flatnonzero(report[:, kernel.GAP] < 0.0):
-            e, depth, force = self.elements[k], -report[k, kernel.GAP], report[k, kernel.NORMAL_FORCE]
+            e = self.elements[k]
+            depth, force = -report[k, kernel.GAP], report[k, kernel.NORMAL_FORCE]
             where = ("the shapes overlap by" if isinstance(e, Contact)
                      else "the joint is past its limit by")
             warnings.warn(f"{e.what}: {where} {depth:.6g} {e.units[0]} in the drawing, with "
-                          f"a force of {force:.6g} {e.units[1]}; place the bodies apart (or at the limit) unless that "
+                          f"a force of {force:.6g} {e.units[1]}; place the bodies apart (or at "
+                          "the limit) unless that "
                           "is their static penetration", ContactWarning,
                           stacklevel=user_stacklevel())
 

@@ -100,14 +100,51 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n) -> float:
 
 
 @jit
+def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n, s_i, s_j, v_i,
+                        v_j) -> tuple:
+    """``(gap, gap rate)`` of contact ``k`` (a NaN gap: its normal is undefined), with the
+    normal ``n``, the offsets ``s_i``, ``s_j`` of the contact point midway between the
+    surfaces from the bodies' reference points, and ``v_j`` the velocity of body j's
+    material point there relative to body i's."""
+    dim = points.shape[2]
+    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
+    reach = values[k, 1] + 0.5 * gap
+    for x in range(3):
+        point = c_i[x] + reach * n[x]
+        s_i[x] = point - (Q[i, x] if x < dim else 0.0)
+        s_j[x] = point - (Q[j, x] if x < dim else 0.0)
+    _velocity(Qd, omega, dim, i, s_i, v_i)
+    _velocity(Qd, omega, dim, j, s_j, v_j)
+    rate = 0.0
+    for x in range(3):
+        v_j[x] -= v_i[x]
+        rate += n[x] * v_j[x]
+    return gap, rate
+
+
+@jit
+def _stop_side(x: float, rate: float, lower: float, upper: float) -> tuple:
+    """``(gap, gap rate, sign)`` of a stop's end nearer to being passed, and the direction
+    (+1: up the coordinate) it pushes body j."""
+    if x - lower < upper - x:
+        return x - lower, rate, 1.0
+    return upper - x, -rate, -1.0
+
+
+@jit
 def normal_force(values, k, delta: float, delta_rate: float) -> float:
     """The normal force [N] of contact ``k``'s law at penetration ``delta`` [m] and rate
     ``delta_rate`` [m/s] (zero when apart, never pulling)."""
     if not delta > 0.0:
         return 0.0
-    force = (values[k, 3] * delta ** values[k, 4]
-             + values[k, 5] * delta ** values[k, 6] * delta_rate)
+    force = _law(values, k, delta, delta_rate)
     return force if force > 0.0 else 0.0
+
+
+@jit
+def _law(values, k, delta: float, delta_rate: float) -> float:
+    """``K delta^n_K + D delta^n_D delta'`` of contact ``k`` (``delta > 0``), unclipped."""
+    return values[k, 3] * delta ** values[k, 4] + values[k, 5] * delta ** values[k, 6] * delta_rate
 
 
 @jit
@@ -123,20 +160,10 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
         if values[k, 0] >= HINGE_STOP:
             _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report)
             continue
-        gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
+        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n,
+                                        s_i, s_j, v_i, v_j)
         if gap != gap:
             return k
-        reach = values[k, 1] + 0.5 * gap
-        for x in range(3):
-            point = c_i[x] + reach * n[x]
-            s_i[x] = point - (Q[i, x] if x < dim else 0.0)
-            s_j[x] = point - (Q[j, x] if x < dim else 0.0)
-        _velocity(Qd, omega, dim, i, s_i, v_i)
-        _velocity(Qd, omega, dim, j, s_j, v_j)
-        rate = 0.0
-        for x in range(3):
-            v_j[x] -= v_i[x]
-            rate += n[x] * v_j[x]
         force = normal_force(values, k, -gap, -rate)
         slip = 0.0
         for x in range(3):
@@ -158,7 +185,7 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
             report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, rate, force
             for x in range(3):
                 report[k, FRICTION + x] = friction * v_j[x]
-                report[k, POINT + x] = c_i[x] + reach * n[x]
+                report[k, POINT + x] = s_i[x] + (Q[i, x] if x < dim else 0.0)
                 report[k, NORMAL + x] = n[x]
             power = values[k, 4] + 1.0
             report[k, POTENTIAL] = values[k, 3] * delta ** power / power
@@ -219,12 +246,7 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> N
         x, rate = _hinge(A, omega, Q, Qd, k, i, j, points, h)
     else:
         x, rate = _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
-    lower, upper = values[k, 1], values[k, 2]
-    # the side nearer to being passed; sign: the direction the stop pushes body j
-    if x - lower < upper - x:
-        gap, gap_rate, sign = x - lower, rate, 1.0
-    else:
-        gap, gap_rate, sign = upper - x, -rate, -1.0
+    gap, gap_rate, sign = _stop_side(x, rate, values[k, 1], values[k, 2])
     force = normal_force(values, k, -gap, -gap_rate)
     if hinge:
         _add_torque(axes, j, h, sign * force, out)
@@ -255,7 +277,6 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
     straddles the kink of a touch or a release."""
     c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    dim = points.shape[2]
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
@@ -263,23 +284,12 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
                 x, rate = _hinge(A, omega, Q, Qd, k, i, j, points, h)
             else:
                 x, rate = _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
-            lower, upper = values[k, 1], values[k, 2]
-            delta, delta_rate = (lower - x, -rate) if x - lower < upper - x else (x - upper, rate)
+            gap, rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
         else:
-            gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
-            reach = values[k, 1] + 0.5 * gap
-            for x_ in range(3):
-                point = c_i[x_] + reach * n[x_]
-                s_i[x_] = point - (Q[i, x_] if x_ < dim else 0.0)
-                s_j[x_] = point - (Q[j, x_] if x_ < dim else 0.0)
-            _velocity(Qd, omega, dim, i, s_i, v_i)
-            _velocity(Qd, omega, dim, j, s_j, v_j)
-            delta, delta_rate = -gap, 0.0
-            for x_ in range(3):
-                delta_rate -= n[x_] * (v_j[x_] - v_i[x_])
+            gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j,
+                                            n, s_i, s_j, v_i, v_j)
+        delta, delta_rate = -gap, -rate
         if not delta > 0.0:
             out[k] = delta if delta == delta else 0.0
             continue
-        pushing = (delta ** values[k, 4]
-                   + values[k, 5] / values[k, 3] * delta ** values[k, 6] * delta_rate)
-        out[k] = min(delta, pushing)
+        out[k] = min(delta, _law(values, k, delta, delta_rate) / values[k, 3])
