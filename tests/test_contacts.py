@@ -454,3 +454,35 @@ def test_a_hinge_stop_between_two_spinning_bodies_acts_at_their_relative_angle(d
     # the stiff stop lets the hinge past by at most its elastic dent, ~ rate sqrt(I/k)
     assert angle.max() < 0.52 and angle.min() > -0.52
     assert turned is None or np.ptp(turned) > 1.0  # while the first bar turned a lot
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_slide_stop_on_a_spinning_body_acts_at_the_relative_slide(dim):
+    # no ground: a block slides on a turning bar (2 rad/s), thrown out at 1 m/s towards the
+    # stop 0.3 m along it; the slide the joint reports turns back there, and with an elastic
+    # stop the energy stays
+    b = mb.ModelBuilder(dim=dim)
+    pad = (0.0,) * (dim - 2)
+    inertia = 0.2 if dim == 2 else np.diag([0.2, 0.2, 0.2])
+
+    def spin(rate):
+        return rate if dim == 2 else (0.0, 0.0, rate)
+
+    bar = b.add_body("bar", mass=3.0, inertia=inertia, position=(0.0, 0.0) + pad,
+                     angular_velocity=spin(2.0))
+    block = b.add_body("block", mass=1.0, inertia=inertia, position=(0.4, 0.0) + pad,
+                       velocity=(1.0, 2.0 * 0.4) + pad, angular_velocity=spin(2.0))
+    slide = b.add(Prismatic("slide", bar, block, axis=(1.0, 0.0) + pad))
+    b.add(mb.JointLimit("ends", slide, lower=-0.2, upper=0.3,
+                        law=mb.LinearContact(stiffness=1e5, restitution=1.0)))
+    model = b.build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 1.5, 1501), method="DOP853", rtol=1e-11,
+                              atol=1e-13, strict=True)
+    s = res.joint("slide").displacement
+    assert 0.3 < s.max() < 0.31  # reached the stop, let past by its elastic dent only
+    charts = [None] * len(res.t) if res.charts is None else res.charts
+    energy = np.array([mb.kinetic_energy(model, q, qd, c) + mb.potential_energy(model, q, c)
+                       for q, qd, c in zip(res.q[::50], res.qd[::50], charts[::50])])
+    np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-8 * energy[0])
+    R = res.body("bar").rotation  # the bar turned by more than a radian meanwhile
+    assert math.acos((np.trace(R[0].T @ R[-1]) - (1 if dim == 3 else 0)) / 2) > 1.0
