@@ -8,7 +8,8 @@ rigid ball would rebound to e^(2n) h0 after its n-th bounce; the compliant one l
 little to gravity while it is in contact (a tenth of a millisecond, 0.15 mm deep). At the first bounce its
 bottom slides on the plate: friction spins it up until it rolls, and as friction acts at the
 contact point the angular momentum about that point is kept, m v r = m v' r + (2/5) m r^2 v' / r:
-it goes on at 5/7 of its sideways speed (a little more: the dent lowers the contact point). Recorded to bouncing_ball.rrd: rerun bouncing_ball.rrd
+it goes on at 5/7 of its sideways speed (a little less: the dent brings the contact point
+nearer the centre, so the spin takes a larger share). Recorded to bouncing_ball.rrd: rerun bouncing_ball.rrd
 
 Run: python examples/bouncing_ball.py [--rrd FILE] [--show]
 """
@@ -53,7 +54,8 @@ def main(n_points: int = 1001, rrd: str | None = None, show: bool = False) -> mb
         "apex [m]": apex[flights],
         "rigid e^(2n) h0 [m]": RESTITUTION ** (2 * bounces) * HEIGHT,
     }, precision=8))
-    # Hertz's impact (contact.md 1.3): the deepest dent and the time in contact
+    # Hertz's impact (Johnson, Contact Mechanics, 11.4): the deepest dent
+    # (5 m v^2 / (4 K))^(2/5) and the time in contact 2.943 dent / v
     mass, speed = model.mass[0], math.sqrt(2 * G * HEIGHT)
     K = 4 / 3 * 210e9 / (2 * (1 - 0.3 ** 2)) * math.sqrt(RADIUS)
     dent = (5 * mass * speed ** 2 / (4 * K)) ** 0.4

@@ -1,6 +1,7 @@
 """Compliant contacts against what is derived apart from the code: the contact's generalized
 forces against differences of a potential and a gap written here, restitution against the
-single-impact closed forms and published tables (Chrono's restitution test, contact.md 1.4),
+single impact's phase plane (Chrono's restitution test; what the published Hunt-Crossley
+calibrations really give),
 a bouncing ball against e^(2n) h0 as the contact stiffens, energy over many elastic impacts,
 and a sliding ball that ends rolling at 5/7 of its speed (angular momentum about the contact
 point)."""
@@ -11,6 +12,8 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
@@ -126,7 +129,7 @@ def test_damped_normal_force_and_friction_act_at_the_contact_point(second):
     rate = (_gap(q + h * qd, charts, data, second)
             - _gap(q - h * qd, charts, data, second)) / (2 * h)
     chi = law.constants(1.0, 1.0, "law")[2] * v0 / K
-    # the exact calibration: chi (1 + e) = ln((1 + chi) / (1 - chi e)) (contact.md 1.5)
+    # the exact calibration: chi (1 + e) = ln((1 + chi) / (1 - chi e)) (_hunt_crossley_restitution)
     assert chi * (1 + e) == pytest.approx(math.log((1 + chi) / (1 - chi * e)), rel=1e-12)
     force = K * (-gap) ** 1.4 * (1 + chi * (-rate) / v0)
     states = mb.contact_states(model, q, qd, charts)
@@ -170,19 +173,44 @@ def test_chrono_restitution_test_rebounds_with_the_restitution_asked_for(e):
         assert _two_spheres(law) == pytest.approx(e, abs=1e-8), law
 
 
-def test_published_hunt_crossley_calibrations_give_their_tabulated_restitutions():
-    # contact.md 1.4: what each published chi really gives for e = 0.5, and the clipped
-    # linear law with the unclipped damping ratio of e = 0.5 (1.1): 0.550
-    table = {"hunt-crossley": 0.6630, "lankarani-nikravesh": 0.7252, "flores": 0.4704,
-             "gonthier": 0.4877}
-    for calibration, expected in table.items():
+def _hunt_crossley_restitution(chi: float) -> float:
+    """The restitution of ``F = K d^n (1 + chi d' / v0)`` in a free impact at ``v0``: its
+    phase plane ``m v dv = -K d^n (1 + chi v / v0) dd`` integrated over the compression
+    (``v0`` to 0) and the restitution (0 to ``-e v0``), whose energy integrals cancel:
+    ``int_{-e}^{1} u / (1 + chi u) du = 0``, i.e. ``chi (1 + e) = ln((1 + chi) / (1 - chi
+    e))``, whatever ``K``, ``n``, ``m`` and ``v0``."""
+    f = lambda e: chi * (1 + e) - math.log((1 + chi) / (1 - chi * e))  # noqa: E731
+    return brentq(f, 1e-9, min(1.0, (1 - 1e-12) / chi))
+
+
+def _clipped_linear_restitution(zeta: float) -> float:
+    """The restitution of ``m x'' = -k x - c x'`` (``zeta = c / (2 sqrt(k m))``) whose force
+    may not pull: the speed where ``k x + c x'`` falls to zero, by SciPy."""
+    def parted(_t, y):
+        return y[0] + 2 * zeta * y[1] if y[1] < 0 else 1.0
+    parted.terminal, parted.direction = True, -1
+    solution = solve_ivp(lambda _t, y: [y[1], -y[0] - 2 * zeta * y[1]], (0.0, 10.0),
+                         [0.0, 1.0], rtol=1e-12, atol=1e-14, events=parted)
+    return -float(solution.y_events[0][0][1])
+
+
+def test_published_hunt_crossley_calibrations_give_other_restitutions():
+    # what each published chi, asked for e = 0.5, really gives (the phase plane above), and
+    # the linear law with the damping ratio of the unclipped oscillator's e = 0.5 clipped
+    published = {"hunt-crossley": 1.5 * 0.5, "lankarani-nikravesh": 0.75 * (1 - 0.25),
+                 "flores": 1.6 * 0.5 / 0.5, "gonthier": (1 - 0.25) / 0.5}
+    for calibration, chi in published.items():
         law = mb.HuntCrossley(stiffness=73260.07, restitution=0.5, impact_speed=2.0,
                               calibration=calibration)
-        assert _two_spheres(law) == pytest.approx(expected, abs=6e-5), calibration
+        expected = _hunt_crossley_restitution(chi)
+        assert abs(expected - 0.5) > 0.01  # none is exact
+        assert _two_spheres(law) == pytest.approx(expected, abs=1e-8), calibration
     zeta = -math.log(0.5) / math.hypot(math.pi, math.log(0.5))
     m_star, k = 0.5, 1e5
     law = mb.LinearContact(stiffness=k, damping=2 * zeta * math.sqrt(k * m_star))
-    assert _two_spheres(law) == pytest.approx(0.550, abs=5e-4)
+    expected = _clipped_linear_restitution(zeta)
+    assert expected == pytest.approx(0.550, abs=5e-4)
+    assert _two_spheres(law) == pytest.approx(expected, abs=1e-8)
     # a Hunt-Crossley law rebounds more from a slower impact
     slow = _two_spheres(mb.HuntCrossley(stiffness=73260.07, restitution=0.5, impact_speed=2.0),
                         closing=1.0)
@@ -205,7 +233,7 @@ def _bouncing_ball(stiffness, e=0.8, h0=1.0, dim=2, t=None, rtol=1e-10):
 
 
 def test_bouncing_ball_converges_to_the_rigid_apex_heights_as_the_contact_stiffens():
-    # a rigid bounce with restitution e reaches e^(2n) h0 (contact.md 2.4); a compliant one
+    # a rigid bounce with restitution e reaches e^(2n) h0; a compliant one
     # loses a little to gravity during the contact, in proportion to its depth ~ K^(-2/5)
     e, h0 = 0.8, 1.0
     n = np.arange(1, 4)

@@ -101,8 +101,9 @@ def mesh_properties(mesh: Any, density: float, name: str = "body") -> MassProper
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh or path
-        A closed (watertight) triangle mesh, lengths in metres.
+    mesh : trimesh.Trimesh, path or dict
+        A closed (watertight) triangle mesh, lengths in metres, or a primitive shape (whose
+        mass and inertia are the solid's closed forms, not its mesh's).
     density : float
         [kg/m^3], positive.
     name : str
@@ -127,7 +128,7 @@ def mesh_properties(mesh: Any, density: float, name: str = "body") -> MassProper
     4.680 kg, I_zz / closed form = 1.000000000000
     """
     what = f"body '{name}'"
-    mesh = load_mesh(mesh, what)
+    shape, mesh = mesh, load_mesh(mesh, what)
     rho = finite_scalar(density, f"{what}: density [kg/m^3]", positive=True)
     if not mesh.is_watertight:
         raise ModelError(f"{what}: the mesh is not watertight (it has holes or open edges), so it "
@@ -144,4 +145,28 @@ def mesh_properties(mesh: Any, density: float, name: str = "body") -> MassProper
     inertia = np.array(solid.moment_inertia, dtype=float)
     inertia = 0.5 * (inertia + inertia.T)  # exact symmetry for the positive-definiteness check
     solid.apply_translation(-center)
-    return MassProperties(float(solid.mass), center, inertia, solid)
+    mass = float(solid.mass)
+    if isinstance(shape, dict):
+        # a primitive's mesh only draws it: a sphere's or cylinder's facets hold 0.9 % and
+        # 0.2 % less than the solid, whose closed forms are exact
+        mass, inertia = _primitive_properties(shape, rho)
+    return MassProperties(mass, center, inertia, solid)
+
+
+def _primitive_properties(shape: dict, density: float) -> tuple[float, np.ndarray]:
+    """The exact mass [kg] and centroidal inertia [kg m^2] of a primitive shape (checked by
+    :func:`_primitive` already)."""
+    kind, size = next(iter(shape.items()))
+    values = np.asarray(size, dtype=float).reshape(-1)
+    if kind == "box":
+        x, y, z = values
+        mass = density * x * y * z
+        return mass, mass / 12 * np.diag([y * y + z * z, x * x + z * z, x * x + y * y])
+    if kind == "cylinder":
+        r, h = values
+        mass = density * np.pi * r * r * h
+        across = mass * (3 * r * r + h * h) / 12
+        return mass, np.diag([across, across, mass * r * r / 2])
+    r = values[0]
+    mass = density * 4 / 3 * np.pi * r ** 3
+    return mass, np.eye(3) * 0.4 * mass * r * r
