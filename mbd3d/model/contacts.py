@@ -157,7 +157,6 @@ def _plane_normal(ctx: "BuildContext", plane: Plane, what: str) -> np.ndarray:
     return ctx.to_local_vector(plane.body, ctx.direction(plane.normal_at, f"{what}: plane normal"))
 
 
-
 class JointLimit(ForceElement):
     """A stop at each end of a joint's travel: the joint coordinate stays in ``[lower,
     upper]`` up to the compliance of ``law``, which pushes it back when it passes an end.
