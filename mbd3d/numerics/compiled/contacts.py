@@ -123,6 +123,15 @@ def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n, s
 
 
 @jit
+def _add_pair(axes, i, j, s_i, s_j, F, out) -> None:
+    """``F`` on body j at offset ``s_j`` and ``-F`` on body i at ``s_i`` (``F`` is negated)."""
+    _add_force(axes, j, s_j, F, out)
+    for x in range(3):
+        F[x] = -F[x]
+    _add_force(axes, i, s_i, F, out)
+
+
+@jit
 def _stop_side(x: float, rate: float, lower: float, upper: float) -> tuple:
     """``(gap, gap rate, sign)`` of a stop's end nearer to being passed, and the direction
     (+1: up the coordinate) it pushes body j."""
@@ -176,10 +185,7 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
         friction = -values[k, 7] * force * weight
         for x in range(3):
             F[x] = force * n[x] + friction * v_j[x]
-        _add_force(axes, j, s_j, F, out)
-        for x in range(3):
-            F[x] = -F[x]
-        _add_force(axes, i, s_i, F, out)
+        _add_pair(axes, i, j, s_i, s_j, F, out)
         if report.shape[0] > 0:
             delta = -gap if gap < 0.0 else 0.0
             report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, rate, force
@@ -254,10 +260,7 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> N
     else:
         for x_ in range(3):
             F[x_] = sign * force * h[x_]
-        _add_force(axes, j, s_j, F, out)
-        for x_ in range(3):
-            F[x_] = -F[x_]
-        _add_force(axes, i, s_i, F, out)
+        _add_pair(axes, i, j, s_i, s_j, F, out)
     if report.shape[0] > 0:
         delta = -gap if gap < 0.0 else 0.0
         report[k, :] = 0.0
