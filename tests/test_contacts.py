@@ -521,3 +521,23 @@ def test_a_slide_stop_on_a_spinning_body_acts_at_the_relative_slide(dim):
     np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-8 * energy[0])
     R = res.body("bar").rotation  # the bar turned by more than a radian meanwhile
     assert math.acos((np.trace(R[0].T @ R[-1]) - (1 if dim == 3 else 0)) / 2) > 1.0
+
+
+@pytest.mark.parametrize("lower, upper", [(0.4, 1.2), (-1.2, -0.4)])
+def test_stops_both_on_one_side_of_zero_hold_at_both_ends(lower, upper):
+    # a pendulum drawn half-way between its stops, thrown up at 4 rad/s: it meets the upper
+    # stop, falls back onto the lower one and bounces between them (elastic stops); which
+    # end is nearer must be judged from the ends themselves, not from zero
+    middle, L, m = 0.5 * (lower + upper), 1.0, 1.5
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    rod = b.add_body("rod", mass=m, inertia=m * L * L / 12, angle=middle,
+                     position=(L / 2 * math.cos(middle), L / 2 * math.sin(middle)))
+    pin = b.add(Revolute("pin", b.ground, rod, at=(0.0, 0.0)))
+    b.add(mb.JointLimit("stops", pin, lower=lower, upper=upper,
+                        law=mb.LinearContact(stiffness=1e4, restitution=1.0)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 2.0, 2001),
+                              initial_rates={"pin": 4.0}, method="DOP853", rtol=1e-10,
+                              atol=1e-12)
+    angle = res.joint("pin").angle
+    assert angle.max() > upper and angle.min() < lower  # both ends met
+    assert angle.max() < upper + 0.05 and angle.min() > lower - 0.05  # and held
