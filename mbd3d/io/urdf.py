@@ -15,9 +15,9 @@ the robot at ``joint_positions`` (default all zero):
 The root link is welded to the ground (``fixed_base=True``, it becomes the ground) or left
 free. A revolute or prismatic joint's ``<limit>`` becomes a :class:`~mbd3d.JointLimit` at its
 lower and upper ends (``joint_limits``: the contact law, or ``"ignore"``); mimic joints are not
-coupled, which a :class:`UrdfWarning` reports. Visual geometry (collision geometry where a link has none) becomes the
-body's shape for the viewer: meshes (paths relative to the URDF, ``package://`` resolved from
-the URDF's folder upwards), boxes, cylinders and spheres.
+coupled, which a :class:`UrdfWarning` reports. Visual geometry (collision geometry where a
+link has none) becomes the body's shape for the viewer: meshes (paths relative to the URDF,
+``package://`` resolved from the URDF's folder upwards), boxes, cylinders and spheres.
 
 ``drive={"joint": motion}`` adds a :class:`~mbd3d.joints.RotationDriver` (or
 :class:`~mbd3d.joints.TranslationDriver`) named ``"<joint>_drive"`` whose motion is the URDF
