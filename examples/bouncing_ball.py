@@ -5,11 +5,12 @@ GPa, nu = 0.3), with a restitution of 0.8 and friction 0.2; it also moves sidewa
 Hertz's stiffness follows from the materials, K = (4/3) E* sqrt(r) (E* = E / (2 (1 - nu^2))
 for two bodies of one material), and the law's damping is calibrated to the restitution. A
 rigid ball would rebound to e^(2n) h0 after its n-th bounce; the compliant one loses a
-little to gravity while it is in contact (a tenth of a millisecond, 0.15 mm deep). At the first bounce its
-bottom slides on the plate: friction spins it up until it rolls, and as friction acts at the
-contact point the angular momentum about that point is kept, m v r = m v' r + (2/5) m r^2 v' / r:
-it goes on at 5/7 of its sideways speed (a little less: the dent brings the contact point
-nearer the centre, so the spin takes a larger share). Recorded to bouncing_ball.rrd: rerun bouncing_ball.rrd
+little to gravity while it is in contact (a tenth of a millisecond, 0.15 mm deep). At the
+first bounce its bottom slides on the plate: friction spins it up until it rolls, and as
+friction acts at the contact point the angular momentum about that point is kept,
+m v r = m v' r + (2/5) m r^2 v' / r: it goes on at 5/7 of its sideways speed (a little less:
+the dent brings the contact point nearer the centre, so the spin takes a larger share).
+Recorded to bouncing_ball.rrd: rerun bouncing_ball.rrd
 
 Run: python examples/bouncing_ball.py [--rrd FILE] [--show]
 """
