@@ -138,3 +138,30 @@ def test_a_rigid_driven_mechanism_has_no_modes():
     from mbd3d.mechanisms import four_bar
     along = mb.vibration_modes_along(four_bar(gravity=0.0), [0.0, 0.5])
     assert along.frequencies.shape == (2, 0)
+
+
+def test_a_bar_sprung_to_a_driven_crank_without_gravity_along_the_turn():
+    """No gravity: a driven crank carries a bar on a pin; a spring of free length h joins the
+    crank's point (r + a, h) to the bar's point at a from the pin, so it is relaxed when the
+    bar lies along the crank. At rest the applied forces vanish at every crank angle (the
+    solve must judge convergence without them), and a swing phi of the bar stretches the
+    spring by a phi with no tension to stiffen it geometrically: the bar swings about the pin
+    at sqrt(k a^2 / I_pin) / 2 pi, I_pin = I + m (L/2)^2, wherever the crank stands."""
+    from mbd3d.joints import RotationDriver
+    r, L, m, k, a, h = 0.3, 0.8, 2.0, 7.0, 0.6, 0.25
+    inertia = m * L * L / 12
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    crank = b.add_body("crank", mass=1.0, inertia=0.01, position=(r / 2, 0.0))
+    bar = b.add_body("bar", mass=m, inertia=inertia, position=(r + L / 2, 0.0))
+    hub = b.add(Revolute("hub", b.ground, crank, at=(0.0, 0.0)))
+    b.add(Revolute("pin", crank, bar, at=(r, 0.0)))
+    b.add(mb.SpringDamper("spring", crank, bar, at_i=(r + a, h), at_j=(r + a, 0.0),
+                          stiffness=k))
+    b.add(RotationDriver("motor", hub, motion=mb.Ramp(0.0, 2.0)))
+    along = mb.vibration_modes_along(b.build(), np.linspace(0.0, 3.0, 7))
+    expected = math.sqrt(k * a * a / (inertia + m * L * L / 4)) / (2 * math.pi)
+    np.testing.assert_allclose(along.frequencies, expected, rtol=1e-6, atol=0)
+    rest = along.equilibrium
+    np.testing.assert_allclose(rest.body("bar").angle, rest.body("crank").angle, rtol=0,
+                               atol=1e-10)
+    np.testing.assert_allclose(rest.body("crank").angle, 2.0 * along.t, rtol=0, atol=1e-10)

@@ -166,3 +166,55 @@ def test_spatial_bar_on_a_ball_joint_pulled_by_a_spring_minimises_its_energy():
     assert res.stats["stability"] == ["neutral"]
     eigenvalues = np.sort(res.stats["stiffness_eigenvalues"][0])
     assert abs(eigenvalues[0]) < 1e-6 * eigenvalues[-1] and np.all(eigenvalues[1:] > 0)
+
+
+@pytest.mark.parametrize("angle", [0.3, 1.0, 2.5])
+def test_a_relaxed_torsion_spring_without_gravity_is_found_from_far_away(angle):
+    """No gravity: the bar rests where its spring is free (angle 0), where the applied forces
+    vanish, so the force balance cannot be judged relative to them; the reduced stiffness in
+    an orthonormal basis of the pin's free motion (-L/2 sin, L/2 cos, 1) / norm is
+    k / (1 + (L/2)^2)."""
+    L, k = 0.8, 5.0
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    bar = b.add_body("bar", mass=2.0, inertia=0.1, angle=angle,
+                     position=(L / 2 * math.cos(angle), L / 2 * math.sin(angle)))
+    b.add(Revolute("O", b.ground, bar, at=(0.0, 0.0)))
+    b.add(mb.RotationalSpringDamper("spring", body_i=b.ground, body_j=bar, stiffness=k,
+                                    free_angle=0.0))
+    res = mb.static_equilibrium(b.build())
+    assert abs(res.body("bar").angle[0]) < 1e-12
+    np.testing.assert_allclose(res.q[0], [L / 2, 0.0, 0.0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.lam[0], 0.0, rtol=0, atol=1e-12)
+    assert res.stats["stability"] == ["stable"]
+    np.testing.assert_allclose(res.stats["stiffness_eigenvalues"][0], [k / (1 + L * L / 4)],
+                               rtol=1e-6, atol=0)
+
+
+def test_a_spatial_bar_comes_to_rest_where_its_spring_is_free():
+    """No gravity, a spring from a fixed point to the tip of a bar on a ball joint: every
+    direction that puts the tip at the spring's free length from the anchor is an equilibrium
+    (a circle of them, plus the spin about the bar), so the stiffness is singular along two
+    free motions; the one found must have the spring relaxed."""
+    L, l0 = 1.0, 0.3
+    anchor = np.array([0.8, 0.3, -0.2])
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    bar = b.add_body("bar", mass=1.5, inertia=1.5 * np.array([1e-2, 1 / 12, 1 / 12]),
+                     position=(L / 2, 0.0, 0.0))
+    b.add(Spherical("ball", b.ground, bar, at=(0.0, 0.0, 0.0)))
+    b.add(mb.SpringDamper("spring", b.ground, bar, at_i=anchor, at_j=(L, 0.0, 0.0),
+                          stiffness=60.0, free_length=l0))
+    res = mb.static_equilibrium(b.build())
+    tip = res.point("bar", (L / 2, 0.0, 0.0)).position[0]
+    assert np.linalg.norm(tip - anchor) == pytest.approx(l0, abs=1e-10)
+    assert np.linalg.norm(tip) == pytest.approx(L, abs=1e-12)
+    np.testing.assert_allclose(res.lam[0], 0.0, rtol=0, atol=1e-9)
+    assert res.stats["stability"] == ["neutral"]
+
+
+def test_a_bar_guessed_at_the_horizontal_follows_gravity_down():
+    """At the horizontal the pendulum's potential is flat to second order (V'' = 0), so the
+    differenced stiffness there has no meaningful sign; the solve follows the weight down to
+    the hanging rest, not up to the inverted one."""
+    res = mb.static_equilibrium(sprung_pendulum(k=0.0))
+    assert res.body("bar").angle[0] == pytest.approx(-math.pi / 2, abs=1e-10)
+    assert res.stats["stability"] == ["stable"]

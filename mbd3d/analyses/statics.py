@@ -12,7 +12,9 @@ vanish). They are solved for ``(q, lam)`` together by Newton's method on the mat
     [Cq      0   ]          H = d(Cq^T lam)/dq   (the constraint forces' geometric stiffness)
 
 with a backtracking line search on the residual; ``K + H`` is the force balance's derivative by
-forward differences (a model's size in residual evaluations per iteration).
+forward differences (a model's size in residual evaluations per iteration). The step is taken
+in the joints' free motions (the null-space method), so that a neutral motion, along which the
+differenced stiffness is noise, does not carry it away (:func:`_newton_step`).
 Drivers are held at their values at each time, or released (their rows dropped, their efforts
 zero), so that a mechanism settles with that freedom.
 
@@ -71,7 +73,10 @@ def static_equilibrium(model, times: float | Sequence[float] = 0.0,
         (``True``: every driver); their efforts are zero.
     tol : float
         Convergence: every constraint row within ``tol`` of its scale (lengths in units of
-        the model's length) and the force balance within ``tol`` of the largest force.
+        the model's length) and either the force balance within ``tol`` of the largest
+        applied force or the last Newton step within ``tol`` of the coordinates' scales (the
+        test that applies where the applied forces vanish at the equilibrium, as at a relaxed
+        spring without gravity).
     max_iterations : int
         Newton iterations allowed per time.
     observers, progress
@@ -154,67 +159,103 @@ def _residual(model, t, q, lam, active, chart):
 
 def _solve(model, t, q, lam, active, chart, tol, max_iterations, stats, what):
     """Newton's method for ``(q, lam)`` at ``t``, with a backtracking line search and steps
-    no longer than the coordinates' scales (see :func:`_newton_step`)."""
+    no longer than the coordinates' scales (see :func:`_newton_step`).
+
+    Converged when the constraint rows are within ``tol`` of their scales and either the force
+    balance is within ``tol`` of the largest applied force, or the Newton step moves no
+    coordinate by more than ``tol`` of its scale. The second test is what ends the solve where
+    the applied forces vanish at the equilibrium (a relaxed spring without gravity): there the
+    force balance relative to the applied forces stays of order one all the way in."""
     n = model.n_coordinates
     row_scale = model.row_scale[active]
     if lam is None:  # the least-squares multipliers at the guess
         _, _, Cq, Qe = _residual(model, t, q, np.zeros(len(active)), active, chart)
         lam = la.lstsq(Cq.T, Qe)[0] if len(active) else np.zeros(0)
-    zeros = np.zeros(n)
-    mass = np.einsum("kii->ki", model.body_type.mass_blocks(
-        constraints.frames(model, q, zeros, chart), model.mass, model.inertia)).ravel()
 
-    def merit(force, C, Qe):
-        scale = max(float(np.max(np.abs(Qe), initial=0.0)), model.mass_scale * 1e-12)
-        return max(float(np.max(np.abs(force), initial=0.0)) / scale,
-                   float(np.max(np.abs(C) / row_scale, initial=0.0)))
+    def rows(C):
+        return float(np.max(np.abs(C) / row_scale, initial=0.0))
+
+    def merit(force, C, unit):
+        return max(float(np.max(np.abs(force), initial=0.0)) / unit, rows(C))
 
     force, C, Cq, Qe = _residual(model, t, q, lam, active, chart)
-    size = merit(force, C, Qe)
+    tiny = model.mass_scale * 1e-12
+    size = merit(force, C, max(_largest(Qe), tiny))
+    unit = None
     for _ in range(max_iterations):
         stiffness = _stiffness(model, t, q, lam, active, chart, Cq)
         if size <= tol:
             return q, lam, stiffness, Cq
+        if unit is None:
+            # the line search's force unit, fixed for the solve so that it judges the point
+            # and the trial alike however small the forces become near the equilibrium: the
+            # forces at the guess, or those its stiffness makes over the coordinates' scales
+            # (where the guess is unloaded but off its rows: a driver moved, a spring not yet
+            # stretched)
+            unit = max(_largest(Qe), _largest(force),
+                       _largest(stiffness * model.coordinate_scale), tiny)
         stats["newton_iterations"] += 1
-        step = _newton_step(model, stiffness, Cq, force, C, mass)
+        step = _newton_step(model, stiffness, Cq, force, C)
+        if (rows(C) <= tol
+                and np.max(np.abs(step[:n]) / model.coordinate_scale, initial=0.0) <= tol):
+            return q + step[:n], lam + step[n:], stiffness, Cq
         fraction = 1.0
         while True:  # backtracking: the first step that lowers the residual
             q_try, lam_try = q + fraction * step[:n], lam + fraction * step[n:]
             trial = _residual(model, t, q_try, lam_try, active, chart)
-            trial_size = merit(trial[0], trial[1], trial[3])
-            if trial_size < size or fraction < 1.0 / 64:
+            common = max(unit, _largest(Qe), _largest(trial[3]))
+            if (merit(trial[0], trial[1], common) < merit(force, C, common)
+                    or fraction < 1.0 / 64):
                 break
             fraction *= 0.5
         q, lam = q_try, lam_try
-        (force, C, Cq, Qe), size = trial, trial_size
+        force, C, Cq, Qe = trial
+        size = merit(force, C, max(_largest(Qe), tiny))
     raise AnalysisError(f"{what}: Newton's method did not converge at t = {t:.6g} s (residual "
                         f"{size:.2e} of the forces' and rows' scale after {max_iterations} "
                         "iterations); there may be no equilibrium near the guess: give "
                         "q_guess closer to one, or hold a driver instead of releasing it")
 
 
-def _newton_step(model, stiffness, Cq, force, C, mass) -> np.ndarray:
-    """The Newton step of ``[stiffness Cq^T; Cq 0] d(q, lam) = -(force, C)``, shortened so
-    that no coordinate moves by more than its scale (a length, a radian) at once. Where the
-    matrix is singular (the potential flat along a free motion: a pendulum at the horizontal
-    without a spring) the stiffness is damped by a small multiple of the masses, which turns
-    the step into one along the applied forces."""
-    n, k = stiffness.shape[0], Cq.shape[0]
-    rhs = -np.concatenate([force, C])
-    damping = 0.0
-    # the damping's unit: a stiffness of the order of gravity's on the model's length
-    unit = 1e-3 * max(float(np.linalg.norm(model.gravity)), 1.0) / model.length_scale
-    for _ in range(8):
-        J = np.block([[stiffness + damping * np.diag(mass), Cq.T], [Cq, np.zeros((k, k))]])
-        lu, piv = la.lu_factor(J, check_finite=False)
-        pivots = np.abs(np.diag(lu))
-        if pivots.size == 0 or pivots.min() > 1e-12 * pivots.max():
-            step = la.lu_solve((lu, piv), rhs, check_finite=False)
-            break
-        damping = unit if damping == 0.0 else 100.0 * damping
-    else:
-        step = la.lstsq(J, rhs)[0]
-    largest = float(np.max(np.abs(step[:n]) / model.coordinate_scale, initial=0.0))
+def _largest(values: np.ndarray) -> float:
+    return float(np.max(np.abs(values), initial=0.0))
+
+
+def _newton_step(model, stiffness, Cq, force, C) -> np.ndarray:
+    """The Newton step ``d(q, lam)`` of ``stiffness dq + Cq^T dlam = -force``,
+    ``Cq dq = -C``, by the null-space method, shortened so that no coordinate moves by more
+    than its scale (a length, a radian) at once.
+
+    In coordinates divided by their scales, ``dq`` is the least-norm correction of the rows
+    plus a motion ``N z`` in the joints' free motions (``N`` an orthonormal null space of
+    ``Cq``), where ``N^T K N z = -N^T (force + K dq_rows)``. That reduced stiffness is solved
+    through its singular values, each raised to at least :data:`NEUTRAL_TOLERANCE` of the
+    largest and to a stiffness of the order of gravity's on the model's length: along a
+    neutral motion (the spin of a bar about its own axis) the differenced stiffness is noise,
+    and a plain solve would send the step along it; along a motion where the potential is
+    flat but pushed (a pendulum at the horizontal without a spring) the step follows the
+    force, downhill."""
+    scale = model.coordinate_scale
+    C_rows = Cq * scale
+    K = scale[:, None] * stiffness * scale
+    dx = -la.lstsq(C_rows, C)[0] if C_rows.shape[0] else np.zeros(len(scale))
+    N = la.null_space(C_rows) if C_rows.shape[0] else np.eye(len(scale))
+    if N.shape[1]:
+        U, sigma, Vt = la.svd(N.T @ K @ N)
+        # gravity's stiffness on the model's length, per coordinate scale squared [J]
+        pull = 1e-3 * max(float(np.linalg.norm(model.gravity)), 1.0) / model.length_scale
+        floor = max(NEUTRAL_TOLERANCE * sigma[0], pull * model.mass_scale
+                    * model.length_scale ** 2)
+        g = N.T @ (scale * force + K @ dx)
+        # a flat direction is given the floor's stiffness with a positive sign (its differenced
+        # sign is noise), so that the step goes with the force there, downhill
+        flat = sigma < floor
+        U[:, flat] = Vt[flat].T
+        dx -= N @ (Vt.T @ ((U.T @ g) / np.maximum(sigma, floor)))
+    dq = scale * dx
+    dlam = (la.lstsq(Cq.T, -(force + stiffness @ dq))[0] if Cq.shape[0] else np.zeros(0))
+    step = np.concatenate([dq, dlam])
+    largest = float(np.max(np.abs(dx), initial=0.0))
     return step / largest if largest > 1.0 else step
 
 
