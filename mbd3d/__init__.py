@@ -30,8 +30,8 @@ from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDErr
                           AccuracyWarning, ContactWarning, LiftOffWarning, StiffnessWarning)
 from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.model.friction import JointFriction
-from mbd3d.model.contacts import (Contact, ContactStates, JointLimit, Plane, Sphere,
-                                  contact_states)
+from mbd3d.model.contacts import (Box, Capsule, Contact, ContactStates, JointLimit, Plane,
+                                  Sphere, contact_states)
 from mbd3d.model.contact_laws import HertzContact, HuntCrossley, LinearContact
 from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
                                        solve_velocity)
@@ -56,7 +56,8 @@ __all__ = [
     "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "JointFriction",
-    "ContactWarning", "Contact", "JointLimit", "Sphere", "Plane", "LinearContact", "HertzContact", "HuntCrossley",
+    "ContactWarning", "Contact", "JointLimit", "Sphere", "Plane",
+    "Capsule", "Box", "LinearContact", "HertzContact", "HuntCrossley",
     "contact_states", "ContactStates",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "static_equilibrium", "vibration_modes", "Modes",

@@ -207,8 +207,9 @@ def hertz_stiffness(young_modulus, poisson_ratio, radius: float, what: str) -> f
         raise ModelError(f"{what}: young_modulus must be > 0, got {young_modulus!r}")
     if not (np.all(np.isfinite(nu)) and np.all((nu > -1.0) & (nu < 0.5))):
         raise ModelError(f"{what}: poisson_ratio must lie in (-1, 0.5), got {poisson_ratio!r}")
-    if not math.isfinite(radius):
-        raise ModelError(f"{what}: Hertz's stiffness needs a curved surface (a sphere)")
+    if not (math.isfinite(radius) and radius > 0.0):
+        raise ModelError(f"{what}: Hertz's stiffness needs a curved surface (a sphere, a "
+                         "capsule, a box's rounded corners); give the stiffness instead")
     E_star = 1.0 / float(np.sum((1.0 - nu ** 2) / E))
     return 4.0 / 3.0 * E_star * math.sqrt(radius)
 

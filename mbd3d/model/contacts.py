@@ -1,6 +1,7 @@
-"""Compliant contacts between shapes attached to bodies: a sphere (planar: a circle) against a
-plane (planar: a line) or against another sphere, pushed apart by a normal force law
-(:mod:`mbd3d.model.contact_laws`) and dragged by regularised Coulomb friction.
+"""Compliant contacts between shapes attached to bodies (:mod:`mbd3d.model.shapes`: spheres,
+capsules, boxes and planes; circles, stadiums, rectangles and lines in the plane), pushed apart
+by a normal force law (:mod:`mbd3d.model.contact_laws`) and dragged by regularised Coulomb
+friction; and joint stops, by the same laws.
 
 A contact is a force element: it acts only while the shapes overlap, and the compiled core
 evaluates all contacts of a model in one loop (:mod:`mbd3d.numerics.compiled.contacts`), in
@@ -20,45 +21,24 @@ import numpy as np
 from mbd3d.errors import ContactWarning, ModelError, user_stacklevel
 from mbd3d.model.body import Body
 from mbd3d.model.contact_laws import ContactLaw
-from mbd3d.model.forces import ForceElement, _CompiledForces, resolve_point
+from mbd3d.model.forces import ForceElement, _CompiledForces
+from mbd3d.model.shapes import Box, Capsule, Plane, Sphere, pair_order, pair_rows
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import contacts as kernel
 
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext, Model
 
-__all__ = ["Sphere", "Plane", "Contact", "JointLimit", "ContactStates", "contact_states"]
-
-
-@dataclass(frozen=True)
-class Sphere:
-    """A sphere (planar model: a circle) of ``radius`` [m] fixed to ``body``, centred at
-    ``point`` (body frame [m]) or at ``at`` (global point of the drawing); default the body's
-    reference point."""
-
-    body: Body
-    radius: float
-    point: Any = None
-    at: Any = None
-
-
-@dataclass(frozen=True)
-class Plane:
-    """The half-space (planar model: half-plane) of ``body`` bounded by the plane (line)
-    through ``point`` (body frame) or ``at`` (drawing) with outward ``normal`` (body frame,
-    or ``normal_at`` in the drawing's axes): the side the normal points to is free."""
-
-    body: Body
-    normal: Any = None
-    point: Any = None
-    at: Any = None
-    normal_at: Any = None
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "Contact", "JointLimit", "ContactStates",
+           "contact_states"]
 
 
 class Contact(ForceElement):
     #: contacts and joint limits are one group of the compiled core
     group_key = "contacts"
-    """A compliant contact between a sphere and a plane or between two spheres.
+    """A compliant contact between two shapes: a sphere, a capsule or a box against a plane, a
+    sphere or a capsule against a sphere, a capsule against a capsule (and a box against a
+    sphere), in either order.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
     friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
@@ -68,13 +48,18 @@ class Contact(ForceElement):
     Parameters
     ----------
     name : str
-    first : Sphere
-    second : Plane or Sphere
+    first, second : Sphere, Capsule, Box or Plane
+        The shapes (see :mod:`mbd3d.model.shapes`). A capsule touches a plane at its two ends
+        and a box at its corners, each end or corner a contact of its own (a row of
+        :func:`contact_states`, named ``"name[end a]"``, ``"name[corner -+-]"``); a laws'
+        calibration then holds for one of them touching alone.
     law : ContactLaw
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact` or
         :class:`~mbd3d.HuntCrossley`. Laws calibrated to a restitution use the pair's effective
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
         free bodies, not the inertia the pair has through joints (give ``effective_mass``).
+        Hertz's stiffness from the material uses the radii ``r_i r_j / (r_i + r_j)`` (a
+        sphere's or a capsule's, a box's rounding, a plane's infinite).
     friction : float
         Coulomb coefficient ``mu`` >= 0.
     slip_velocity : float
@@ -92,12 +77,14 @@ class Contact(ForceElement):
     ...                      law=mb.HertzContact(stiffness=1e7, restitution=0.8)))
     """
 
-    def __init__(self, name: str, first: Sphere, second: Plane | Sphere, *, law: ContactLaw,
+    def __init__(self, name: str, first: Any, second: Any, *, law: ContactLaw,
                  friction: float = 0.0, slip_velocity: float = 1e-3,
                  effective_mass: float | None = None):
-        if not isinstance(first, Sphere) or not isinstance(second, (Sphere, Plane)):
-            raise ModelError(f"contact '{name}': give a Sphere and then a Plane or a Sphere, "
-                             f"got {type(first).__name__} and {type(second).__name__}")
+        shapes = (Sphere, Capsule, Box, Plane)
+        if not isinstance(first, shapes) or not isinstance(second, shapes):
+            raise ModelError(f"contact '{name}': give two shapes (Sphere, Capsule, Box or "
+                             f"Plane), got {type(first).__name__} and {type(second).__name__}")
+        pair_order(first, second, f"contact '{name}'")
         if not isinstance(law, ContactLaw):
             raise ModelError(f"contact '{name}': law must be a LinearContact, HertzContact or "
                              f"HuntCrossley, got {law!r}")
@@ -114,47 +101,25 @@ class Contact(ForceElement):
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
         return _Contacts(elements, ctx)
 
-    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray]:
-        """``(points (3, dim), values (9,))`` of the compiled core (see
-        :mod:`mbd3d.numerics.compiled.contacts`), checked."""
+    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool]:
+        """``(points (r, 4, dim), values (r, 9), labels, swapped)``: the rows of the compiled
+        core (see :mod:`mbd3d.numerics.compiled.contacts` and :func:`shapes.pair_rows`),
+        checked."""
         what = f"contact '{self.name}'"
-        first, second = self.first, self.second
-        if self.body_i is self.body_j:
-            raise ModelError(f"{what}: both shapes are on body '{self.body_i.name}'")
-        r_i = finite_scalar(first.radius, f"{what}: radius of the sphere", positive=True)
-        c_i = resolve_point(ctx, first.body, first.point, first.at, f"{what}: sphere centre")
-        p_j = resolve_point(ctx, second.body, second.point, second.at,
-                            f"{what}: {'plane point' if isinstance(second, Plane) else 'centre'}")
-        normal = np.zeros(ctx.dim)
-        if isinstance(second, Plane):
-            kind, r_j, radius = kernel.SPHERE_PLANE, 0.0, r_i
-            normal = _plane_normal(ctx, second, what)
-        else:
-            kind = kernel.SPHERE_SPHERE
-            r_j = finite_scalar(second.radius, f"{what}: radius of the second sphere",
-                                positive=True)
-            radius = r_i * r_j / (r_i + r_j)
+        rows = pair_rows(ctx, self.first, self.second, what)
         mu = finite_scalar(self.friction, f"{what}: friction")
         slip = finite_scalar(self.slip_velocity, f"{what}: slip_velocity", positive=True)
         if mu < 0.0:
             raise ModelError(f"{what}: friction must be >= 0, got {self.friction!r}")
-        K, n, D, p = self.law.constants(self._effective_mass(what), radius, what)
-        values = np.array([kind, r_i, r_j, K, n, D, p, mu, slip], dtype=float)
-        return np.stack([c_i, p_j, normal]), values
+        K, n, D, p = self.law.constants(self._effective_mass(what), rows.radius, what)
+        values = np.array([[kind, r_i, r_j, K, n, D, p, mu, slip]
+                           for kind, r_i, r_j in rows.kinds], dtype=float)
+        return rows.points, values, rows.labels, rows.swapped
 
     def _effective_mass(self, what: str) -> float:
         if self.effective_mass is not None:
             return finite_scalar(self.effective_mass, f"{what}: effective_mass", positive=True)
         return _pair_mass([b.mass for b in (self.body_i, self.body_j) if not b.is_ground])
-
-
-def _plane_normal(ctx: "BuildContext", plane: Plane, what: str) -> np.ndarray:
-    if (plane.normal is None) == (plane.normal_at is None):
-        raise ModelError(f"{what}: give the plane's normal in the body frame (normal) or in "
-                         "the drawing (normal_at), one of them")
-    if plane.normal is not None:
-        return ctx.direction(plane.normal, f"{what}: plane normal")
-    return ctx.to_local_vector(plane.body, ctx.direction(plane.normal_at, f"{what}: plane normal"))
 
 
 class JointLimit(ForceElement):
@@ -218,7 +183,8 @@ class JointLimit(ForceElement):
         return _Contacts(elements, ctx)
 
     def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray]:
-        """``(points (3, dim), values (9,))`` of the compiled core, checked."""
+        """``(points (1, 4, dim), values (1, 9), labels, swapped)`` of the compiled core,
+        checked."""
         what = f"joint limit '{self.name}'"
         lower = -math.inf if self.lower is None else finite_scalar(self.lower, f"{what}: lower")
         upper = math.inf if self.upper is None else finite_scalar(self.upper, f"{what}: upper")
@@ -226,19 +192,19 @@ class JointLimit(ForceElement):
             raise ModelError(f"{what}: lower must be below upper, got {self.lower!r} and "
                              f"{self.upper!r}")
         u_i, u_j, axes = self.joint.reaction_frame(ctx)
-        points = np.zeros((3, ctx.dim))
+        points = np.zeros((kernel.POINTS, ctx.dim))
         if self.hinge and ctx.dim == 3:
             if not (-math.pi < lower or self.lower is None) or not (
                     upper < math.pi or self.upper is None):
                 raise ModelError(f"{what}: a spatial hinge's angle is measured in (-pi, pi]; "
                                  f"give limits inside it, got {self.lower!r}, {self.upper!r}")
-            points[:] = self.joint.hinge_directions(ctx, what)
+            points[:3] = self.joint.hinge_directions(ctx, what)
         elif not self.hinge:
-            points[:] = u_i, u_j, axes[:, 0]
+            points[:3] = u_i, u_j, axes[:, 0]
         kind = kernel.HINGE_STOP if self.hinge else kernel.SLIDE_STOP
         mass = self._effective_mass(ctx, u_i, u_j, axes, what)
         K, n, D, p = self.law.constants(mass, math.inf, what)
-        return points, np.array([kind, lower, upper, K, n, D, p, 0.0, 1.0])
+        return points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False
 
     def _effective_mass(self, ctx, u_i, u_j, axes, what) -> float:
         if self.effective_mass is not None:
@@ -267,46 +233,63 @@ def _pair_mass(masses: list) -> float:
 
 
 class _Contacts(_CompiledForces):
-    def __init__(self, elements: list[Contact], ctx: "BuildContext"):
+    """The contacts and joint stops of a model as rows of the compiled core: ``owners[r]``
+    is the element of row ``r``; where a pair was given the other way round (``swapped``)
+    the core's body i is the element's second body, and its reports are turned back."""
+
+    def __init__(self, elements: list, ctx: "BuildContext"):
         self.elements = elements
         arrays = [e.arrays(ctx) for e in elements]
-        self._points = np.ascontiguousarray(np.stack([a[0] for a in arrays]))
-        self._values = np.ascontiguousarray(np.stack([a[1] for a in arrays]))
+        self._points = np.ascontiguousarray(np.concatenate([a[0] for a in arrays]))
+        self._values = np.ascontiguousarray(np.concatenate([a[1] for a in arrays]))
+        self.owners = [e for e, a in zip(elements, arrays) for _ in a[2]]
+        self.names = [f"{e.name}[{label}]" if label else e.name
+                      for e, a in zip(elements, arrays) for label in a[2]]
+        self._swapped = np.array([a[3] for a in arrays for _ in a[2]], dtype=bool)
         self._rows = None
         self._check_apart(ctx)
+
+    def _pairs(self, row) -> np.ndarray:
+        """The core's ``(i, j)`` body indices per row, from ``row(body)``."""
+        pairs = np.array([[row(e.body_i), row(e.body_j)] for e in self.owners], dtype=np.int64)
+        pairs[self._swapped] = pairs[self._swapped, ::-1]
+        return pairs
 
     def _check_apart(self, ctx: "BuildContext") -> None:
         """Shapes that overlap in the drawing are reported with the depth (a
         :class:`~mbd3d.errors.ContactWarning`): an integration starts with that force."""
         fr = ctx.body_type.frames(ctx.frames.Q, np.zeros_like(ctx.frames.Q), charts=ctx.charts)
-        bodies = np.array([[ctx.row(e.body_i), ctx.row(e.body_j)]
-                                           for e in self.elements], dtype=np.int64)
-        report = self._report(fr, bodies)
+        report = self._report(fr, self._pairs(ctx.row))
         for k in np.flatnonzero(report[:, kernel.GAP] < 0.0):
-            e = self.elements[k]
+            e = self.owners[k]
             depth, force = -report[k, kernel.GAP], report[k, kernel.NORMAL_FORCE]
             where = ("the shapes overlap by" if isinstance(e, Contact)
                      else "the joint is past its limit by")
-            warnings.warn(f"{e.what}: {where} {depth:.6g} {e.units[0]} in the drawing, with "
-                          f"a force of {force:.6g} {e.units[1]}; place the bodies apart (or at "
-                          "the limit) unless that "
-                          "is their static penetration", ContactWarning,
-                          stacklevel=user_stacklevel())
+            name = self.names[k][len(e.name):]
+            warnings.warn(f"{e.what}{name}: {where} {depth:.6g} {e.units[0]} in the drawing, "
+                          f"with a force of {force:.6g} {e.units[1]}; place the bodies apart (or "
+                          "at the limit) unless that is their static penetration",
+                          ContactWarning, stacklevel=user_stacklevel())
 
     def _report(self, fr, bodies: np.ndarray) -> np.ndarray:
+        """A row of the core's report per contact row, normals and friction turned back to
+        the element's order of shapes."""
         out = np.zeros_like(fr.Q)
-        report = np.zeros((len(self.elements), kernel.REPORT_COLUMNS))
+        report = np.zeros((len(self.owners), kernel.REPORT_COLUMNS))
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
                                             self._points, self._values, out, report)
         if failed >= 0:
-            raise ModelError(f"{self.elements[failed].what}: the two spheres' centres "
-                             "coincide; the contact normal is undefined")
+            raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet; the contact "
+                             "normal is undefined")
+        turned = slice(kernel.FRICTION, kernel.FRICTION + 3), slice(kernel.NORMAL,
+                                                                     kernel.NORMAL + 3)
+        for columns in turned:
+            report[self._swapped, columns] *= -1.0
         return report
 
     def _bodies(self, model) -> np.ndarray:
         if self._rows is None:
-            self._rows = np.array([[model.padded_index(e.body_i), model.padded_index(e.body_j)]
-                                   for e in self.elements], dtype=np.int64)
+            self._rows = self._pairs(model.padded_index)
         return self._rows
 
     def apply(self, model, t, fr, Q):
@@ -314,8 +297,8 @@ class _Contacts(_CompiledForces):
                                             self._bodies(model), self._points, self._values,
                                             Q, np.zeros((0, kernel.REPORT_COLUMNS)))
         if failed >= 0:
-            raise ModelError(f"{self.elements[failed].what}: the two spheres' "
-                             f"centres coincide at t = {t:g} s; the contact normal is undefined")
+            raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet at t = {t:g} "
+                             "s; the contact normal is undefined")
 
     def table(self, model):
         return {"contact_bodies": self._bodies(model), "contact_points": self._points,
@@ -331,11 +314,12 @@ class _Contacts(_CompiledForces):
 @dataclass(frozen=True)
 class ContactStates:
     """The contacts of a model at one state, one row per contact, in the order they were
-    added.
+    added (a capsule or a box against a plane a row per end or corner).
 
     Attributes
     ----------
     names : list of str
+        The contacts' names, an end's or a corner's label in brackets.
     gap : ndarray (k,)
         Distance between the surfaces [m]; negative: the penetration.
     gap_rate : ndarray (k,)
@@ -375,7 +359,7 @@ def contact_states(model: "Model", q: np.ndarray, qd: np.ndarray | None = None,
     group = groups[0]
     r = group.states(model, fr)
     k = kernel
-    return ContactStates(names=[e.name for e in group.elements], gap=r[:, k.GAP].copy(),
+    return ContactStates(names=list(group.names), gap=r[:, k.GAP].copy(),
                          gap_rate=r[:, k.GAP_RATE].copy(), normal_force=r[:, k.NORMAL_FORCE].copy(),
                          friction_force=r[:, k.FRICTION:k.FRICTION + 3].copy(),
                          point=r[:, k.POINT:k.POINT + 3].copy(),

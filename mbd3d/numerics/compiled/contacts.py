@@ -1,17 +1,26 @@
 """Compliant contacts between shapes on bodies and joint stops, compiled: the gap, the normal
 force of the contact law and the regularised Coulomb friction, for all of them in one loop.
 
-Contact ``k`` acts between body ``i = bodies[k, 0]`` and ``j = bodies[k, 1]``; ``kinds[k]``:
+Contact ``k`` acts between body ``i = bodies[k, 0]`` and ``j = bodies[k, 1]``; ``kinds[k]``
+and its body points ``points[k]`` (body frames):
 
-- ``SPHERE_PLANE``: a sphere (planar: a circle) of radius ``r_i`` centred at body point
-  ``points[k, 0]`` of ``i`` against the half-space of ``j`` bounded by the plane (planar: the
-  line) through body point ``points[k, 1]`` with outward unit normal ``points[k, 2]`` (body
-  frame of ``j``): ``g = m . (c_i - P) - r_i``;
+- ``SPHERE_PLANE``: a sphere (planar: a circle) of radius ``r_i`` centred at ``points[k, 0]``
+  of ``i`` against the half-space of ``j`` bounded by the plane (planar: the line) through
+  ``points[k, 1]`` with outward unit normal ``points[k, 2]``: ``g = m . (c_i - P) - r_i``;
 - ``SPHERE_SPHERE``: spheres (circles) of radii ``r_i``, ``r_j`` centred at ``points[k, 0]``
-  of ``i`` and ``points[k, 1]`` of ``j``: ``g = |c_j - c_i| - r_i - r_j``.
+  of ``i`` and ``points[k, 1]`` of ``j``;
+- ``SEGMENT_SPHERE``: a capsule of radius ``r_i`` around the segment from ``points[k, 0]`` to
+  ``points[k, 1]`` of ``i`` against the sphere of radius ``r_j`` at ``points[k, 2]`` of ``j``;
+- ``SEGMENT_SEGMENT``: two capsules, around ``points[k, 0:2]`` of ``i`` and ``points[k, 2:4]``
+  of ``j``;
+- ``BOX_SPHERE``: a box along ``i``'s axes centred at ``points[k, 0]`` with half sizes
+  ``points[k, 1]``, rounded by ``r_i``, against the sphere at ``points[k, 2]`` of ``j``.
 
+Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
+closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
+nearest face).
 With ``n`` the unit normal from ``i`` to ``j`` (``-m`` against a plane, ``(c_j - c_i) / |c_j -
-c_i|`` between spheres), both bodies are pushed apart at the point ``x = c_i + (r_i + g / 2)
+c_i|`` between cores, the face's normal inside a box), both bodies are pushed apart at the point ``x = c_i + (r_i + g / 2)
 n`` midway between the two surfaces, each at its own material point there, so that the pair
 exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
@@ -47,9 +56,14 @@ import numpy as np
 
 from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
+from mbd3d.numerics.compiled.shapes import (box_to_point, closest_between_segments,
+                                            closest_on_segment)
 
-#: the kinds of shape pairs
-SPHERE_PLANE, SPHERE_SPHERE, HINGE_STOP, SLIDE_STOP = 0, 1, 2, 3
+#: the kinds of shape pairs, then of joint stops (from ``HINGE_STOP`` on)
+SPHERE_PLANE, SPHERE_SPHERE, SEGMENT_SPHERE, SEGMENT_SEGMENT, BOX_SPHERE = 0, 1, 2, 3, 4
+HINGE_STOP, SLIDE_STOP = 5, 6
+#: body points per contact (``points[k]``)
+POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
 #: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J]
 GAP, GAP_RATE, NORMAL_FORCE, FRICTION, POINT, NORMAL, POTENTIAL = 0, 1, 2, 3, 6, 9, 12
@@ -75,18 +89,36 @@ def _velocity(Qd, omega, dim, b, s, out):
 
 
 @jit
-def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n) -> float:
-    """The unit normal ``n`` from body ``i`` to body ``j`` and the gap of contact ``k`` (NaN
-    when two spheres' centres coincide: the normal is undefined)."""
-    _point(A, Q, i, points[k, 0], c_i)
-    _point(A, Q, j, points[k, 1], c_j)
+def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n, work) -> float:
+    """The unit normal ``n`` from body ``i`` to body ``j``, the points ``c_i``, ``c_j`` of the
+    shapes' cores it joins and the gap of contact ``k`` (NaN where two cores meet: the normal
+    is undefined). ``work`` (4, 3) is scratch."""
     if kind == SPHERE_PLANE:
+        _point(A, Q, i, points[k, 0], c_i)
+        _point(A, Q, j, points[k, 1], c_j)
         _turn(A, j, points[k, 2], n)
         gap = 0.0
         for x in range(3):
             gap += n[x] * (c_i[x] - c_j[x])
             n[x] = -n[x]
         return gap - values[k, 1]
+    if kind == BOX_SPHERE:
+        _point(A, Q, i, points[k, 0], work[0])
+        _point(A, Q, j, points[k, 2], c_j)
+        return (box_to_point(A, i, work[0], points[k, 1], c_j, c_i, n)
+                - values[k, 1] - values[k, 2])
+    if kind == SPHERE_SPHERE:
+        _point(A, Q, i, points[k, 0], c_i)
+        _point(A, Q, j, points[k, 1], c_j)
+    elif kind == SEGMENT_SPHERE:
+        _point(A, Q, i, points[k, 0], work[0])
+        _point(A, Q, i, points[k, 1], work[1])
+        _point(A, Q, j, points[k, 2], c_j)
+        closest_on_segment(work[0], work[1], c_j, c_i)
+    else:
+        for row in range(4):
+            _point(A, Q, i if row < 2 else j, points[k, row], work[row])
+        closest_between_segments(work[0], work[1], work[2], work[3], c_i, c_j)
     distance = 0.0
     for x in range(3):
         n[x] = c_j[x] - c_i[x]
@@ -101,13 +133,13 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n) -> float:
 
 @jit
 def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n, s_i, s_j, v_i,
-                        v_j) -> tuple:
+                        v_j, work) -> tuple:
     """``(gap, gap rate)`` of contact ``k`` (a NaN gap: its normal is undefined), with the
     normal ``n``, the offsets ``s_i``, ``s_j`` of the contact point midway between the
     surfaces from the bodies' reference points, and ``v_j`` the velocity of body j's
-    material point there relative to body i's."""
+    material point there relative to body i's. ``work`` (4, 3) is scratch."""
     dim = points.shape[2]
-    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n)
+    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n, work)
     reach = values[k, 1] + 0.5 * gap
     for x in range(3):
         point = c_i[x] + reach * n[x]
@@ -163,6 +195,7 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
     or the first contact whose normal is undefined."""
     c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    work = np.zeros((POINTS, 3))
     dim = points.shape[2]
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
@@ -170,7 +203,7 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
             _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report)
             continue
         gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n,
-                                        s_i, s_j, v_i, v_j)
+                                        s_i, s_j, v_i, v_j, work)
         if gap != gap:
             return k
         force = normal_force(values, k, -gap, -rate)
@@ -280,6 +313,7 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
     straddles the kink of a touch or a release."""
     c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    work = np.zeros((POINTS, 3))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
@@ -290,7 +324,7 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
             gap, rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
         else:
             gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j,
-                                            n, s_i, s_j, v_i, v_j)
+                                            n, s_i, s_j, v_i, v_j, work)
         delta, delta_rate = -gap, -rate
         if not delta > 0.0:
             out[k] = delta if delta == delta else 0.0

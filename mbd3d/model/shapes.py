@@ -1,0 +1,204 @@
+"""The shapes a contact is made of, fixed to bodies: a sphere (planar: a circle), a capsule (a
+segment with a radius; planar: a stadium), a box along its body's axes (optionally rounded)
+and a plane (planar: a line) bounding a half-space; and how a pair of them becomes the rows of
+the compiled core (:mod:`mbd3d.numerics.compiled.contacts`).
+
+A pair is one row, or several where a shape touches at several points at once: a capsule
+against a plane at its two ends, a box against a plane at its corners (4 in the plane, 8 in
+space), each pushing on its own, so that a capsule or a box lying flat is carried at both ends
+or at all its lower corners.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mbd3d.errors import ModelError
+from mbd3d.model.body import Body
+from mbd3d.model.forces import resolve_point
+from mbd3d.numerics.checks import finite_scalar
+from mbd3d.numerics.compiled import contacts as kernel
+
+if TYPE_CHECKING:
+    from mbd3d.model.builder import BuildContext
+
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "PairRows", "pair_order", "pair_rows"]
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """A sphere (planar model: a circle) of ``radius`` [m] fixed to ``body``, centred at
+    ``point`` (body frame [m]) or at ``at`` (global point of the drawing); default the body's
+    reference point."""
+
+    body: Body
+    radius: float
+    point: Any = None
+    at: Any = None
+
+
+@dataclass(frozen=True)
+class Plane:
+    """The half-space (planar model: half-plane) of ``body`` bounded by the plane (line)
+    through ``point`` (body frame) or ``at`` (drawing) with outward ``normal`` (body frame,
+    or ``normal_at`` in the drawing's axes): the side the normal points to is free."""
+
+    body: Body
+    normal: Any = None
+    point: Any = None
+    at: Any = None
+    normal_at: Any = None
+
+
+@dataclass(frozen=True)
+class Capsule:
+    """All points within ``radius`` [m] of the segment between two points fixed to ``body``
+    (planar model: a stadium): ``ends`` in the body frame [m] or ``ends_at`` in the drawing,
+    two points each. A cylinder with rounded ends; a rod, a pin, a link's outline."""
+
+    body: Body
+    radius: float
+    ends: Any = None
+    ends_at: Any = None
+
+
+@dataclass(frozen=True)
+class Box:
+    """A box fixed to ``body`` with its edges along the body's axes: edge lengths ``size``
+    [m] (planar model: a rectangle, two lengths), centred at ``point`` (body frame) or ``at``
+    (drawing), default the body's reference point; its edges and corners rounded by
+    ``radius`` [m] (default 0: sharp)."""
+
+    body: Body
+    size: Any
+    point: Any = None
+    at: Any = None
+    radius: float = 0.0
+
+
+@dataclass(frozen=True)
+class PairRows:
+    """A pair of shapes as rows of the compiled core: the body points ``points (r, 4, dim)``
+    and ``(kind, r_i, r_j)`` per row, with the shapes' radius of curvature at the touch (for
+    Hertz's law), a label per row, and ``swapped`` where the core's body i is the second
+    shape's (the pair was given the other way round)."""
+
+    points: np.ndarray
+    kinds: list
+    radius: float
+    labels: list
+    swapped: bool
+
+
+#: the pairs the core evaluates, first shape (its body i) then second
+_PAIRS = {(Sphere, Plane), (Sphere, Sphere), (Capsule, Plane), (Capsule, Sphere),
+          (Capsule, Capsule), (Box, Plane), (Box, Sphere)}
+
+
+def pair_order(first: Any, second: Any, what: str) -> bool:
+    """Whether the pair ``(first, second)`` is evaluated the other way round (the core's body
+    i is the second shape's); a pair the core has no contact for is refused."""
+    kinds = (type(first), type(second))
+    if kinds in _PAIRS:
+        return False
+    if kinds[::-1] in _PAIRS:
+        return True
+    names = ", ".join(sorted(f"{a.__name__}-{b.__name__}" for a, b in _PAIRS))
+    raise ModelError(f"{what}: no contact between a {kinds[0].__name__} and a "
+                     f"{kinds[1].__name__}; the pairs are {names}, in either order (a box "
+                     "against a box or a capsule: put Spheres at one box's corners against the "
+                     "other)")
+
+
+def pair_rows(ctx: "BuildContext", first: Any, second: Any, what: str) -> PairRows:
+    """The rows of the contact between ``first`` and ``second`` (either order of a supported
+    pair), checked, with every message naming ``what``."""
+    if pair_order(first, second, what):
+        return _rows(ctx, second, first, what, swapped=True)
+    return _rows(ctx, first, second, what, swapped=False)
+
+
+def _rows(ctx, first, second, what, swapped) -> PairRows:
+    if first.body is second.body:
+        raise ModelError(f"{what}: both shapes are on body '{first.body.name}'")
+    r_i, core_i = _core(ctx, first, what)
+    if isinstance(second, Plane):
+        P = resolve_point(ctx, second.body, second.point, second.at, f"{what}: plane point")
+        m = _plane_normal(ctx, second, what)
+        rows = [np.stack([c, P, m, np.zeros(ctx.dim)]) for c in core_i]
+        labels = ([""] if len(core_i) == 1 else _labels(first, ctx.dim))
+        return PairRows(np.stack(rows), [(kernel.SPHERE_PLANE, r_i, 0.0)] * len(rows),
+                        r_i, labels, swapped)
+    r_j, core_j = _core(ctx, second, what)
+    kind = {Sphere: kernel.SPHERE_SPHERE, Capsule: kernel.SEGMENT_SPHERE,
+            Box: kernel.BOX_SPHERE}[type(first)]
+    if isinstance(second, Capsule):
+        kind = kernel.SEGMENT_SEGMENT
+    cores = list(core_i) + list(core_j)
+    if isinstance(first, Box):  # the centre and half sizes, not the corners
+        cores = list(_box(ctx, first, what)[1:]) + list(core_j)
+    points = np.zeros((1, kernel.POINTS, ctx.dim))
+    points[0, :len(cores)] = cores
+    radius = r_i * r_j / (r_i + r_j) if r_i + r_j > 0 else 0.0
+    return PairRows(points, [(kind, r_i, r_j)], radius, [""], swapped)
+
+
+def _core(ctx, shape, what) -> tuple[float, np.ndarray]:
+    """``(radius, core points (c, dim))`` of a shape in its body frame: a sphere's centre, a
+    capsule's two ends, a box's corners."""
+    name = type(shape).__name__.lower()
+    if isinstance(shape, Box):
+        radius, centre, half = _box(ctx, shape, what)
+        signs = np.array(list(itertools.product((-1.0, 1.0), repeat=ctx.dim)))
+        return radius, centre + signs * half
+    radius = finite_scalar(shape.radius, f"{what}: radius of the {name}", positive=True)
+    if isinstance(shape, Sphere):
+        centre = resolve_point(ctx, shape.body, shape.point, shape.at, f"{what}: sphere centre")
+        return radius, centre[None]
+    if (shape.ends is None) == (shape.ends_at is None):
+        raise ModelError(f"{what}: give the capsule's two ends in the body frame (ends) or in "
+                         "the drawing (ends_at), one of them")
+    given = shape.ends if shape.ends is not None else shape.ends_at
+    if np.shape(given)[:1] != (2,):
+        raise ModelError(f"{what}: the capsule's ends are two points, got {given!r}")
+    in_body = shape.ends is not None
+    ends = np.stack([resolve_point(ctx, shape.body, e if in_body else None,
+                                   None if in_body else e, f"{what}: capsule end")
+                     for e in given])
+    if not np.linalg.norm(ends[1] - ends[0]) > 0.0:
+        raise ModelError(f"{what}: the capsule's two ends coincide; give a Sphere instead")
+    return radius, ends
+
+
+def _box(ctx, box: Box, what: str) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(rounding radius, centre, half sizes)`` of a box in its body frame, checked."""
+    radius = finite_scalar(box.radius, f"{what}: radius of the box")
+    if radius < 0.0:
+        raise ModelError(f"{what}: the box's radius must be >= 0, got {box.radius!r}")
+    size = ctx.vector(box.size, f"{what}: box size")
+    if not np.all(size > 0.0):
+        raise ModelError(f"{what}: the box's edge lengths must be > 0, got {box.size!r}")
+    centre = resolve_point(ctx, box.body, box.point, box.at, f"{what}: box centre")
+    return radius, centre, 0.5 * size
+
+
+def _labels(shape, dim: int) -> list:
+    """Names of a shape's touching points: a capsule's ends a and b, a box's corners by the
+    signs of their body coordinates."""
+    if isinstance(shape, Capsule):
+        return ["end a", "end b"]
+    return ["corner " + "".join("-+"[s > 0] for s in signs)
+            for signs in itertools.product((-1.0, 1.0), repeat=dim)]
+
+
+def _plane_normal(ctx: "BuildContext", plane: Plane, what: str) -> np.ndarray:
+    if (plane.normal is None) == (plane.normal_at is None):
+        raise ModelError(f"{what}: give the plane's normal in the body frame (normal) or in "
+                         "the drawing (normal_at), one of them")
+    if plane.normal is not None:
+        return ctx.direction(plane.normal, f"{what}: plane normal")
+    return ctx.to_local_vector(plane.body, ctx.direction(plane.normal_at, f"{what}: plane normal"))
