@@ -39,6 +39,8 @@ class Prismatic(Joint):
     """
 
     friction_kind = "prismatic"
+    #: the coordinates a :class:`~mbd3d.JointLimit` may stop
+    limit_coordinates = ("displacement",)
 
     def __init__(self, name: str, body_i: Body, body_j: Body, *, axis: Any, at: Any = None,
                  point_i: Any = None, point_j: Any = None):

@@ -47,6 +47,8 @@ class Revolute(Joint):
     """
 
     friction_kind = "revolute"
+    #: the coordinates a :class:`~mbd3d.JointLimit` may stop
+    limit_coordinates = ("angle",)
 
     def __init__(self, name: str, body_i: Body, body_j: Body, *, at: Any = None,
                  point_i: Any = None, point_j: Any = None, axis: Any = None):
@@ -55,10 +57,7 @@ class Revolute(Joint):
 
     def hinge_directions(self, ctx: BuildContext, what: str
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        axes = Axes(ctx, self, self.axis)
-        h_i, h_j = axes.i[2], axes.j[2]
-        f_i = reference_direction(h_i)
-        return f_i, np.cross(h_i, f_i), reference_direction(h_j)
+        return hinge_directions(ctx, self)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         u_i, u_j = self.points(ctx)
@@ -73,6 +72,17 @@ class Revolute(Joint):
         if ctx.dim == 2:
             return super().reaction_frame(ctx)
         return u_i, u_j, Axes(ctx, self, self.axis).reaction_axes(along_x=False)
+
+
+def hinge_directions(ctx: BuildContext, joint: Joint
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(f_i, g_i, f_j)``: the directions a spatial hinge's angle about ``joint.axis`` is
+    measured from, in body i's frame (``g_i = h x f_i``), and body j's reference direction in
+    its own frame (see :func:`reference_direction`)."""
+    axes = Axes(ctx, joint, joint.axis)
+    h_i, h_j = axes.i[2], axes.j[2]
+    f_i = reference_direction(h_i)
+    return f_i, np.cross(h_i, f_i), reference_direction(h_j)
 
 
 def reference_direction(h: np.ndarray) -> np.ndarray:

@@ -14,13 +14,18 @@ from mbd3d.errors import ModelError
 from mbd3d.model.builder import BuildContext
 
 from mbd3d.joints.base import Axes, Joint, perpendicular, perpendicular_rows, require_spatial
+from mbd3d.joints.revolute import hinge_directions
 
 
 class Spherical(Joint):
     """Ball joint: a point of body i and a point of body j coincide (rows ``x``, ``y``, ``z``).
 
-    Reaction on body j: the force [N]; no moment about the ball.
+    Reaction on body j: the force [N]; no moment about the ball. A
+    :class:`~mbd3d.JointLimit` stops it at a cone (``coordinate="cone"``).
     """
+
+    #: the coordinates a :class:`~mbd3d.JointLimit` may stop
+    limit_coordinates = ("cone",)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         require_spatial(ctx, self.name)
@@ -70,6 +75,13 @@ class _AxisJoint(Joint):
 class Cylindrical(_AxisJoint):
     """Body j slides along and turns about an axis of body i: axes aligned (``axis_f``,
     ``axis_g``) and the point of j on the line (``normal_f``, ``normal_g``); 4 rows."""
+
+    #: the coordinates a :class:`~mbd3d.JointLimit` may stop
+    limit_coordinates = ("angle", "displacement")
+
+    def hinge_directions(self, ctx: BuildContext, what: str
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return hinge_directions(ctx, self)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         require_spatial(ctx, self.name)

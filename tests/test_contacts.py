@@ -17,7 +17,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
-from mbd3d.joints import Prismatic, Revolute, Spherical
+from mbd3d.joints import Prismatic, Revolute, Spherical, Universal
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces
 
@@ -420,8 +420,10 @@ def test_bad_joint_limits_are_named():
     body = b.add_body("body", mass=1.0, inertia=np.eye(3), position=(0.0, 0.0, 0.0))
     hinge = Revolute("hinge", b.ground, body, at=(0, 0, 0), axis=(0, 0, 1))
     law = mb.LinearContact(stiffness=1e4, damping=1.0)
-    with pytest.raises(mb.ModelError, match="joint limit 'stop': give a Revolute or Prismatic"):
-        mb.JointLimit("stop", Spherical("ball", b.ground, body, at=(0, 0, 0)), upper=1.0, law=law)
+    with pytest.raises(mb.ModelError, match="joint limit 'stop': give a Revolute, Prismatic, "
+                       "Cylindrical or Spherical joint"):
+        mb.JointLimit("stop", Universal("cross", b.ground, body, at=(0, 0, 0), axis_i=(1, 0, 0),
+                                        axis_j=(0, 1, 0)), upper=1.0, law=law)
     for kwargs, words in [(dict(lower=1.0, upper=0.5), "lower must be below upper"),
                           (dict(lower=-4.0), r"inside it")]:
         builder = mb.ModelBuilder(dim=3)

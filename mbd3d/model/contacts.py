@@ -126,22 +126,35 @@ class JointLimit(ForceElement):
     """A stop at each end of a joint's travel: the joint coordinate stays in ``[lower,
     upper]`` up to the compliance of ``law``, which pushes it back when it passes an end.
 
-    The coordinate is the one results report for the joint
-    (``results.joint(name).angle`` or ``.displacement``): a revolute's angle [rad] of body j
-    about the hinge (planar ``theta_j - theta_i``; spatial, from body i's reference direction,
-    in (-pi, pi]), a prismatic joint's slide [m] of body j's point along the axis.
+    The coordinates are those results report for the joint (``results.joint(name).angle``,
+    ``.displacement``):
+
+    - ``"angle"`` of a revolute or a cylindrical joint [rad]: body j about the hinge (planar
+      ``theta_j - theta_i``; spatial, from body i's reference direction, in (-pi, pi]);
+    - ``"displacement"`` of a prismatic or a cylindrical joint [m]: body j's point along the
+      axis;
+    - ``"cone"`` of a spherical joint [rad]: the angle between ``axis`` as carried by body i
+      and as carried by body j (0 in the drawing), kept below ``upper``, the cone's half
+      angle: a ball joint's range of swing in every direction.
 
     Parameters
     ----------
     name : str
-    joint : Revolute or Prismatic
+    joint : Revolute, Prismatic, Cylindrical or Spherical
         A joint of the model.
     lower, upper : float, optional
-        The ends [rad or m] (either may be left out: no stop there).
+        The ends [rad or m] (either may be left out: no stop there; a cone has ``upper``
+        only).
     law : ContactLaw
         As for :class:`Contact`; a law calibrated to a restitution uses ``effective_mass``:
-        default the pair's effective mass (prismatic) or moment of inertia about the hinge
-        [kg m^2] (revolute), ``m_i m_j / (m_i + m_j)``, of the free bodies.
+        default the pair's effective mass (a slide) or moment of inertia about the hinge
+        (about the axes square to a cone's) [kg m^2], ``m_i m_j / (m_i + m_j)``, of the free
+        bodies.
+    coordinate : str, optional
+        ``"angle"``, ``"displacement"`` or ``"cone"``; default the joint's only one (a
+        cylindrical joint has two: name it, and stop the other with a second limit).
+    axis : array_like, optional
+        The cone's axis, a direction of the drawing (global axes); a cone only.
     effective_mass : float, optional
         [kg or kg m^2].
 
@@ -159,21 +172,35 @@ class JointLimit(ForceElement):
     group_key = "contacts"
 
     def __init__(self, name: str, joint: Any, *, lower: float | None = None,
-                 upper: float | None = None, law: ContactLaw,
-                 effective_mass: float | None = None):
-        kind = getattr(joint, "friction_kind", None)
-        if kind not in ("revolute", "prismatic") or not hasattr(joint, "reaction_frame"):
-            raise ModelError(f"joint limit '{name}': give a Revolute or Prismatic joint, got "
-                             f"{joint!r}")
+                 upper: float | None = None, law: ContactLaw, coordinate: str | None = None,
+                 axis: Any = None, effective_mass: float | None = None):
+        what = f"joint limit '{name}'"
+        choices = getattr(joint, "limit_coordinates", None)
+        if not choices or not hasattr(joint, "reaction_frame"):
+            raise ModelError(f"{what}: give a Revolute, Prismatic, Cylindrical or Spherical "
+                             f"joint, got {joint!r}")
+        if coordinate is None and len(choices) > 1:
+            raise ModelError(f"{what}: a {type(joint).__name__} joint has {len(choices)} "
+                             f"coordinates; name the one stopped: coordinate= "
+                             f"{' or '.join(repr(c) for c in choices)}")
+        coordinate = choices[0] if coordinate is None else coordinate
+        if coordinate not in choices:
+            raise ModelError(f"{what}: a {type(joint).__name__} joint's coordinates are "
+                             f"{', '.join(repr(c) for c in choices)}; got {coordinate!r}")
+        if (coordinate == "cone") != (axis is not None):
+            raise ModelError(f"{what}: " + ("a cone needs its axis= (a direction of the "
+                                            "drawing)" if axis is None else
+                                            "axis= is a cone's; a hinge or a slide has the "
+                                            "joint's own"))
         if not isinstance(law, ContactLaw):
-            raise ModelError(f"joint limit '{name}': law must be a LinearContact, HertzContact "
-                             f"or HuntCrossley, got {law!r}")
+            raise ModelError(f"{what}: law must be a LinearContact, HertzContact or "
+                             f"HuntCrossley, got {law!r}")
         self.name, self.joint, self.law = name, joint, law
         self.lower, self.upper, self.effective_mass = lower, upper, effective_mass
+        self.coordinate, self.axis = coordinate, axis
         self.body_i, self.body_j = joint.body_i, joint.body_j
-        self.hinge = kind == "revolute"
-        self.what = f"joint limit '{name}'"
-        self.units = ("rad", "N m") if self.hinge else ("m", "N")
+        self.what = what
+        self.units = ("m", "N") if coordinate == "displacement" else ("rad", "N m")
 
     def bodies(self) -> list[tuple[str, Body]]:
         return [("body_i", self.body_i), ("body_j", self.body_j)]
@@ -182,48 +209,77 @@ class JointLimit(ForceElement):
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
         return _Contacts(elements, ctx)
 
-    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray]:
+    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool]:
         """``(points (1, 4, dim), values (1, 9), labels, swapped)`` of the compiled core,
         checked."""
-        what = f"joint limit '{self.name}'"
+        what = self.what
+        lower, upper = self._ends(ctx)
+        u_i, u_j, axes = self.joint.reaction_frame(ctx)
+        points = np.zeros((kernel.POINTS, ctx.dim))
+        if self.coordinate == "cone":
+            kind = kernel.CONE_STOP
+            direction = ctx.direction(self.axis, f"{what}: axis")
+            points[:2] = (ctx.to_local_vector(self.body_i, direction),
+                          ctx.to_local_vector(self.body_j, direction))
+            spin = [ctx.rotation(self.body_i) @ v for v in _across(points[0])]
+        elif self.coordinate == "angle":
+            kind = kernel.HINGE_STOP
+            spin = [np.array([0.0, 0.0, 1.0])]
+            if ctx.dim == 3:
+                points[:3] = self.joint.hinge_directions(ctx, what)
+                spin = [ctx.rotation(self.body_i) @ np.cross(points[0], points[1])]
+        else:
+            kind, spin = kernel.SLIDE_STOP, None
+            points[:3] = u_i, u_j, axes[:, 0]
+        mass = self._effective_mass(ctx, u_i, u_j, spin, what)
+        K, n, D, p = self.law.constants(mass, math.inf, what)
+        return points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False
+
+    def _ends(self, ctx) -> tuple[float, float]:
+        what = self.what
         lower = -math.inf if self.lower is None else finite_scalar(self.lower, f"{what}: lower")
         upper = math.inf if self.upper is None else finite_scalar(self.upper, f"{what}: upper")
         if not lower < upper:
             raise ModelError(f"{what}: lower must be below upper, got {self.lower!r} and "
                              f"{self.upper!r}")
-        u_i, u_j, axes = self.joint.reaction_frame(ctx)
-        points = np.zeros((kernel.POINTS, ctx.dim))
-        if self.hinge and ctx.dim == 3:
-            if not (-math.pi < lower or self.lower is None) or not (
-                    upper < math.pi or self.upper is None):
-                raise ModelError(f"{what}: a spatial hinge's angle is measured in (-pi, pi]; "
-                                 f"give limits inside it, got {self.lower!r}, {self.upper!r}")
-            points[:3] = self.joint.hinge_directions(ctx, what)
-        elif not self.hinge:
-            points[:3] = u_i, u_j, axes[:, 0]
-        kind = kernel.HINGE_STOP if self.hinge else kernel.SLIDE_STOP
-        mass = self._effective_mass(ctx, u_i, u_j, axes, what)
-        K, n, D, p = self.law.constants(mass, math.inf, what)
-        return points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False
+        if self.coordinate == "cone" and not (self.lower is None and 0.0 < upper < math.pi):
+            raise ModelError(f"{what}: a cone has an upper end only, its half angle in (0, pi) "
+                             f"[rad], got lower={self.lower!r}, upper={self.upper!r}")
+        inside = ((-math.pi < lower or self.lower is None)
+                  and (upper < math.pi or self.upper is None))
+        if self.coordinate == "angle" and ctx.dim == 3 and not inside:
+            raise ModelError(f"{what}: a spatial hinge's angle is measured in (-pi, pi]; "
+                             f"give limits inside it, got {self.lower!r}, {self.upper!r}")
+        return lower, upper
 
-    def _effective_mass(self, ctx, u_i, u_j, axes, what) -> float:
+    def _effective_mass(self, ctx, u_i, u_j, spin, what) -> float:
+        """The pair's mass along a slide (``spin`` None), or its mean moment of inertia
+        about the global axes ``spin`` through the joint (a hinge's, a cone's two across)."""
         if self.effective_mass is not None:
             return finite_scalar(self.effective_mass, f"{what}: effective_mass", positive=True)
-        if not self.hinge:
+        if spin is None:
             return _pair_mass([b.mass for b in (self.body_i, self.body_j) if not b.is_ground])
-        h = ctx.rotation(self.body_i) @ axes[:, 2] if ctx.dim == 3 else None
-        moments = []
-        for body, u in ((self.body_i, u_i), (self.body_j, u_j)):
-            if body.is_ground:
-                continue
-            if ctx.dim == 2:
-                moments.append(float(body.inertia) + body.mass * float(u @ u))
-                continue
-            axis = ctx.rotation(body).T @ h
-            arm = u - (u @ axis) * axis
-            moments.append(float(axis @ np.asarray(body.inertia) @ axis)
-                           + body.mass * float(arm @ arm))
-        return _pair_mass(moments)
+        return float(np.mean([_pair_mass([_moment(ctx, body, u, h) for body, u in
+                                          ((self.body_i, u_i), (self.body_j, u_j))
+                                          if not body.is_ground]) for h in spin]))
+
+
+def _across(a: np.ndarray) -> list[np.ndarray]:
+    """Two unit vectors square to ``a`` (3,) and to each other."""
+    e = np.eye(3)[int(np.argmin(np.abs(a)))]
+    first = np.cross(a, e)
+    first /= np.linalg.norm(first)
+    return [first, np.cross(a / np.linalg.norm(a), first)]
+
+
+def _moment(ctx, body, u, h) -> float:
+    """Moment of inertia [kg m^2] of ``body`` about the global axis ``h`` (3D; planar: the
+    normal) through its body point ``u``."""
+    if ctx.dim == 2:
+        return float(body.inertia) + body.mass * float(u @ u)
+    axis = ctx.rotation(body).T @ h
+    arm = u - (u @ axis) * axis
+    return float(axis @ np.asarray(body.inertia) @ axis) + body.mass * float(arm @ arm)
 
 
 def _pair_mass(masses: list) -> float:

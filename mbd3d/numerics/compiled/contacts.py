@@ -19,10 +19,11 @@ and its body points ``points[k]`` (body frames):
 Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
 closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
 nearest face).
+
 With ``n`` the unit normal from ``i`` to ``j`` (``-m`` against a plane, ``(c_j - c_i) / |c_j -
-c_i|`` between cores, the face's normal inside a box), both bodies are pushed apart at the point ``x = c_i + (r_i + g / 2)
-n`` midway between the two surfaces, each at its own material point there, so that the pair
-exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
+c_i|`` between cores, the face's normal inside a box), both bodies are pushed apart at the
+point ``x = c_i + (r_i + g / 2) n`` midway between the two surfaces, each at its own material
+point there, so that the pair exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
 normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip)``::
 
@@ -45,7 +46,11 @@ the coordinates are those :mod:`mbd3d.io.joint_coordinates` reports):
 - ``SLIDE_STOP``: the slide ``s = h . (P_j - P_i)`` of body j's point ``P_j`` along body i's
   axis ``h`` from ``P_i``, ``points[k] = (u_i, u_j, h_i)`` in the body frames; the force acts
   along ``h`` at ``P_j`` (on body i at its material point there), whose virtual work is the
-  force times the slide's variation.
+  force times the slide's variation;
+- ``CONE_STOP``: the angle ``atan2(|a_i x a_j|, a_i . a_j)`` in [0, pi] between an axis of
+  body i and one of body j, ``points[k] = (a_i, a_j)``, kept below ``upper`` (a spherical
+  joint's cone); the torque acts about ``h = a_i x a_j / |a_i x a_j|``, along which the
+  angle grows at ``h . (omega_j - omega_i)``.
 """
 
 from __future__ import annotations
@@ -61,7 +66,7 @@ from mbd3d.numerics.compiled.shapes import (box_to_point, closest_between_segmen
 
 #: the kinds of shape pairs, then of joint stops (from ``HINGE_STOP`` on)
 SPHERE_PLANE, SPHERE_SPHERE, SEGMENT_SPHERE, SEGMENT_SEGMENT, BOX_SPHERE = 0, 1, 2, 3, 4
-HINGE_STOP, SLIDE_STOP = 5, 6
+HINGE_STOP, SLIDE_STOP, CONE_STOP = 5, 6, 7
 #: body points per contact (``points[k]``)
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
@@ -277,17 +282,45 @@ def _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j) -> tuple:
 
 
 @jit
+def _cone(A, omega, k, i, j, points, h) -> tuple:
+    """``(angle, angle')`` of cone stop ``k`` and the axis ``h`` (global, 3D) it turns about
+    (zero where the two axes are aligned)."""
+    a_i, a_j = np.zeros(3), np.zeros(3)
+    _turn(A, i, points[k, 0], a_i)
+    _turn(A, j, points[k, 1], a_j)
+    sine, cosine, rate = 0.0, 0.0, 0.0
+    for x in range(3):
+        y, z = (x + 1) % 3, (x + 2) % 3
+        h[x] = a_i[y] * a_j[z] - a_i[z] * a_j[y]
+        sine += h[x] * h[x]
+        cosine += a_i[x] * a_j[x]
+    sine = math.sqrt(sine)
+    for x in range(3):
+        h[x] = h[x] / sine if sine > 0.0 else 0.0
+        rate += h[x] * (omega[j, x] - omega[i, x])
+    return math.atan2(sine, cosine), rate
+
+
+@jit
+def _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j) -> tuple:
+    """``(x, x')`` of stop ``k`` with its axis ``h`` (and, for a slide, the offsets ``s_i``,
+    ``s_j`` of the point pushed)."""
+    if values[k, 0] == SLIDE_STOP:
+        return _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
+    if values[k, 0] == CONE_STOP:
+        return _cone(A, omega, k, i, j, points, h)
+    return _hinge(A, omega, Q, Qd, k, i, j, points, h)
+
+
+@jit
 def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> None:
-    """Stop ``k``: the law's force back into ``[lower, upper]`` along its joint coordinate."""
+    """Stop ``k``: the law's force back into ``[lower, upper]`` along its joint coordinate (a
+    torque about a hinge's or a cone's axis, a force along a slide)."""
     h, s_i, s_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    hinge = values[k, 0] == HINGE_STOP
-    if hinge:
-        x, rate = _hinge(A, omega, Q, Qd, k, i, j, points, h)
-    else:
-        x, rate = _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
+    x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
     gap, gap_rate, sign = _stop_side(x, rate, values[k, 1], values[k, 2])
     force = normal_force(values, k, -gap, -gap_rate)
-    if hinge:
+    if values[k, 0] != SLIDE_STOP:
         _add_torque(axes, j, h, sign * force, out)
         _add_torque(axes, i, h, -sign * force, out)
     else:
@@ -317,10 +350,7 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
-            if values[k, 0] == HINGE_STOP:
-                x, rate = _hinge(A, omega, Q, Qd, k, i, j, points, h)
-            else:
-                x, rate = _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
+            x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
         else:
             gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j,
