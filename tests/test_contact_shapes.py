@@ -90,13 +90,14 @@ def test_closest_points_between_segments_against_exact_arithmetic():
     """The distance of the kernel's closest points against the exact least distance, for 300
     pairs of every sort (crossing, skew, end to end) and for pairs at angles from 1e-14 to
     1e-6 rad (below about 1e-8 rad they count as parallel, and the distance is within 1e-8 of
-    the length); where parallel segments overlap, the points are the middle of the overlap,
-    square across."""
+    the length), at sizes from 1 mm to 1 km (what counts as parallel does not depend on the
+    size); where parallel segments overlap, the points are the middle of the overlap, square
+    across."""
     rng = np.random.default_rng(3)
     c_i, c_j = np.zeros(3), np.zeros(3)
     for k in range(300 + 9 * 20):
-        a, b, c, d = rng.normal(size=(4, 3))
-        bound = 1e-12
+        a, b, c, d = rng.normal(size=(4, 3)) * 10.0 ** (3 * (k % 3 - 1))
+        bound = 1e-12 * np.abs([a, b, c, d]).max()
         if k >= 300:
             angle = 10.0 ** (-14 + (k - 300) // 20)
             u = b - a
@@ -107,8 +108,8 @@ def test_closest_points_between_segments_against_exact_arithmetic():
         s = (c_i - a) @ (b - a) / ((b - a) @ (b - a))
         t = (c_j - c) @ (d - c) / ((d - c) @ (d - c))
         assert -1e-12 <= s <= 1 + 1e-12 and -1e-12 <= t <= 1 + 1e-12
-        np.testing.assert_allclose(c_i, a + s * (b - a), rtol=0, atol=1e-12)
-        np.testing.assert_allclose(c_j, c + t * (d - c), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(c_i, a + s * (b - a), rtol=0, atol=bound)
+        np.testing.assert_allclose(c_j, c + t * (d - c), rtol=0, atol=bound)
         exact = _exact_segment_distance(a, b, c, d)
         assert np.linalg.norm(c_j - c_i) == pytest.approx(exact, abs=bound), k
     a, b = np.zeros(3), np.array([2.0, 0.0, 0.0])
@@ -150,7 +151,9 @@ def test_closest_point_of_a_segment_and_a_box_against_scipy():
 
 #: the pairs: (first shape, second shape) built on bodies one and two
 PAIRS = ["capsule-sphere", "capsule-capsule", "box-sphere", "sphere-box", "capsule-plane",
-         "box-plane"]
+         "box-plane", "sphere-hole", "capsule-hole"]
+#: the hole of body two: its radius and axis (body frame)
+R_HOLE, AXIS = 0.4, np.array([0.3, 0.8, -0.5]) / np.linalg.norm([0.3, 0.8, -0.5])
 R_I, R_J = 0.15, 0.1
 ENDS_I = np.array([[-0.4, 0.1, 0.0], [0.5, -0.1, 0.2]])
 ENDS_J = np.array([[0.1, -0.3, 0.1], [-0.2, 0.4, -0.1]])
@@ -167,7 +170,8 @@ def _pair(kind: str, law):
     shapes = {"capsule": lambda body, ends, r: mb.Capsule(body, r, ends=ends),
               "sphere": lambda body, ends, r: mb.Sphere(body, r, point=ends[0]),
               "box": lambda body, ends, r: mb.Box(body, 2 * HALF, point=CENTRE_I),
-              "plane": lambda body, ends, r: mb.Plane(body, normal=NORMAL, point=CENTRE_J)}
+              "plane": lambda body, ends, r: mb.Plane(body, normal=NORMAL, point=CENTRE_J),
+              "hole": lambda body, ends, r: mb.Hole(body, R_HOLE, point=CENTRE_J, axis=AXIS)}
     b.add(mb.Contact("touch", shapes[first](one, ENDS_I, R_I),
                      shapes[second](two, ENDS_J, R_J), law=law))
     return b.build()
@@ -188,6 +192,11 @@ def _gap(kind, q, charts) -> float:
         return _box_point(on1(CENTRE_I), A1, HALF, on2(ENDS_J[0])) - R_J
     if kind == "sphere-box":  # the box is body two's, centred at CENTRE_I of it
         return _box_point(on2(CENTRE_I), A2, HALF, on1(ENDS_I[0])) - R_I
+    if second == "hole":  # the pin's centre off the axis, square to it
+        h, P = A2 @ AXIS, on2(CENTRE_J)
+        centres = [on1(e) for e in ENDS_I[:2 if first == "capsule" else 1]]
+        return np.array([R_HOLE - R_I - np.linalg.norm((np.eye(3) - np.outer(h, h)) @ (c - P))
+                         for c in centres])
     m, P = A2 @ NORMAL, on2(CENTRE_J)
     if first == "capsule":
         points, radius = [on1(e) for e in ENDS_I], R_I
@@ -205,6 +214,15 @@ def _overlapping(kind, rng, deep=False):
     q = np.zeros(12)
     q[3:6], q[9:12] = rng.normal(size=3) * 0.6, rng.normal(size=3) * 0.6
     depth = rng.uniform(0.17, 0.19) if deep else rng.uniform(1e-3, 3e-3)
+    if kind.endswith("hole"):  # the hole's axis put R_HOLE - R_I + depth from the pin's centre
+        A2 = _rotation(charts[1], q[9:12])
+        h = A2 @ AXIS
+        across = np.cross(h, rng.normal(size=3))
+        centre = q[0:3] + _rotation(charts[0], q[3:6]) @ ENDS_I[0]
+        hole = (centre - (R_HOLE - R_I + depth) * across / np.linalg.norm(across)
+                + rng.normal() * 0.2 * h)
+        q[6:9] = hole - A2 @ CENTRE_J
+        return q, charts
     if kind.endswith("plane"):  # the plane moved along its normal
         q[6:9] += (np.min(_gap(kind, q, charts)) + depth) * (_rotation(charts[1], q[9:12])
                                                              @ NORMAL)
@@ -227,6 +245,7 @@ def _overlapping(kind, rng, deep=False):
     return q, charts
 
 
+@pytest.mark.filterwarnings("ignore::mbd3d.ContactWarning")  # the drawing is any overlap
 @pytest.mark.parametrize("kind", PAIRS + ["box-sphere deep", "sphere-box deep"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_gap_and_force_follow_the_shapes_distance_and_the_hertz_potential(kind, seed):
@@ -274,6 +293,47 @@ def test_parallel_capsules_touch_at_the_middle_of_what_they_share(dim):
     np.testing.assert_allclose(states.point[0], [0.3, 0.095, 0.0], rtol=0, atol=1e-15)
     np.testing.assert_allclose(states.normal[0], [0.0, 1.0, 0.0], rtol=0, atol=1e-15)
     np.testing.assert_allclose(states.normal_force, [1e5 * 0.01], rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_pin_hangs_in_its_hole_at_the_clearance_plus_its_weights_dent(dim):
+    """A revolute clearance joint: a link hanging by a pin of radius 0.02 m in a hole of
+    0.021 m in the ground, a linear law of stiffness K: at rest the pin touches the bottom of
+    the hole, its centre the clearance plus m g / K below the hole's, and it carries the
+    weight. Planar: a circle in a circle; spatial: a sphere in a horizontal cylinder."""
+    m, K, r_pin, r_hole = 1.2, 2e6, 0.02, 0.021
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) + (0.0,) * (dim - 2))
+    link = b.add_body("link", mass=m, inertia=0.01 if dim == 2 else np.eye(3) * 0.01,
+                      position=(0.0,) * dim)
+    hole = (mb.Hole(b.ground, r_hole) if dim == 2 else
+            mb.Hole(b.ground, r_hole, axis=(0.0, 0.0, 1.0)))
+    b.add(mb.Contact("clearance", mb.Sphere(link, r_pin), hole,
+                     law=mb.LinearContact(stiffness=K, damping=0.0)))
+    model = b.build()
+    rest = mb.static_equilibrium(model)
+    assert rest.q[0, 1] == pytest.approx(-(r_hole - r_pin) - m * G / K, abs=1e-12)
+    states = mb.contact_states(model, rest.q[0])
+    assert states.normal_force[0] == pytest.approx(m * G, rel=1e-10)
+    np.testing.assert_allclose(states.normal[0], [0.0, -1.0, 0.0], rtol=0, atol=1e-12)
+    # the point midway between the hole's wall and the pin's bottom, m g / K below it
+    assert states.point[0, 1] == pytest.approx(-(r_hole + 0.5 * m * G / K), abs=1e-12)
+
+
+def test_a_shaft_in_a_bearing_rests_on_both_ends_sharing_its_weight():
+    """A capsule in a horizontal hole touches the hole's wall at both ends, each carrying its
+    share of the weight by the lever rule about the centre of mass (0.5 and 0.3 m)."""
+    m, K = 2.0, 1e6
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    shaft = b.add_body("shaft", mass=m, inertia=np.diag([1e-3, 0.05, 0.05]), position=(0, 0, 0))
+    b.add(mb.Contact("bearing", mb.Capsule(shaft, 0.05, ends=[(-0.3, 0, 0), (0.5, 0, 0)]),
+                     mb.Hole(b.ground, 0.051, axis_at=(1.0, 0.0, 0.0)),
+                     law=mb.LinearContact(stiffness=K, damping=0.0)))
+    model = b.build()
+    rest = mb.static_equilibrium(model)
+    states = mb.contact_states(model, rest.q[0])
+    np.testing.assert_allclose(states.normal_force, [m * G * 0.5 / 0.8, m * G * 0.3 / 0.8],
+                               rtol=1e-9, atol=0)
+    assert states.names == ["bearing[end a]", "bearing[end b]"]
 
 
 def test_the_box_and_capsule_rows_are_named_by_corner_and_end():
@@ -414,6 +474,16 @@ def test_bad_shapes_are_named():
         with pytest.raises(mb.ModelError, match=words) as info:
             b.build()
         assert "contact 'touch'" in str(info.value)
+    holes = [(lambda two: mb.Hole(two, 0.05, axis=(0, 0, 1)), "the pin must be narrower"),
+             (lambda two: mb.Hole(two, 0.5), "the hole's axis"),
+             (lambda two: mb.Hole(two, 0.5, axis=(0, 0, 1), axis_at=(0, 0, 1)), "the hole's axis")]
+    for hole, words in holes:
+        b = mb.ModelBuilder(dim=3)
+        one = b.add_body("one", mass=1.0, inertia=np.eye(3) * 0.1, position=(0, 0, 0))
+        two = b.add_body("two", mass=1.0, inertia=np.eye(3) * 0.1, position=(0, 0, 2))
+        b.add(mb.Contact("pin", mb.Sphere(one, 0.1), hole(two), law=law))
+        with pytest.raises(mb.ModelError, match=f"contact 'pin': .*{words}"):
+            b.build()
     with pytest.raises(mb.ModelError, match="no contact between a Box and a Box"):
         mb.Contact("boxes", mb.Box(one, (1, 1, 1)), mb.Box(two, (1, 1, 1)), law=law)
     b = mb.ModelBuilder(dim=3)
@@ -439,6 +509,8 @@ def test_capsules_and_boxes_round_trip_through_a_model_file(tmp_path):
                      law=law))
     b.add(mb.Contact("rod crate", mb.Box(crate, (0.3, 0.2, 0.1)), mb.Sphere(rod, 0.05),
                      law=law))
+    b.add(mb.Contact("pin", mb.Sphere(rod, 0.02, at=(0.3, 0.0, 0.5)),
+                     mb.Hole(crate, 0.03, at=(0.3, 0.0, 0.5), axis_at=(0.0, 1.0, 0.0)), law=law))
     model = b.build()
     path = tmp_path / "shapes.yaml"
     again = mb.load(mb.save(model, path))

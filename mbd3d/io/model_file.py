@@ -34,7 +34,7 @@ Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd
 (``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``
 and ``JointLimit``, whose ``joint`` names a joint, ``Contact``); their fields are
 their constructors' keyword arguments, as documented there. A contact's shapes and law are
-``{type: Sphere | Plane | Capsule | Box, body: ..., ...}`` and ``{type: LinearContact |
+``{type: Sphere | Plane | Capsule | Box | Hole, body: ...}`` and ``{type: LinearContact |
 HertzContact | HuntCrossley, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
@@ -215,6 +215,7 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
                                                    motion.SmoothStep, joints.CamProfile,
                                                    contacts.Sphere, contacts.Plane,
                                                    contacts.Capsule, contacts.Box,
+                                                   contacts.Hole,
                                                    contact_laws.LinearContact,
                                                    contact_laws.HertzContact,
                                                    contact_laws.HuntCrossley)}

@@ -141,9 +141,9 @@ def _plain(value: Any, where: str) -> Any:
 def _is_contact_part(value: Any) -> bool:
     """A contact's shape or law (frozen dataclasses, written field by field)."""
     from mbd3d.model.contact_laws import ContactLaw  # noqa: PLC0415
-    from mbd3d.model.shapes import Box, Capsule, Plane, Sphere  # noqa: PLC0415
+    from mbd3d.model.shapes import Box, Capsule, Hole, Plane, Sphere  # noqa: PLC0415
 
-    return (isinstance(value, (Sphere, Plane, Capsule, Box, ContactLaw))
+    return (isinstance(value, (Sphere, Plane, Capsule, Box, Hole, ContactLaw))
             and dataclasses.is_dataclass(value))
 
 

@@ -22,23 +22,23 @@ from mbd3d.errors import ContactWarning, ModelError, user_stacklevel
 from mbd3d.model.body import Body
 from mbd3d.model.contact_laws import ContactLaw
 from mbd3d.model.forces import ForceElement, _CompiledForces
-from mbd3d.model.shapes import Box, Capsule, Plane, Sphere, pair_order, pair_rows
+from mbd3d.model.shapes import Box, Capsule, Hole, Plane, Sphere, pair_order, pair_rows
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import contacts as kernel
 
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext, Model
 
-__all__ = ["Sphere", "Plane", "Capsule", "Box", "Contact", "JointLimit", "ContactStates",
-           "contact_states"]
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Contact", "JointLimit",
+           "ContactStates", "contact_states"]
 
 
 class Contact(ForceElement):
     #: contacts and joint limits are one group of the compiled core
     group_key = "contacts"
-    """A compliant contact between two shapes: a sphere, a capsule or a box against a plane, a
-    sphere or a capsule against a sphere, a capsule against a capsule (and a box against a
-    sphere), in either order.
+    """A compliant contact between shapes on two bodies: a sphere, a capsule or a box against
+    a plane; a sphere or a capsule against a sphere or a capsule, or inside a hole (a pin with
+    clearance); a box against a sphere; in either order.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
     friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
@@ -48,18 +48,19 @@ class Contact(ForceElement):
     Parameters
     ----------
     name : str
-    first, second : Sphere, Capsule, Box or Plane
-        The shapes (see :mod:`mbd3d.model.shapes`). A capsule touches a plane at its two ends
-        and a box at its corners, each end or corner a contact of its own (a row of
-        :func:`contact_states`, named ``"name[end a]"``, ``"name[corner -+-]"``); a laws'
-        calibration then holds for one of them touching alone.
+    first, second : Sphere, Capsule, Box, Plane or Hole
+        The shapes (see :mod:`mbd3d.model.shapes`). A capsule touches a plane or a hole's
+        wall at its two ends and a box touches a plane at its corners, each end or corner a
+        contact of its own (a row of :func:`contact_states`, named ``"name[end a]"``,
+        ``"name[corner -+-]"``); a law's calibration then holds for one of them touching
+        alone.
     law : ContactLaw
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact` or
         :class:`~mbd3d.HuntCrossley`. Laws calibrated to a restitution use the pair's effective
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
         free bodies, not the inertia the pair has through joints (give ``effective_mass``).
         Hertz's stiffness from the material uses the radii ``r_i r_j / (r_i + r_j)`` (a
-        sphere's or a capsule's, a box's rounding, a plane's infinite).
+        sphere's or a capsule's, a box's rounding, a plane's infinite; a hole's negative).
     friction : float
         Coulomb coefficient ``mu`` >= 0.
     slip_velocity : float
@@ -80,10 +81,11 @@ class Contact(ForceElement):
     def __init__(self, name: str, first: Any, second: Any, *, law: ContactLaw,
                  friction: float = 0.0, slip_velocity: float = 1e-3,
                  effective_mass: float | None = None):
-        shapes = (Sphere, Capsule, Box, Plane)
+        shapes = (Sphere, Capsule, Box, Plane, Hole)
         if not isinstance(first, shapes) or not isinstance(second, shapes):
-            raise ModelError(f"contact '{name}': give two shapes (Sphere, Capsule, Box or "
-                             f"Plane), got {type(first).__name__} and {type(second).__name__}")
+            raise ModelError(f"contact '{name}': give two shapes (Sphere, Capsule, Box, Plane "
+                             f"or Hole), got {type(first).__name__} and "
+                             f"{type(second).__name__}")
         pair_order(first, second, f"contact '{name}'")
         if not isinstance(law, ContactLaw):
             raise ModelError(f"contact '{name}': law must be a LinearContact, HertzContact or "

@@ -1,7 +1,7 @@
 """The shapes a contact is made of, fixed to bodies: a sphere (planar: a circle), a capsule (a
-segment with a radius; planar: a stadium), a box along its body's axes (optionally rounded)
-and a plane (planar: a line) bounding a half-space; and how a pair of them becomes the rows of
-the compiled core (:mod:`mbd3d.numerics.compiled.contacts`).
+segment with a radius; planar: a stadium), a box along its body's axes (optionally rounded),
+a plane (planar: a line) bounding a half-space and a round hole a pin moves in; and how a
+pair of them becomes the rows of the compiled core (:mod:`mbd3d.numerics.compiled.contacts`).
 
 A pair is one row, or several where a shape touches at several points at once: a capsule
 against a plane at its two ends, a box against a plane at its corners (4 in the plane, 8 in
@@ -26,7 +26,8 @@ from mbd3d.numerics.compiled import contacts as kernel
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext
 
-__all__ = ["Sphere", "Plane", "Capsule", "Box", "PairRows", "pair_order", "pair_rows"]
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "PairRows", "pair_order",
+           "pair_rows"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,23 @@ class Box:
 
 
 @dataclass(frozen=True)
+class Hole:
+    """A round hole through ``body`` (planar model: a circle; spatial: a cylinder without
+    ends) of ``radius`` [m] about the axis through ``point`` (body frame) or ``at``
+    (drawing), default the body's reference point, along ``axis`` (body frame) or ``axis_at``
+    (the drawing's axes; spatial models only). A sphere or a capsule of another body moves
+    inside it and is pushed back from its wall: a pin in a hole with clearance (a revolute
+    clearance joint), a ball in a tube, a shaft in a bearing."""
+
+    body: Body
+    radius: float
+    point: Any = None
+    at: Any = None
+    axis: Any = None
+    axis_at: Any = None
+
+
+@dataclass(frozen=True)
 class PairRows:
     """A pair of shapes as rows of the compiled core: the body points ``points (r, 4, dim)``
     and ``(kind, r_i, r_j)`` per row, with the shapes' radius of curvature at the touch (for
@@ -96,7 +114,7 @@ class PairRows:
 
 #: the pairs the core evaluates, first shape (its body i) then second
 _PAIRS = {(Sphere, Plane), (Sphere, Sphere), (Capsule, Plane), (Capsule, Sphere),
-          (Capsule, Capsule), (Box, Plane), (Box, Sphere)}
+          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Sphere, Hole), (Capsule, Hole)}
 
 
 def pair_order(first: Any, second: Any, what: str) -> bool:
@@ -133,6 +151,8 @@ def _rows(ctx, first, second, what, swapped) -> PairRows:
         labels = ([""] if len(core_i) == 1 else _labels(first, ctx.dim))
         return PairRows(np.stack(rows), [(kernel.SPHERE_PLANE, r_i, 0.0)] * len(rows),
                         r_i, labels, swapped)
+    if isinstance(second, Hole):
+        return _in_hole(ctx, first, second, r_i, core_i, what, swapped)
     r_j, core_j = _core(ctx, second, what)
     kind = {Sphere: kernel.SPHERE_SPHERE, Capsule: kernel.SEGMENT_SPHERE,
             Box: kernel.BOX_SPHERE}[type(first)]
@@ -145,6 +165,34 @@ def _rows(ctx, first, second, what, swapped) -> PairRows:
     points[0, :len(cores)] = cores
     radius = r_i * r_j / (r_i + r_j) if r_i + r_j > 0 else 0.0
     return PairRows(points, [(kind, r_i, r_j)], radius, [""], swapped)
+
+
+def _in_hole(ctx, pin, hole: Hole, r_i: float, core_i: np.ndarray, what: str,
+             swapped: bool) -> PairRows:
+    """A pin (a sphere, or a capsule's two ends) in a hole: a row per pin point."""
+    r_j = finite_scalar(hole.radius, f"{what}: radius of the hole", positive=True)
+    if not r_i < r_j:
+        raise ModelError(f"{what}: the pin must be narrower than the hole, got a radius of "
+                         f"{r_i:g} m in a hole of {r_j:g} m")
+    centre = resolve_point(ctx, hole.body, hole.point, hole.at, f"{what}: hole centre")
+    if ctx.dim == 2:
+        if hole.axis is not None or hole.axis_at is not None:
+            raise ModelError(f"{what}: the hole's axis is the plane's normal in a planar model; "
+                             "leave axis and axis_at out")
+        axis = np.zeros(2)
+    elif (hole.axis is None) == (hole.axis_at is None):
+        raise ModelError(f"{what}: give the hole's axis in the body frame (axis) or in the "
+                         "drawing (axis_at), one of them")
+    elif hole.axis is not None:
+        axis = ctx.direction(hole.axis, f"{what}: the hole's axis")
+    else:
+        axis = ctx.to_local_vector(hole.body, ctx.direction(hole.axis_at,
+                                                            f"{what}: the hole's axis"))
+    rows = np.stack([np.stack([c, centre, axis, np.zeros(ctx.dim)]) for c in core_i])
+    labels = [""] if len(core_i) == 1 else _labels(pin, ctx.dim)
+    # Hertz's radius of a convex pin in a concave hole
+    return PairRows(rows, [(kernel.PIN_IN_HOLE, r_i, r_j)] * len(rows), r_i * r_j / (r_j - r_i),
+                    labels, swapped)
 
 
 def _core(ctx, shape, what) -> tuple[float, np.ndarray]:

@@ -14,7 +14,13 @@ and its body points ``points[k]`` (body frames):
 - ``SEGMENT_SEGMENT``: two capsules, around ``points[k, 0:2]`` of ``i`` and ``points[k, 2:4]``
   of ``j``;
 - ``BOX_SPHERE``: a box along ``i``'s axes centred at ``points[k, 0]`` with half sizes
-  ``points[k, 1]``, rounded by ``r_i``, against the sphere at ``points[k, 2]`` of ``j``.
+  ``points[k, 1]``, rounded by ``r_i``, against the sphere at ``points[k, 2]`` of ``j``;
+- ``PIN_IN_HOLE``: a pin, the sphere of radius ``r_i`` at ``points[k, 0]`` of ``i`` (planar:
+  a circle), inside a hole of radius ``r_j`` of ``j``, the cylinder about the axis through
+  ``points[k, 1]`` along the unit ``points[k, 2]`` (planar: the circle about ``points[k, 1]``,
+  the axis zero): ``g = r_j - r_i - |e|`` with ``e`` the pin centre's offset from the axis,
+  square to it; the normal ``e / |e|`` pushes the hole outwards and the pin back (none while
+  the pin is centred, where ``g`` is the clearance).
 
 Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
 closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
@@ -22,8 +28,9 @@ nearest face).
 
 With ``n`` the unit normal from ``i`` to ``j`` (``-m`` against a plane, ``(c_j - c_i) / |c_j -
 c_i|`` between cores, the face's normal inside a box), both bodies are pushed apart at the
-point ``x = c_i + (r_i + g / 2) n`` midway between the two surfaces, each at its own material
-point there, so that the pair exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
+point ``x = c_i + (r_i + g / 2) n`` midway between the two surfaces (in a hole, midway between
+the pin's surface and the hole's wall), each at its own material point there, so that the pair
+exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
 normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip)``::
 
@@ -66,7 +73,8 @@ from mbd3d.numerics.compiled.shapes import (box_to_point, closest_between_segmen
 
 #: the kinds of shape pairs, then of joint stops (from ``HINGE_STOP`` on)
 SPHERE_PLANE, SPHERE_SPHERE, SEGMENT_SPHERE, SEGMENT_SEGMENT, BOX_SPHERE = 0, 1, 2, 3, 4
-HINGE_STOP, SLIDE_STOP, CONE_STOP = 5, 6, 7
+PIN_IN_HOLE = 5
+HINGE_STOP, SLIDE_STOP, CONE_STOP = 6, 7, 8
 #: body points per contact (``points[k]``)
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
@@ -94,10 +102,11 @@ def _velocity(Qd, omega, dim, b, s, out):
 
 
 @jit
-def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n, work) -> float:
-    """The unit normal ``n`` from body ``i`` to body ``j``, the points ``c_i``, ``c_j`` of the
-    shapes' cores it joins and the gap of contact ``k`` (NaN where two cores meet: the normal
-    is undefined). ``work`` (4, 3) is scratch."""
+def _normal_and_gap(A, Q, k, kind, i, j, points, values, x_k, n, work) -> float:
+    """The unit normal ``n`` from body ``i`` to body ``j``, the contact point ``x_k`` midway
+    between the two surfaces and the gap of contact ``k`` (NaN where two cores meet: the
+    normal is undefined). ``work`` (6, 3) is scratch."""
+    c_i, c_j = work[4], work[5]
     if kind == SPHERE_PLANE:
         _point(A, Q, i, points[k, 0], c_i)
         _point(A, Q, j, points[k, 1], c_j)
@@ -106,12 +115,14 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n, work) -> f
         for x in range(3):
             gap += n[x] * (c_i[x] - c_j[x])
             n[x] = -n[x]
-        return gap - values[k, 1]
+        return _midway(c_i, n, values[k, 1], gap - values[k, 1], x_k)
+    if kind == PIN_IN_HOLE:
+        return _pin_in_hole(A, Q, k, i, j, points, values, x_k, n, work)
     if kind == BOX_SPHERE:
         _point(A, Q, i, points[k, 0], work[0])
         _point(A, Q, j, points[k, 2], c_j)
-        return (box_to_point(A, i, work[0], points[k, 1], c_j, c_i, n)
-                - values[k, 1] - values[k, 2])
+        gap = box_to_point(A, i, work[0], points[k, 1], c_j, c_i, n)
+        return _midway(c_i, n, values[k, 1], gap - values[k, 1] - values[k, 2], x_k)
     if kind == SPHERE_SPHERE:
         _point(A, Q, i, points[k, 0], c_i)
         _point(A, Q, j, points[k, 1], c_j)
@@ -133,23 +144,52 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, c_i, c_j, n, work) -> f
         return math.nan
     for x in range(3):
         n[x] /= distance
-    return distance - values[k, 1] - values[k, 2]
+    return _midway(c_i, n, values[k, 1], distance - values[k, 1] - values[k, 2], x_k)
 
 
 @jit
-def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n, s_i, s_j, v_i,
+def _midway(c_i, n, r_i: float, gap: float, x_k) -> float:
+    """``x_k = c_i + (r_i + gap / 2) n``, the point midway between the surfaces; returns
+    ``gap``."""
+    for x in range(3):
+        x_k[x] = c_i[x] + (r_i + 0.5 * gap) * n[x]
+    return gap
+
+
+@jit
+def _pin_in_hole(A, Q, k, i, j, points, values, x_k, n, work) -> float:
+    """The gap of pin ``i`` in hole ``j`` (see the module doc), its normal ``n`` and the
+    point ``x_k`` midway between the pin's surface and the hole's wall."""
+    pin, centre, axis = work[0], work[1], work[2]
+    _point(A, Q, i, points[k, 0], pin)
+    _point(A, Q, j, points[k, 1], centre)
+    _turn(A, j, points[k, 2], axis)
+    along, offset = 0.0, 0.0
+    for x in range(3):
+        along += axis[x] * (pin[x] - centre[x])
+    for x in range(3):
+        centre[x] += along * axis[x]  # the axis' point level with the pin
+        n[x] = pin[x] - centre[x]
+        offset += n[x] * n[x]
+    offset = math.sqrt(offset)
+    for x in range(3):
+        n[x] = n[x] / offset if offset > 0.0 else 0.0
+        x_k[x] = centre[x] + 0.5 * (values[k, 1] + values[k, 2] + offset) * n[x]
+    return values[k, 2] - values[k, 1] - offset
+
+
+@jit
+def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point, n, s_i, s_j, v_i,
                         v_j, work) -> tuple:
     """``(gap, gap rate)`` of contact ``k`` (a NaN gap: its normal is undefined), with the
-    normal ``n``, the offsets ``s_i``, ``s_j`` of the contact point midway between the
-    surfaces from the bodies' reference points, and ``v_j`` the velocity of body j's
-    material point there relative to body i's. ``work`` (4, 3) is scratch."""
+    normal ``n``, the ``point`` midway between the surfaces and its offsets ``s_i``, ``s_j``
+    from the bodies' reference points, and ``v_j`` the velocity of body j's material point
+    there relative to body i's. ``work`` (6, 3) is scratch."""
     dim = points.shape[2]
-    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, c_i, c_j, n, work)
-    reach = values[k, 1] + 0.5 * gap
+    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, point, n, work)
     for x in range(3):
-        point = c_i[x] + reach * n[x]
-        s_i[x] = point - (Q[i, x] if x < dim else 0.0)
-        s_j[x] = point - (Q[j, x] if x < dim else 0.0)
+        s_i[x] = point[x] - (Q[i, x] if x < dim else 0.0)
+        s_j[x] = point[x] - (Q[j, x] if x < dim else 0.0)
     _velocity(Qd, omega, dim, i, s_i, v_i)
     _velocity(Qd, omega, dim, j, s_j, v_j)
     rate = 0.0
@@ -198,16 +238,16 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
     """Add the generalized forces of the contacts into ``out`` (bodies + ground, n_coords),
     and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``). Returns -1,
     or the first contact whose normal is undefined."""
-    c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
+    point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    work = np.zeros((POINTS, 3))
+    work = np.zeros((6, 3))
     dim = points.shape[2]
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
             _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report)
             continue
-        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j, n,
+        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point, n,
                                         s_i, s_j, v_i, v_j, work)
         if gap != gap:
             return k
@@ -344,16 +384,16 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
     (or stop) ``k``'s law pushes, ``min(delta, F_n / K)`` with the unclipped force, else
     ``delta`` (<= 0): the integrators end a step where it changes sign, so that no step
     straddles the kink of a touch or a release."""
-    c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
+    point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    work = np.zeros((POINTS, 3))
+    work = np.zeros((6, 3))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
         else:
-            gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, c_i, c_j,
+            gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point,
                                             n, s_i, s_j, v_i, v_j, work)
         delta, delta_rate = -gap, -rate
         if not delta > 0.0:
