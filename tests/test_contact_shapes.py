@@ -158,6 +158,8 @@ R_I, R_J = 0.15, 0.1
 ENDS_I = np.array([[-0.4, 0.1, 0.0], [0.5, -0.1, 0.2]])
 ENDS_J = np.array([[0.1, -0.3, 0.1], [-0.2, 0.4, -0.1]])
 HALF = np.array([0.3, 0.2, 0.25])
+#: the box's rounding: its corners and edges are spheres and cylinders of this radius
+R_BOX = 0.03
 CENTRE_I, CENTRE_J = np.array([0.05, -0.1, 0.02]), np.array([0.1, 0.05, -0.03])
 NORMAL = np.array([0.2, -0.3, -1.0]) / np.linalg.norm([0.2, -0.3, -1.0])
 
@@ -169,7 +171,8 @@ def _pair(kind: str, law):
     first, second = kind.split("-")
     shapes = {"capsule": lambda body, ends, r: mb.Capsule(body, r, ends=ends),
               "sphere": lambda body, ends, r: mb.Sphere(body, r, point=ends[0]),
-              "box": lambda body, ends, r: mb.Box(body, 2 * HALF, point=CENTRE_I),
+              "box": lambda body, ends, r: mb.Box(body, 2 * HALF, point=CENTRE_I,
+                                                  radius=R_BOX),
               "plane": lambda body, ends, r: mb.Plane(body, normal=NORMAL, point=CENTRE_J),
               "hole": lambda body, ends, r: mb.Hole(body, R_HOLE, point=CENTRE_J, axis=AXIS)}
     b.add(mb.Contact("touch", shapes[first](one, ENDS_I, R_I),
@@ -189,9 +192,9 @@ def _gap(kind, q, charts) -> float:
         return _segment_segment(on1(ENDS_I[0]), on1(ENDS_I[1]), on2(ENDS_J[0]),
                                 on2(ENDS_J[1])) - R_I - R_J
     if kind == "box-sphere":
-        return _box_point(on1(CENTRE_I), A1, HALF, on2(ENDS_J[0])) - R_J
+        return _box_point(on1(CENTRE_I), A1, HALF, on2(ENDS_J[0])) - R_BOX - R_J
     if kind == "sphere-box":  # the box is body two's, centred at CENTRE_I of it
-        return _box_point(on2(CENTRE_I), A2, HALF, on1(ENDS_I[0])) - R_I
+        return _box_point(on2(CENTRE_I), A2, HALF, on1(ENDS_I[0])) - R_BOX - R_I
     if second == "hole":  # the pin's centre off the axis, square to it
         h, P = A2 @ AXIS, on2(CENTRE_J)
         centres = [on1(e) for e in ENDS_I[:2 if first == "capsule" else 1]]
@@ -202,18 +205,18 @@ def _gap(kind, q, charts) -> float:
         points, radius = [on1(e) for e in ENDS_I], R_I
     else:
         points = [on1(CENTRE_I + (2 * np.array(s) - 1) * HALF) for s in np.ndindex(2, 2, 2)]
-        radius = 0.0
+        radius = R_BOX
     return np.array([m @ (c - P) - radius for c in points])
 
 
 def _overlapping(kind, rng, deep=False):
     """Random charts and rotations, body two moved until the pair overlaps by 1 to 3 mm (the
-    deepest row, for a plane), or ``deep`` by 17 to 19 cm (a sphere's centre inside a box)."""
+    deepest row, for a plane), or ``deep`` by 20 to 22 cm (a sphere's centre inside a box)."""
     charts = np.tile(np.eye(3), (3, 1, 1))
     charts[:2] = Rotation.random(2, random_state=rng.integers(1000)).as_matrix()
     q = np.zeros(12)
     q[3:6], q[9:12] = rng.normal(size=3) * 0.6, rng.normal(size=3) * 0.6
-    depth = rng.uniform(0.17, 0.19) if deep else rng.uniform(1e-3, 3e-3)
+    depth = rng.uniform(0.20, 0.22) if deep else rng.uniform(1e-3, 3e-3)
     if kind.endswith("hole"):  # the hole's axis put R_HOLE - R_I + depth from the pin's centre
         A2 = _rotation(charts[1], q[9:12])
         h = A2 @ AXIS
@@ -258,7 +261,7 @@ def test_gap_and_force_follow_the_shapes_distance_and_the_hertz_potential(kind, 
     q, charts = _overlapping(kind, np.random.default_rng(seed), deep)
     states = mb.contact_states(model, q, charts=charts)
     expected_gap = np.atleast_1d(_gap(kind, q, charts))
-    assert not deep or expected_gap[0] < -max(R_I, R_J)  # the centre is in the box
+    assert not deep or expected_gap[0] < -R_BOX - max(R_I, R_J)  # the centre is in the box
     np.testing.assert_allclose(states.gap, expected_gap, rtol=0, atol=1e-9)
 
     def V(x):

@@ -132,7 +132,10 @@ class JointLimit(ForceElement):
     ``.displacement``):
 
     - ``"angle"`` of a revolute or a cylindrical joint [rad]: body j about the hinge (planar
-      ``theta_j - theta_i``; spatial, from body i's reference direction, in (-pi, pi]);
+      ``theta_j - theta_i``; spatial, in (-pi, pi], from body i's reference direction to body
+      j's, each the body's x axis projected on the plane square to the hinge, or its y axis
+      where x lies along the hinge: not zero in the drawing unless those coincide there, as
+      ``results.joint(name).angle`` at the start shows);
     - ``"displacement"`` of a prismatic or a cylindrical joint [m]: body j's point along the
       axis;
     - ``"cone"`` of a spherical joint [rad]: the angle between ``axis`` as carried by body i
