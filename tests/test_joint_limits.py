@@ -178,3 +178,54 @@ def test_cone_and_cylindrical_limits_round_trip_through_a_model_file(tmp_path):
         t = np.linspace(0.0, 0.5, 6)
         first, second = (mb.forward_dynamics(m, t, method="DOP853") for m in (model, again))
         np.testing.assert_array_equal(second.q, first.q)
+
+
+@pytest.mark.filterwarnings("ignore::mbd3d.ContactWarning")  # past the stop in the drawing
+@pytest.mark.parametrize("stop", ["slide", "hinge", "cone"])
+def test_a_stops_rate_is_the_rate_of_its_coordinate_with_both_bodies_moving(stop):
+    """The rate a stop damps with, against central differences of its own coordinate along
+    the velocities, with both bodies moving and turning in random charts: the slide's
+    ``h . (P_j - P_i)`` turns with body i, the cone's angle with both (any state), the hinge's
+    angle about an axis both bodies share."""
+    rng = np.random.default_rng({"slide": 1, "hinge": 2, "cone": 3}[stop])
+    b = mb.ModelBuilder(dim=3)
+    one = b.add_body("one", mass=2.0, inertia=np.diag([0.1, 0.2, 0.3]), position=(0, 0, 0))
+    two = b.add_body("two", mass=3.0, inertia=np.diag([0.3, 0.2, 0.4]), position=(0.2, 0, 0.5))
+    law = mb.LinearContact(stiffness=1e4, damping=50.0)
+    if stop == "slide":
+        joint = b.add(Prismatic("joint", one, two, at=(0.1, 0.0, 0.4), axis=(0.3, 0.4, 1.0)))
+        b.add(mb.JointLimit("stop", joint, upper=-0.1, law=law))
+    elif stop == "hinge":
+        joint = b.add(Revolute("joint", one, two, at=(0.1, 0.0, 0.4), axis=(0.3, 0.4, 1.0)))
+        b.add(mb.JointLimit("stop", joint, upper=-0.1, law=law))
+    else:
+        joint = b.add(Spherical("joint", one, two, at=(0.1, 0.0, 0.4)))
+        b.add(mb.JointLimit("stop", joint, upper=0.1, axis=(0.3, 0.4, 1.0), law=law))
+    model = b.build()
+    charts = np.tile(np.eye(3), (3, 1, 1))
+    charts[:2] = Rotation.random(2, random_state=int(rng.integers(100))).as_matrix()
+    q = np.zeros(12)
+    q[0:3], q[6:9] = rng.normal(size=3) * 0.1, rng.normal(size=3) * 0.1 + (0.2, 0, 0.5)
+    q[3:6], q[9:12] = rng.normal(size=3) * 0.3, rng.normal(size=3) * 0.3
+    qd = rng.normal(size=12)
+    if stop == "hinge":  # body two turned from body one's attitude about the shared axis only
+        axis = np.array([0.3, 0.4, 1.0]) / np.linalg.norm([0.3, 0.4, 1.0])
+        A2 = _rotation(charts[0], q[3:6]) @ Rotation.from_rotvec(0.7 * axis).as_matrix()
+        rotvec = Rotation.from_matrix(charts[1].T @ A2).as_rotvec()
+        q[9:12] = math.tan(np.linalg.norm(rotvec) / 2) * rotvec / np.linalg.norm(rotvec)
+        # and turning relative to it about that axis (body one's rates, plus a spin about it)
+        omega = rng.normal(size=3)
+        frames = constraints.frames(model, q, np.zeros(12), charts)
+        G = [np.linalg.lstsq(frames.axes[k], np.eye(3), rcond=None)[0] for k in (0, 1)]
+        h = _rotation(charts[0], q[3:6]) @ axis
+        qd[3:6] = G[0] @ omega
+        qd[9:12] = G[1] @ (omega + 1.3 * h)
+
+    def coordinate(x):
+        return mb.contact_states(model, x, charts=charts).gap[0]
+
+    step = 1e-6
+    expected = (coordinate(q + step * qd) - coordinate(q - step * qd)) / (2 * step)
+    states = mb.contact_states(model, q, qd, charts)
+    assert states.gap_rate[0] == pytest.approx(expected, rel=1e-7, abs=1e-9)
+    assert abs(expected) > 0.1
