@@ -346,6 +346,13 @@ def test_the_box_and_capsule_rows_are_named_by_corner_and_end():
     assert len(names) == 8
     model = _pair("capsule-plane", mb.LinearContact(stiffness=1e5, damping=0.0))
     assert mb.contact_states(model, model.q0).names == ["touch[end a]", "touch[end b]"]
+    b = mb.ModelBuilder(dim=2)
+    box = b.add_body("box", mass=1.0, inertia=0.01, position=(0.0, 0.099))
+    b.add(mb.Contact("floor", mb.Box(box, (0.4, 0.2)), mb.Plane(b.ground, normal=(0.0, 1.0)),
+                     law=mb.LinearContact(stiffness=1e5, damping=0.0)))
+    with pytest.warns(mb.ContactWarning, match=r"contact 'floor\[corner \+-\]': the shapes "
+                                               r"overlap by 0\.001 m"):
+        b.build()
 
 
 def test_a_sphere_given_first_against_a_box_reports_in_the_order_given():

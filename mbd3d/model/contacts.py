@@ -326,8 +326,8 @@ class _Contacts(_CompiledForces):
             depth, force = -report[k, kernel.GAP], report[k, kernel.NORMAL_FORCE]
             where = ("the shapes overlap by" if isinstance(e, Contact)
                      else "the joint is past its limit by")
-            name = self.names[k][len(e.name):]
-            warnings.warn(f"{e.what}{name}: {where} {depth:.6g} {e.units[0]} in the drawing, "
+            what = e.what.replace(f"'{e.name}'", f"'{self.names[k]}'")  # with the corner
+            warnings.warn(f"{what}: {where} {depth:.6g} {e.units[0]} in the drawing, "
                           f"with a force of {force:.6g} {e.units[1]}; place the bodies apart (or "
                           "at the limit) unless that is their static penetration",
                           ContactWarning, stacklevel=user_stacklevel())
