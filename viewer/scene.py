@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+import trimesh
 
 from mbd3d.joints import (CamFollower, CoordinateDriver, FlatFaceFollower, GearPair, Prismatic,
                           RackPinion, RollingDisc, RollingDiscOnPlane, RotationDriver,
@@ -18,9 +19,10 @@ from mbd3d.joints import (CamFollower, CoordinateDriver, FlatFaceFollower, GearP
 from mbd3d.errors import ModelError
 from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
+from mbd3d.model.contacts import Contact, contact_group
 from mbd3d.model.mass_properties import load_mesh
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
-                                 cam_outlines, curve_polyline, pitch_curves,
+                                 cam_outlines, contact_parts, curve_polyline, pitch_curves,
                                  initial_points, model_size)
 
 __all__ = ["Scene", "SIM_TIME", "STEP"]
@@ -136,6 +138,10 @@ class Scene:
         self.reactions = list(reactions) if self.dynamic else []
         self.drivers = [e for e in model.joints if e.is_driver] if self.dynamic else []
         self.springs = [f for f in model.forces if isinstance(f, SpringDamper)]
+        group = contact_group(model, required=False)
+        #: contacts and stops (their forces plotted), whether a contact's (drawn as an arrow)
+        self.contacts = [] if group is None or not self.dynamic else [
+            (name, isinstance(owner, Contact)) for name, owner in zip(group.names, group.owners)]
         self.shapes = {b.name: given[b.name] if b.name in given
                        else body_shape(model, b, self.joined[b.name], self.size)
                        for b in model.bodies}
@@ -180,6 +186,9 @@ class Scene:
             if self._meshes_plotted():
                 forces.append(rrb.TimeSeriesView(name="Gear mesh forces [N]",
                                                  origin="/plots/meshes"))
+            if self.contacts:
+                forces.append(rrb.TimeSeriesView(name="Contact forces [N, N m]",
+                                                 origin="/plots/contacts"))
             if forces:
                 panels.append(rrb.Tabs(*forces, name="Force analysis"))
         if self.analysis == "vibration modes":
@@ -238,6 +247,12 @@ class Scene:
                 stream.log(f"{path}/joints", rr.Points3D(
                     [u for _, u in joined], radii=radius, colors=JOINT_COLOR,
                     labels=[name for name, _ in joined], show_labels=False), static=True)
+        ground_shapes = contact_parts(self.model, self.model.ground, self.size)
+        if ground_shapes:
+            mesh = trimesh.util.concatenate(ground_shapes)
+            stream.log("world/ground/contacts", rr.Mesh3D(
+                vertex_positions=mesh.vertices, triangle_indices=mesh.faces,
+                vertex_normals=mesh.vertex_normals, albedo_factor=GROUND_COLOR), static=True)
         ground = self.joined["ground"]
         if ground:
             stream.log("world/ground/joints", rr.Points3D(
@@ -455,6 +470,22 @@ class Scene:
             return lifted
         return np.einsum("kab,b->ka", rotation, vector)
 
+    def _contact_forces(self, stream, block: Results, times: list) -> list:
+        """Plot every contact's and stop's normal force; the arrows of the contacts' forces
+        on their second shapes, at the contact points (none where they are apart)."""
+        if not self.contacts:
+            return []
+        rr, states, arrows = _rerun(), block.contacts(), []
+        for r, (name, is_contact) in enumerate(self.contacts):
+            part = _part(name)
+            stream.send_columns(f"plots/contacts/{part}", indexes=times,
+                                columns=rr.Scalars.columns(scalars=states.normal_force[:, r]))
+            if is_contact:
+                force = (states.normal_force[:, r, None] * states.normal[:, r]
+                         + states.friction_force[:, r])
+                arrows.append((f"world/contacts/{part}", states.point[:, r], force, "force"))
+        return arrows
+
     def _log_forces(self, stream, view: _Block, times: list) -> None:
         rr = _rerun()
         block = view.results
@@ -507,6 +538,7 @@ class Scene:
                 continue
             arrows.append((f"world/reactions/{part}", view.point_position(body, u), force,
                            "force"))
+        arrows += self._contact_forces(stream, block, times)
         for driver in self.drivers:
             effort = block.driver(driver.name).effort
             send(f"plots/efforts/{_part(driver.name)}", indexes=times,

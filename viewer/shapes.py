@@ -6,8 +6,9 @@ between its joint points, a ternary link the outline through its points, a slide
 its sliding axis, and a body joined at one point or none (a top, a free body) the box with the
 same mass and principal inertia. Gears add their pitch circle (a thin ring with a spoke, so
 that the turning shows), racks their pitch line, cams their surface (a plate) and rollers
-their circle. All shapes are trimesh meshes in the body
-frame [m].
+their circle. The shapes of contacts (spheres, capsules, boxes, planes, holes) are drawn as
+they are, in place of the inertia box of a body that has no joints. All shapes are trimesh
+meshes in the body frame [m].
 """
 
 from __future__ import annotations
@@ -22,8 +23,10 @@ from mbd3d.joints.base import triad
 from mbd3d.model.body import Body
 from mbd3d.model.forces import SpringDamper
 from mbd3d.model.builder import Model
+from mbd3d.model.contacts import contact_group
+from mbd3d.model.shapes import Outline
 
-__all__ = ["attachment_points", "body_shape", "model_size", "initial_frames", "initial_points",
+__all__ = ["attachment_points", "body_shape", "contact_parts", "model_size", "initial_frames", "initial_points",
            "pitch_curves", "cam_outlines", "color_of", "GROUND_COLOR"]
 
 #: body colours, cycled (RGBA, 0-255): distinguishable and readable on the dark background
@@ -304,9 +307,51 @@ def body_shape(model: Model, body: Body, joined: list[tuple[str, np.ndarray]],
         parts += [_capsule(a, b, radius) for a, b in zip(ring, ring[1:] + ring[:1])]
     elif len(points) >= 3:
         parts += [_capsule(np.zeros(3), p, radius) for p in points]
-    elif parts:
-        parts += [_capsule(np.zeros(3), p, radius) for p in points]
-    else:
+    contacts = contact_parts(model, body, size)
+    if not parts and not contacts:
         parts.append(_inertia_box(body, model.dim, size))
+    if len(points) < 2 and axis is None:
         parts += [_capsule(np.zeros(3), p, radius) for p in points]
-    return trimesh.util.concatenate(parts)
+    return trimesh.util.concatenate(parts + contacts)
+
+
+def contact_parts(model: Model, body: Body, size: float) -> list[trimesh.Trimesh]:
+    """The shapes of the contacts fixed to ``body`` (or the ground), body frame [m]: planes
+    as squares (planar: strips) ``2 size`` wide, holes as rings, planar shapes as plates."""
+    group = contact_group(model, required=False)
+    if group is None:
+        return []
+    return [_contact_part(o, size) for o in group.outlines if o.body.name == body.name]
+
+
+def _contact_part(shape: Outline, size: float) -> trimesh.Trimesh:
+    """One contact shape as a mesh in its body's frame."""
+    planar = len(shape.points[0]) == 2
+    p, r = [_lift(x) for x in shape.points], shape.radius
+    thin = 0.01 * size
+    if shape.kind == "Sphere":
+        return trimesh.creation.icosphere(subdivisions=2, radius=r).apply_translation(p[0])
+    if shape.kind == "Capsule":
+        return _capsule(p[0], p[1], r)
+    if shape.kind == "Box":
+        extents = 2.0 * (p[1] + r)
+        if planar:
+            extents[2] = 2.0 * thin
+        return trimesh.creation.box(extents=extents).apply_translation(p[0])
+    frame = np.eye(4)
+    if shape.kind == "Plane":
+        normal = p[1]
+        if planar:  # a strip along the line, its face in the drawing's plane
+            frame[:3, :3] = np.column_stack([np.cross(normal, [0.0, 0.0, 1.0]), normal,
+                                             [0.0, 0.0, 1.0]])
+            extents = [4.0 * size, thin, 2.0 * thin]
+        else:
+            frame[:3, :3] = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], normal)[:3, :3]
+            extents = [4.0 * size, 4.0 * size, thin]
+        frame[:3, 3] = p[0] - 0.5 * thin * normal  # its top face on the plane
+        return trimesh.creation.box(extents=extents, transform=frame)
+    axis = np.array([0.0, 0.0, 1.0]) if planar else p[1]  # a hole
+    frame[:3, :3] = trimesh.geometry.align_vectors([0.0, 0.0, 1.0], axis)[:3, :3]
+    frame[:3, 3] = p[0]
+    return trimesh.creation.annulus(r_min=r, r_max=r + 2.0 * thin, height=0.2 * size,
+                                    transform=frame)

@@ -43,6 +43,7 @@ def export_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
                     for k, c in enumerate(axes)]
             out += [(f"{b.name}.alpha_{c}", "rad/s^2", h.angular_acceleration[:, k])
                     for k, c in enumerate(axes)]
+    out += _contact_columns(results)
     if results.lam is None:
         return out
     for element in results.model.joints:
@@ -59,6 +60,24 @@ def export_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
         else:
             out += [(f"{element.name}.M{c} on {on.name}", "N m", r.moment[:, k])
                     for k, c in enumerate(axes)]
+    return out
+
+
+def _contact_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
+    """Each contact row's gap and normal force, and a contact's friction force's size."""
+    from mbd3d.model.contacts import Contact, contact_group  # noqa: PLC0415
+
+    group = contact_group(results.model, required=False)
+    if group is None:
+        return []
+    states = results.contacts()
+    out = []
+    for r, (name, owner) in enumerate(zip(states.names, group.owners)):
+        length, force = owner.units
+        out += [(f"{name}.gap", length, states.gap[:, r]),
+                (f"{name}.Fn", force, states.normal_force[:, r])]
+        if isinstance(owner, Contact):
+            out.append((f"{name}.Ft", "N", np.linalg.norm(states.friction_force[:, r], axis=1)))
     return out
 
 

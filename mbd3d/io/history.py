@@ -13,8 +13,9 @@ import numpy as np
 from mbd3d.model.body import Frames
 from mbd3d.model.constraints import driver_values, motion_phases
 from mbd3d.model.primitives import evaluate_rows
+from mbd3d.numerics.compiled.contacts import REPORT_COLUMNS
 
-__all__ = ["residuals", "energies"]
+__all__ = ["residuals", "energies", "contact_history"]
 
 #: body rows evaluated per chunk: bounds the memory of a 1000-body model over a long run
 CHUNK_ROWS = 20_000
@@ -121,3 +122,20 @@ def energies(model, q: np.ndarray, qd: np.ndarray, charts: np.ndarray | None = N
         R = q.reshape(k, nb, nc)[:, :, :model.dim]
         potential = -np.einsum("b,kbd,d->k", model.mass, R, model.gravity)
     return kinetic, potential
+
+
+def contact_history(model, q: np.ndarray, qd: np.ndarray, charts: np.ndarray | None = None):
+    """:class:`~mbd3d.model.contacts.ContactStates` of every contact and joint stop at each
+    of ``k`` states ``(q, qd)`` (k, n), each array with a leading axis ``k``; one compiled
+    call per chunk of states."""
+    from mbd3d.model.contacts import contact_group, states_of
+
+    group = contact_group(model)
+    k = len(q)
+    r = len(group.names)
+    report = np.empty((k * r, REPORT_COLUMNS))
+    for part in _chunks(model, k):
+        cp = None if charts is None else charts[part]
+        fr = _stacked_frames(model, q[part], qd[part], cp, ground=True)
+        report[part.start * r:part.stop * r] = group.states(model, fr, part.stop - part.start)
+    return states_of(group, report, k)

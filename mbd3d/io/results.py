@@ -25,6 +25,7 @@ from mbd3d.io.exports import format_table
 from mbd3d.io.joint_views import JointHistory, MeshForce, Reaction
 from mbd3d.model import constraints
 from mbd3d.model.body import Body
+from mbd3d.model.contacts import ContactStates
 from mbd3d.model.primitives import evaluate_rows
 from mbd3d.errors import MBDError, ModelError
 from mbd3d.numerics.rotations import to_quaternion
@@ -236,6 +237,13 @@ class Results:
             fr = constraints.frames(self.model, q, self.qd[k], chart)
             out[k] = group.apply(self.model, fr, lam[k], Q)[index]
         return out
+
+    def contacts(self) -> ContactStates:
+        """Every contact and joint stop at every time point: gap, gap rate, normal and
+        friction force, point and normal, one column per contact row (a capsule's end, a
+        box's corner), each array with a leading time axis (k, r, ...); see
+        :class:`mbd3d.ContactStates`. A model without contacts is refused."""
+        return history.contact_history(self.model, self.q, self.qd, self.charts)
 
     def _reaction(self, name: str, on: Any, frame: str) -> Reaction:
         model = self.model

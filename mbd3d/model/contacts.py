@@ -22,7 +22,8 @@ from mbd3d.errors import ContactWarning, ModelError, user_stacklevel
 from mbd3d.model.body import Body
 from mbd3d.model.contact_laws import ContactLaw
 from mbd3d.model.forces import ForceElement, _CompiledForces
-from mbd3d.model.shapes import Box, Capsule, Hole, Plane, Sphere, pair_order, pair_rows
+from mbd3d.model.shapes import (Box, Capsule, Hole, Plane, Sphere, outline, pair_order,
+                                pair_rows)
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import contacts as kernel
 
@@ -307,6 +308,9 @@ class _Contacts(_CompiledForces):
         self.names = [f"{e.name}[{label}]" if label else e.name
                       for e, a in zip(elements, arrays) for label in a[2]]
         self._swapped = np.array([a[3] for a in arrays for _ in a[2]], dtype=bool)
+        #: the contacts' shapes in their bodies' frames, for drawing
+        self.outlines = [outline(ctx, shape, e.what) for e in elements if isinstance(e, Contact)
+                         for shape in (e.first, e.second)]
         self._rows = None
         self._check_apart(ctx)
 
@@ -332,20 +336,25 @@ class _Contacts(_CompiledForces):
                           "at the limit) unless that is their static penetration",
                           ContactWarning, stacklevel=user_stacklevel())
 
-    def _report(self, fr, bodies: np.ndarray) -> np.ndarray:
+    def _report(self, fr, bodies: np.ndarray, k: int = 1) -> np.ndarray:
         """A row of the core's report per contact row, normals and friction turned back to
-        the element's order of shapes."""
+        the element's order of shapes; of ``k`` states stacked time-major in ``fr`` (rows ``t *
+        (n_bodies + 1) + b``), the rows of state ``t`` at ``t * r ... (t + 1) * r``."""
+        r, rows = len(self.owners), len(fr.Q) // k
+        if k > 1:
+            bodies = (bodies[None] + rows * np.arange(k)[:, None, None]).reshape(k * r, 2)
         out = np.zeros_like(fr.Q)
-        report = np.zeros((len(self.owners), kernel.REPORT_COLUMNS))
+        report = np.zeros((k * r, kernel.REPORT_COLUMNS))
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
-                                            self._points, self._values, out, report)
+                                            np.tile(self._points, (k, 1, 1)),
+                                            np.tile(self._values, (k, 1)), out, report)
         if failed >= 0:
-            raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet; the contact "
-                             "normal is undefined")
-        turned = slice(kernel.FRICTION, kernel.FRICTION + 3), slice(kernel.NORMAL,
-                                                                     kernel.NORMAL + 3)
-        for columns in turned:
-            report[self._swapped, columns] *= -1.0
+            raise ModelError(f"{self.owners[failed % r].what}: the shapes' cores meet; the "
+                             "contact normal is undefined")
+        swapped = np.tile(self._swapped, k)
+        for columns in (slice(kernel.FRICTION, kernel.FRICTION + 3),
+                        slice(kernel.NORMAL, kernel.NORMAL + 3)):
+            report[swapped, columns] *= -1.0
         return report
 
     def _bodies(self, model) -> np.ndarray:
@@ -368,31 +377,36 @@ class _Contacts(_CompiledForces):
     def potential(self, model, fr) -> float:
         return float(np.sum(self._report(fr, self._bodies(model))[:, kernel.POTENTIAL]))
 
-    def states(self, model, fr) -> np.ndarray:
-        return self._report(fr, self._bodies(model))
+    def states(self, model, fr, k: int = 1) -> np.ndarray:
+        """The report of ``k`` states stacked in ``fr`` (see :meth:`_report`), (k * r, c)."""
+        return self._report(fr, self._bodies(model), k)
 
 
 @dataclass(frozen=True)
 class ContactStates:
-    """The contacts of a model at one state, one row per contact, in the order they were
-    added (a capsule or a box against a plane a row per end or corner).
+    """The contacts and joint stops of a model at one state, one row per contact in the
+    order they were added (a capsule or a box against a plane a row per end or corner, a
+    stop's row after the contacts added before it); over a run
+    (:meth:`mbd3d.Results.contacts`) every array has a leading time axis ``k``.
 
     Attributes
     ----------
     names : list of str
         The contacts' names, an end's or a corner's label in brackets.
     gap : ndarray (k,)
-        Distance between the surfaces [m]; negative: the penetration.
+        Distance between the surfaces [m]; negative: the penetration. A stop's: how far its
+        joint coordinate is inside its limits [rad or m], negative past one.
     gap_rate : ndarray (k,)
-        [m/s], positive while they separate.
+        [m/s or rad/s], positive while they separate.
     normal_force : ndarray (k,)
-        [N], >= 0.
+        [N], >= 0; a hinge's or a cone's stop: a torque [N m].
     friction_force : ndarray (k, 3)
         On the second shape [N], global axes (the opposite acts on the first).
     point : ndarray (k, 3)
-        Midway between the surfaces [m], global.
+        Midway between the surfaces [m], global; a stop's: its joint's point on body j.
     normal : ndarray (k, 3)
-        Unit normal from the first shape to the second, global.
+        Unit normal from the first shape to the second, global; a stop's: the direction of
+        its force or torque on body j.
     potential_energy : ndarray (k,)
         Of the law's spring part [J].
     """
@@ -407,22 +421,36 @@ class ContactStates:
     potential_energy: np.ndarray
 
 
+def contact_group(model: "Model", required: bool = True) -> _Contacts | None:
+    """The compiled contacts and joint stops of ``model``; a model without any is refused
+    (``required``) or gives None."""
+    groups = [g for g in model.force_groups if isinstance(g, _Contacts)]
+    if not groups and required:
+        raise ModelError(f"model '{model.name}' has no contacts or joint limits")
+    return groups[0] if groups else None
+
+
+def states_of(group: _Contacts, report: np.ndarray, k: int | None = None) -> ContactStates:
+    """The core's ``report`` as :class:`ContactStates`: of one state (``k`` None), or of
+    ``k`` states (every array with a leading axis ``k``)."""
+    r = report if k is None else report.reshape(k, len(group.names), -1)
+    c = kernel
+    return ContactStates(names=list(group.names), gap=r[..., c.GAP].copy(),
+                         gap_rate=r[..., c.GAP_RATE].copy(),
+                         normal_force=r[..., c.NORMAL_FORCE].copy(),
+                         friction_force=r[..., c.FRICTION:c.FRICTION + 3].copy(),
+                         point=r[..., c.POINT:c.POINT + 3].copy(),
+                         normal=r[..., c.NORMAL:c.NORMAL + 3].copy(),
+                         potential_energy=r[..., c.POTENTIAL].copy())
+
+
 def contact_states(model: "Model", q: np.ndarray, qd: np.ndarray | None = None,
                    charts: np.ndarray | None = None) -> ContactStates:
-    """The state of every contact of ``model`` at ``(q, qd)`` (``qd`` default zero)."""
+    """The state of every contact of ``model`` at ``(q, qd)`` (``qd`` default zero); over a
+    run, :meth:`mbd3d.Results.contacts`."""
     from mbd3d.model.constraints import frames  # noqa: PLC0415
 
     q = np.asarray(q, dtype=float)
     fr = frames(model, q, np.zeros_like(q) if qd is None else np.asarray(qd, dtype=float), charts)
-    groups = [g for g in model.force_groups if isinstance(g, _Contacts)]
-    if not groups:
-        raise ModelError(f"model '{model.name}' has no contacts")
-    group = groups[0]
-    r = group.states(model, fr)
-    k = kernel
-    return ContactStates(names=list(group.names), gap=r[:, k.GAP].copy(),
-                         gap_rate=r[:, k.GAP_RATE].copy(), normal_force=r[:, k.NORMAL_FORCE].copy(),
-                         friction_force=r[:, k.FRICTION:k.FRICTION + 3].copy(),
-                         point=r[:, k.POINT:k.POINT + 3].copy(),
-                         normal=r[:, k.NORMAL:k.NORMAL + 3].copy(),
-                         potential_energy=r[:, k.POTENTIAL].copy())
+    group = contact_group(model)
+    return states_of(group, group.states(model, fr))

@@ -26,8 +26,8 @@ from mbd3d.numerics.compiled import contacts as kernel
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext
 
-__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "PairRows", "pair_order",
-           "pair_rows"]
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "PairRows", "Outline", "pair_order",
+           "pair_rows", "outline"]
 
 
 @dataclass(frozen=True)
@@ -174,6 +174,45 @@ def _in_hole(ctx, pin, hole: Hole, r_i: float, core_i: np.ndarray, what: str,
     if not r_i < r_j:
         raise ModelError(f"{what}: the pin must be narrower than the hole, got a radius of "
                          f"{r_i:g} m in a hole of {r_j:g} m")
+    centre, axis = _hole_axis(ctx, hole, what)
+    rows = np.stack([np.stack([c, centre, axis, np.zeros(ctx.dim)]) for c in core_i])
+    labels = [""] if len(core_i) == 1 else _labels(pin, ctx.dim)
+    # Hertz's radius of a convex pin in a concave hole
+    return PairRows(rows, [(kernel.PIN_IN_HOLE, r_i, r_j)] * len(rows), r_i * r_j / (r_j - r_i),
+                    labels, swapped)
+
+
+@dataclass(frozen=True)
+class Outline:
+    """A shape resolved in its body's frame, for drawing: ``kind`` its class name; ``radius``
+    [m] (a sphere's, capsule's, hole's or a box's rounding; 0 for a plane); ``points`` (p,
+    dim) [m]: a sphere's centre, a capsule's two ends, a box's centre and half sizes, a
+    plane's point and unit normal, a hole's centre and unit axis (planar: zero)."""
+
+    body: Body
+    kind: str
+    radius: float
+    points: np.ndarray
+
+
+def outline(ctx: "BuildContext", shape: Any, what: str) -> Outline:
+    """``shape`` in its body's frame (see :class:`Outline`), checked as its contact was."""
+    kind = type(shape).__name__
+    if isinstance(shape, Plane):
+        point = resolve_point(ctx, shape.body, shape.point, shape.at, f"{what}: plane point")
+        return Outline(shape.body, kind, 0.0, np.stack([point, _plane_normal(ctx, shape, what)]))
+    if isinstance(shape, Hole):
+        radius = finite_scalar(shape.radius, f"{what}: radius of the hole", positive=True)
+        return Outline(shape.body, kind, radius, np.stack(_hole_axis(ctx, shape, what)))
+    if isinstance(shape, Box):
+        radius, centre, half = _box(ctx, shape, what)
+        return Outline(shape.body, kind, radius, np.stack([centre, half]))
+    radius, core = _core(ctx, shape, what)
+    return Outline(shape.body, kind, radius, core)
+
+
+def _hole_axis(ctx, hole: Hole, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """A hole's centre and unit axis in its body frame (planar: the axis is zero)."""
     centre = resolve_point(ctx, hole.body, hole.point, hole.at, f"{what}: hole centre")
     if ctx.dim == 2:
         if hole.axis is not None or hole.axis_at is not None:
@@ -188,11 +227,7 @@ def _in_hole(ctx, pin, hole: Hole, r_i: float, core_i: np.ndarray, what: str,
     else:
         axis = ctx.to_local_vector(hole.body, ctx.direction(hole.axis_at,
                                                             f"{what}: the hole's axis"))
-    rows = np.stack([np.stack([c, centre, axis, np.zeros(ctx.dim)]) for c in core_i])
-    labels = [""] if len(core_i) == 1 else _labels(pin, ctx.dim)
-    # Hertz's radius of a convex pin in a concave hole
-    return PairRows(rows, [(kernel.PIN_IN_HOLE, r_i, r_j)] * len(rows), r_i * r_j / (r_j - r_i),
-                    labels, swapped)
+    return centre, axis
 
 
 def _core(ctx, shape, what) -> tuple[float, np.ndarray]:
