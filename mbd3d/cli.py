@@ -27,7 +27,7 @@ import numpy as np
 
 __all__ = ["main"]
 
-_KINDS = ("kinematic", "inverse", "forward", "equilibrium")
+_KINDS = ("kinematic", "inverse", "forward", "equilibrium", "modes")
 #: what --help says of the exit status (the module doc says the same)
 EXIT_STATUS = ("exit status: 0 done, 1 the analysis failed or the model has a problem, 2 a bad "
                "command line or model file, 130 interrupted (a sweep keeps the runs done: run "
@@ -225,6 +225,9 @@ def _run(args) -> int:
     # existing file is replaced only with --overwrite; both are written as the time points
     # are computed, so that a run stopped by any means (even killed) leaves what it did
     rrd, csv_path = _destinations(args, loaded, spec)
+    model = loaded.model
+    if spec.kind == "modes":
+        return _run_modes(args, model, spec, rrd, csv_path)
     observers = []
     if rrd is not None:
         from mbd3d.viewer import Recorder, check_destination  # noqa: PLC0415
@@ -233,7 +236,6 @@ def _run(args) -> int:
     if csv_path is not None:
         from mbd3d.io.exports import CsvWriter  # noqa: PLC0415
         observers.append(CsvWriter(csv_path, overwrite=args.overwrite))
-    model = loaded.model
     failure = None
     try:
         res = spec.run(model, observers=observers)
@@ -246,13 +248,9 @@ def _run(args) -> int:
                       if isinstance(value, (int, float)) and not isinstance(value, bool))
     print(f"{model.name}: {res.analysis}, {len(res)} time points, {res.status}"
           f"{' (' + res.message + ')' if res.message else ''}\n{stats}\n")
-    columns = {"t [s]": res.t}
-    for body in model.bodies[:4]:
-        history = res.body(body.name)
-        for axis, label in enumerate("xyz"[:model.dim]):
-            columns[f"{body.name}.{label} [m]"] = history.position[:, axis]
     if len(res):
-        print(format_table(columns, rows=args.rows))
+        for title, columns in _tables(res):
+            print(f"{title}:\n{format_table(columns, rows=args.rows)}\n")
     if csv_path is not None:
         print(f"\nCSV written to {os.path.abspath(csv_path)}")
     if rrd is not None and args.show and failure is None:
@@ -261,6 +259,71 @@ def _run(args) -> int:
     if failure is not None:
         print(f"mbd3d run: error: {failure}", file=sys.stderr)
     return 0 if res.status == "complete" else 1
+
+
+#: most bodies and joints the summary tables of mbd3d run show (the CSV has them all)
+_SHOWN = 4
+
+
+def _tables(res) -> list[tuple[str, dict]]:
+    """The summary tables of a run: the first bodies' centres of mass; the first joints'
+    coordinates and the drivers' efforts (where the analysis has multipliers)."""
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+
+    model = res.model
+    bodies = {"t [s]": res.t}
+    for body in model.bodies[:_SHOWN]:
+        history = res.body(body.name)
+        for axis, label in enumerate("xyz"[:model.dim]):
+            bodies[f"{body.name}.{label} [m]"] = history.position[:, axis]
+    joints = {"t [s]": res.t}
+    for element in [e for e in model.joints if not e.is_driver]:
+        if len(joints) > _SHOWN:
+            break
+        for quantity, unit in (("angle", "rad"), ("displacement", "m")):
+            try:
+                joints[f"{element.name}.{quantity} [{unit}]"] = getattr(
+                    res.joint(element.name), quantity)
+            except ModelError:  # a joint without this coordinate
+                pass
+    if res.lam is not None:
+        for element in [e for e in model.joints if e.is_driver][:_SHOWN]:
+            joints[f"{element.name}.effort [{element.effort_unit}]"] = res.driver(
+                element.name).effort
+    tables = [(f"centres of mass{_more(len(model.bodies))}", bodies)]
+    if len(joints) > 1:
+        tables.append(("joint coordinates" + (" and driver efforts" if res.lam is not None
+                                              else ""), joints))
+    return tables
+
+
+def _more(count: int) -> str:
+    return f" (the first {_SHOWN} of {count}; the CSV has all)" if count > _SHOWN else ""
+
+
+def _run_modes(args, model, spec, rrd: str | None, csv_path: str | None) -> int:
+    """``mbd3d run`` of a ``modes`` analysis: the frequencies and damping ratios at each
+    time's equilibrium, as a table, a CSV and a recording (written when all are computed)."""
+    from mbd3d.io.files import check_output_path  # noqa: PLC0415
+    from mbd3d.io.results import format_table  # noqa: PLC0415
+    import mbd3d as mb  # noqa: PLC0415
+
+    # the destinations checked before the computing, as for the other analyses
+    if rrd is not None:
+        from mbd3d.viewer import check_destination  # noqa: PLC0415
+        check_destination(rrd, overwrite=args.overwrite, show=args.show)
+    if csv_path is not None:
+        check_output_path(csv_path, overwrite=args.overwrite)
+    modes = mb.vibration_modes_along(model, spec.t, **spec.options)
+    print(f"{model.name}: vibration modes at {len(modes.t)} positions, complete\n")
+    print(format_table(modes.columns(), rows=args.rows))
+    if csv_path is not None:
+        modes.to_csv(csv_path, overwrite=args.overwrite)
+        print(f"\nCSV written to {os.path.abspath(csv_path)}")
+    if rrd is not None:
+        from mbd3d.viewer import record_modes  # noqa: PLC0415
+        record_modes(modes, rrd, overwrite=args.overwrite, show=args.show)
+    return 0
 
 
 def _view(args) -> int:
@@ -298,7 +361,7 @@ def _sweep(args) -> int:
     for key, values in axes.items():
         read(path, {key: values[0]})
     spec = _chosen_analysis(args, loaded)
-    if spec.kind == "equilibrium":
+    if spec.kind in ("equilibrium", "modes"):
         raise ModelError("sweep runs kinematic, inverse or forward analyses")
     kind = {"kinematic": "kinematic", "inverse": "inverse dynamics",
             "forward": "forward dynamics"}[spec.kind]

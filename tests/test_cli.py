@@ -81,6 +81,55 @@ def test_run_with_a_changed_value_and_another_analysis(tmp_path):
     assert "forward dynamics, 3 time points, complete" in done.stdout
 
 
+def _printed_table(stdout: str, title: str) -> dict[str, np.ndarray]:
+    """The columns of a table ``mbd3d run`` printed under ``title:`` (names with units)."""
+    lines = stdout.split(f"{title}:\n", 1)[1].split("\n\n", 1)[0].splitlines()
+    names = [n + "]" for n in lines[0].strip().split("]") if n.strip()]
+    rows = np.array([[float(x) for x in line.split()] for line in lines[1:]])
+    return {name.strip(): rows[:, k] for k, name in enumerate(names)}
+
+
+def test_run_tables_show_joint_coordinates_and_driver_efforts():
+    done = mbd3d("run", MODELS / "slider_crank.yaml", "--t", "0:0.5:0.05", "--rows", "6")
+    assert done.returncode == 0, done.stderr
+    res = mb.inverse_dynamics(mb.load(MODELS / "slider_crank.yaml"), np.linspace(0.0, 0.5, 11))
+    shown = _printed_table(done.stdout, "joint coordinates and driver efforts")
+    k = np.searchsorted(res.t, shown["t [s]"])
+    assert len(k) == 6 and np.all(np.isclose(res.t[k], shown["t [s]"], rtol=0, atol=1e-12))
+    # printed to 5 significant digits
+    for name, expected in (("O.angle [rad]", res.joint("O").angle),
+                           ("rail.displacement [m]", res.joint("rail").displacement),
+                           ("motor.effort [N m]", res.driver("motor").effort)):
+        np.testing.assert_allclose(shown[name], expected[k], rtol=5e-5, atol=1e-12)
+    bodies = _printed_table(done.stdout, "centres of mass")
+    np.testing.assert_allclose(bodies["slider.x [m]"], res.body("slider").position[k, 0],
+                               rtol=5e-5)
+
+
+def test_a_model_file_can_ask_for_the_modes_along_a_motion(tmp_path):
+    """The four-bar driven through a spring: its one frequency at each crank position, in the
+    table, the CSV and a recording, as vibration_modes_along gives them."""
+    text = (MODELS / "four_bar_modes.yaml").read_text().replace("kind: equilibrium",
+                                                                "kind: modes")
+    assert "kind: modes" in text
+    (tmp_path / "fbm.yaml").write_text(text)
+    done = mbd3d("run", tmp_path / "fbm.yaml", "--csv", tmp_path, "--rrd", tmp_path / "m.rrd")
+    assert done.returncode == 0, done.stderr
+    assert "vibration modes at 37 positions, complete" in done.stdout
+    model = mb.load(tmp_path / "fbm.yaml")
+    modes = mb.vibration_modes_along(model, np.linspace(0.0, 1.0, 37))
+    table = np.genfromtxt(tmp_path / "fbm_modes.csv", delimiter=",", names=True)
+    np.testing.assert_array_equal(table["mode_1_f_Hz"], modes.frequencies[:, 0])
+    assert np.all(modes.frequencies[:, 0] > 1.0)
+    _, plotted = read_component(tmp_path / "m.rrd", "/plots/modes/frequency", "Scalars:scalars",
+                                "sim_time")
+    np.testing.assert_allclose(plotted[:, 0], modes.frequencies[:, 0], rtol=0, atol=1e-12)
+    again = mbd3d("run", tmp_path / "fbm.yaml", "--csv", tmp_path)
+    assert again.returncode == 2 and "already exists" in again.stderr
+    refused = mbd3d("sweep", tmp_path / "fbm.yaml", "--grid", "bodies.crank.mass=0.2,0.3")
+    assert refused.returncode == 2 and "sweep runs kinematic, inverse or forward" in refused.stderr
+
+
 @pytest.mark.parametrize("args, message", [
     (("run", "{bad}"), r"bad.yaml:8: joints\[0\].body_j: no body or joint 'bra'"),
     (("run", "{good}", "--t", "0:1"), "give START:STOP:STEP"),

@@ -21,6 +21,7 @@ moving state use :func:`mbd3d.linearize`.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -30,6 +31,7 @@ import scipy.linalg as la
 from mbd3d.analyses.position import solve_position
 from mbd3d.analyses.statics import _active_rows, _stiffness, static_equilibrium
 from mbd3d.errors import ModelError
+from mbd3d.io.exports import write_columns
 from mbd3d.io.results import Results
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
@@ -132,6 +134,20 @@ class ModesAlong:
     damping_ratios: np.ndarray
     shapes: np.ndarray
     equilibrium: Results
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The frequencies and damping ratios as named columns, ``t [s]``, ``mode 1 f
+        [Hz]``, ``mode 1 zeta [-]``, ... (NaN where a position has fewer modes)."""
+        cols = {"t [s]": self.t}
+        for r in range(self.frequencies.shape[1]):
+            cols[f"mode {r + 1} f [Hz]"] = self.frequencies[:, r]
+            cols[f"mode {r + 1} zeta [-]"] = self.damping_ratios[:, r]
+        return cols
+
+    def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
+        """Write :meth:`columns` to a CSV file (atomically; an existing file is replaced only
+        with ``overwrite``); returns its path."""
+        return write_columns(self.columns(), path, overwrite)
 
     def at(self, index: int) -> Modes:
         """The modes at the ``index``-th position (to animate one)."""

@@ -18,7 +18,7 @@ from mbd3d.io.observers import Observer
 if TYPE_CHECKING:
     from mbd3d.io.results import Results
 
-__all__ = ["columns", "export_columns", "to_csv", "to_pandas", "to_npz", "import_pandas",
+__all__ = ["columns", "export_columns", "to_csv", "write_columns", "to_pandas", "to_npz", "import_pandas",
            "format_table", "CsvWriter"]
 
 
@@ -92,8 +92,15 @@ def columns(results: Results) -> dict[str, np.ndarray]:
 
 def to_csv(results: Results, path: str | os.PathLike, overwrite: bool = True) -> str:
     """Write :func:`columns` to a CSV file (see :meth:`mbd3d.io.results.Results.to_csv`)."""
-    cols = columns(results)
-    data = np.column_stack(list(cols.values())) if len(results.t) else np.zeros((0, len(cols)))
+    return write_columns(columns(results), path, overwrite)
+
+
+def write_columns(cols: dict[str, np.ndarray], path: str | os.PathLike,
+                  overwrite: bool = True) -> str:
+    """Write equally long named columns to a CSV file, atomically: a header of the names,
+    then one row per entry, every number as Python's shortest exact repr."""
+    length = len(next(iter(cols.values())))
+    data = np.column_stack(list(cols.values())) if length else np.zeros((0, len(cols)))
 
     def write(f):
         writer = csv.writer(f, lineterminator="\n")

@@ -39,7 +39,8 @@ HertzContact | HuntCrossley, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
 cam's profile is ``{type: CamProfile, angles: [...], radii: [...]}``.
-Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``), times
+Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``, and
+``modes``: the vibration modes about the equilibrium at each time with the drivers held), times
 ``t`` (a list, or ``{start, stop, step}`` or ``{start, stop, points}``), the keyword
 arguments of that analysis function, and optionally where ``mbd3d run`` writes the recording
 (``rrd``) and the CSV (``csv``, a folder). Paths are relative to the file. A body's shape is a
@@ -92,7 +93,7 @@ class ModelFileError(ModelError):
 @dataclass(frozen=True)
 class AnalysisSpec:
     """An analysis a model file asks for: ``kind`` (kinematic, inverse, forward,
-    equilibrium), output times ``t`` [s] and keyword arguments of the analysis function."""
+    equilibrium, modes), output times ``t`` [s] and keyword arguments of the analysis function."""
 
     kind: str
     t: np.ndarray
