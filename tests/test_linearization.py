@@ -174,6 +174,8 @@ def test_bad_linearisation_requests_are_named():
         mb.linearize(model, model.q0, coordinates=["cart.y", "pole.theta"])
     with pytest.raises(mb.ModelError, match="output 'pole.spin'"):
         mb.linearize(model, model.q0, outputs=["pole.spin"])
+    with pytest.raises(mb.ModelError, match="frame_rate is for spatial models"):
+        mb.linearize(model, model.q0, frame_rate=(0.0, 0.0, 1.0))
 
 
 def test_heavy_top_in_steady_precession_nutates_at_the_closed_form_frequency():
@@ -250,3 +252,56 @@ def test_a_singular_position_is_reported_as_the_linearisation_s():
     with pytest.raises(mb.SingularJacobianError,
                        match=r"^linearisation of 'four-bar': the constraint Jacobian is singular"):
         mb.linearize(flat, mb.solve_position(flat))
+
+
+@pytest.mark.parametrize("root", [-1.0, 1.0])
+def test_a_spinning_top_nutates_at_rouths_frequency_in_the_precessing_frame(root):
+    """A top spinning at w3 about its axis tilted theta0 precesses steadily at either root of
+    I1 cos(theta0) Omega^2 - I3 w3 Omega + m g l = 0 (slow and fast precession). In the bodies'
+    axes the motion is not steady (the spin turns them), but in a frame turning at Omega about
+    the vertical it is: there the small nutation has Routh's frequency, the second
+    derivative of the effective potential (p_phi - p_psi cos theta)^2 / (2 I1 sin^2 theta) +
+    m g l cos theta over I1, the same at any time of the motion."""
+    m, radius, l, theta0, w3 = 1.0, 0.1, 0.05, math.radians(40), 60.0
+    I3, transverse = m * radius ** 2 / 2, m * radius ** 2 / 4
+    I1 = transverse + m * l * l
+    c, s = math.cos(theta0), math.sin(theta0)
+    Omega = (I3 * w3 + root * math.sqrt((I3 * w3) ** 2 - 4 * I1 * m * G * l * c)) / (2 * I1 * c)
+    p_psi = I3 * w3
+    p_phi = I1 * Omega * s * s + p_psi * c
+
+    def effective(theta):
+        return ((p_phi - p_psi * np.cos(theta)) ** 2 / (2 * I1 * np.sin(theta) ** 2)
+                + m * G * l * np.cos(theta))
+
+    h = 1e-4
+    routh = math.sqrt((effective(theta0 + h) - 2 * effective(theta0) + effective(theta0 - h))
+                      / (h * h) / I1)
+    closed = math.sqrt(Omega ** 2 * s * s + (I3 * w3 - 2 * I1 * Omega * c) ** 2 / I1 ** 2)
+    assert routh == pytest.approx(closed, rel=1e-6)  # the differences' own accuracy
+
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    attitude = mb.rotations.axis_angle((1.0, 0.0, 0.0), theta0)
+    axis = attitude[:, 2]
+    omega = np.array([0.0, 0.0, Omega]) + (w3 - Omega * c) * axis
+    top = b.add_body("top", mass=m, inertia=(transverse, transverse, I3), position=l * axis,
+                     orientation=attitude, velocity=np.cross(omega, l * axis),
+                     angular_velocity=omega)
+    b.add(Spherical("tip", b.ground, top, at=(0.0, 0.0, 0.0)))
+    model = b.build()
+    period = 2 * math.pi / Omega
+    run = mb.forward_dynamics(model, np.linspace(0.0, period, 7), method="DOP853", rtol=1e-11,
+                              atol=1e-12)
+    np.testing.assert_allclose(np.arccos(run.body("top").rotation[:, 2, 2]), theta0, rtol=0,
+                               atol=1e-8)
+    for k in (0, 2, 5):  # anywhere along the steady motion
+        lin = mb.linearize(model, run.q[k], run.qd[k], run.t[k], charts=run.charts[k],
+                           frame_rate=(0.0, 0.0, Omega))
+        values = lin.eigenvalues
+        oscillating = values[np.argsort(-np.abs(values))[:2]]
+        np.testing.assert_allclose(np.sort(oscillating.imag), [-closed, closed], rtol=1e-7)
+        np.testing.assert_allclose(oscillating.real, 0.0, rtol=0, atol=1e-7 * closed)
+        # the precession and the spin are free
+        assert np.sort(np.abs(values))[3] < 1e-4 * Omega
+    with pytest.raises(mb.ModelError, match="frame_rate must be 3 finite numbers"):
+        mb.linearize(model, model.q0, model.qd0, frame_rate=(0.0, Omega))

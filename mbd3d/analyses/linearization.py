@@ -18,9 +18,14 @@ first order ``theta = 2 g`` in the reference's chart), with the body-axes angula
 steady in the bodies' own axes (constant body-axes angular velocities and forces: a body
 turning steadily about a fixed axis, a top precessing without spin relative to its precession)
 the matrices are constant and their eigenvalues are the frequencies of the small motions about
-it, as they are about an equilibrium. Along any other motion ``A(t)`` describes the
+it, as they are about an equilibrium. A motion steady only in a frame that turns at a
+constant rate (a symmetric top spinning about its axis while it precesses: its body axes
+turn with the spin, so its body-axes ``A(t)`` is periodic) has constant matrices when the
+disturbances are measured in that frame (``frame_rate``, :func:`.moving_frames.frame_turning`), and their
+eigenvalues are then its frequencies. Along any other motion ``A(t)`` describes the
 disturbances as a linear time-varying system: integrate ``dx' = A(t) dx`` along it (its
-eigenvalues at one instant are not frequencies of the motion).
+eigenvalues at one instant are not frequencies of the motion; those of a periodic one are
+the Floquet multipliers of ``dx' = A(t) dx`` over a period, not computed here).
 
 ``B`` is exact: an input is a force whose generalized force ``Q_u`` enters the augmented
 equations linearly, one solve per input. The rest of ``A`` and ``C`` comes from central
@@ -45,6 +50,7 @@ import numpy as np
 import scipy.linalg as la
 
 from mbd3d.analyses.dynamics import forward_accelerations
+from mbd3d.analyses.moving_frames import co_moving_turning, frame_turning
 from mbd3d.errors import AnalysisError, ModelError
 from mbd3d.io.results import Results
 from mbd3d.model import constraints
@@ -130,7 +136,8 @@ class LinearModel:
 def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: float = 0.0, *,
               inputs: Sequence[str] = (), outputs: Sequence[str] | Mapping[str, Output] | None
               = None, coordinates: Sequence[str] | None = None,
-              charts: np.ndarray | None = None, tol: float = 1e-8) -> LinearModel:
+              charts: np.ndarray | None = None, frame_rate: Sequence[float] | None = None,
+              tol: float = 1e-8) -> LinearModel:
     """Linear state-space equations of ``model`` about the state ``(q, qd)`` at time ``t``.
 
     Parameters
@@ -164,6 +171,13 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         freedom; default chosen from ``Cq``, the best-conditioned partition.
     charts : ndarray, optional
         Spatial models: the reference rotations ``q`` is relative to (default the model's).
+    frame_rate : array_like (3,), optional
+        Spatial models: the angular velocity [rad/s, global axes] of a frame the
+        disturbances are measured in (see :func:`.moving_frames.frame_turning`): for a motion that is steady
+        in a turning frame but not in the bodies' axes (a spinning top's steady precession:
+        the precession rate about the vertical), which then has constant matrices whose
+        eigenvalues are its frequencies. Default: each body's own axes (co-moving). It
+        changes ``A`` only; ``mass``, ``damping`` and ``stiffness`` stay co-moving.
     tol : float
         How far ``(q, qd)`` may violate the constraints: positions relative to the model's
         length, rates to their largest term.
@@ -234,12 +248,13 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         A[k:, column] = (plus.v_rate[independent] - minus.v_rate[independent]) / (2 * h)
         if output_specs is not None:
             C_out[:, column] = (plus.y - minus.y) / (2 * h)
-    if model.dim == 3:  # co-moving: theta' = d omega_bar - omega_bar_ref x theta
-        rotations = (N * unit[:, None]).reshape(model.n_bodies, 6, k)[:, 3:]  # d theta / d p
-        omega = sampler.v0.reshape(-1, 6)[:, 3:, None]
-        turning = np.zeros((model.n_bodies, 6, k))
-        turning[:, 3:] = np.cross(omega, rotations, axisa=1, axisb=1, axisc=1)
-        A[:k, :k] -= turning.reshape(n, k)[independent]
+    if model.dim == 3:
+        A[:k, :k] -= co_moving_turning(model, sampler.v0, N * unit[:, None], independent)
+    if frame_rate is not None:
+        turning = frame_turning(model, frame_rate, charts, sampler.v0, N * unit[:, None],
+                                independent, what)
+        A[:k, :k] += turning
+        A[k:, k:] += turning
 
     B, D_out = _input_matrices(system, sampler, q, qd, Cq, inputs, independent,
                                len(output_names), what)
