@@ -98,6 +98,14 @@ class Planar(_AxisJoint):
     """Body j slides on a plane of body i and turns about its normal ``axis``: normals aligned
     (``axis_f``, ``axis_g``) and the point of j in the plane (``plane``); 3 rows."""
 
+    #: the coordinates a :class:`~mbd3d.JointLimit` may stop: the turn about the normal and
+    #: the two components of ``results.joint(name).plane_position``
+    limit_coordinates = ("angle", "plane_position[0]", "plane_position[1]")
+
+    def hinge_directions(self, ctx: BuildContext, what: str
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return hinge_directions(ctx, self)
+
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         require_spatial(ctx, self.name)
         u_i, u_j = self.points(ctx)

@@ -421,7 +421,7 @@ def test_bad_joint_limits_are_named():
     hinge = Revolute("hinge", b.ground, body, at=(0, 0, 0), axis=(0, 0, 1))
     law = mb.LinearContact(stiffness=1e4, damping=1.0)
     with pytest.raises(mb.ModelError, match="joint limit 'stop': give a Revolute, Prismatic, "
-                       "Cylindrical or Spherical joint"):
+                       "Cylindrical, Planar or Spherical joint"):
         mb.JointLimit("stop", Universal("cross", b.ground, body, at=(0, 0, 0), axis_i=(1, 0, 0),
                                         axis_j=(0, 1, 0)), upper=1.0, law=law)
     for kwargs, words in [(dict(lower=1.0, upper=0.5), "lower must be below upper"),

@@ -229,3 +229,48 @@ def test_a_stops_rate_is_the_rate_of_its_coordinate_with_both_bodies_moving(stop
     states = mb.contact_states(model, q, qd, charts)
     assert states.gap_rate[0] == pytest.approx(expected, rel=1e-7, abs=1e-9)
     assert abs(expected) > 0.1
+
+
+def test_a_planar_joint_stops_each_coordinate_with_its_restitution():
+    """A puck sliding and turning on a tilted plane (no gravity) strikes a stop along the
+    plane's first axis and one on its turn: a slide stop pushes at the joint's point (the
+    centre) and a turn stop is a pure torque, so each rebounds its own coordinate with its
+    restitution (linear laws calibrated to the puck's mass and its moment about the normal)
+    and leaves the others' rates as they were."""
+    from mbd3d.joints import Planar
+
+    normal = np.array([0.3, -0.4, 0.85]) / np.linalg.norm([0.3, -0.4, 0.85])
+    first = np.eye(3)[0] - normal[0] * normal
+    first /= np.linalg.norm(first)
+    attitude = np.column_stack([first, np.cross(normal, first), normal])  # body z the normal
+    m, inertia = 1.5, np.diag([0.01, 0.012, 0.02])
+    speed, across, spin = 0.8, 0.3, 2.0
+
+    def build(velocity):
+        b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+        puck = b.add_body("puck", mass=m, inertia=inertia, position=(0.1, 0.2, 0.3),
+                          orientation=attitude, velocity=velocity,
+                          angular_velocity=spin * normal)
+        plane = b.add(Planar("plane", b.ground, puck, axis=normal, at=(0.1, 0.2, 0.3)))
+        b.add(mb.JointLimit("edge", plane, coordinate="plane_position[0]", lower=-0.3,
+                            upper=0.1, law=mb.LinearContact(stiffness=1e5, restitution=0.6)))
+        b.add(mb.JointLimit("turn", plane, coordinate="angle", upper=0.5,
+                            law=mb.LinearContact(stiffness=1e3, restitution=0.4)))
+        return b.build()
+
+    axes = build(np.zeros(3)).reaction_frame("plane")[2]  # the normal, the plane's two axes
+    np.testing.assert_allclose(axes[:, 0], normal, rtol=0, atol=1e-15)
+    model = build(speed * axes[:, 1] + across * axes[:, 2])
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 101), method="DOP853",
+                              rtol=1e-11, atol=1e-12, strict=True)
+    joint = res.joint("plane")
+    np.testing.assert_allclose(joint.plane_velocity[0], [speed, across], rtol=1e-12)
+    assert joint.angle[0] == pytest.approx(0.0, abs=1e-14)
+    assert joint.angle_rate[0] == pytest.approx(spin, rel=1e-12)
+    # both struck (at 0.125 s and 0.25 s) and left
+    assert np.max(joint.plane_position[:, 0]) > 0.1 and np.max(joint.angle) > 0.5
+    np.testing.assert_allclose(joint.plane_velocity[-1], [-0.6 * speed, across], rtol=1e-7)
+    assert joint.angle_rate[-1] == pytest.approx(-0.4 * spin, rel=1e-7)
+    states = res.contacts()
+    assert states.names == ["edge", "turn"]
+    assert np.all(states.normal_force[-1] == 0.0)

@@ -139,6 +139,9 @@ class JointLimit(ForceElement):
       ``results.joint(name).angle`` at the start shows);
     - ``"displacement"`` of a prismatic or a cylindrical joint [m]: body j's point along the
       axis;
+    - ``"angle"``, ``"plane_position[0]"`` and ``"plane_position[1]"`` of a planar joint
+      (spatial): the turn about its normal as a hinge's, and body j's point along either of
+      the plane's two axes [m] (``results.joint(name).plane_position``);
     - ``"cone"`` of a spherical joint [rad]: the angle between ``axis`` as carried by body i
       and as carried by body j (0 in the drawing), kept below ``upper``, the cone's half
       angle: a ball joint's range of swing in every direction.
@@ -146,7 +149,7 @@ class JointLimit(ForceElement):
     Parameters
     ----------
     name : str
-    joint : Revolute, Prismatic, Cylindrical or Spherical
+    joint : Revolute, Prismatic, Cylindrical, Planar or Spherical
         A joint of the model.
     lower, upper : float, optional
         The ends [rad or m] (either may be left out: no stop there; a cone has ``upper``
@@ -157,8 +160,9 @@ class JointLimit(ForceElement):
         (about the axes square to a cone's) [kg m^2], ``m_i m_j / (m_i + m_j)``, of the free
         bodies.
     coordinate : str, optional
-        ``"angle"``, ``"displacement"`` or ``"cone"``; default the joint's only one (a
-        cylindrical joint has two: name it, and stop the other with a second limit).
+        ``"angle"``, ``"displacement"``, ``"plane_position[0]"``, ``"plane_position[1]"`` or
+        ``"cone"``; default the joint's only one (a cylindrical joint has two, a planar one
+        three: name it, and stop the others with limits of their own).
     axis : array_like, optional
         The cone's axis, a direction of the drawing (global axes); a cone only.
     effective_mass : float, optional
@@ -183,8 +187,8 @@ class JointLimit(ForceElement):
         what = f"joint limit '{name}'"
         choices = getattr(joint, "limit_coordinates", None)
         if not choices or not hasattr(joint, "reaction_frame"):
-            raise ModelError(f"{what}: give a Revolute, Prismatic, Cylindrical or Spherical "
-                             f"joint, got {joint!r}")
+            raise ModelError(f"{what}: give a Revolute, Prismatic, Cylindrical, Planar or "
+                             f"Spherical joint, got {joint!r}")
         if coordinate is None and len(choices) > 1:
             raise ModelError(f"{what}: a {type(joint).__name__} joint has {len(choices)} "
                              f"coordinates; name the one stopped: coordinate= "
@@ -206,7 +210,7 @@ class JointLimit(ForceElement):
         self.coordinate, self.axis = coordinate, axis
         self.body_i, self.body_j = joint.body_i, joint.body_j
         self.what = what
-        self.units = ("m", "N") if coordinate == "displacement" else ("rad", "N m")
+        self.units = ("rad", "N m") if coordinate in ("angle", "cone") else ("m", "N")
 
     def bodies(self) -> list[tuple[str, Body]]:
         return [("body_i", self.body_i), ("body_j", self.body_j)]
@@ -234,9 +238,10 @@ class JointLimit(ForceElement):
             if ctx.dim == 3:
                 points[:3] = self.joint.hinge_directions(ctx, what)
                 spin = [ctx.rotation(self.body_i) @ np.cross(points[0], points[1])]
-        else:
+        else:  # a slide: along the axis, or one of a planar joint's in-plane axes
             kind, spin = kernel.SLIDE_STOP, None
-            points[:3] = u_i, u_j, axes[:, 0]
+            column = {"plane_position[0]": 1, "plane_position[1]": 2}.get(self.coordinate, 0)
+            points[:3] = u_i, u_j, axes[:, column]
         mass = self._effective_mass(ctx, u_i, u_j, spin, what)
         K, n, D, p = self.law.constants(mass, math.inf, what)
         return points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False
