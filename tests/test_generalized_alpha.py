@@ -243,3 +243,32 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
         res = mb.forward_dynamics(model, [0.0, 1.0], method="generalized-alpha", step=0.02)
     exact = mb.forward_dynamics(model, [0.0, 1.0], method="DOP853", rtol=1e-10)
     assert abs(res.body("link1").angle[-1] - exact.body("link1").angle[-1]) < 1e-3
+
+
+@pytest.mark.parametrize("law", [mb.LinearContact(stiffness=1e8, restitution=0.8),
+                                 mb.LinearContact(stiffness=1e6, restitution=1.0),
+                                 mb.HertzContact(stiffness=1e8, restitution=0.5),
+                                 mb.HertzContact(stiffness=1e6, restitution=0.8)],
+                         ids=["linear 1e8", "linear 1e6 elastic", "hertz 1e8", "hertz 1e6"])
+def test_a_long_step_resolves_an_impact_on_a_stiff_floor(law):
+    """A ball dropped 0.4 m onto a floor whose contact lasts 0.3 to 5 ms, with a step of
+    10 ms: the step shortens into the impact (ending at the touch, a hundred steps per period
+    of the contact's oscillation while it lasts) and comes back in flight, so the energy after
+    the bounce matches DOP853's to 0.25 % of the drop's (the method's own error at that
+    resolution: 0.2 % at most over linear and Hertz laws of 1e5 to 1e8 and restitutions 0.5
+    to 1, falling as the square of the steps per period). A fixed step left this ball 2.8 m
+    high, moving up at 7 m/s."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.5))
+    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
+                     law=law))
+    model = b.build()
+    t = np.linspace(0.0, 0.6, 13)
+    reference = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12)
+    res = mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-2)
+    energy = [0.5 * r.qd[:, 1] ** 2 + G * r.q[:, 1] for r in (res, reference)]
+    flying = (t > 0.3) & (reference.q[:, 1] > 0.1) & (res.q[:, 1] > 0.1)
+    assert np.sum(flying) >= 3  # after the bounce, in flight
+    assert np.max(np.abs(energy[0] - energy[1])[flying]) < 2.5e-3 * G * 0.4
+    # in flight the nominal step: a few hundred steps for the impact, not 0.6 s of them
+    assert res.stats["steps"] < 400

@@ -89,7 +89,10 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         Largest step [s].
     step : float, optional
         "generalized-alpha" only, and required there: the fixed step [s] (shortened to land on
-        output times). Its error is second order: halving the step quarters it.
+        output times, and at contacts and stops to end at each touch and resolve each impact
+        with a hundred steps per period of the contact's oscillation while it lasts; see
+        :mod:`mbd3d.analyses.contact_steps`). Its error is second order: halving the step
+        quarters it.
     rho_inf : float
         "generalized-alpha" only: spectral radius at infinite frequency, in [0, 1]; 1 adds
         no numerical damping, lower values damp the highest frequencies (stiff springs).

@@ -49,6 +49,7 @@ from mbd3d.errors import AccuracyWarning, IntegrationError, ModelError, user_sta
 from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
+from mbd3d.analyses.contact_steps import ContactSteps
 from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.passages import PassageWatch
 
@@ -195,8 +196,10 @@ class GeneralizedAlphaIntegrator(Integrator):
     """Generalized-alpha with the fixed step ``request.step`` as the driver runs it (see
     :func:`mbd3d.forward_dynamics`, ``method="generalized-alpha"``).
 
-    The step is shortened only to land on output times, or for one step to a quarter when
-    Newton does not converge (near a singular configuration).
+    The step is shortened to land on output times, for one step to a quarter when Newton
+    does not converge (near a singular configuration), and at compliant contacts and stops:
+    to end just past each touch and release, and to resolve each impact while it lasts (see
+    :mod:`.contact_steps`).
     """
 
     #: Newton's tolerance on the residual, the penalty ratio and the iterations per step
@@ -228,6 +231,9 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.newton = _NewtonStep(model, self.coefficients, self.stats, self.newton_tol,
                                   self.relative_penalty, self.max_newton_iterations,
                                   request.projection_tol)
+        self.contacts = ContactSteps(model)
+        if self.contacts.group is not None:
+            self.stats["contact_retries"] = 0
 
     def chart(self) -> np.ndarray | None:
         return self.charts
@@ -258,11 +264,12 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.qdd, self.lam = self._accelerations(t0, q, qd, None)
         self.q, self.qd, self.a = q, qd, self.qdd.copy()
         self.tt, self.h = t0, min(self.step, self.request.max_step)
+        self.contacts.start(t0, q, qd, self.charts)
         return self.qdd, self.lam
 
     def _trial_step(self, target: float) -> float:
         """The next step towards ``target``: the nominal one, shortened to land on it."""
-        tt, h = self.tt, self.h
+        tt, h = self.tt, min(self.h, self.contacts.limit(self.tt))
         h_try = min(h, target - tt)
         if target - (tt + h_try) < 1e-9 * max(h, 1e-300):
             h_try = target - tt
@@ -312,7 +319,12 @@ class GeneralizedAlphaIntegrator(Integrator):
             result = self.newton(self.tt + h_try, h_try, self.q, self.qd, self.qdd, self.a,
                                  self.lam, self.charts)
             if result is not None:
-                break
+                shorter = self.contacts.retry(h_try, result[0][0], result[0][1], self.charts)
+                if shorter is None:
+                    break
+                self.stats["contact_retries"] += 1  # across a touch or a release: end there
+                self.h = shorter
+                continue
             self.stats["rejected_steps"] += 1
             self.h = 0.25 * h_try
             if self.h < 1e-14 * max(1.0, abs(self.tt)):
@@ -324,6 +336,12 @@ class GeneralizedAlphaIntegrator(Integrator):
         (q, qd, qdd, a, lam), S = result
         t_old, q_old, qd_old = self.tt, self.q, self.qd
         self.tt += h_try
+        if self.contacts.accept(self.tt, q, qd, self.charts):
+            # a touch or a release in the step: the recursion starts again (see contact_steps)
+            qdd, lam, _ = consistent_accelerations(self.model, self.tt, q, qd, self.charts,
+                                                   None if self.redundant else lam,
+                                                   self.redundant)
+            a = qdd.copy()
         self.stats["steps"] += 1
         self.q, self.qd, self.qdd, self.a, self.lam, self.S = q, qd, qdd, a, lam, S
         t_step = self.tt  # where passages are noted: the step's end before it is snapped
@@ -386,6 +404,7 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         self.tt, self.q, self.qd = t, q, qd
+        self.contacts.restart(t, q, qd, self.charts)
         self.qdd, self.lam, _ = consistent_accelerations(self.model, t, q, qd, self.charts,
                                                          self.lam, self.redundant)
         self.a = self.qdd.copy()

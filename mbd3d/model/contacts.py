@@ -104,20 +104,21 @@ class Contact(ForceElement):
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
         return _Contacts(elements, ctx)
 
-    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool]:
-        """``(points (r, 4, dim), values (r, 9), labels, swapped)``: the rows of the compiled
-        core (see :mod:`mbd3d.numerics.compiled.contacts` and :func:`shapes.pair_rows`),
-        checked."""
+    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool, float]:
+        """``(points (r, 4, dim), values (r, 9), labels, swapped, effective mass)``: the rows
+        of the compiled core (see :mod:`mbd3d.numerics.compiled.contacts` and
+        :func:`shapes.pair_rows`), checked, and the mass the law is calibrated with."""
         what = f"contact '{self.name}'"
         rows = pair_rows(ctx, self.first, self.second, what)
         mu = finite_scalar(self.friction, f"{what}: friction")
         slip = finite_scalar(self.slip_velocity, f"{what}: slip_velocity", positive=True)
         if mu < 0.0:
             raise ModelError(f"{what}: friction must be >= 0, got {self.friction!r}")
-        K, n, D, p = self.law.constants(self._effective_mass(what), rows.radius, what)
+        mass = self._effective_mass(what)
+        K, n, D, p = self.law.constants(mass, rows.radius, what)
         values = np.array([[kind, r_i, r_j, K, n, D, p, mu, slip]
                            for kind, r_i, r_j in rows.kinds], dtype=float)
-        return rows.points, values, rows.labels, rows.swapped
+        return rows.points, values, rows.labels, rows.swapped, mass
 
     def _effective_mass(self, what: str) -> float:
         if self.effective_mass is not None:
@@ -219,9 +220,9 @@ class JointLimit(ForceElement):
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
         return _Contacts(elements, ctx)
 
-    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool]:
-        """``(points (1, 4, dim), values (1, 9), labels, swapped)`` of the compiled core,
-        checked."""
+    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool, float]:
+        """``(points (1, 4, dim), values (1, 9), labels, swapped, effective mass)`` of the
+        compiled core, checked (see :meth:`Contact.arrays`)."""
         what = self.what
         lower, upper = self._ends(ctx)
         u_i, u_j, axes = self.joint.reaction_frame(ctx)
@@ -244,7 +245,8 @@ class JointLimit(ForceElement):
             points[:3] = u_i, u_j, axes[:, column]
         mass = self._effective_mass(ctx, u_i, u_j, spin, what)
         K, n, D, p = self.law.constants(mass, math.inf, what)
-        return points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False
+        return (points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False,
+                mass)
 
     def _ends(self, ctx) -> tuple[float, float]:
         what = self.what
@@ -313,6 +315,8 @@ class _Contacts(_CompiledForces):
         self.names = [f"{e.name}[{label}]" if label else e.name
                       for e, a in zip(elements, arrays) for label in a[2]]
         self._swapped = np.array([a[3] for a in arrays for _ in a[2]], dtype=bool)
+        #: per row, the mass (a stop: the moment of inertia) its law is calibrated with
+        self.masses = np.array([a[4] for a in arrays for _ in a[2]], dtype=float)
         #: the contacts' shapes in their bodies' frames, for drawing
         self.outlines = [outline(ctx, shape, e.what) for e in elements if isinstance(e, Contact)
                          for shape in (e.first, e.second)]
@@ -374,6 +378,25 @@ class _Contacts(_CompiledForces):
         if failed >= 0:
             raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet at t = {t:g} "
                              "s; the contact normal is undefined")
+
+    def switches(self, model, fr) -> np.ndarray:
+        """Each row's switching function at the state of ``fr``: positive exactly while its law
+        pushes (see :func:`~mbd3d.numerics.compiled.contacts.switches_into`)."""
+        out = np.empty(len(self.owners))
+        kernel.switches_into(fr.A, fr.omega3, fr.Q, fr.Qd, self._bodies(model), self._points,
+                             self._values, out)
+        return out
+
+    def impact_periods(self, gap: np.ndarray, gap_rate: np.ndarray) -> np.ndarray:
+        """Per row, the period [s] of the law's oscillation ``2 pi sqrt(m* / k)`` at its
+        stiffest in the impact at ``(gap, gap_rate)``: ``k = n K delta^(n - 1)`` at the
+        deeper of the penetration now and the one the closing speed reaches against the
+        law's spring, ``((n + 1) m* v^2 / (2 K))^(1 / (n + 1))`` (damping only shortens it)."""
+        K, n, m = self._values[:, 3], self._values[:, 4], self.masses
+        closing = np.maximum(-gap_rate, 0.0)
+        deepest = ((n + 1.0) * m * closing ** 2 / (2.0 * K)) ** (1.0 / (n + 1.0))
+        delta = np.maximum(np.maximum(-gap, deepest), 1e-300)
+        return 2.0 * math.pi * np.sqrt(m / (n * K * delta ** (n - 1.0)))
 
     def table(self, model):
         return {"contact_bodies": self._bodies(model), "contact_points": self._points,
