@@ -182,7 +182,8 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="mbd3d-mutate-") as scratch:
         copies = [scratch_copy(Path(scratch) / f"job{k}") for k in range(max(1, args.jobs))]
         for copy in copies:  # the unchanged tests must pass, or nothing can be judged
-            if run_tests(copy, args.tests, args.compiled, args.timeout) != "survived":
+            # (given longer: compiled, this first run fills the copy's kernel cache)
+            if run_tests(copy, args.tests, args.compiled, max(args.timeout, 1800.0)) != "survived":
                 print("the tests fail on the unchanged code: fix them first", file=sys.stderr)
                 return 2
         free = list(copies)
