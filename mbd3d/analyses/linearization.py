@@ -169,11 +169,12 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         Spatial models: the reference rotations ``q`` is relative to (default the model's).
     frame_rate : array_like (3,), optional
         Spatial models: the angular velocity [rad/s, global axes] of a frame the
-        disturbances are measured in (see :func:`.moving_frames.frame_turning`): for a motion that is steady
-        in a turning frame but not in the bodies' axes (a spinning top's steady precession:
-        the precession rate about the vertical), which then has constant matrices whose
-        eigenvalues are its frequencies. Default: each body's own axes (co-moving). It
-        changes ``A`` only; ``mass``, ``damping`` and ``stiffness`` stay co-moving.
+        disturbances are measured in (see :func:`.moving_frames.frame_turning`): for a
+        motion that is steady in a turning frame but not in the bodies' axes (a spinning
+        top's steady precession: the precession rate about the vertical), which then has
+        constant matrices whose eigenvalues are its frequencies. Default: each body's own
+        axes (co-moving). It changes ``A`` only; ``mass``, ``damping`` and ``stiffness``
+        stay co-moving.
     tol : float
         How far ``(q, qd)`` may violate the constraints: positions relative to the model's
         length, rates to their largest term.
