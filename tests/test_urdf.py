@@ -370,3 +370,107 @@ def test_a_urdf_limit_stops_the_joint_at_its_ends_in_urdf_terms(tmp_path):
     np.testing.assert_allclose(rate, [2.0, 2.0, -1.0, -1.0, 0.5], rtol=1e-7, atol=0)
     with pytest.raises(mb.ModelError, match="joint_limits must be 'stop', 'ignore' or a"):
         load_urdf(urdf, joint_limits="yes")
+
+
+WELDED = """<robot name="welded">
+  <link name="base"/>
+  <link name="arm"><inertial><origin xyz="0.2 0 0" rpy="0 0 0.3"/><mass value="2"/>
+    <inertia ixx="0.01" iyy="0.03" izz="0.035" ixy="0.002" ixz="0" iyz="0"/></inertial></link>
+  <link name="tool"><inertial><origin xyz="0 0.05 0.1"/><mass value="0.5"/>
+    <inertia ixx="0" iyy="0" izz="0" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="flange"/>
+  <link name="camera"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm"/>
+    <origin xyz="0 0 0.4"/><axis xyz="0 0 1"/><limit lower="0" upper="0"/></joint>
+  <joint name="tool" type="fixed"><parent link="arm"/><child link="tool"/>
+    <origin xyz="0.5 0 0" rpy="0 0.4 0"/><axis xyz="0 0 0"/></joint>
+  <joint name="mount" type="fixed"><parent link="tool"/><child link="flange"/></joint>
+  <joint name="pan" type="continuous"><parent link="flange"/><child link="camera"/>
+    <axis xyz="1 0 0"/></joint>
+</robot>
+"""
+
+
+def test_links_welded_by_fixed_joints_are_one_body_with_their_summed_inertia(tmp_path):
+    """An arm carrying a point-mass tool on a fixed joint (its axis left zero), a massless
+    flange and a massless camera on a hinge: one body named after the arm, whose mass, centre
+    and inertia are those of the two summed by the parallel-axis theorem, computed here from
+    the URDF's numbers; the camera's hinge moves no mass and is left out; the joint and link
+    both named 'tool' keep apart; limits with equal ends are no stop."""
+    path = tmp_path / "welded.urdf"
+    path.write_text(WELDED)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        model = load_urdf(path)
+    said = " ".join(str(w.message) for w in caught if issubclass(w.category, UrdfWarning))
+    assert "left out with their links: pan" in said
+    assert "joint limits are not enforced" in said and "shoulder [0.0, 0.0]" in said
+    assert [body.name for body in model.bodies] == ["arm"]
+    assert [e.name for e in model.joints] == ["shoulder"] and not model.forces
+    # by hand: both centres and inertias in the drawing (the arm's frame is at z = 0.4)
+    c, s = math.cos(0.3), math.sin(0.3)
+    R_arm = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    I_arm = R_arm @ np.array([[0.01, 0.002, 0], [0.002, 0.03, 0], [0, 0, 0.035]]) @ R_arm.T
+    c, s = math.cos(0.4), math.sin(0.4)
+    R_tool = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    centres = np.array([[0.2, 0.0, 0.4], np.array([0.5, 0.0, 0.4]) + R_tool @ [0, 0.05, 0.1]])
+    masses = np.array([2.0, 0.5])
+    centre = masses @ centres / 2.5
+    inertia = I_arm.copy()
+    for m, r in zip(masses, centres - centre):
+        inertia += m * ((r @ r) * np.eye(3) - np.outer(r, r))
+    arm = model.bodies[0]
+    assert arm.mass == pytest.approx(2.5, rel=1e-15)
+    np.testing.assert_allclose(model.q0[:3], centre, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(arm.inertia, inertia, rtol=0, atol=1e-15)  # arm axes = drawing
+
+
+def test_what_a_broken_robot_gets_is_said(tmp_path):
+    """Inertias off the triangle inequality by rounding are repaired, beyond it refused with
+    the link; a missing mesh is a warning (or refused, or not read); a driven joint that
+    moves no mass is refused; a joint named as a link is renamed; a link named as the
+    model's ground becomes '<name>_link'."""
+    rounding = ONE_JOINT.replace("MASS", "2").replace("AXIS", "0 0 1").replace(
+        'ixx="1" iyy="1" izz="1"', 'ixx="1" iyy="1" izz="2.005"')
+    path = tmp_path / "r.urdf"
+    path.write_text(rounding)
+    with pytest.warns(UrdfWarning, match=r"link 'arm': principal moments .* by 0\.25% .* J3 "
+                                          "lowered to J1 \\+ J2"):
+        arm = load_urdf(path).bodies[0]
+    np.testing.assert_allclose(np.linalg.eigvalsh(arm.inertia), [1, 1, 2], rtol=1e-15)
+    path.write_text(rounding.replace('izz="2.005"', 'izz="2.5"'))
+    with pytest.raises(mb.ModelError, match=r"r\.urdf': link 'arm' .* exceeds the sum of the "
+                                            r"others by 20\.0%; no real body has them"):
+        load_urdf(path)
+    mesh = rounding.replace('izz="2.005"', 'izz="2"').replace(
+        "</inertial></link>", "</inertial><visual><geometry><mesh filename=\"gone.stl\"/>"
+        "</geometry></visual></link>", 1)
+    path.write_text(mesh)
+    with pytest.warns(UrdfWarning, match=r"mesh 'gone\.stl' not found.*link 'arm' is drawn "
+                                          "without it"):
+        assert load_urdf(path).bodies[0].shape is None
+    with pytest.raises(mb.ModelError, match=r"mesh 'gone\.stl' not found"):
+        load_urdf(path, meshes="require")
+    read: list = []
+    load_urdf(path, meshes="skip", files_read=read)
+    assert read == [str(path.resolve())]
+    with pytest.raises(mb.ModelError, match=r"meshes must be 'load', 'require' or 'skip'"):
+        load_urdf(path, meshes="maybe")
+    welded = tmp_path / "welded.urdf"
+    welded.write_text(WELDED)
+    with pytest.raises(mb.ModelError, match=r"joint\(s\) pan move no mass .* cannot be driven"):
+        load_urdf(welded, drive={"pan": 0.1})
+    with pytest.raises(mb.ModelError, match=r"joint 'tool' is fixed; it cannot be driven"):
+        load_urdf(welded, drive={"tool": 0.1})
+    same = tmp_path / "same.urdf"
+    same.write_text(ONE_JOINT.replace("MASS", "2").replace("AXIS", "0 0 1").replace(
+        'joint name="j1"', 'joint name="arm"'))
+    with pytest.warns(UrdfWarning, match=r"joints named as links are renamed in the model: "
+                                          r"'arm' -> 'arm_joint'"):
+        model = load_urdf(same, drive={"arm": mb.Ramp(0.0, 1.0)})
+    assert [e.name for e in model.joints] == ["arm_joint", "arm_joint_drive"]
+    grounded = tmp_path / "g.urdf"
+    grounded.write_text(ONE_JOINT.replace("MASS", "2").replace("AXIS", "0 0 1").replace(
+        '"arm"', '"ground"'))
+    with pytest.warns(UrdfWarning, match=r"link 'ground' is the body 'ground_link'"):
+        assert load_urdf(grounded).bodies[0].name == "ground_link"

@@ -1,23 +1,33 @@
 """URDF import: robots described in URDF as spatial mechanisms.
 
-The file is parsed by yourdfpy (``pip install "mbd3d[urdf]"``). Each link with mass becomes a
-spatial body: its frame at the link's centre of mass with the link's axes (so a joint's angle is
-measured between link axes, as in the URDF), its inertia tensor turned from the inertial frame
-into the link's axes. Joints become constraints between those bodies, given in the drawing of
-the robot at ``joint_positions`` (default all zero):
+The file is parsed by yourdfpy (``pip install "mbd3d[urdf]"``). Each link that a moving joint
+carries, together with the links fixed joints weld to it (a tool flange, a sensor, a
+massless frame), becomes one spatial body named after that link: its mass the sum of theirs,
+its frame at their common centre of mass with the link's axes (so a joint's angle is
+measured between link axes, as in the URDF), its inertia theirs about that centre (each
+turned from its inertial frame, by the parallel-axis theorem), its shape theirs joined.
+Joints become constraints between those bodies, given in the drawing of the robot at
+``joint_positions`` (default all zero):
 
 - ``revolute`` and ``continuous``: :class:`~mbd3d.joints.Revolute` about the joint axis;
 - ``prismatic``: :class:`~mbd3d.joints.Prismatic` along it;
-- ``fixed``: :class:`~mbd3d.joints.Fixed`, or nothing when the child link has no mass (a tool
-  frame, a sensor mount: its children hang on the parent);
+- ``fixed``: nothing (its child is part of its parent's body; its axis is not read);
 - ``floating`` and ``planar``: refused, naming the joint.
+
+URDF keeps the names of links and of joints apart, a model does not: a joint named as a link
+is renamed ``"<name>_joint"`` (a :class:`UrdfWarning` lists them).
 
 The root link is welded to the ground (``fixed_base=True``, it becomes the ground) or left
 free. A revolute or prismatic joint's ``<limit>`` becomes a :class:`~mbd3d.JointLimit` at its
-lower and upper ends (``joint_limits``: the contact law, or ``"ignore"``); mimic joints are not
-coupled, which a :class:`UrdfWarning` reports. Visual geometry (collision geometry where a
-link has none) becomes the body's shape for the viewer: meshes (paths relative to the URDF,
-``package://`` resolved from the URDF's folder upwards), boxes, cylinders and spheres.
+lower and upper ends (``joint_limits``: the contact law, or ``"ignore"``; equal ends are no
+range); mimic joints are not coupled, which a :class:`UrdfWarning` reports. Joints that move
+no mass (no link below them has an ``<inertial>``: a camera frame on a hinge, fingers drawn
+without inertias) are left out with their links, and principal moments of inertia that break
+``J1 + J2 >= J3`` by rounding (:data:`INERTIA_ROUNDING`) are repaired, both said in a
+warning; beyond that the robot is refused, naming the link. Visual geometry (collision
+geometry where a link has none) becomes the body's shape for the viewer: meshes (paths
+relative to the URDF, ``package://`` resolved from the URDF's folder upwards; a missing one
+is a warning unless ``meshes="require"``), boxes, cylinders and spheres.
 
 ``drive={"joint": motion}`` adds a :class:`~mbd3d.joints.RotationDriver` (or
 :class:`~mbd3d.joints.TranslationDriver`) named ``"<joint>_drive"`` whose motion is the URDF
@@ -40,7 +50,9 @@ __all__ = ["urdf_builder", "load_urdf", "UrdfWarning"]
 
 
 class UrdfWarning(UserWarning):
-    """A URDF feature mbd3d reads but does not model (joint limits, mimic joints)."""
+    """A URDF feature mbd3d reads but does not model (joint limits, mimic joints), or what
+    loading the file mended (renamed joints, repaired inertias, missing meshes, joints that
+    move no mass)."""
 
 
 def load_urdf(path: str | os.PathLike, **options: Any):
@@ -117,7 +129,8 @@ def _drawing_frames(links: dict, joints: list, root: str, positions: Mapping[str
 def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float] | None = None,
                  fixed_base: bool = True, drive: Mapping[str, Motion | float] | None = None,
                  gravity=(0.0, 0.0, -9.81), name: str | None = None, builder=None,
-                 files_read: list[str] | None = None, joint_limits: Any = "stop"):
+                 files_read: list[str] | None = None, joint_limits: Any = "stop",
+                 meshes: str = "load"):
     """A :class:`ModelBuilder` holding the robot of a URDF file, to extend before building
     (drivers on its joints, loop-closing joints, forces).
 
@@ -146,6 +159,10 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         ``"<joint>_limit"`` with the given law, or by default (``"stop"``) a
         :class:`~mbd3d.LinearContact` of natural frequency 100 Hz with the link's inertia
         about the joint and restitution 0.5; ``"ignore"``: none (reported in a warning).
+    meshes : "load", "require" or "skip"
+        The visual meshes the bodies are drawn with: loaded, a missing one reported in a
+        :class:`UrdfWarning` (the robot still loads: meshes do not enter the dynamics);
+        loaded, a missing one refused; or not read at all (faster; primitives still drawn).
 
     Raises
     ------
@@ -157,7 +174,6 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         import yourdfpy  # noqa: PLC0415
     except ImportError:
         raise ModelError('URDF import needs yourdfpy: pip install "mbd3d[urdf]"') from None
-    from mbd3d.joints import Fixed, Prismatic, Revolute
     from mbd3d.model.builder import ModelBuilder  # noqa: PLC0415
 
     path = pathlib.Path(path)
@@ -177,61 +193,206 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     for key, motion in drive.items():
         positions.setdefault(key, motion.evaluate(0.0)[0])
 
+    if meshes not in ("load", "require", "skip"):
+        raise ModelError(f"{what}: meshes must be 'load', 'require' or 'skip', got {meshes!r}")
     frames, order = _drawing_frames(links, joints, roots[0], positions, what)
+    for joint in order:
+        if joint.type == "fixed" and joint.name in drive:
+            raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
+    order = _without_massless_branches(order, links, drive, what)
 
     b = builder if builder is not None else ModelBuilder(
         dim=3, gravity=gravity, name=name or robot.robot.name or path.stem)
     if b.dim != 3:
         raise ModelError(f"{what}: a URDF robot is spatial; the builder is planar")
-    bodies: dict[str, Any] = {}
-    root = links[roots[0]]
-    if fixed_base:
-        bodies[root.name] = b.ground
-    else:
-        bodies[root.name] = _add_link(b, root, frames[root.name], path, what, files_read)
+    owner = _welded_groups(order, roots[0])
+    bodies = _add_bodies(b, links, order, owner, frames, roots[0] if fixed_base else None,
+                         (path, what, files_read, meshes))
+    names = _joint_names(order, set(bodies) | {b.ground.name}, what)
     limit_law = _limit_law(joint_limits, what)
     limited, mimic = [], []
     for joint in order:
-        child = links[joint.child]
-        parent_body = bodies[joint.parent]
-        frame = frames[joint.child]
-        point = frame[:3, 3]
-        axis = frame[:3, :3] @ _axis(joint, what)
-        massive = _mass(child, what) > 0
-        if not massive:
-            if joint.type != "fixed":
-                raise ModelError(f"{what}: link '{child.name}' has no mass but moves on "
-                                 f"{joint.type} joint '{joint.name}'; give it an <inertial>")
-            bodies[child.name] = parent_body  # hangs on its parent
-            continue
-        body = _add_link(b, child, frame, path, what, files_read)
-        bodies[child.name] = body
-        if joint.type in ("revolute", "continuous"):
-            element = b.add(Revolute(joint.name, parent_body, body, at=point, axis=axis))
-        elif joint.type == "prismatic":
-            element = b.add(Prismatic(joint.name, parent_body, body, at=point, axis=axis))
-        else:
-            element = b.add(Fixed(joint.name, parent_body, body, at=point))
+        if joint.type == "fixed":
+            continue  # its child is part of its parent's body
+        element, axis = _add_joint(b, joint, names[joint.name], bodies[owner[joint.parent]],
+                                   bodies[joint.child], frames[joint.child], what)
         if joint.limit is not None and joint.type in ("revolute", "prismatic") and (
                 joint.limit.lower is not None or joint.limit.upper is not None):
             q0 = float(positions.get(joint.name, 0.0))
-            if not _add_limit(b, joint, element, axis, q0, limit_law):
+            if not _add_limit(b, joint, names[joint.name], element, axis, q0, limit_law):
                 limited.append(f"{joint.name} [{joint.limit.lower}, {joint.limit.upper}]")
         if joint.mimic is not None:
             mimic.append(f"{joint.name} = {joint.mimic.multiplier or 1.0} x "
                          f"{joint.mimic.joint} + {joint.mimic.offset or 0.0}")
         if joint.name in drive:
-            _add_driver(b, joint, element, axis, drive[joint.name],
+            _add_driver(b, joint, names[joint.name], element, axis, drive[joint.name],
                         float(positions.get(joint.name, 0.0)), what)
     if limited:
         why = ("joint_limits='ignore'" if limit_law is None
-               else "a spatial hinge's angle is measured within half a turn of the drawing")
+               else "a spatial hinge's angle is measured within half a turn of the drawing, "
+                    "and equal ends are no range")
         warnings.warn(f"{what}: joint limits are not enforced ({why}): {', '.join(limited)}",
                       UrdfWarning, stacklevel=user_stacklevel())
     if mimic:
         warnings.warn(f"{what}: mimic joints are not coupled (each moves freely): "
                       f"{', '.join(mimic)}", UrdfWarning, stacklevel=user_stacklevel())
     return b
+
+
+def _welded_groups(order: list, root: str) -> dict:
+    """Each link's body: the link itself when a moving joint (or nothing, the root) carries
+    it, else its parent's (a fixed joint welds a link to its parent's body)."""
+    owner = {root: root}
+    for joint in order:  # parents before children
+        owner[joint.child] = owner[joint.parent] if joint.type == "fixed" else joint.child
+    return owner
+
+
+def _add_bodies(b, links: dict, order: list, owner: dict, frames: dict, welded: str | None,
+                source: tuple) -> dict:
+    """A body per group of welded links, named after its first link: their masses, centres
+    and inertias summed (the parallel-axis theorem), their shapes joined; the group of the
+    link ``welded`` (the root, with a fixed base) is the ground. ``source``: the URDF's path,
+    its description, the files read and the ``meshes`` option. Returns the body of each
+    group's first link."""
+    what = source[1]
+    members: dict[str, list] = {}
+    for link, first in owner.items():
+        members.setdefault(first, []).append(links[link])
+    bodies = {}
+    for first, group in members.items():
+        if first == welded:
+            bodies[first] = b.ground
+            continue
+        mass, centre, inertia = _composite(group, frames, what)
+        if not mass > 0:  # the free base (a moving link's massless branch is dropped)
+            raise ModelError(f"{what}: the root link '{first}' (with the links welded to it: "
+                             f"{', '.join(link.name for link in group)}) has no mass but is "
+                             "the free base; give it an <inertial>, or weld it: "
+                             "fixed_base=True")
+        frame = frames[first][:3, :3]
+        inertia = _physical(frame.T @ inertia @ frame, first, group, what)
+        body_frame = np.eye(4)
+        body_frame[:3, :3], body_frame[:3, 3] = frame, centre
+        shapes = [_shape(link, np.linalg.inv(body_frame) @ frames[link.name], source)
+                  for link in group]
+        shapes = [mesh for mesh in shapes if mesh is not None]
+        name = first if first != b.ground.name else f"{first}_link"  # the model's ground
+        if name != first:
+            warnings.warn(f"{what}: link '{first}' is the body '{name}' (the model's ground "
+                          f"is '{first}')", UrdfWarning, stacklevel=user_stacklevel())
+        bodies[first] = b.add_body(name, mass=mass, inertia=inertia, position=centre,
+                                   orientation=frame, shape=_joined(shapes))
+    return bodies
+
+
+#: the largest relative excess of J3 over J1 + J2 repaired as rounding of published values
+INERTIA_ROUNDING = 0.01
+
+
+def _physical(inertia: np.ndarray, first: str, group: list, what: str) -> np.ndarray:
+    """A body's inertia (body axes) whose principal moments break ``J1 + J2 >= J3`` by at
+    most :data:`INERTIA_ROUNDING` of ``J3``, repaired to ``J3 = J1 + J2`` (a warning says
+    so); refused beyond it, naming the links."""
+    moments, axes = np.linalg.eigh(inertia)
+    excess = moments[2] - moments[0] - moments[1]
+    if not excess > 1e-9 * moments[2]:
+        return inertia
+    links = ", ".join(link.name for link in group)
+    if excess > INERTIA_ROUNDING * moments[2]:
+        raise ModelError(f"{what}: link '{first}' (with the links welded to it: {links}) has "
+                         f"principal moments of inertia {moments} [kg m^2], whose largest "
+                         f"exceeds the sum of the others by {excess / moments[2]:.1%}; no "
+                         "real body has them (more than rounding): correct its <inertia>")
+    warnings.warn(f"{what}: link '{first}': principal moments of inertia {moments} break J1 + "
+                  f"J2 >= J3 by {excess / moments[2]:.2%} (rounding of the published values); "
+                  "J3 lowered to J1 + J2", UrdfWarning, stacklevel=user_stacklevel())
+    moments[2] = moments[0] + moments[1]
+    return axes @ np.diag(moments) @ axes.T
+
+
+def _without_massless_branches(order: list, links: dict, drive: Mapping, what: str) -> list:
+    """The joints less those whose child and everything below it have no mass (a finger
+    drawn without <inertial>s, a camera frame on a hinge): nothing the joint moves has
+    inertia, so they are dropped with their links, a warning naming them."""
+    below: dict[str, float] = {}
+    for joint in reversed(order):  # children before parents
+        below[joint.child] = below.get(joint.child, 0.0) + _mass(links[joint.child], what)
+        below[joint.parent] = below.get(joint.parent, 0.0) + below[joint.child]
+    dropped = {joint.child for joint in order
+               if joint.type != "fixed" and not below[joint.child] > 0}
+    kept, lost = [], []
+    for joint in order:  # parents first: a dropped link's children are dropped with it
+        if joint.parent in dropped or joint.child in dropped:
+            dropped.add(joint.child)
+            lost.append(joint)
+            continue
+        kept.append(joint)
+    driven = [joint.name for joint in lost if joint.name in drive]
+    if driven:
+        raise ModelError(f"{what}: joint(s) {', '.join(driven)} move no mass (no link below "
+                         "has an <inertial>); they cannot be driven")
+    if lost:
+        warnings.warn(f"{what}: joints that move no mass (no link below them has an "
+                      f"<inertial>) are left out with their links: "
+                      f"{', '.join(joint.name for joint in lost if joint.type != 'fixed')}",
+                      UrdfWarning, stacklevel=user_stacklevel())
+    return kept
+
+
+def _composite(group: list, frames: dict, what: str) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass [kg], centre [m] and centroidal inertia [kg m^2] (drawing axes) of links welded
+    together, each from its <inertial> in its frame of the drawing."""
+    parts = []
+    for link in group:
+        m = _mass(link, what)
+        if m > 0:
+            T = frames[link.name] @ _origin(link.inertial.origin)
+            R = T[:3, :3]
+            parts.append((m, T[:3, 3], R @ np.asarray(link.inertial.inertia, float) @ R.T))
+    mass = float(sum(m for m, _, _ in parts))
+    if not mass > 0:
+        return 0.0, np.zeros(3), np.zeros((3, 3))
+    centre = sum(m * c for m, c, _ in parts) / mass
+    inertia = np.zeros((3, 3))
+    for m, c, I in parts:
+        d = c - centre
+        inertia += I + m * ((d @ d) * np.eye(3) - np.outer(d, d))
+    return mass, centre, 0.5 * (inertia + inertia.T)
+
+
+def _joined(shapes: list):
+    import trimesh  # noqa: PLC0415
+    return trimesh.util.concatenate(shapes) if shapes else None
+
+
+def _joint_names(order: list, taken: set, what: str) -> dict:
+    """The model's name of each moving URDF joint: its own, or ``"<name>_joint"`` where a
+    link (a body) has it, since URDF keeps links and joints apart and mbd3d does not."""
+    names, renamed = {}, []
+    for joint in order:
+        name = joint.name
+        if joint.type != "fixed" and name in taken:
+            name = f"{joint.name}_joint"
+            while name in taken:
+                name += "_"
+            renamed.append(f"'{joint.name}' -> '{name}'")
+        names[joint.name] = name
+        taken.add(name)
+    if renamed:
+        warnings.warn(f"{what}: joints named as links are renamed in the model: "
+                      f"{', '.join(renamed)}", UrdfWarning, stacklevel=user_stacklevel())
+    return names
+
+
+def _add_joint(b, joint, name: str, parent, child, frame: np.ndarray, what: str) -> tuple:
+    """The moving joint ``joint`` between two bodies, at its child's frame ``frame`` of the
+    drawing; returns it and its axis (drawing)."""
+    from mbd3d.joints import Prismatic, Revolute  # noqa: PLC0415
+
+    point, axis = frame[:3, 3], frame[:3, :3] @ _axis(joint, what)
+    kind = Prismatic if joint.type == "prismatic" else Revolute
+    return b.add(kind(name, parent, child, at=point, axis=axis)), axis
 
 
 def _check_tree(joints: list, links: dict, what: str) -> None:
@@ -292,41 +453,26 @@ def _mass(link, what: str) -> float:
     return float(mass)
 
 
-def _add_link(b, link, frame: np.ndarray, path: pathlib.Path, what: str, files_read: list):
-    """A body for a link: frame at its centre of mass, axes the link's."""
-    inertial = link.inertial
-    if not _mass(link, what) > 0:
-        raise ModelError(f"{what}: link '{link.name}' has no mass; give it an <inertial> or "
-                         "weld it to the ground (fixed_base=True)")
-    T_inertial = _origin(inertial.origin)
-    R = T_inertial[:3, :3]
-    inertia = R @ np.asarray(inertial.inertia, dtype=float) @ R.T  # in the link's axes
-    centre_in_link = T_inertial[:3, 3]
-    position = frame[:3, :3] @ centre_in_link + frame[:3, 3]
-    return b.add_body(link.name, mass=float(inertial.mass), inertia=inertia, position=position,
-                      orientation=frame[:3, :3],
-                      shape=_shape(link, centre_in_link, path, what, files_read))
-
-
-def _add_driver(b, joint, element, axis: np.ndarray, motion: Motion, q0: float,
+def _add_driver(b, joint, name: str, element, axis: np.ndarray, motion: Motion, q0: float,
                 what: str) -> None:
     """Drive the URDF joint's coordinate (``q0`` in the drawing) by ``motion``."""
     from mbd3d.joints import RotationDriver, TranslationDriver  # noqa: PLC0415
 
     if joint.type == "prismatic":
-        b.add(TranslationDriver(f"{joint.name}_drive", element, motion=motion + Constant(-q0)))
+        b.add(TranslationDriver(f"{name}_drive", element, motion=motion + Constant(-q0)))
     elif joint.type in ("revolute", "continuous"):
         offset = _drive_offset(element.body_i, element.body_j, axis) - q0
-        b.add(RotationDriver(f"{joint.name}_drive", element,
+        b.add(RotationDriver(f"{name}_drive", element,
                              motion=motion + Constant(offset) if offset else motion))
     else:
         raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
 
 
-def _add_limit(b, joint, element, axis: np.ndarray, q0: float, law) -> bool:
+def _add_limit(b, joint, name: str, element, axis: np.ndarray, q0: float, law) -> bool:
     """Add the URDF joint's ``<limit>`` as a JointLimit on ``element`` (its ends moved from
     the URDF coordinate, ``q0`` in the drawing, to the angle or slide mbd3d measures); False
-    when it is not added (no law, or a hinge's ends beyond half a turn of the drawing)."""
+    when it is not added (no law, equal ends, or a hinge's ends beyond half a turn of the
+    drawing)."""
     from mbd3d.model.contacts import JointLimit  # noqa: PLC0415
 
     offset = -q0
@@ -337,7 +483,9 @@ def _add_limit(b, joint, element, axis: np.ndarray, q0: float, law) -> bool:
     if law is None or (joint.type == "revolute" and any(
             end is not None and not -np.pi < end < np.pi for end in ends)):
         return False
-    b.add(JointLimit(f"{joint.name}_limit", element, lower=ends[0], upper=ends[1], law=law))
+    if None not in ends and not ends[0] < ends[1]:
+        return False  # lower = upper = 0: what some files write for "no limits"
+    b.add(JointLimit(f"{name}_limit", element, lower=ends[0], upper=ends[1], law=law))
     return True
 
 
@@ -375,9 +523,10 @@ def _rodrigues_matrix(g: np.ndarray) -> np.ndarray:
     return from_rodrigues(np.asarray(g, dtype=float))
 
 
-def _shape(link, centre: np.ndarray, path: pathlib.Path, what: str, files_read: list):
-    """The link's visual (else collision) geometry as one mesh in the body frame (link axes,
-    origin at the centre of mass), or None."""
+def _shape(link, to_body: np.ndarray, source: tuple):
+    """The link's visual (else collision) geometry as one mesh in its body's frame
+    (``to_body``: the link's frame in the body's, 4x4), or None; ``source`` as for
+    :func:`_add_bodies`."""
     import trimesh  # noqa: PLC0415
 
     parts = []
@@ -386,7 +535,18 @@ def _shape(link, centre: np.ndarray, path: pathlib.Path, what: str, files_read: 
         if geometry is None:
             continue
         if geometry.mesh is not None:
-            file = _mesh_file(geometry.mesh.filename, path, what)
+            path, what, files_read, meshes = source
+            if meshes == "skip":
+                continue
+            try:
+                file = _mesh_file(geometry.mesh.filename, path, what)
+            except ModelError as exc:
+                if meshes == "require":
+                    raise
+                warnings.warn(f"{exc}; link '{link.name}' is drawn without it (meshes="
+                              "'require' refuses this)", UrdfWarning,
+                              stacklevel=user_stacklevel())
+                continue
             files_read.append(str(pathlib.Path(file).resolve()))
             mesh = trimesh.load(str(file), force="mesh")
             if geometry.mesh.scale is not None:
@@ -405,7 +565,7 @@ def _shape(link, centre: np.ndarray, path: pathlib.Path, what: str, files_read: 
     if not parts:
         return None
     mesh = trimesh.util.concatenate(parts)
-    mesh.apply_translation(-centre)
+    mesh.apply_transform(to_body)
     return mesh
 
 
