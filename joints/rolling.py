@@ -75,8 +75,9 @@ class RollingDiscOnPlane(ConstraintElement):
     material point there has no velocity along the plane (two velocity-level rows): the disc
     can roll to any position and heading, so the configurations it can reach are five
     dimensional while its velocities are three (:class:`mbd3d.model.primitives.DiscOnPlane`).
-    Forward dynamics with the explicit integrators (DOP853, RK45, ...) handles such rows;
-    kinematic analysis, inverse dynamics, generalized-alpha, statics and linearisation need
+    Forward dynamics with the explicit integrators (DOP853, RK45, ...) and linearisation
+    (:func:`mbd3d.linearize`, with fewer independent velocities than displacements) handle
+    such rows; kinematic analysis, inverse dynamics, generalized-alpha, statics and modes need
     positions that follow from the constraints and refuse them.
 
     ``results.joint(name).contact_force`` is the normal force the plane exerts on the disc

@@ -50,12 +50,13 @@ def outputs_of(model, outputs, states, what):
     return names, specs
 
 
-def input_matrices(system, sampler, q, qd, Cq, inputs, independent, n_outputs, what):
-    """``B`` (2k, p) and ``D`` (r, p): each input's generalized force through the augmented
-    equations (linear in it: exact), and the outputs' response by central differences."""
+def input_matrices(system, sampler, q, qd, Cq, inputs, k, rates_of, n_outputs, what):
+    """``B`` (k + k_v, p) and ``D`` (r, p): each input's generalized force through the
+    augmented equations (linear in it: exact) on the rates of the velocity measures
+    ``rates_of`` (k_v, the states after the ``k`` displacements), and the outputs' response
+    by central differences."""
     model = system.model
-    k = len(independent)
-    B = np.zeros((2 * k, len(inputs)))
+    B = np.zeros((k + len(rates_of), len(inputs)))
     D = np.zeros((n_outputs, len(inputs)))
     M, Ca, Q, Qd, _ = system.augmented(q, qd)
     qdd0, lam0_active = system.solve(M, Ca, Q, Qd)
@@ -75,8 +76,8 @@ def input_matrices(system, sampler, q, qd, Cq, inputs, independent, n_outputs, w
         if row is not None:
             lam_u[row] = -1.0  # the released driver's multiplier is minus its effort
         # the velocities' rates are linear in qdd at a fixed state
-        B[k:, column] = (model.body_type.velocity_derivative(q, qd, qdd0 + qdd_u)
-                         - model.body_type.velocity_derivative(q, qd, qdd0))[independent]
+        B[k:, column] = (sampler.w_rate(q, qd, qdd0 + qdd_u)
+                         - sampler.w_rate(q, qd, qdd0))[rates_of]
         if sampler.output_specs is not None and n_outputs:
             h = STEP * max(1.0, float(np.max(np.abs(qdd0), initial=0.0))
                             / max(float(np.max(np.abs(qdd_u))), 1e-300))

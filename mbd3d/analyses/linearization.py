@@ -1,27 +1,27 @@
 """Linearisation: the linear equations of a mechanism about a state, for control design.
 
-The constrained equations of motion are reduced onto independent coordinates by coordinate
-partitioning: ``k = n - rank(Cq)`` coordinates are chosen (by the user, or by a
-column-pivoted QR of the scaled ``Cq`` that keeps the best-conditioned dependent set) and the
-others follow from the constraints, by Newton-Raphson for positions and from ``Cq qd = -Ct``
-for rates. The state is ``x = (p, v)``: the independent coordinates' displacements ``p`` from
-the reference and their velocities ``v``, and about the reference motion ``(x = 0, u0)``
+The constrained equations of motion are reduced onto independent measures by partitioning:
+``k = n - rank`` displacements free of the position rows are chosen (by the user, or by a
+column-pivoted QR of the scaled Jacobian that keeps the best-conditioned dependent set), and
+``k_v`` velocities free of every row (``k_v = k`` unless rolling rows constrain velocities
+only); the others follow from the constraints, by Newton-Raphson for positions and from
+``Cq qd = -Ct`` for rates. The state is ``x = (p, v)``: the independent displacements ``p``
+from the reference and the independent velocities ``v``, and about the reference motion
+``(x = 0, u0)``
 
     dx' = A dx + B du,        dy = C dx + D du.
 
-Displacements are taken relative to the reference motion itself (co-moving): a position by
-its difference, a spatial orientation by the small rotation ``theta`` [rad] about the body's
-own axes that takes the reference attitude to the displaced one (``A = A_ref exp(theta~)``, to
-first order ``theta = 2 g`` in the reference's chart), with the body-axes angular velocity
-``omega_bar`` as its velocity. Then ``x = 0`` is the reference for all time and
-``theta' = d omega_bar - omega_bar_ref x theta`` to first order. About a motion that is
-steady in the bodies' own axes (constant body-axes angular velocities and forces: a body
-turning steadily about a fixed axis, a top precessing without spin relative to its precession)
-the matrices are constant and their eigenvalues are the frequencies of the small motions about
-it, as they are about an equilibrium. A motion steady only in a frame that turns at a
-constant rate (a symmetric top spinning about its axis while it precesses: its body axes
-turn with the spin, so its body-axes ``A(t)`` is periodic) has constant matrices when the
-disturbances are measured in that frame (``frame_rate``, :func:`.moving_frames.frame_turning`), and their
+Displacements are taken relative to the reference motion itself: a position by its
+difference, a spatial orientation by a small rotation ``theta`` [rad], with an angular
+velocity as its velocity (:mod:`.moving_frames` says in which axes). By default both are in
+the body's own axes, which turn with the reference (``A = A_ref exp(theta~)``, ``theta = 2 g``
+in the reference's chart to first order, ``theta' = d omega_bar - omega_bar_ref x theta``):
+about a motion steady in the bodies' axes (a body turning steadily about a fixed axis, a top
+precessing without spin of its own) the matrices are constant and their eigenvalues are the
+frequencies of the small motions, as about an equilibrium. A motion steady only in a frame
+that turns at a constant rate, ``frame_rate`` (a symmetric top spinning about its axis while
+it precesses: its body axes turn with the spin; a disc rolling straight on, a frame that does
+not turn), has constant matrices with every vector measured in that frame's axes, and their
 eigenvalues are then its frequencies. Along any other motion ``A(t)`` describes the
 disturbances as a linear time-varying system: integrate ``dx' = A(t) dx`` along it (its
 eigenvalues at one instant are not frequencies of the motion; those of a periodic one are
@@ -33,12 +33,12 @@ differences through the position and velocity solves and the augmented equations
 of ``eps^(1/3)`` of each coordinate's scale (accelerations are quadratic in the rates, so the
 rate columns carry only rounding).
 
-The reduced second-order form ``Mr dp'' + Dr dp' + Kr dp = Br du``, ``Mr = N^T M N`` with
-``N = dq/dp`` the partitioning's null-space basis of ``Cq``, has ``Kr = -Mr A_21`` and
-``Dr = -Mr A_22``: at an equilibrium the stiffness of the applied and the constraint forces
-(gravity's included) and the dampers'; at a moving state also the centripetal and gyroscopic
-terms (neither is then symmetric, and for spatial bodies ``A`` holds the rotation terms the
-second-order form leaves out).
+The reduced form ``Mr dv' + Dr dv + Kr dp = Br du``, ``Mr = N_v^T M N_v`` with ``N_v =
+dqd/dv`` (the partitioning's null-space basis), has ``Kr = -Mr A_vp`` and ``Dr = -Mr
+A_vv``: at an equilibrium (and without rolling rows, ``v = p'``) the second-order form, with
+the stiffness of the applied and the constraint forces (gravity's included) and the dampers';
+at a moving state also the centripetal and gyroscopic terms (neither is then symmetric, and
+for spatial bodies ``A`` holds the rotation terms the second-order form leaves out).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ import scipy.linalg as la
 from mbd3d.analyses.dynamics import forward_accelerations
 from mbd3d.analyses.linear_io import (STEP, Output, input_matrices, outputs_of,
                                       released_drivers)
-from mbd3d.analyses.moving_frames import co_moving_turning, frame_turning
+from mbd3d.analyses.moving_frames import measure
 from mbd3d.errors import AnalysisError, ModelError
 from mbd3d.io.results import Results
 from mbd3d.model import constraints
@@ -73,28 +73,32 @@ class LinearModel:
     ``dx' = A dx + B du``, ``dy = C dx + D du`` with ``x = (p, v)``: the independent
     coordinates' displacements from the reference motion and their velocities, in the
     units of the coordinates (lengths [m], planar angles [rad] and their rates) except for
-    spatial orientations, whose displacement is a small rotation about the body's own axes
-    [rad] and whose velocity is the body-axes angular velocity [rad/s].
+    spatial orientations, whose displacement is a small rotation [rad] and whose velocity is
+    an angular velocity [rad/s], about the body's own axes (or, with ``frame_rate``, about the
+    axes of the turning frame: :mod:`.moving_frames`). A model with rolling (velocity-level)
+    rows has fewer independent velocities ``v`` (k_v) than displacements ``p`` (k): its rows
+    fix the rates, not the positions.
 
     Attributes
     ----------
-    A : ndarray (2k, 2k)
-    B : ndarray (2k, p)
+    A : ndarray (k + k_v, k + k_v)
+    B : ndarray (k + k_v, p)
         Per unit of each input [N or N m].
-    C : ndarray (r, 2k)
+    C : ndarray (r, k + k_v)
     D : ndarray (r, p)
     states : list of str
         ``"body.coordinate"`` for ``p`` (``"body.rx"``, ``.ry``, ``.rz`` for a spatial
         body's rotations), then ``"body.coordinate_dot"`` (``"body.wx"``, ...) for ``v``.
     inputs, outputs : list of str
-    mass, damping, stiffness : ndarray (k, k)
-        ``Mr``, ``Dr``, ``Kr`` of the second-order form ``Mr dp'' + Dr dp' + Kr dp = Br du``
-        (kg, kg m^2, N/m, N m/rad, ... by coordinate).
-    input_matrix : ndarray (k, p)
+    mass, damping, stiffness : ndarray (k_v, k_v), (k_v, k_v), (k_v, k)
+        ``Mr``, ``Dr``, ``Kr`` of ``Mr dv' + Dr dv + Kr dp = Br du`` (kg, kg m^2, N/m, N
+        m/rad, ... by coordinate); without rolling rows (``v = p'`` about an equilibrium)
+        the second-order form ``Mr dp'' + Dr dp' + Kr dp = Br du``.
+    input_matrix : ndarray (k_v, p)
         ``Br``.
     basis : ndarray (n, k)
-        ``N = dq/dp``: how every coordinate follows the independent ones (a basis of the null
-        space of ``Cq``; for spatial bodies ``q`` is relative to ``charts``).
+        ``N = dq/dp``: how every coordinate follows the independent displacements (for
+        spatial bodies ``q`` is relative to ``charts``).
     t : float
         Time [s] of the reference.
     q, qd : ndarray (n,)
@@ -102,6 +106,8 @@ class LinearModel:
     charts : ndarray or None
         Spatial models: the reference rotations ``q`` is relative to, each body's attitude at
         the reference (so its Rodrigues parameters are zero there).
+    rate_basis : ndarray (n, k_v)
+        ``dqd/dv``: how every coordinate's rate follows the independent velocities.
     """
 
     A: np.ndarray
@@ -120,6 +126,7 @@ class LinearModel:
     q: np.ndarray
     qd: np.ndarray
     charts: np.ndarray | None = field(default=None, repr=False)
+    rate_basis: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def eigenvalues(self) -> np.ndarray:
@@ -168,13 +175,13 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
     charts : ndarray, optional
         Spatial models: the reference rotations ``q`` is relative to (default the model's).
     frame_rate : array_like (3,), optional
-        Spatial models: the angular velocity [rad/s, global axes] of a frame the
-        disturbances are measured in (see :func:`.moving_frames.frame_turning`): for a
-        motion that is steady in a turning frame but not in the bodies' axes (a spinning
-        top's steady precession: the precession rate about the vertical), which then has
+        Spatial models: the angular velocity [rad/s, global axes] of a frame whose axes
+        the disturbances (displacements, rotations, velocities, angular velocities) are
+        measured in (:class:`.moving_frames.TurningFrame`): for a motion steady in a turning
+        frame but not in the bodies' axes (a spinning top's steady precession: the
+        precession rate about the vertical; a disc rolling straight on: zero), which then has
         constant matrices whose eigenvalues are its frequencies. Default: each body's own
-        axes (co-moving). It changes ``A`` only; ``mass``, ``damping`` and ``stiffness``
-        stay co-moving.
+        axes (co-moving).
     tol : float
         How far ``(q, qd)`` may violate the constraints: positions relative to the model's
         length, rates to their largest term.
@@ -189,7 +196,6 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
         For a state that violates the constraints (names the rows), unknown inputs, outputs
         or coordinates, or coordinates that are not independent at the state.
     """
-    constraints.require_holonomic(model, "linearize")
     what = f"linearisation of '{model.name}'"
     n = model.n_coordinates
     q = _vector(q, n, what, "q")
@@ -209,61 +215,56 @@ def linearize(model, q: Sequence[float], qd: Sequence[float] | None = None, t: f
     _, lam_full = forward_accelerations(model, t, q, qd, charts, what=what)
     system.efforts = np.array([-lam_full[model.rows_of(name)[0]] for name in released])
 
-    # state units: a rotation about a body axis is 2 g at g = 0, its rate omega_bar = 2 g_dot
-    rotation = np.zeros(n, dtype=bool)
-    if model.dim == 3:
-        rotation.reshape(-1, 6)[:, 3:] = True
-    unit = np.where(rotation, 2.0, 1.0)
-    active = Cq[system.active]
-    independent, dependent = _partition(model, active, system.active, coordinates, what)
-    k = len(independent)
-    N = np.zeros((n, k))
-    N[independent] = np.eye(k)
-    if k and len(dependent):
-        N[dependent] = -la.lstsq(active[:, dependent], active[:, independent])[0]
-    N /= unit[independent][None, :]
+    measures = measure(model, q, qd, charts, frame_rate, what)
+    # displacements free of the position rows; velocities free of every row (a rolling
+    # disc's rows constrain velocities only: fewer of them), each in the measures' terms
+    E0 = measures.velocity_map(q)
+    independent, N = _partition(model, Cq[system.holonomic] @ measures.P,
+                                system.holonomic, coordinates, what)
+    rolling = len(system.holonomic) < len(system.active)
+    rates_of, N_v = (_partition(model, Cq[system.active] @ np.linalg.inv(E0), system.active,
+                                None, what) if rolling else (independent, N))
+    k, kv = len(independent), len(rates_of)
 
-    labels = [model.coordinate_labels[j] for j in independent]
-    states = ([_state_name(label, 0) for label in labels]
-              + [_state_name(label, 1) for label in labels])
+    states = ([_state_name(model.coordinate_labels[j], 0) for j in independent]
+              + [_state_name(model.coordinate_labels[j], 1) for j in rates_of])
     output_names, output_specs = outputs_of(model, outputs, states, what)
-    sampler = _Sampler(system, q, qd, independent, N, output_specs, what)
+    sampler = _Sampler(system, measures, q, qd, independent, N, rates_of, output_specs, what)
 
-    A = np.zeros((2 * k, 2 * k))
-    A[:k, k:] = np.eye(k)  # d p / dt = v (held exactly in every sample)
-    C_out = np.zeros((len(output_names), 2 * k))
-    position_steps = STEP * np.maximum(model.coordinate_scale[independent],
-                                        np.abs(q[independent])) * unit[independent]
+    A = np.zeros((k + kv, k + kv))
+    C_out = np.zeros((len(output_names), k + kv))
+    scale = model.coordinate_scale
+    position_steps = STEP * np.maximum(scale[independent], np.abs(q[independent]))
     gravity = float(np.linalg.norm(model.gravity))
     rate_unit = np.sqrt(gravity / model.length_scale) if gravity > 0 else 1.0
-    rate_steps = STEP * np.maximum(model.coordinate_scale[independent] * rate_unit,
-                                    np.abs(sampler.v0[independent]))
-    for column in range(2 * k):
-        j = column % k
+    rate_steps = STEP * np.maximum(scale[rates_of] * rate_unit,
+                                   np.abs(measures.w0[rates_of]))
+    for column in range(k + kv):
+        j = column if column < k else column - k
         h = position_steps[j] if column < k else rate_steps[j]
         plus, minus = (sampler.at(column < k, j, sign * h) for sign in (1.0, -1.0))
-        A[k:, column] = (plus.v_rate[independent] - minus.v_rate[independent]) / (2 * h)
+        A[:k, column] = (plus.x_rate[independent] - minus.x_rate[independent]) / (2 * h)
+        A[k:, column] = (plus.w_rate[rates_of] - minus.w_rate[rates_of]) / (2 * h)
         if output_specs is not None:
             C_out[:, column] = (plus.y - minus.y) / (2 * h)
-    if model.dim == 3:
-        A[:k, :k] -= co_moving_turning(model, sampler.v0, N * unit[:, None], independent)
-    if frame_rate is not None:
-        turning = frame_turning(model, frame_rate, charts, sampler.v0, N * unit[:, None],
-                                independent, what)
-        A[:k, :k] += turning
-        A[k:, k:] += turning
+    turning = measures.turning(N)
+    if turning is not None:  # a frame that turns: each vector's rate less Omega x itself
+        A[:k, :k] += turning[independent]
+        A[k:, k:] += measures.turning(N_v)[rates_of]
 
-    B, D_out = input_matrices(system, sampler, q, qd, Cq, inputs, independent,
-                               len(output_names), what)
+    B, D_out = input_matrices(system, sampler, q, qd, Cq, inputs, k, rates_of,
+                              len(output_names), what)
     if output_specs is None:
-        C_out, D_out = np.eye(2 * k), np.zeros((2 * k, B.shape[1]))
+        C_out, D_out = np.eye(k + kv), np.zeros((k + kv, B.shape[1]))
 
     frames = constraints.frames(model, q, qd, charts)
-    Mr = N.T @ mass_matrix(model, frames, sparse=False) @ N
+    basis, rate_basis = measures.P @ N, np.linalg.solve(E0, N_v)
+    Mr = rate_basis.T @ mass_matrix(model, frames, sparse=False) @ rate_basis
     return LinearModel(
         A=A, B=B, C=C_out, D=D_out, states=states, inputs=list(inputs), outputs=output_names,
         mass=Mr, damping=-Mr @ A[k:, k:], stiffness=-Mr @ A[k:, :k],
-        input_matrix=Mr @ B[k:], basis=N, t=t, q=q, qd=qd, charts=charts)
+        input_matrix=Mr @ B[k:], basis=basis, t=t, q=q, qd=qd, charts=charts,
+        rate_basis=rate_basis)
 
 
 def _state_name(label: str, order: int) -> str:
@@ -321,6 +322,8 @@ class _System:
                 raise ModelError(f"linearisation of '{model.name}': driver '{name}' has "
                                  f"{len(model.rows_of(name))} rows; an input is one effort")
         self.active = np.setdiff1d(np.arange(model.n_constraints), self.released_rows)
+        #: the active rows that constrain positions (not a rolling disc's velocity rows)
+        self.holonomic = np.setdiff1d(self.active, model.velocity_rows)
         self.efforts = np.zeros(len(released))
 
     def jacobian(self, q) -> np.ndarray:
@@ -328,35 +331,34 @@ class _System:
         data = constraints.evaluate(self.model, self.t, frames, value=False)[1]
         return constraints.jacobian_matrix(self.model, data, sparse=False)
 
-    def position(self, q, held, what) -> np.ndarray:
-        """Newton-Raphson on the active rows with the ``held`` coordinates fixed, from a
-        guess first-order close (a tangent step)."""
-        model, n = self.model, self.model.n_coordinates
-        H = np.eye(n)[held]
-        target = q[held].copy()
+    def position(self, q, held: np.ndarray, target: np.ndarray, what) -> np.ndarray:
+        """Newton-Raphson on the active position rows with the measures ``held @ q`` (rows of
+        linear combinations of the coordinates) at ``target``, from a guess first-order close
+        (a tangent step)."""
+        model = self.model
+        rows = self.holonomic
+        scale = np.concatenate([model.row_scale[rows],
+                                np.abs(held) @ model.coordinate_scale])
         for _ in range(20):
             frames = constraints.frames(model, q, charts=self.charts)
             C, data, _ = constraints.evaluate(model, self.t, frames)
             Cq = constraints.jacobian_matrix(model, data, sparse=False)
-            residual = np.concatenate([C[self.active], q[held] - target])
-            scale = np.concatenate([model.row_scale[self.active], model.coordinate_scale[held]])
+            residual = np.concatenate([C[rows], held @ q - target])
             if np.max(np.abs(residual) / scale, initial=0.0) <= 1e-14:
                 return q
-            q = q - la.lstsq(np.vstack([Cq[self.active], H]), residual)[0]
+            q = q - la.lstsq(np.vstack([Cq[rows], held]), residual)[0]
         raise AnalysisError(f"{what}: the constraints do not close about a displaced state at "
                             f"t = {self.t:.6g} s (residual {np.max(np.abs(residual) / scale):.1e});"
                             " the state is at or near a singular position")
 
-    def rates(self, q, E_rows, v_independent) -> np.ndarray:
-        """``qd`` with ``Cq qd = -Ct`` (active rows) and the independent velocities ``v`` given:
-        the velocities are linear in the rates, ``v = E(q) qd``."""
+    def rates(self, q, E, w) -> np.ndarray:
+        """``qd`` with ``Cq qd = -Ct`` (active rows) and the velocity measures ``E qd = w``
+        (``E``: rows of the velocity map at ``q``)."""
         model = self.model
         frames = constraints.frames(model, q, charts=self.charts)
         _, data, _, nu = constraints.evaluate(model, self.t, frames, value=False, rate=True)
         Cq = constraints.jacobian_matrix(model, data, sparse=False)[self.active]
-        E = np.column_stack([model.body_type.velocities(q, e)
-                             for e in np.eye(model.n_coordinates)])[E_rows]
-        return la.lstsq(np.vstack([Cq, E]), np.concatenate([nu[self.active], v_independent]))[0]
+        return la.lstsq(np.vstack([Cq, E]), np.concatenate([nu[self.active], w]))[0]
 
     def augmented(self, q, qd):
         """``(M, Cq of the active rows, Q with the released efforts, Qd of the active rows,
@@ -398,8 +400,21 @@ def _coordinate_index(model, label: str) -> int:
     return model.coordinate_index(label)
 
 
-def _partition(model, Cq: np.ndarray, rows: np.ndarray, coordinates, what: str
+def _partition(model, J: np.ndarray, rows: np.ndarray, coordinates, what: str
                ) -> tuple[np.ndarray, np.ndarray]:
+    """The independent measures (in the user's order) of the constraint rows ``rows`` whose
+    Jacobian in the measures is ``J``, and the basis ``N`` (n, k) of how every measure
+    follows them."""
+    independent, dependent = _independent(model, J, rows, coordinates, what)
+    N = np.zeros((model.n_coordinates, len(independent)))
+    N[independent] = np.eye(len(independent))
+    if len(independent) and len(dependent):
+        N[dependent] = -la.lstsq(J[:, dependent], J[:, independent])[0]
+    return independent, N
+
+
+def _independent(model, Cq: np.ndarray, rows: np.ndarray, coordinates, what: str
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the independent (in the user's order) and dependent coordinates, from the
     Jacobian ``Cq`` of the constraint rows ``rows``."""
     n = model.n_coordinates
@@ -435,34 +450,41 @@ def _partition(model, Cq: np.ndarray, rows: np.ndarray, coordinates, what: str
 
 
 class _Sample:
-    __slots__ = ("v_rate", "y")
+    __slots__ = ("x_rate", "w_rate", "y")
 
-    def __init__(self, v_rate, y):
-        self.v_rate, self.y = v_rate, y
+    def __init__(self, x_rate, w_rate, y):
+        self.x_rate, self.w_rate, self.y = x_rate, w_rate, y
 
 
 class _Sampler:
-    """States displaced along one independent coordinate or velocity, completed by the
-    constraints, with the velocities' rates and the outputs."""
+    """States displaced along one independent measure of displacement or of velocity,
+    completed by the constraints, with the rates of every measure and the outputs."""
 
-    def __init__(self, system, q, qd, independent, basis, output_specs, what):
-        self.system, self.q, self.qd = system, q, qd
-        self.independent, self.basis = independent, basis
+    def __init__(self, system, measures, q, qd, independent, basis, rates_of, output_specs,
+                 what):
+        self.system, self.measures, self.q, self.qd = system, measures, q, qd
+        self.independent, self.basis, self.rates_of = independent, basis, rates_of
         self.output_specs = output_specs
         self.what = what
-        self.v0 = system.model.body_type.velocities(q, qd)
 
     def at(self, position: bool, j: int, h: float) -> _Sample:
-        system = self.system
-        q, v = self.q.copy(), self.v0.copy()
+        system, measures = self.system, self.measures
+        q, w = self.q, measures.w0[self.rates_of].copy()
         if position:
-            q = system.position(q + h * self.basis[:, j], self.independent, self.what)
+            held = measures.P_inv[self.independent]
+            target = held @ q + h * np.eye(len(self.independent))[j]
+            q = system.position(q + h * measures.P @ self.basis[:, j], held, target, self.what)
         else:
-            v[self.independent[j]] += h
-        qd = system.rates(q, self.independent, v[self.independent])
+            w[j] += h
+        qd = system.rates(q, measures.velocity_map(q)[self.rates_of], w)
         qdd, lam = system.accelerations(q, qd)
-        return _Sample(system.model.body_type.velocity_derivative(q, qd, qdd),
-                       self.evaluate(q, qd, qdd, lam))
+        v, v_rate = measures.rates(q, qd, qdd)
+        x_rate = measures.position_rate(v, measures.P_inv @ (q - self.q))
+        return _Sample(x_rate, v_rate, self.evaluate(q, qd, qdd, lam))
+
+    def w_rate(self, q, qd, qdd) -> np.ndarray:
+        """The velocity measures' rates at a state."""
+        return self.measures.rates(q, qd, qdd)[1]
 
     def evaluate(self, q, qd, qdd, lam) -> np.ndarray | None:
         if self.output_specs is None:
