@@ -75,10 +75,11 @@ class RollingDiscOnPlane(ConstraintElement):
     material point there has no velocity along the plane (two velocity-level rows): the disc
     can roll to any position and heading, so the configurations it can reach are five
     dimensional while its velocities are three (:class:`mbd3d.model.primitives.DiscOnPlane`).
-    Forward dynamics with the explicit integrators (DOP853, RK45, ...) and linearisation
+    Forward dynamics with the explicit integrators (DOP853, RK45, ...), static equilibrium
+    (balanced in the motions the rows leave), vibration modes and linearisation
     (:func:`mbd3d.linearize`, with fewer independent velocities than displacements) handle
-    such rows; kinematic analysis, inverse dynamics, generalized-alpha, statics and modes need
-    positions that follow from the constraints and refuse them.
+    such rows; kinematic analysis, inverse dynamics and generalized-alpha need positions that
+    follow from the constraints and refuse them.
 
     ``results.joint(name).contact_force`` is the normal force the plane exerts on the disc
     [N] and ``.traction`` the in-plane force (global, (k, 3)) [N]: the friction rolling needs,

@@ -3,8 +3,9 @@ the contact's velocity computed apart, steady circular rolling at the closed-for
 relation (Omega^2 = 4 g tan(phi) / (6 R - 5 r sin(phi)) for a thin uniform disc, derived from
 Euler's equations about the contact; Greenwood, *Advanced Dynamics*, 2003, sec. 8.5) and its
 negative control, a disc rolling down an inclined plane at g sin(b) / (1 + J / (m r^2)),
-energy conserved in a wobbling run, and the analyses that cannot take velocity-level rows
-refusing them by name."""
+energy conserved in a wobbling run; its linearisation about upright rolling against the lean
+dynamics' closed form (stable above v^2 = g r / 3), its rest on a slope and its fall-over
+rate; and the analyses that cannot take velocity-level rows refusing them by name."""
 
 from __future__ import annotations
 
@@ -205,8 +206,7 @@ def test_analyses_that_need_positions_from_the_constraints_refuse_it():
     t = np.linspace(0.0, 0.1, 3)
     for run in (lambda: mb.kinematic_analysis(model, t),
                 lambda: mb.inverse_dynamics(model, t),
-                lambda: mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-3),
-                lambda: mb.static_equilibrium(model)):
+                lambda: mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-3)):
         with pytest.raises(mb.ModelError, match="'roll' constrains velocities only.*DOP853"):
             run()
 
@@ -274,6 +274,38 @@ def test_the_lean_closed_form_is_the_nonlinear_disc_s_wobble():
     stiffness = (C_ + M * RADIUS ** 2) * C_ * w ** 2 / A_ - M * G * RADIUS
     assert period == pytest.approx(2 * math.pi * math.sqrt((A_ + M * RADIUS ** 2) / stiffness),
                                    rel=1e-4)
+
+
+def test_a_disc_at_rest_on_a_slope_leans_until_its_centre_is_above_the_contact():
+    """Standing square to a plane tilted 20 degrees, rolling direction along the level line,
+    the disc can rest only leaning so that gravity passes through the contact (it cannot roll
+    down: the rolling rows hold it sideways): there the plane pushes m g cos(b) along its
+    normal and the rolling rows m g sin(b) up the slope, and the rest is unstable (it falls
+    over); static equilibrium finds it from the square stance. Its fall-over on a level
+    plane is the root sqrt(m g r / (A + m r^2)) of the upright disc at rest."""
+    beta = math.radians(20.0)
+    normal = np.array([0.0, -math.sin(beta), math.cos(beta)])
+    axis = np.cross(normal, [1.0, 0.0, 0.0])  # square to the plane, along its fall line
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G), name="disc on a slope")
+    disc = b.add_body("disc", mass=M, inertia=THIN_DISC, position=RADIUS * normal,
+                      orientation=mb.rotations.frame_along(axis))
+    b.add(RollingDiscOnPlane("roll", b.ground, disc, radius=RADIUS, axis=axis, normal=normal,
+                             point=(0.0, 0.0, 0.0)))
+    rest = mb.static_equilibrium(b.build())
+    assert rest.stats["stability"] == ["unstable"]
+    point, _ = rest.joint("roll").contact()
+    np.testing.assert_allclose(rest.body("disc").position[0, :2], point[0, :2], rtol=0,
+                               atol=1e-12)
+    np.testing.assert_allclose(rest.joint("roll").contact_force, M * G * math.cos(beta),
+                               rtol=1e-12)
+    np.testing.assert_allclose(rest.joint("roll").traction[0],
+                               M * G * math.sin(beta) * np.cross(normal, [1.0, 0.0, 0.0]),
+                               rtol=0, atol=1e-12 * M * G)
+    modes = mb.vibration_modes(_upright(0.0))
+    fall = math.sqrt(M * G * RADIUS / (THIN_DISC[1, 1] + M * RADIUS ** 2))
+    np.testing.assert_allclose(2 * math.pi * modes.frequencies[-2:], fall, rtol=1e-7)
+    np.testing.assert_array_equal(np.sort(modes.damping_ratios[-2:]), [-1.0, 1.0])
+    np.testing.assert_allclose(modes.frequencies[:-2], 0.0, rtol=0, atol=1e-7 * fall)
 
 
 @pytest.mark.parametrize("change, words", [

@@ -170,7 +170,6 @@ def vibration_modes_along(model, times: Sequence[float], q_guess: Sequence[float
     -------
     ModesAlong
     """
-    constraints.require_holonomic(model, "vibration_modes_along")
     rest = static_equilibrium(model, times, q_guess, release=release)
     active = _active_rows(model, release)
     found = []
@@ -201,7 +200,6 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
         oscillates (undamped or underdamped) once, one that does not (overdamped, unstable,
         free) twice, with its two real roots.
     """
-    constraints.require_holonomic(model, "vibration_modes")
     rest = static_equilibrium(model, [t], q_guess, release=release)
     active = _active_rows(model, release)
     frequencies, ratios, shapes = _modes_about(

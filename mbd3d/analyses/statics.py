@@ -99,7 +99,6 @@ def static_equilibrium(model, times: float | Sequence[float] = 0.0,
     ModelError
         For an unknown driver in ``release`` or a bad guess.
     """
-    constraints.require_holonomic(model, "static equilibrium")
     t = check_times(times)
     what = f"static equilibrium of '{model.name}'"
     active = _active_rows(model, release)

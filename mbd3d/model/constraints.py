@@ -136,7 +136,7 @@ def require_holonomic(model, what: str) -> None:
         f"{', '.join(repr(j) for j in joints)} constrain{'s' if len(joints) == 1 else ''} "
         "velocities only (nonholonomic: a disc rolling on a plane reaches any position by "
         "rolling); forward dynamics with an explicit method (method='DOP853', 'RK45' or "
-        "'RK23') integrates its motion, and mb.linearize linearises about it")
+        "'RK23') integrates its motion; static equilibrium, modes and mb.linearize take it")
 
 
 def has_spatial_meshes(model) -> bool:
