@@ -27,7 +27,7 @@ import numpy as np
 
 __all__ = ["main"]
 
-_KINDS = ("kinematic", "inverse", "forward", "equilibrium", "modes")
+_KINDS = ("kinematic", "inverse", "forward", "equilibrium", "modes", "linearize")
 #: what --help says of the exit status (the module doc says the same)
 EXIT_STATUS = ("exit status: 0 done, 1 the analysis failed or the model has a problem, 2 a bad "
                "command line or model file, 130 interrupted (a sweep keeps the runs done: run "
@@ -228,6 +228,8 @@ def _run(args) -> int:
     model = loaded.model
     if spec.kind == "modes":
         return _run_modes(args, model, spec, rrd, csv_path)
+    if spec.kind == "linearize":
+        return _run_linearize(args, model, spec, rrd, csv_path)
     observers = []
     if rrd is not None:
         from mbd3d.viewer import Recorder, check_destination  # noqa: PLC0415
@@ -326,6 +328,48 @@ def _run_modes(args, model, spec, rrd: str | None, csv_path: str | None) -> int:
     return 0
 
 
+def _run_linearize(args, model, spec, rrd: str | None, csv_path: str | None) -> int:
+    """``mbd3d run`` of a ``linearize`` analysis: the eigenvalues printed, the matrices A, B,
+    C, D as a CSV in long form (matrix, row, column, value; rows and columns named)."""
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io import files  # noqa: PLC0415
+    from mbd3d.io.results import format_table  # noqa: PLC0415
+
+    if rrd is not None:
+        raise ModelError("a linearisation has no motion to record; leave out the recording "
+                         "(rrd)")
+    if csv_path is not None:
+        files.check_output_path(csv_path, overwrite=args.overwrite)
+    lin = spec.run(model)
+    values = lin.eigenvalues
+    size = np.abs(values)
+    print(f"{model.name}: linearisation at t = {lin.t:g} s, {len(lin.states)} states: "
+          f"{', '.join(lin.states)}\n")
+    print(format_table({"Re s [1/s]": values.real, "Im s [1/s]": values.imag,
+                        "f [Hz]": size / (2 * np.pi),
+                        "zeta [-]": np.where(size > 0, -values.real / np.where(
+                            size > 0, size, 1.0), 0.0)}))
+    if csv_path is not None:
+        rows = []
+        for matrix, names_r, names_c in (("A", lin.states, lin.states),
+                                         ("B", lin.states, lin.inputs),
+                                         ("C", lin.outputs, lin.states),
+                                         ("D", lin.outputs, lin.inputs)):
+            values_m = getattr(lin, matrix)
+            rows += [(matrix, r, c, repr(float(values_m[i, j])))
+                     for i, r in enumerate(names_r) for j, c in enumerate(names_c)]
+
+        def write(f):
+            import csv  # noqa: PLC0415
+            writer = csv.writer(f, lineterminator="\n")
+            writer.writerow(("matrix", "row", "column", "value"))
+            writer.writerows(rows)
+        files.atomic_write(csv_path, write, text=True, overwrite=args.overwrite,
+                           what="the CSV file")
+        print(f"\nCSV written to {os.path.abspath(csv_path)}")
+    return 0
+
+
 def _view(args) -> int:
     from mbd3d.errors import ModelError  # noqa: PLC0415
     from mbd3d.viewer import show  # noqa: PLC0415
@@ -361,7 +405,7 @@ def _sweep(args) -> int:
     for key, values in axes.items():
         read(path, {key: values[0]})
     spec = _chosen_analysis(args, loaded)
-    if spec.kind in ("equilibrium", "modes"):
+    if spec.kind in ("equilibrium", "modes", "linearize"):
         raise ModelError("sweep runs kinematic, inverse or forward analyses")
     kind = {"kinematic": "kinematic", "inverse": "inverse dynamics",
             "forward": "forward dynamics"}[spec.kind]

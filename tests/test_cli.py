@@ -130,6 +130,43 @@ def test_a_model_file_can_ask_for_the_modes_along_a_motion(tmp_path):
     assert refused.returncode == 2 and "sweep runs kinematic, inverse or forward" in refused.stderr
 
 
+def test_a_model_file_can_ask_for_a_linearisation(tmp_path):
+    """The cart-pole linearised about its upright drawing and about the equilibrium found
+    from it: the matrices in the CSV are those mb.linearize gives, the unstable root is
+    printed; one time only, no recording."""
+    text = (MODELS / "cart_pendulum_linearized.yaml").read_text()
+    start = text.index("analyses:")
+    analysis = ("analyses:\n- kind: linearize\n  t: [0.0]\n  about: ABOUT\n"
+                "  inputs: [push.x]\n  coordinates: [cart.x, pole.theta]\n"
+                "  outputs: [pole.theta]\n")
+    model = mb.load(MODELS / "cart_pendulum_linearized.yaml")
+    lin = mb.linearize(model, model.q0, inputs=["push.x"], outputs=["pole.theta"],
+                       coordinates=["cart.x", "pole.theta"])
+    for about in ("drawing", "equilibrium"):
+        path = tmp_path / f"{about}.yaml"
+        path.write_text(text[:start] + analysis.replace("ABOUT", about))
+        done = mbd3d("run", path, "--csv", tmp_path)
+        assert done.returncode == 0, done.stderr
+        assert "4 states: cart.x, pole.theta, cart.x_dot, pole.theta_dot" in done.stdout
+        rows = list(csv.reader(io.StringIO((tmp_path / f"{about}_linearize.csv").read_text())))
+        assert rows[0] == ["matrix", "row", "column", "value"]
+        for name in "ABCD":
+            got = np.array([float(r[3]) for r in rows[1:] if r[0] == name])
+            np.testing.assert_allclose(got, getattr(lin, name).ravel(), rtol=1e-6,
+                                       atol=1e-9 * np.max(np.abs(getattr(lin, name))))
+        unstable = np.max(lin.eigenvalues.real)
+        assert f"{unstable:.5g}" in done.stdout
+    for old, new, message in (("t: [0.0]", "t: [0.0, 1.0]", "about one time"),
+                              ("about: drawing", "about: up", "about must be 'drawing' or")):
+        path = tmp_path / "bad.yaml"
+        path.write_text(text[:start] + analysis.replace("ABOUT", "drawing").replace(old, new))
+        done = mbd3d("run", path)
+        assert done.returncode == 2 and message in done.stderr, done.stderr
+    path = tmp_path / "drawing.yaml"
+    done = mbd3d("run", path, "--rrd", tmp_path / "x.rrd")
+    assert done.returncode == 2 and "no motion to record" in done.stderr
+
+
 @pytest.mark.parametrize("args, message", [
     (("run", "{bad}"), r"bad.yaml:8: joints\[0\].body_j: no body or joint 'bra'"),
     (("run", "{good}", "--t", "0:1"), "give START:STOP:STEP"),

@@ -15,6 +15,7 @@ and returning arrays or Results; not a model element (``mbd3d.model``) nor a fil
 
 from mbd3d.analyses.dynamics import forward_dynamics
 from mbd3d.analyses.kinematics import inverse_dynamics, kinematic_analysis
+from mbd3d.analyses.linearization import linearize_at
 from mbd3d.analyses.modes import vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.io import model_file
@@ -22,4 +23,4 @@ from mbd3d.io import model_file
 # the analyses a model file's analyses: section can ask for, by kind
 model_file.ANALYSES.update(kinematic=kinematic_analysis, inverse=inverse_dynamics,
                            forward=forward_dynamics, equilibrium=static_equilibrium,
-                           modes=vibration_modes_along)
+                           modes=vibration_modes_along, linearize=linearize_at)

@@ -58,7 +58,7 @@ from mbd3d.io.results import Results
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
 
-__all__ = ["LinearModel", "linearize"]
+__all__ = ["LinearModel", "linearize", "linearize_at"]
 
 #: relative pivot of the scaled Jacobian below which a column counts as dependent
 _RANK_TOLERANCE = 1e-10
@@ -504,3 +504,35 @@ class _Sampler:
                                   charts=None if charts is None else charts[None])
             values.append(np.ravel(np.asarray(spec(results), dtype=float)))
         return np.concatenate(values) if values else np.zeros(0)
+
+
+def linearize_at(model, times: Sequence[float], *, about: str = "drawing",
+                 inputs: Sequence[str] = (), outputs: Sequence[str] | None = None,
+                 coordinates: Sequence[str] | None = None,
+                 frame_rate: Sequence[float] | None = None,
+                 release: Sequence[str] = ()) -> LinearModel:
+    """The linearisation a model file asks for (``{kind: linearize, t: [t0], ...}``): at the
+    one time of ``times`` [s], about the drawing's state (``about: drawing``: the model's
+    initial coordinates and rates, which must satisfy the constraints: a moving reference
+    such as a spinning top's) or about the static equilibrium found from it (``about:
+    equilibrium``, with the drivers named in ``release`` released); the other options as for
+    :func:`linearize` (outputs named by coordinate)."""
+    what = f"linearisation of '{model.name}'"
+    t = np.atleast_1d(np.asarray(times, dtype=float))
+    if t.size != 1:
+        raise ModelError(f"{what}: a linearisation is about one time; give t: [t0], got "
+                         f"{t.size} times")
+    if about == "drawing":
+        q, qd, charts = model.q0, model.qd0, None
+    elif about == "equilibrium":
+        from mbd3d.analyses.statics import static_equilibrium  # noqa: PLC0415
+        rest = static_equilibrium(model, [float(t[0])], release=release)
+        q, qd = rest.q[0], np.zeros(model.n_coordinates)
+        charts = None if rest.charts is None else rest.charts[0]
+    else:
+        raise ModelError(f"{what}: about must be 'drawing' or 'equilibrium', got {about!r}")
+    if release and about != "equilibrium":
+        raise ModelError(f"{what}: release is for about: equilibrium (name the drivers to "
+                         "release in inputs to linearise with their efforts as inputs)")
+    return linearize(model, q, qd, float(t[0]), inputs=inputs, outputs=outputs,
+                     coordinates=coordinates, charts=charts, frame_rate=frame_rate)

@@ -39,8 +39,10 @@ HertzContact | HuntCrossley, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
 cam's profile is ``{type: CamProfile, angles: [...], radii: [...]}``.
-Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``, and
-``modes``: the vibration modes about the equilibrium at each time with the drivers held), times
+Analyses have a ``kind`` (``kinematic``, ``inverse``, ``forward``, ``equilibrium``,
+``modes``: the vibration modes about the equilibrium at each time with the drivers held, and
+``linearize``: the linear state-space model at one time, about the drawing or the
+equilibrium, see :func:`mbd3d.analyses.linearization.linearize_at`), times
 ``t`` (a list, or ``{start, stop, step}`` or ``{start, stop, points}``), the keyword
 arguments of that analysis function, and optionally where ``mbd3d run`` writes the recording
 (``rrd``) and the CSV (``csv``, a folder). Paths are relative to the file. A body's shape is a
@@ -93,7 +95,7 @@ class ModelFileError(ModelError):
 @dataclass(frozen=True)
 class AnalysisSpec:
     """An analysis a model file asks for: ``kind`` (kinematic, inverse, forward,
-    equilibrium, modes), output times ``t`` [s] and keyword arguments of the analysis function."""
+    equilibrium, modes, linearize), output times ``t`` [s] and keyword arguments of the analysis function."""
 
     kind: str
     t: np.ndarray
