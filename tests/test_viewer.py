@@ -205,6 +205,34 @@ def test_live_recording_equals_the_recording_of_the_results(tmp_path):
     assert len(blocks) > 1
 
 
+def test_joint_coordinates_are_plotted_one_line_each_continuous_across_live_blocks(tmp_path):
+    """A spatial crank turned three times and a slider on it, recorded live point by point:
+    each block's own hinge angle starts within half a turn of zero (a spatial angle is read
+    from the bodies' attitudes), yet the plot is the results' continuous angle; the slide's
+    plot is its displacement."""
+    from mbd3d.joints import Prismatic, Revolute, RotationDriver, TranslationDriver
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    crank = b.add_body("crank", mass=1.0, inertia=np.eye(3) * 0.01, position=(0.1, 0, 0))
+    slider = b.add_body("slider", mass=0.5, inertia=np.eye(3) * 0.001,
+                        position=(0.2, 0.0, 0.0))
+    hinge = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0)))
+    slide = b.add(Prismatic("rail", crank, slider, at=(0.2, 0.0, 0.0), axis=(1.0, 0.0, 0.0)))
+    b.add(RotationDriver("motor", hinge, motion=mb.Ramp(0.0, 2 * math.pi)))
+    b.add(TranslationDriver("push", slide, motion=mb.Harmonic(0.05, 1.0)))
+    live = tmp_path / "live.rrd"
+    t = np.linspace(0.0, 3.0, 151)
+    res = mb.inverse_dynamics(b.build(), t,
+                              observers=[Recorder(live, interval=0.0, announce=False)])
+    assert np.ptp(res.joint("O").angle) > 5 * math.pi
+    assert abs(res.subset(100).joint("O").angle[0]) <= math.pi  # what a block sees alone
+    for name, quantity in (("O", "angle"), ("rail", "displacement")):
+        steps, plotted = read_component(live, f"/plots/joints/{name}/{quantity}",
+                                        "Scalars:scalars")
+        np.testing.assert_array_equal(steps, np.arange(len(res)))
+        np.testing.assert_allclose(plotted[:, 0], getattr(res.joint(name), quantity),
+                                   rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt])
 def test_a_run_that_fails_or_is_interrupted_leaves_a_valid_recording(tmp_path, error):
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))

@@ -21,6 +21,7 @@ from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
 from mbd3d.model.contacts import Contact, contact_group
 from mbd3d.model.mass_properties import load_mesh
+from mbd3d.viewer.joint_plots import JointPlots
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
                                  cam_outlines, contact_parts, curve_polyline, pitch_curves,
                                  initial_points, model_size)
@@ -138,6 +139,7 @@ class Scene:
         self.reactions = list(reactions) if self.dynamic else []
         self.drivers = [e for e in model.joints if e.is_driver] if self.dynamic else []
         self.springs = [f for f in model.forces if isinstance(f, SpringDamper)]
+        self.joint_plots = JointPlots(model, MAX_RECORDED_JOINTS)
         group = contact_group(model, required=False)
         #: contacts and stops (their forces plotted), whether a contact's (drawn as an arrow)
         self.contacts = [] if group is None or not self.dynamic else [
@@ -165,7 +167,9 @@ class Scene:
             # the grid lies in the horizontal plane: seen edge-on across a planar mechanism
             line_grid=rrb.LineGrid3D(visible=self.model.dim == 3),
             overrides={f"/world/trails/{_part(label)}": trails for label in self.points})
-        kinematic = [rrb.TimeSeriesView(name="Positions [m]", origin="/plots/position")]
+        kinematic = [rrb.TimeSeriesView(name="Joint coordinates [rad, m]",
+                                        origin="/plots/joints")] if self.joint_plots.items else []
+        kinematic.append(rrb.TimeSeriesView(name="Positions [m]", origin="/plots/position"))
         if self.model.dim == 2:
             kinematic.append(rrb.TimeSeriesView(name="Angles [rad]", origin="/plots/angle"))
         else:
@@ -318,6 +322,7 @@ class Scene:
             elif name in self.plotted:
                 stream.log(f"plots/angular_velocity/{part}", rr.SeriesLines(
                     names=[f"{name} ω{a}" for a in "xyz"], colors=shades), static=True)
+        self.joint_plots.log_styles(stream, rr, _part)
         for driver in self.drivers:
             unit = "N m" if self._effort_kind(driver)[0] == "torque" else "N"
             stream.log(f"plots/efforts/{_part(driver.name)}",
@@ -401,6 +406,7 @@ class Scene:
             send(f"world/trails/{part}", indexes=times, columns=rr.Points3D.columns(
                 positions=_lift(history.position), radii=np.full(k, 0.006 * self.size),
                 colors=np.tile(color_of(self.model.body(body)), (k, 1))))
+        self.joint_plots.send(stream, rr, _part, block, times)
         for spring in self.springs:
             ends = self._spring_ends(view, spring)
             send(f"world/springs/{_part(spring.name)}", indexes=times,
