@@ -304,6 +304,15 @@ def test_large_models_record_poses_without_plots_by_default(tmp_path):
     assert sum(p.startswith("/world/bodies/") and p.count("/") == 3 for p in paths) == 30
     assert {p for p in paths if p.startswith("/plots/position/")} == {"/plots/position/link1"}
     assert not any(p.startswith("/world/reactions/") for p in paths)
+    # the joints' angles instead, a line each, the first 24
+    assert sum(p.startswith("/plots/joints/") for p in paths) == 24
+    # a robot-sized chain: its 7 angles, not its bodies' 21 positions; its reactions
+    res = mb.forward_dynamics(pendulum_chain(7), np.linspace(0.0, 0.05, 3))
+    record(res, path, announce=False, overwrite=True)
+    paths = entity_paths(path)
+    assert not any(p.startswith("/plots/position/") for p in paths)
+    assert sum(p.startswith("/plots/joints/") for p in paths) == 7
+    assert sum(p.startswith("/world/reactions/") for p in paths) == 7
 
 
 def test_the_main_job_says_where_the_recording_went(tmp_path, capsys):

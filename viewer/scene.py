@@ -31,7 +31,9 @@ __all__ = ["Scene", "SIM_TIME", "STEP"]
 #: the timelines: simulated time (duration, ns) and the index of the output time point
 SIM_TIME, STEP = "sim_time", "step"
 #: default detail limits: above these, plots and reaction arrows only for what is asked
-MAX_PLOTTED_BODIES, MAX_RECORDED_JOINTS = 12, 24
+#: (above 6 bodies and 8 joints a time plot of every one holds 20 lines and more, whose
+#: legend covers the curves: a robot's joint coordinates are the readable plot)
+MAX_PLOTTED_BODIES, MAX_RECORDED_JOINTS, MAX_JOINT_PLOTS = 6, 8, 24
 #: longest arrow, as a fraction of the mechanism's size
 ARROW_FRACTION = 0.3
 
@@ -139,7 +141,7 @@ class Scene:
         self.reactions = list(reactions) if self.dynamic else []
         self.drivers = [e for e in model.joints if e.is_driver] if self.dynamic else []
         self.springs = [f for f in model.forces if isinstance(f, SpringDamper)]
-        self.joint_plots = JointPlots(model, MAX_RECORDED_JOINTS)
+        self.joint_plots = JointPlots(model, MAX_JOINT_PLOTS)
         group = contact_group(model, required=False)
         #: contacts and stops (their forces plotted), whether a contact's (drawn as an arrow)
         self.contacts = [] if group is None or not self.dynamic else [
