@@ -199,6 +199,33 @@ def test_slider_crank_friction_example(capsys, tmp_path):
     assert recorded_steps(rrd, "slider") == 7
 
 
+def test_slider_crank_clearance_example(capsys, tmp_path):
+    """The pin leaves its bearing and strikes it; the slider stays in the band the clearance
+    (plus the dent) leaves about the ideal slider-crank's closed-form position, and the band
+    shrinks with the clearance."""
+    rrd = tmp_path / "clearance.rrd"
+    example = load("slider_crank_clearance")
+    res, ideal = example.main(n_points=76, turns=1.5, rrd=str(rrd))
+    out = capsys.readouterr().out
+    assert "within the band" in out
+    force = res.contacts().normal_force[:, 0]
+    assert np.any(force == 0.0) and np.max(force) > 10 * np.max(np.linalg.norm(
+        ideal.joint("B").reaction(on="slider").force, axis=1))
+    # the ideal slider by the closed form of the slider-crank
+    theta = res.body("crank").angle
+    closed = (example.CRANK * np.cos(theta)
+              + np.sqrt(example.ROD ** 2 - (example.CRANK * np.sin(theta)) ** 2))
+    np.testing.assert_allclose(ideal.body("slider").position[:, 0], closed, rtol=0, atol=1e-12)
+    off = np.abs(res.body("slider").position[:, 0] - closed)
+    assert np.all(off <= example.band(res)) and np.max(off) > 0.5 * example.CLEARANCE
+    tight = mb.forward_dynamics(example.build(1e-5), res.t, method="DOP853", rtol=1e-8,
+                                atol=1e-10)
+    off = np.abs(tight.body("slider").position[:, 0] - closed)
+    assert np.all(off <= example.band(tight, 1e-5))
+    assert example.band(tight, 1e-5) < 0.1 * example.band(res)
+    assert recorded_steps(rrd, "slider") == 76
+
+
 def test_cam_follower_example(capsys, tmp_path):
     rrd = tmp_path / "cam.rrd"
     res = load("cam_follower").main(n_points=9, rrd=str(rrd))

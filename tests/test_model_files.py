@@ -77,6 +77,10 @@ EXAMPLES = {
     "slider_crank_friction": (lambda m: m.build(), {"kind": "inverse",
                                                     "t": steps(0.0, 0.2, 0.2 / 72)}),
     "cam_follower": (lambda m: m.build(), {"kind": "inverse", "t": steps(0.0, 1.0, 1 / 70)}),
+    "slider_crank_clearance": (lambda m: m.build(), {"kind": "forward",
+                                                     "t": steps(0.0, 0.024, 6e-5),
+                                                     "method": "DOP853", "rtol": 1e-8,
+                                                     "atol": 1e-10}),
     "sweep_slider_crank": (lambda m: m.build(20.0, 0.3), {"kind": "inverse",
                                                            "t": steps(0.0, 1.0, 0.01)}),
 }

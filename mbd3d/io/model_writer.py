@@ -110,7 +110,8 @@ def _plain(value: Any, where: str) -> Any:
     if _is_contact_part(value):
         return {"type": type(value).__name__,
                 **{f.name: _plain(getattr(value, f.name), where)
-                   for f in dataclasses.fields(value) if getattr(value, f.name) != f.default}}
+                   for f in dataclasses.fields(value)
+                   if not _is_default(getattr(value, f.name), f.default)}}
     if isinstance(value, Motion):
         if value.terms() is None:
             raise ModelFileError(f"{where}: a motion given by Python functions cannot be "
@@ -136,6 +137,13 @@ def _plain(value: Any, where: str) -> Any:
                              "SmoothStep)")
     raise ModelFileError(f"{where}: {type(value).__name__} values cannot be written to a model "
                          "file")
+
+
+def _is_default(value: Any, default: Any) -> bool:
+    """Whether a field holds its default (a shape's point may be an array: compared whole)."""
+    if default is None or value is None:
+        return value is default
+    return bool(np.array_equal(np.asarray(value, dtype=object), np.asarray(default, dtype=object)))
 
 
 def _is_contact_part(value: Any) -> bool:
