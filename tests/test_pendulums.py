@@ -7,6 +7,7 @@ link angles) and integrated with SciPy at tight tolerance; nothing of mbd3d is u
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -90,3 +91,29 @@ def test_hanging_pendulum_at_rest_carries_its_weight():
     np.testing.assert_allclose(pin.reaction(on="ground").force, [[0.0, -m * G]] * 11,
                                rtol=0, atol=1e-9)
     np.testing.assert_allclose(pin.reaction(on="link1").moment, 0.0, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853"])
+def test_the_explicit_pairs_step_as_scipys_solve_ivp_does(method):
+    """A free body on a spring (no constraints: the same ODE in the same coordinates) through
+    SciPy's solve_ivp with the same pair and tolerances: the compiled loop's step-size control
+    (its error norm, safety factor and limits) takes the steps SciPy's does, within a few
+    (the first step's guess differs slightly), and lands on the same state."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    body = b.add_body("b", mass=1.3, inertia=0.05, position=(0.3, -0.2), angle=0.4,
+                      velocity=(0.5, 0.1), angular_velocity=2.0)
+    b.add(mb.SpringDamper("s", b.ground, body, point_i=(0.0, 0.0), point_j=(0.1, 0.05),
+                          stiffness=200.0, free_length=0.2))
+    model = b.build()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.StiffnessWarning)
+        res = mb.forward_dynamics(model, [0.0, 2.0], method=method, rtol=1e-8, atol=1e-10)
+
+    def f(t, y):
+        return np.concatenate([y[3:], mb.forward_accelerations(model, t, y[:3], y[3:])[0]])
+
+    sol = solve_ivp(f, (0.0, 2.0), np.concatenate([model.q0, model.qd0]), method=method,
+                    rtol=1e-8, atol=1e-10)
+    steps = len(sol.t) - 1
+    assert abs(res.stats["steps"] - steps) <= 0.05 * steps, (res.stats["steps"], steps)
+    np.testing.assert_allclose(res.q[-1], sol.y[:3, -1], rtol=0, atol=1e-6)
