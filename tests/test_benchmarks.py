@@ -85,3 +85,10 @@ def test_friction_benchmark_runs(capsys, monkeypatch):
     assert len(rows) == 4 and all(r["count"] > 0 for r in rows)
     assert "friction costs" in capsys.readouterr().out
 
+
+def test_contacts_benchmark_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    rows = _load("contacts").main(repeat=1, duration=0.002)
+    assert len(rows) == 4 and all(r["count"] > 0 for r in rows)
+    assert "the contact costs" in capsys.readouterr().out
+
