@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -113,3 +114,26 @@ def test_every_motion_and_a_sum_of_them_through_the_compiled_table_equal_their_f
         ]
         expected.append(tuple(np.sum([expected[0], expected[1], expected[2]], axis=0)))
         np.testing.assert_allclose(out, expected, rtol=0, atol=1e-13)
+
+
+def test_forward_dynamics_follows_a_driver_s_acceleration():
+    """A slider whose slide is driven by a harmonic motion, integrated by forward dynamics
+    (the compiled loop's accelerations: the driver's second derivative enters the rows'
+    right-hand side): the slider accelerates as the motion's second derivative and the
+    driver pushes m times that (Newton along a level rail), to the integrator's accuracy."""
+    from mbd3d.joints import Prismatic, TranslationDriver
+    m = 2.5
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    slider = b.add_body("slider", mass=m, inertia=0.01, position=(0.0, 0.0))
+    rail = b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0)))
+    motion = mb.Harmonic(0.1, 2.0, phase=0.3)
+    b.add(TranslationDriver("push", rail, motion=motion))
+    t = np.linspace(0.0, 1.0, 11)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.InitialStateWarning)  # rates set by the driver
+        res = mb.forward_dynamics(b.build(), t, method="DOP853", rtol=1e-10, atol=1e-12)
+    wanted = np.array([motion.evaluate(tk)[2] for tk in t])
+    assert np.max(np.abs(wanted)) > 0.1
+    np.testing.assert_allclose(res.body("slider").acceleration[:, 0], wanted, rtol=0,
+                               atol=1e-7)
+    np.testing.assert_allclose(res.driver("push").effort, m * wanted, rtol=0, atol=1e-6)
