@@ -18,8 +18,8 @@ from mbd3d.io.observers import Observer
 if TYPE_CHECKING:
     from mbd3d.io.results import Results
 
-__all__ = ["columns", "export_columns", "to_csv", "write_columns", "to_pandas", "to_npz", "import_pandas",
-           "format_table", "CsvWriter"]
+__all__ = ["columns", "export_columns", "to_csv", "write_columns", "to_pandas", "to_npz",
+           "import_pandas", "format_table", "CsvWriter"]
 
 
 def export_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:

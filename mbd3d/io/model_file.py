@@ -95,7 +95,8 @@ class ModelFileError(ModelError):
 @dataclass(frozen=True)
 class AnalysisSpec:
     """An analysis a model file asks for: ``kind`` (kinematic, inverse, forward,
-    equilibrium, modes, linearize), output times ``t`` [s] and keyword arguments of the analysis function."""
+    equilibrium, modes, linearize), output times ``t`` [s] and keyword arguments of the
+    analysis function."""
 
     kind: str
     t: np.ndarray
