@@ -83,9 +83,10 @@ def test_velocity_derivative_is_the_rate_of_the_angular_velocity():
 
 @pytest.mark.parametrize("with_rates", [True, False])
 def test_chart_reset_keeps_orientation_angular_velocity_and_quaternion(with_rates):
-    limit = 1.0
-    # body 0 over the limit, body 1 past half of it, body 2 below half: 0 and 1 move
-    g = np.array([[0.9, -0.5, 0.3], [0.1, 0.45, -0.2], [0.2, -0.1, 0.3], [0.05, 0.0, 0.1]])
+    limit = 1.3
+    # body 0 over the limit (by all three of its parameters), body 1 past half of it, bodies 2
+    # and 3 below half: 0 and 1 move
+    g = np.array([[0.8, -0.8, 0.8], [0.3, 0.5, -0.3], [0.3, -0.3, 0.3], [0.05, 0.0, 0.1]])
     q = rng.normal(size=6 * N_BODIES)
     q.reshape(-1, 6)[:, 3:] = g
     qd = rng.normal(size=6 * N_BODIES)
@@ -125,7 +126,7 @@ def test_chart_reset_keeps_orientation_angular_velocity_and_quaternion(with_rate
         np.testing.assert_array_equal(qd.reshape(-1, 6)[2:], qd_in.reshape(-1, 6)[2:])
     # nothing over the limit: nothing moves, and the answer says so
     q_small = q_in.copy()
-    q_small.reshape(-1, 6)[:, 3:] *= 0.2
+    q_small.reshape(-1, 6)[:, 3:] *= 0.8      # |g| of body 0 at 0.85 of the limit
     kept = charts.copy()
     assert not spatial_reset_charts(q_small, np.zeros(0), charts, limit, np.zeros((0, 4)))
     np.testing.assert_array_equal(charts, kept)

@@ -331,9 +331,10 @@ def spatial_reset_charts(q: np.ndarray, qd: np.ndarray, charts: np.ndarray, limi
                                + charts[b, i, 2] * local[2, j])
         charts[b] = moved
         if turns.shape[0]:
-            scale = 1.0 / math.sqrt(1.0 + g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+            # (1, g) is A(g)'s quaternion times sqrt(1 + g.g): the normalisation below,
+            # there anyway to keep rounding from accumulating, divides that out too
             w, x, y, z = turns[b, 0], turns[b, 1], turns[b, 2], turns[b, 3]
-            a, bx, by, bz = scale, scale * g[0], scale * g[1], scale * g[2]
+            a, bx, by, bz = 1.0, g[0], g[1], g[2]
             turns[b, 0] = w * a - x * bx - y * by - z * bz
             turns[b, 1] = w * bx + x * a + y * bz - z * by
             turns[b, 2] = w * by - x * bz + y * a + z * bx
