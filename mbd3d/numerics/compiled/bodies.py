@@ -331,14 +331,14 @@ def spatial_reset_charts(q: np.ndarray, qd: np.ndarray, charts: np.ndarray, limi
                                + charts[b, i, 2] * local[2, j])
         charts[b] = moved
         if turns.shape[0]:
-            # (1, g) is A(g)'s quaternion times sqrt(1 + g.g): the normalisation below,
+            # times (1, g), A(g)'s quaternion times sqrt(1 + g.g): the normalisation below,
             # there anyway to keep rounding from accumulating, divides that out too
             w, x, y, z = turns[b, 0], turns[b, 1], turns[b, 2], turns[b, 3]
-            a, bx, by, bz = 1.0, g[0], g[1], g[2]
-            turns[b, 0] = w * a - x * bx - y * by - z * bz
-            turns[b, 1] = w * bx + x * a + y * bz - z * by
-            turns[b, 2] = w * by - x * bz + y * a + z * bx
-            turns[b, 3] = w * bz + x * by - y * bx + z * a
+            bx, by, bz = g[0], g[1], g[2]
+            turns[b, 0] = w - x * bx - y * by - z * bz
+            turns[b, 1] = w * bx + x + y * bz - z * by
+            turns[b, 2] = w * by - x * bz + y + z * bx
+            turns[b, 3] = w * bz + x * by - y * bx + z
             size = math.sqrt(turns[b, 0] ** 2 + turns[b, 1] ** 2 + turns[b, 2] ** 2
                              + turns[b, 3] ** 2)
             for c in range(4):
