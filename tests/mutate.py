@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import ast
 import concurrent.futures
+import contextlib
 import dataclasses
 import os
 import shutil
@@ -139,8 +140,15 @@ def run_tests(copy: Path, tests: list[str], compiled: bool, timeout: float) -> s
 
 
 def scratch_copy(into: Path) -> Path:
+    """A copy of the working tree in ``into/repo``; a copy left there by an earlier run is
+    replaced except for its kernel cache, which stays valid while the compiled core is
+    unchanged (Numba checks each file's time stamp, which the copy keeps)."""
     copy = into / "repo"
-    shutil.copytree(REPO, copy, ignore=IGNORED)
+    if copy.exists():
+        for entry in copy.iterdir():
+            if entry.name != ".numba-cache":
+                shutil.rmtree(entry) if entry.is_dir() else entry.unlink()
+    shutil.copytree(REPO, copy, ignore=IGNORED, dirs_exist_ok=True)
     return copy
 
 
@@ -166,6 +174,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="seconds one mutant's tests may take (default 600)")
     parser.add_argument("--compiled", action="store_true",
                         help="run the tests compiled (each mutant of a kernel recompiles)")
+    parser.add_argument("--scratch", type=Path,
+                        help="keep the copies in this folder (made if missing) to reuse their "
+                             "kernel caches in later --compiled runs; default a temporary one")
     parser.add_argument("--list", action="store_true", help="list the mutants and stop")
     args = parser.parse_args(argv)
     target = REPO / args.module
@@ -179,7 +190,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     text = target.read_text()
     start = time.monotonic()
-    with tempfile.TemporaryDirectory(prefix="mbd3d-mutate-") as scratch:
+    with (contextlib.nullcontext(args.scratch) if args.scratch
+          else tempfile.TemporaryDirectory(prefix="mbd3d-mutate-")) as scratch:
         copies = [scratch_copy(Path(scratch) / f"job{k}") for k in range(max(1, args.jobs))]
         for copy in copies:  # the unchanged tests must pass, or nothing can be judged
             # (given longer: compiled, this first run fills the copy's kernel cache)
