@@ -230,6 +230,133 @@ def test_spring_damper_tangent_equals_finite_differences_at_free_length(dim):
     np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.max(np.abs(numeric)))
 
 
+def _differenced_tangent(model, q, qd, charts, weight, h=1e-7):
+    """``-dQ/dq - weight dQ/dqd`` of the force elements (not the bodies' quadratic velocity
+    terms, which the iteration matrix leaves out) by central differences, and the two parts
+    apart."""
+    from mbd3d.model import constraints
+
+    def Q(x, xd):
+        out = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+        for group in model.force_groups:
+            group.apply(model, 0.0, constraints.frames(model, x, xd, charts), out)
+        return out[:-1].ravel()
+    eye = np.eye(len(q)) * h
+    K = -np.column_stack([(Q(q + e, qd) - Q(q - e, qd)) / (2 * h) for e in eye])
+    D = -np.column_stack([(Q(q, qd + e) - Q(q, qd - e)) / (2 * h) for e in eye])
+    return K + weight * D, K, D
+
+
+def _contact_tangent(model, q, qd, charts, weight):
+    from mbd3d.analyses.implicit import _force_tangent
+    T = _force_tangent(model, 0.0, q, qd, charts, weight)
+    return T.toarray() if hasattr(T, "toarray") else T
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_contact_tangent_equals_finite_differences_where_nothing_is_left_out(dim):
+    """The iteration matrix's analytic contact tangent against central differences of the
+    generalized forces: whole for a frictionless ball pressed into the floor while it slides
+    and spins (the normal is fixed and the force passes through the centre, so the terms the
+    tangent leaves out vanish), and its velocity part, exact at any state, with friction, a
+    damped Hertz law and a sphere against a sphere on two turned, moving bodies."""
+    from test_contacts import _overlapping_state, _spatial_pair
+    rng = np.random.default_rng(11)
+    law = mb.HuntCrossley(stiffness=3e6, restitution=0.6, impact_speed=1.0, exponent=1.5)
+    b = mb.ModelBuilder(dim=dim)
+    ball = b.add_body("ball", mass=1.3, inertia=0.02 if dim == 2 else (0.02, 0.03, 0.025),
+                      position=(0.3, 0.5) if dim == 2 else (0.3, 0.5, 0.4))
+    up = (0.6, 0.8) if dim == 2 else (0.0, 0.6, 0.8)
+    b.add(mb.Contact("floor", mb.Sphere(ball, 0.1), mb.Plane(b.ground, normal=up), law=law))
+    model = b.build()
+    q = model.q0.copy()
+    q[:dim] += (0.098 - np.asarray(up) @ q[:dim]) * np.asarray(up)  # 2 mm into the floor
+    qd = rng.normal(size=model.n_coordinates)
+    qd[:dim] -= (np.asarray(up) @ qd[:dim] + 0.3) * np.asarray(up)  # closing at 0.3 m/s
+    weight = 1e3
+    numeric, _, _ = _differenced_tangent(model, q, qd, model.charts0, weight)
+    analytic = _contact_tangent(model, q, qd, model.charts0, weight)
+    assert np.abs(numeric).max() > 1e5  # pressed: the law's stiffness at 2 mm
+    np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
+    if dim == 2:
+        return
+    for second in ("plane", "sphere"):
+        pair, charts, data = _spatial_pair(second, mb.HertzContact(stiffness=4e6, restitution=0.5),
+                                           friction=0.4)
+        q = _overlapping_state(pair, charts, data, second, rng)
+        qd = rng.normal(size=12) * 0.03  # slipping at about the slip velocity, 0.05 m/s
+        _, _, D = _differenced_tangent(pair, q, qd, charts, weight)
+        velocity_part = (_contact_tangent(pair, q, qd, charts, weight)
+                         - _contact_tangent(pair, q, qd, charts, 0.0)) / weight
+        assert np.abs(D).max() > 10.0
+        np.testing.assert_allclose(velocity_part, D, rtol=0, atol=1e-6 * np.abs(D).max())
+
+
+@pytest.mark.parametrize("hole", [False, True])
+def test_contact_tangent_turns_the_normal_between_centres(hole):
+    """Two spheres pressed together (spatial, turned bodies) and a pin pressed into the wall of
+    its hole (planar), each shape centred on its body: the normal turns as the centres move,
+    a stiffness of the force over the centres' distance, negative between spheres, positive
+    in the hole; the whole tangent against central differences, the relative velocity along
+    the normal (so that the damper's rate does not turn with it)."""
+    dim = 2 if hole else 3
+    law = mb.HuntCrossley(stiffness=3e6, restitution=0.6, impact_speed=1.0, exponent=1.5)
+    b = mb.ModelBuilder(dim=dim)
+    one = b.add_body("one", mass=1.0, inertia=0.01 if hole else (0.01, 0.02, 0.03),
+                     position=(0.0,) * dim)
+    d = np.array([0.6, 0.8]) if hole else np.array([0.48, 0.6, 0.64])  # unit
+    gap = 0.002
+    two = b.add_body("two", mass=2.0, inertia=0.03 if hole else (0.03, 0.02, 0.01),
+                     position=d * ((0.1 - gap) if not hole else 0.003 + gap))
+    if hole:  # pin radius 0.05 in a hole 0.053: the pin 3 mm + 2 mm off the hole's centre
+        b.add(mb.Contact("pin", mb.Sphere(one, 0.05), mb.Hole(two, 0.053), law=law))
+    else:
+        b.add(mb.Contact("pair", mb.Sphere(one, 0.04), mb.Sphere(two, 0.06), law=law))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.ContactWarning)  # they overlap in the drawing
+        model = b.build()
+    q, qd = model.q0.copy(), np.zeros(model.n_coordinates)
+    if not hole:
+        q[3:6], q[9:12] = (0.3, -0.2, 0.5), (-0.4, 0.1, 0.2)
+    nc = model.n_coords_per_body
+    qd[nc:nc + dim] = (-0.2 if not hole else 0.2) * d   # closing
+    weight = 500.0
+    numeric, K, _ = _differenced_tangent(model, q, qd, model.charts0, weight)
+    analytic = _contact_tangent(model, q, qd, model.charts0, weight)
+    assert np.abs(K).max() > 1e4
+    np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_stop_tangent_equals_finite_differences(dim):
+    """A slider past its upper stop (the force along a fixed axis through the block's centre)
+    and, in the plane, a pendulum past its hinge stop: the whole tangent exact; a spatial
+    hinge's velocity part."""
+    from test_contacts import _pendulum, _slider
+    law = mb.HuntCrossley(stiffness=2e5, restitution=0.7, impact_speed=0.5, exponent=1.0)
+    slider = _slider(dim, law)
+    pendulum, _, _ = _pendulum(dim, law, lower=-0.5)
+    rng = np.random.default_rng(5)
+    for model, past in ((slider, True), (pendulum, False)):
+        q, qd = model.q0.copy(), rng.normal(size=model.n_coordinates)
+        if past:  # the block 3 mm past the stop, moving on into it
+            q[0], qd[0] = 0.203, 0.2
+        elif dim == 2:  # the rod turned 0.01 rad past its stop at -0.5 rad, still turning on
+            q[:3], qd[2] = (0.5 * np.cos(-0.51), 0.5 * np.sin(-0.51), -0.51), -0.3
+        else:
+            q[:3], q[5], qd[5] = (0.5 * np.cos(-0.51), 0.5 * np.sin(-0.51), 0.0), \
+                math.tan(-0.51 / 2), -0.15
+        weight = 300.0
+        numeric, _, D = _differenced_tangent(model, q, qd, model.charts0, weight)
+        analytic = _contact_tangent(model, q, qd, model.charts0, weight)
+        assert np.abs(numeric).max() > 1e3
+        if dim == 3 and model is pendulum:
+            analytic = (analytic - _contact_tangent(model, q, qd, model.charts0, 0.0)) / weight
+            numeric = D
+        np.testing.assert_allclose(analytic, numeric, rtol=0,
+                                   atol=1e-6 * np.abs(numeric).max())
+
+
 def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
     # the pendulum released from the horizontal swings through the bottom at about 5.4 rad/s
     # (energy: omega^2 = 3 g / L for a uniform rod): a step of 10 s (landing on t = 1 s) takes

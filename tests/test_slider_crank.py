@@ -150,3 +150,20 @@ def test_rk45_default_keeps_constraint_residuals_below_tolerance():
     assert np.max(res.position_residual) <= 1e-9
     assert np.max(res.velocity_residual) <= 1e-9
     assert res.stats["max_drift"] > 0.0  # drift was measured, and kept in check
+
+
+def test_drift_is_measured_row_by_row_in_the_model_s_own_length():
+    """The compiled loop's drift check (what triggers a projection): a driven slider-crank of
+    0.12 mm and 0.26 mm links keeps its rows (the driver's too, with its offset) to 1e-12 of
+    its size at rtol 1e-11, so no step is projected; at rtol 1e-4 it drifts to 3e-7 of its size
+    and steps are projected. A driver's offset or motion left out of the measure, or
+    the length scale applied the wrong way, turns one into the other."""
+    model = slider_crank(crank_length=0.12e-3, rod_length=0.26e-3, crank_angle=PHI0)
+    tight = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 11), method="DOP853",
+                                rtol=1e-11, constraint_tol=1e-8)
+    assert tight.stats["projections"] == 0
+    assert 0.0 < tight.stats["max_drift"] < 1e-8
+    loose = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 11), method="RK45", rtol=1e-4,
+                                constraint_tol=1e-8)
+    assert loose.stats["projections"] > 0
+    assert loose.stats["max_drift"] > 1e-8

@@ -100,7 +100,7 @@ def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma
     """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements (and the
     joints' friction's ``D``), or None when there are none (gravity does not depend on the state; the spatial bodies' quadratic
     velocity terms are left out of the iteration matrix, which only slows convergence). Groups with an analytic tangent
-    (spring-dampers) give it directly; the others are differenced forward, only over the
+    (spring-dampers, contacts and joint stops) give it directly; the others are differenced forward, only over the
     coordinates of the bodies they act on."""
     if not model.force_groups and model.friction is None:
         return None

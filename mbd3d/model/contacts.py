@@ -379,6 +379,21 @@ class _Contacts(_CompiledForces):
             raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet at t = {t:g} "
                              "s; the contact normal is undefined")
 
+    analytic_tangent = True
+
+    def tangent(self, model, t, fr, velocity_weight):
+        """The laws' slopes through each pair's velocity Jacobian (see
+        :func:`~mbd3d.numerics.compiled.contacts.contact_tangents_into`), as COO triplets over
+        the padded coordinates; rows that do not push add zeros."""
+        bodies, nc = self._bodies(model), model.n_coords_per_body
+        blocks = np.empty((len(bodies), 2 * nc, 2 * nc))
+        kernel.contact_tangents_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
+                                     self._points, self._values, velocity_weight, blocks)
+        index = (bodies[:, :, None] * nc + np.arange(nc)).reshape(len(bodies), 2 * nc)
+        rows = np.broadcast_to(index[:, :, None], blocks.shape)
+        cols = np.broadcast_to(index[:, None, :], blocks.shape)
+        return rows.ravel(), cols.ravel(), blocks.ravel()
+
     def switches(self, model, fr) -> np.ndarray:
         """Each row's switching function at the state of ``fr``: positive exactly while its law
         pushes (see :func:`~mbd3d.numerics.compiled.contacts.switches_into`)."""

@@ -400,3 +400,136 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
             out[k] = delta if delta == delta else 0.0
             continue
         out[k] = min(delta, _law(values, k, delta, delta_rate) / values[k, 3])
+
+
+@jit
+def _pair_jacobian(axes, i, j, s_i, s_j, G) -> None:
+    """``G`` (3, 2 nc) = ``[-J_i, J_j]``: the velocity of body j's material point at offset
+    ``s_j`` relative to body i's at ``s_i`` per coordinate rate, ``J = [I, a_c x s]`` with
+    ``a_c`` the global axis of rotation coordinate ``c`` (the map :func:`_add_force` uses)."""
+    nc = G.shape[1] // 2
+    dim = nc - axes.shape[2]
+    G[:, :] = 0.0
+    for half, b, s, sign in ((0, i, s_i, -1.0), (1, j, s_j, 1.0)):
+        o = half * nc
+        for x in range(dim):
+            G[x, o + x] = sign
+        for c in range(axes.shape[2]):
+            a0, a1, a2 = axes[b, 0, c], axes[b, 1, c], axes[b, 2, c]
+            G[0, o + dim + c] = sign * (a1 * s[2] - a2 * s[1])
+            G[1, o + dim + c] = sign * (a2 * s[0] - a0 * s[2])
+            G[2, o + dim + c] = sign * (a0 * s[1] - a1 * s[0])
+
+
+@jit
+def _turn_jacobian(axes, i, j, G) -> None:
+    """``G`` (3, 2 nc) = the angular velocity of body j relative to body i per coordinate
+    rate (the map :func:`_add_torque` uses)."""
+    nc = G.shape[1] // 2
+    dim = nc - axes.shape[2]
+    G[:, :] = 0.0
+    for o, b, sign in ((0, i, -1.0), (nc, j, 1.0)):
+        for c in range(axes.shape[2]):
+            for x in range(3):
+                G[x, o + dim + c] = sign * axes[b, x, c]
+
+
+@jit
+def _turning_normal(axes, Q, i, j, hole: bool, force: float, n, work, s_i, s_j, G, H) -> None:
+    """``G``, ``H`` of the turning of a normal that joins two points, ``c_i``, ``c_j`` (the
+    cores' closest points, ``work[4:6]``; a pin's centre and the hole's axis level with it,
+    ``work[0:2]``), under the normal force: ``G`` their relative velocity, ``H = -+ (F_n / d)
+    (I - n n^T - a a^T)`` with ``d = |c_j - c_i|`` and ``a`` the hole's axis (none between
+    cores): the cores push apart (a strut's negative stiffness), the hole pulls the pin
+    towards its axis (a string's positive one)."""
+    dim = G.shape[1] // 2 - axes.shape[2]
+    c_i, c_j = (work[0], work[1]) if hole else (work[4], work[5])
+    distance = 0.0
+    for x in range(3):
+        s_i[x] = c_i[x] - (Q[i, x] if x < dim else 0.0)
+        s_j[x] = c_j[x] - (Q[j, x] if x < dim else 0.0)
+        distance += (c_j[x] - c_i[x]) ** 2
+    scale = (1.0 if hole else -1.0) * force / math.sqrt(distance)
+    for x in range(3):
+        for y in range(3):
+            across = (1.0 if x == y else 0.0) - n[x] * n[y]
+            if hole:
+                across -= work[2, x] * work[2, y]
+            H[x, y] = scale * across
+    _pair_jacobian(axes, i, j, s_i, s_j, G)
+
+
+@jit
+def _law_slopes(values, k, delta: float, delta_rate: float) -> tuple:
+    """``(dF_n/d delta, dF_n/d delta')`` of contact ``k``'s law, zero where it does not push."""
+    if normal_force(values, k, delta, delta_rate) == 0.0:
+        return 0.0, 0.0
+    K, n_K, D, n_D = values[k, 3], values[k, 4], values[k, 5], values[k, 6]
+    slope = K * n_K * delta ** (n_K - 1.0)
+    if n_D != 0.0:
+        slope += D * n_D * delta ** (n_D - 1.0) * delta_rate
+    return slope, D * delta ** n_D
+
+
+@jit
+def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, weight,
+                          blocks) -> None:
+    """``blocks[k]`` (2 nc, 2 nc), over the coordinates of bodies i and j of contact ``k``:
+    ``-dQ/dq - weight dQ/dqd`` of its law, ``G^T H G`` with ``G`` the pair's velocity
+    Jacobian (:func:`_pair_jacobian`; a stop's: its coordinate's row). With ``k_n``, ``c_n``
+    the law's slopes in ``delta`` and ``delta'``, ``s = |v_t|``, ``e = v_t / s``, ``w =
+    tanh(s / v) / s`` and ``P = I - n n^T``::
+
+        H = (k_n + weight c_n) (n n^T - mu w v_t n^T)
+            + weight mu F_n (w (P - e e^T) + (1 - tanh^2(s / v)) / v e e^T)
+
+    the law's spring and damper along the normal, the friction's slope in the slip and the
+    friction's change with the normal force. Left out, as for the spring-dampers: the change
+    of the normal, the contact point and the Jacobians with the positions (terms of the size
+    of the force over the shapes' sizes, which change how fast the iteration converges, not
+    where)."""
+    point, n = np.zeros(3), np.zeros(3)
+    s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    work = np.zeros((6, 3))
+    G = np.zeros((3, blocks.shape[1]))
+    H = np.zeros((3, 3))
+    for k in range(bodies.shape[0]):
+        i, j = bodies[k, 0], bodies[k, 1]
+        blocks[k] = 0.0
+        if values[k, 0] >= HINGE_STOP:
+            x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
+            gap, gap_rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
+            k_n, c_n = _law_slopes(values, k, -gap, -gap_rate)
+            _pair_jacobian(axes, i, j, s_i, s_j, G)
+            if values[k, 0] != SLIDE_STOP:
+                _turn_jacobian(axes, i, j, G)
+            row = h @ G  # the coordinate's rate per coordinate rate
+            blocks[k] = (k_n + weight * c_n) * np.outer(row, row)
+            continue
+        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point, n,
+                                        s_i, s_j, v_i, v_j, work)
+        force = normal_force(values, k, -gap, -rate)
+        if force == 0.0:
+            continue
+        k_n, c_n = _law_slopes(values, k, -gap, -rate)
+        slip = 0.0
+        for x in range(3):
+            v_j[x] -= rate * n[x]
+            slip += v_j[x] * v_j[x]
+        slip = math.sqrt(slip)
+        scale, mu = values[k, 8], values[k, 7]
+        w = math.tanh(slip / scale) / slip if slip > 1e-9 * scale else 1.0 / scale
+        w1 = (1.0 - math.tanh(slip / scale) ** 2) / scale
+        for x in range(3):
+            e_x = v_j[x] / slip if slip > 1e-9 * scale else 0.0
+            for y in range(3):
+                e_y = v_j[y] / slip if slip > 1e-9 * scale else 0.0
+                along = (k_n + weight * c_n) * (n[x] * n[y] - mu * w * v_j[x] * n[y])
+                P = (1.0 if x == y else 0.0) - n[x] * n[y]
+                H[x, y] = along + weight * mu * force * (w * (P - e_x * e_y) + w1 * e_x * e_y)
+        _pair_jacobian(axes, i, j, s_i, s_j, G)
+        blocks[k] = G.T @ H @ G
+        if SPHERE_SPHERE <= values[k, 0] <= PIN_IN_HOLE and values[k, 0] != BOX_SPHERE:
+            _turning_normal(axes, Q, i, j, values[k, 0] == PIN_IN_HOLE, force, n, work, s_i,
+                            s_j, G, H)
+            blocks[k] += G.T @ H @ G
