@@ -15,14 +15,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import warnings
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Prismatic, Revolute
 from mbd3d.mechanisms import slider_crank_positions
-from measure import machine, median_time
+from measure import cost_with_and_without, machine
 
 PIN, CLEARANCE = 0.01, 1e-5  # m
 
@@ -52,26 +51,10 @@ def build(contact: bool, torque: float = 2.0) -> mb.Model:
 def main(repeat: int = 3, duration: float = 0.5) -> list[dict]:
     print(machine())
     t = np.linspace(0.0, duration, 51)
-    rows = []
-    for method, options in (("DOP853", dict(rtol=1e-8)),
-                            ("generalized-alpha", dict(step=1e-3))):
-        for contact in (False, True):
-            model = build(contact)
-
-            def run():
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", (mb.InitialStateWarning,
-                                                     mb.StiffnessWarning))
-                    return mb.forward_dynamics(model, t, initial_rates={"O": 30.0},
-                                               method=method, **options)
-            res = run()  # compiled and cached before the timing
-            wall = median_time(run, repeat)
-            count = res.stats["rhs_evaluations" if method == "DOP853" else "steps"]
-            rows.append({"method": method, "contact": contact, "count": count,
-                         "per": wall / count, "wall": wall})
+    rows = cost_with_and_without(build, t, repeat, ignored=(mb.StiffnessWarning,))
     print(mb.format_table({
         "method": [r["method"] for r in rows],
-        "pin B": ["pin in a hole" if r["contact"] else "revolute" for r in rows],
+        "pin B": ["pin in a hole" if r["variant"] else "revolute" for r in rows],
         "evaluations or steps": [r["count"] for r in rows],
         "per one [us]": [r["per"] * 1e6 for r in rows],
         "run [s]": [r["wall"] for r in rows],

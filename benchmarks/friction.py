@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import warnings
 
 import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Prismatic, Revolute
 from mbd3d.mechanisms import slider_crank_positions
-from measure import machine, median_time
+from measure import cost_with_and_without, machine
 
 
 def build(friction: bool, torque: float = 2.0) -> mb.Model:
@@ -46,27 +45,10 @@ def build(friction: bool, torque: float = 2.0) -> mb.Model:
 def main(repeat: int = 3, duration: float = 0.5) -> list[dict]:
     print(machine())
     t = np.linspace(0.0, duration, 51)
-    rows = []
-    for method, options in (("DOP853", dict(rtol=1e-8)),
-                            ("generalized-alpha", dict(step=1e-3))):
-        for friction in (False, True):
-            model = build(friction)
-
-            def run():
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", mb.InitialStateWarning)
-                    return mb.forward_dynamics(model, t, initial_rates={"O": 30.0},
-                                               method=method, **options)
-
-            res = run()  # compiles
-            seconds = median_time(run, repeat)
-            count = res.stats.get("rhs_evaluations") or res.stats["steps"]
-            unit = "right-hand side" if method == "DOP853" else "step"
-            rows.append(dict(method=method, friction=friction, seconds=seconds, count=count,
-                             per=seconds / count, unit=unit))
+    rows = cost_with_and_without(build, t, repeat)
     print(f"{'method':18s} {'friction':8s} {'run [s]':>9s} {'count':>7s} {'per item':>12s}")
     for r in rows:
-        print(f"{r['method']:18s} {str(r['friction']):8s} {r['seconds']:9.4f} {r['count']:7d} "
+        print(f"{r['method']:18s} {str(r['variant']):8s} {r['wall']:9.4f} {r['count']:7d} "
               f"{r['per'] * 1e6:9.1f} us per {r['unit']}")
     for method in ("DOP853", "generalized-alpha"):
         plain, rubbing = (r for r in rows if r["method"] == method)

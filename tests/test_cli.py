@@ -126,6 +126,7 @@ def test_a_model_file_can_ask_for_the_modes_along_a_motion(tmp_path):
     np.testing.assert_allclose(plotted[:, 0], modes.frequencies[:, 0], rtol=0, atol=1e-12)
     again = mbd3d("run", tmp_path / "fbm.yaml", "--csv", tmp_path)
     assert again.returncode == 2 and "already exists" in again.stderr
+    assert "--overwrite on the command line" in again.stderr  # the option this tool takes
     refused = mbd3d("sweep", tmp_path / "fbm.yaml", "--grid", "bodies.crank.mass=0.2,0.3")
     assert refused.returncode == 2 and "sweep runs kinematic, inverse or forward" in refused.stderr
 

@@ -38,8 +38,8 @@ def _skew(x: np.ndarray) -> np.ndarray:
 class BodyAxes:
     """Co-moving measures (see the module); planar: the coordinates themselves."""
 
-    def __init__(self, model, q: np.ndarray, qd: np.ndarray, charts):
-        self.model, self.charts, self.q0 = model, charts, q
+    def __init__(self, model, q: np.ndarray, qd: np.ndarray):
+        self.model = model
         n = model.n_coordinates
         # a rotation about a body axis is 2 g at g = 0 (the reference's chart)
         unit = np.ones(n)
@@ -80,7 +80,7 @@ class TurningFrame(BodyAxes):
     def __init__(self, model, q: np.ndarray, qd: np.ndarray, charts, rate: np.ndarray):
         self.rate = rate
         self._A = lambda q_: constraints.frames(model, q_, None, charts).A[:model.n_bodies]
-        super().__init__(model, q, qd, charts)
+        super().__init__(model, q, qd)
         nb = model.n_bodies
         P = np.zeros((nb, 6, 6))
         P[:, :3, :3] = np.eye(3)
@@ -129,7 +129,7 @@ def measure(model, q, qd, charts, frame_rate, what: str) -> BodyAxes:
     """The measures of a linearisation: co-moving, or in the frame turning at
     ``frame_rate`` (spatial models)."""
     if frame_rate is None:
-        return BodyAxes(model, q, qd, charts)
+        return BodyAxes(model, q, qd)
     if model.dim != 3:
         raise ModelError(f"{what}: frame_rate is for spatial models (a planar model's angles "
                          "do not depend on the frame)")

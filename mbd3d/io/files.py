@@ -68,8 +68,9 @@ def check_output_path(path: str | os.PathLike, overwrite: bool = True,
     check_output_folder(os.path.dirname(path), what)
     if os.path.exists(path):
         if not overwrite:
-            raise OutputError(f"'{path}' already exists; pass overwrite=True to replace it, "
-                              "or choose another file name")
+            raise OutputError(f"'{path}' already exists; allow replacing it (overwrite=True "
+                              "in Python, --overwrite on the command line) or choose another "
+                              "file name")
         # the mode bits too: root may write anywhere, but a file without write bits was
         # protected on purpose
         if not os.access(path, os.W_OK) or not os.stat(path).st_mode & 0o222:
