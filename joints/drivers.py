@@ -15,7 +15,8 @@ from mbd3d.model.body import Body
 from mbd3d.model.element import ConstraintElement, PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.model.builder import BuildContext
-from mbd3d.model.motion import Motion, as_motion
+from mbd3d.model.motion import Constant, Motion, as_motion
+from mbd3d.numerics.checks import finite_scalar
 
 from mbd3d.joints.prismatic import Prismatic
 from mbd3d.joints.revolute import Revolute
@@ -89,6 +90,9 @@ class RotationDriver(ConstraintElement):
         Body j, when ``joint`` is body i.
     motion : Motion or float
         ``f(t)`` [rad].
+    offset : float
+        The angle at which the driven coordinate is zero [rad]: the angle is ``offset + f(t)``
+        (a URDF joint's coordinate, whose zero is where the URDF draws it).
     """
 
     is_driver = True
@@ -96,7 +100,7 @@ class RotationDriver(ConstraintElement):
     effort_unit = "N m"
 
     def __init__(self, name: str, joint: Revolute | Body, body_j: Body | None = None, *,
-                 motion: Motion | float):
+                 motion: Motion | float, offset: float = 0.0):
         self.name = name
         self.joint = joint if isinstance(joint, Revolute) else None
         if self.joint is not None:
@@ -109,18 +113,23 @@ class RotationDriver(ConstraintElement):
                                  "body_j")
             self.body_i, self.body_j = joint, body_j
         self.motion = as_motion(motion, f"driver '{name}': motion")
+        self.offset = finite_scalar(offset, f"driver '{name}': offset")
+
+    def driven_motion(self) -> Motion:
+        """What the row prescribes: ``f(t)`` plus the offset."""
+        return self.motion + Constant(self.offset) if self.offset else self.motion
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         if ctx.dim == 2:
             return [PrimitiveSpec("angle", self.body_i, self.body_j, {}, ("angle",),
-                                  motion=self.motion)]
+                                  motion=self.driven_motion())]
         if self.joint is None:
             raise ModelError(f"driver '{self.name}': in space, give the Revolute whose rotation "
                              "is driven (its axis defines the angle)")
         f_i, g_i, f_j = self.joint.hinge_directions(ctx, f"driver '{self.name}'")
         return [PrimitiveSpec("rotation", self.body_i, self.body_j,
                               {"f_i": f_i, "g_i": g_i, "f_j": f_j}, ("angle",),
-                              motion=self.motion)]
+                              motion=self.driven_motion())]
 
     def reaction_frame(self, ctx: BuildContext):
         if self.joint is not None:
@@ -132,27 +141,34 @@ class TranslationDriver(ConstraintElement):
     """Prescribes the sliding of a prismatic joint: ``h_i . (r_Pj - r_Pi) = f(t)``.
 
     ``f`` is the position [m] of the prismatic's point on body j along the axis, measured from its
-    point on body i (zero in the drawing when the joint was given with ``at``). The effort is the
-    force on body j along the axis [N].
+    point on body i (zero in the drawing when the joint was given with ``at``), less ``offset``
+    [m] (the position at which the driven coordinate is zero: a URDF joint's). The effort is
+    the force on body j along the axis [N].
     """
 
     is_driver = True
     #: the effort is the force along the slider
     effort_unit = "N"
 
-    def __init__(self, name: str, joint: Prismatic, *, motion: Motion | float):
+    def __init__(self, name: str, joint: Prismatic, *, motion: Motion | float,
+                 offset: float = 0.0):
         if not isinstance(joint, Prismatic):
             raise ModelError(f"driver '{name}': joint must be a Prismatic, got {joint!r}")
         self.name = name
         self.joint = joint
         self.body_i, self.body_j = joint.body_i, joint.body_j
         self.motion = as_motion(motion, f"driver '{name}': motion")
+        self.offset = finite_scalar(offset, f"driver '{name}': offset")
+
+    def driven_motion(self) -> Motion:
+        """What the row prescribes: ``f(t)`` plus the offset."""
+        return self.motion + Constant(self.offset) if self.offset else self.motion
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         u_i, u_j, h_i, _ = self.joint.geometry(ctx)
         return [PrimitiveSpec("dot2", self.body_i, self.body_j,
                               {"v_i": h_i, "u_i": u_i, "u_j": u_j}, ("translation",),
-                              motion=self.motion)]
+                              motion=self.driven_motion())]
 
     def reaction_frame(self, ctx: BuildContext):
         return self.joint.reaction_frame(ctx)

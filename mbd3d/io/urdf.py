@@ -44,7 +44,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from mbd3d.errors import ModelError, did_you_mean, user_stacklevel
-from mbd3d.model.motion import Constant, Motion, as_motion
+from mbd3d.model.motion import Motion, as_motion
 
 __all__ = ["urdf_builder", "load_urdf", "UrdfWarning"]
 
@@ -458,12 +458,12 @@ def _add_driver(b, joint, name: str, element, axis: np.ndarray, motion: Motion, 
     """Drive the URDF joint's coordinate (``q0`` in the drawing) by ``motion``."""
     from mbd3d.joints import RotationDriver, TranslationDriver  # noqa: PLC0415
 
+    # the offsets make the drivers' coordinates the URDF's (see mbd3d.inverse_dynamics_at)
     if joint.type == "prismatic":
-        b.add(TranslationDriver(f"{name}_drive", element, motion=motion + Constant(-q0)))
+        b.add(TranslationDriver(f"{name}_drive", element, motion=motion, offset=-q0))
     elif joint.type in ("revolute", "continuous"):
         offset = _drive_offset(element.body_i, element.body_j, axis) - q0
-        b.add(RotationDriver(f"{name}_drive", element,
-                             motion=motion + Constant(offset) if offset else motion))
+        b.add(RotationDriver(f"{name}_drive", element, motion=motion, offset=offset))
     else:
         raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
 

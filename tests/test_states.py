@@ -1,0 +1,101 @@
+"""Inverse dynamics, joint-space mass matrices and bias forces at given states, in any order:
+a closed loop (the slider-crank) against its closed-form one-degree-of-freedom model, and
+robots against Pinocchio's RNEA, CRBA and nonlinear effects (written apart from ours, in
+joint coordinates)."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import math
+import pathlib
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d.mechanisms import slider_crank
+from slider_crank_oracle import SliderCrankOracle
+
+
+def test_slider_crank_efforts_at_states_over_many_turns_in_any_order():
+    model = slider_crank(crank_speed=2 * math.pi)
+    oracle = SliderCrankOracle()
+    rng = np.random.default_rng(4)
+    # angles over five turns either way, shuffled: each state far from the one before
+    phi, rate, acceleration = (rng.uniform(-30.0, 30.0, 12), rng.normal(size=12) * 8.0,
+                               rng.normal(size=12) * 40.0)
+    res = mb.inverse_dynamics_at(model, {"motor": phi}, {"motor": rate},
+                                 {"motor": acceleration})
+    expected = [oracle.driving_torque(*x) for x in zip(phi, rate, acceleration)]
+    np.testing.assert_allclose(res.joint("motor").effort, expected, rtol=1e-10,
+                               atol=1e-12 * np.max(np.abs(expected)))
+    # and on the branch of the drawing (slider right of the crank) at every state
+    np.testing.assert_allclose(res.body("slider").position[:, 0], oracle.slider_x(phi),
+                               rtol=0, atol=1e-12)
+    M, b = mb.joint_space_dynamics_at(model, phi[:, None], rate[:, None])
+    np.testing.assert_allclose(M[:, 0, 0], [oracle.generalized_mass(p) for p in phi],
+                               rtol=1e-10, atol=0)
+    np.testing.assert_allclose(b[:, 0], [oracle.driving_torque(p, r) for p, r in
+                                         zip(phi, rate)], rtol=1e-10, atol=1e-12)
+
+
+def _robot(name: str) -> pathlib.Path:
+    try:
+        share = importlib.metadata.distribution("example-robot-data").locate_file(
+            "cmeel.prefix/share/example-robot-data/robots")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    return pathlib.Path(str(share)) / name
+
+
+@pytest.mark.filterwarnings("ignore::mbd3d.io.urdf.UrdfWarning")
+@pytest.mark.parametrize("name", ["ur_description/urdf/ur5_robot.urdf",
+                                  "panda_description/urdf/panda.urdf"])
+def test_robot_dynamics_at_states_match_pinocchio(name):
+    pin = pytest.importorskip("pinocchio")
+    path = _robot(name)
+    reference = pin.buildModelFromUrdf(str(path))
+    joints = list(reference.names[1:])
+    model = mb.load_urdf(path, meshes="skip", joint_limits="ignore",
+                         drive={j: 0.0 for j in joints})
+    drivers = [f"{j}_drive" for j in joints]
+    assert mb.driven_coordinates(model) == tuple(drivers)
+    rng = np.random.default_rng(len(joints))
+    k, d = 6, len(joints)
+    q, v, a = rng.uniform(-2.5, 2.5, (k, d)), rng.normal(size=(k, d)), rng.normal(size=(k, d))
+    for j, joint in enumerate(reference.joints[1:]):
+        if joint.shortname() == "JointModelPZ" or "Prismatic" in joint.shortname():
+            q[:, j] = rng.uniform(0.0, 0.04, k)  # a finger's slide [m]
+    res = mb.inverse_dynamics_at(model, q, v, a)
+    M, b = mb.joint_space_dynamics_at(model, q, v)
+    data = reference.createData()
+    for s in range(k):
+        x = np.concatenate([(np.cos(q[s, j]), np.sin(q[s, j])) if joint.nq == 2 else
+                            (q[s, j],) for j, joint in enumerate(reference.joints[1:])])
+        tau = pin.rnea(reference, data, x, v[s], a[s])
+        scale = max(1.0, float(np.max(np.abs(tau))))
+        ours = [res.joint(name).effort[s] for name in drivers]
+        np.testing.assert_allclose(ours, tau, rtol=0, atol=1e-10 * scale)
+        crba = pin.crba(reference, data, x)
+        crba = np.triu(crba) + np.triu(crba, 1).T
+        np.testing.assert_allclose(M[s], crba, rtol=0, atol=1e-10 * np.max(np.abs(crba)))
+        np.testing.assert_allclose(b[s], pin.nonLinearEffects(reference, data, x, v[s]),
+                                   rtol=0, atol=1e-10 * scale)
+
+
+def test_bad_states_are_named():
+    model = slider_crank(crank_speed=2 * math.pi)
+    for given, message in (({"motr": 1.0}, "'motr', which is not a driver; did you mean "
+                                           "'motor'"),
+                           ({}, "no value for driver 'motor'"),
+                           ({"motor": [1.0, np.nan]}, "q of driver 'motor' is not finite in "
+                                                      "state 1"),
+                           ([[1.0, 2.0]], r"one column per driver \(1: \['motor'\]\)")):
+        with pytest.raises(mb.ModelError, match=message):
+            mb.inverse_dynamics_at(model, given, 0.0, 0.0)
+    with pytest.raises(mb.ModelError, match="q, qd and qdd give"):
+        mb.inverse_dynamics_at(model, [[1.0], [2.0]], [[0.0]] * 3, 0.0)
+    free = mb.ModelBuilder(dim=2)
+    free.add_body("puck", mass=1.0, inertia=0.1, position=(0.0, 0.0))
+    with pytest.raises(mb.ModelError, match="has no drivers"):
+        mb.inverse_dynamics_at(free.build(), 0.0, 0.0, 0.0)
