@@ -545,3 +545,21 @@ def test_stops_both_on_one_side_of_zero_hold_at_both_ends(lower, upper):
     angle = res.joint("pin").angle
     assert angle.max() > upper and angle.min() < lower  # both ends met
     assert angle.max() < upper + 0.05 and angle.min() > lower - 0.05  # and held
+
+
+def test_the_first_switch_is_where_the_earliest_sign_change_interpolates_to_zero():
+    # the explicit loop's secant on the switching functions: the fraction of a step where the
+    # first one crosses zero, by linear interpolation between the step's ends
+    from mbd3d.numerics.compiled.integration import first_switch
+    rng = np.random.default_rng(8)
+    for _ in range(20):
+        before, after = rng.normal(size=6), rng.normal(size=6)
+        crossing = (before > 0) != (after > 0)
+        expected = min((brentq(lambda s: b + s * (a - b), 0.0, 1.0)
+                        for b, a in zip(before[crossing], after[crossing])), default=None)
+        found = first_switch(before, after)
+        if expected is None:
+            assert found > 1.0  # none: past the step's end
+        else:
+            assert found == pytest.approx(expected, rel=1e-12, abs=1e-15)
+    assert first_switch(np.array([0.5, -1.0]), np.array([0.25, -2.0])) > 1.0
