@@ -330,3 +330,22 @@ def test_examples_refuse_a_bad_output_path_before_computing(tmp_path, capsys, mo
         with pytest.raises(mb.MBDError, match="no display"):
             load("four_bar").main(n_points=5, rrd=str(tmp_path / "fb.rrd"), show=True)
         assert capsys.readouterr().out == ""
+
+
+def test_newtons_cradle_example(capsys, tmp_path):
+    rrd = tmp_path / "nc.rrd"
+    module = load("newtons_cradle")
+    res = module.main(n_points=141, rrd=str(rrd))
+    assert "swung out to" in capsys.readouterr().out and recorded_steps(rrd, "ball5") == 141
+    model = res.model
+    energy = np.array([mb.kinetic_energy(model, q, qd) + mb.potential_energy(model, q)
+                       for q, qd in zip(res.q, res.qd)])
+    np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-8 * abs(energy[0]))
+    # the last ball swings out to the striker's release, less what the gaps leave with the
+    # others: each stops about GAP / STRING rad short of the bottom of its swing, and their
+    # small swings hold a share of the energy of that order squared (2e-5 rad of the last
+    # ball's swing); the outputs catch its top within 3e-5 rad
+    swings = [np.max(np.abs(module.swing(res, k))) for k in range(1, 6)]
+    short = module.GAP / module.STRING
+    assert 0.0 < module.RELEASE - swings[-1] < 0.05 * short
+    assert all(0.5 * short < s < 2 * short for s in swings[1:-1])

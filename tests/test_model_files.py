@@ -81,6 +81,9 @@ EXAMPLES = {
                                                      "t": steps(0.0, 0.024, 6e-5),
                                                      "method": "DOP853", "rtol": 1e-8,
                                                      "atol": 1e-10}),
+    "newtons_cradle": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.35, 5e-4),
+                                             "method": "DOP853", "rtol": 1e-10,
+                                             "atol": 1e-12}),
     "sweep_slider_crank": (lambda m: m.build(20.0, 0.3), {"kind": "inverse",
                                                            "t": steps(0.0, 1.0, 0.01)}),
 }
