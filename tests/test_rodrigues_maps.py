@@ -130,3 +130,38 @@ def test_chart_reset_keeps_orientation_angular_velocity_and_quaternion(with_rate
     kept = charts.copy()
     assert not spatial_reset_charts(q_small, np.zeros(0), charts, limit, np.zeros((0, 4)))
     np.testing.assert_array_equal(charts, kept)
+
+
+def test_the_error_of_rodrigues_parameters_is_measured_as_the_turn_it_stands_for():
+    """The explicit loop's error scale: a position or rate component's is ``atol + rtol
+    max(|y|, |y_new|)``; a Rodrigues parameter's the orientation error its change stands
+    for, measured as a unit quaternion's components (``atol + rtol`` for components of size
+    one), times the most a change of g outgrows the quaternion's it causes, found here with
+    SciPy's quaternions: ``|dg| / |dq|`` is largest along g, where it is ``1 + g.g``."""
+    from mbd3d.numerics.compiled.integration import error_scale
+
+    def quaternion_of(g):
+        size = np.linalg.norm(g)
+        return Rotation.from_rotvec(2.0 * np.arctan(size) * g / size).as_quat()
+
+    def growth(g, direction, h=1e-7):
+        dq = quaternion_of(g + h * direction) - quaternion_of(g)
+        return h / np.linalg.norm(dq)
+
+    n = 6 * N_BODIES
+    y, y_new = rng.normal(size=2 * n), rng.normal(size=2 * n)
+    atol, rtol = rng.uniform(1e-9, 1e-6, 2 * n), 1e-5
+    scale = error_scale(True, n, y, y_new, atol, rtol)
+    for i in range(2 * n):
+        body, k = divmod(i, 6)
+        if i < n and k >= 3:
+            gs = [state[6 * body + 3:6 * body + 6] for state in (y, y_new)]
+            most = max(growth(g, g / np.linalg.norm(g)) for g in gs)
+            others = [growth(g, d / np.linalg.norm(d)) for g in gs
+                      for d in rng.normal(size=(5, 3))]
+            assert max(others) < most
+            assert scale[i] == pytest.approx((atol[i] + rtol) * most, rel=1e-6)
+        else:
+            assert scale[i] == atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
+    planar = error_scale(False, n, y, y_new, atol, rtol)
+    np.testing.assert_array_equal(planar, atol + rtol * np.maximum(abs(y), abs(y_new)))
