@@ -32,6 +32,11 @@ def test_slider_crank_efforts_at_states_over_many_turns_in_any_order():
     # and on the branch of the drawing (slider right of the crank) at every state
     np.testing.assert_allclose(res.body("slider").position[:, 0], oracle.slider_x(phi),
                                rtol=0, atol=1e-12)
+    # a guess for the first state (its solution): the later ones are still reached in pieces
+    guessed = mb.inverse_dynamics_at(model, {"motor": phi}, {"motor": rate},
+                                     {"motor": acceleration}, q_guess=res.q[0])
+    np.testing.assert_allclose(guessed.body("slider").position[:, 0], oracle.slider_x(phi),
+                               rtol=0, atol=1e-12)
     M, b = mb.joint_space_dynamics_at(model, phi[:, None], rate[:, None])
     np.testing.assert_allclose(M[:, 0, 0], [oracle.generalized_mass(p) for p in phi],
                                rtol=1e-10, atol=0)

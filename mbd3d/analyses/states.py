@@ -191,7 +191,7 @@ def inverse_dynamics_at(model, q: Any, qd: Any, qdd: Any, t: float = 0.0, *,
     turns = None if model.charts0 is None else to_quaternion(model.charts0)
     solve_point = _PointSolver(given, tol, model.n_constraints > model.n_coordinates, turns,
                                _ANALYSIS)
-    drawn = None if q_guess is not None else _drawn(model, float(t))
+    drawn = _drawn(model, float(t))
 
     def solve(values: np.ndarray, guess: np.ndarray, chart, first: bool, forces: bool):
         current[:] = values
@@ -201,7 +201,9 @@ def inverse_dynamics_at(model, q: Any, qd: Any, qdd: Any, t: float = 0.0, *,
         chart = model.charts0
         guess = initial_guess(given, float(t), q_guess, chart, f"{_ANALYSIS} of "
                               f"'{model.name}'", "q_guess")
-        start, first = None if drawn is None else drawn[0], True
+        # the first state from the drawing's, unless a guess was given for it
+        start = None if drawn is None or q_guess is not None else drawn[0]
+        first = True
         for k, target in enumerate(states):
             if start is not None:
                 # far from the last state: there in pieces, each position predicted from the
@@ -215,7 +217,7 @@ def inverse_dynamics_at(model, q: Any, qd: Any, qdd: Any, t: float = 0.0, *,
                     guess, first = guess + rate / pieces, False
             guess, qd_k, qdd_k, lam, chart = solve(target, guess, chart, first, True)
             out.store(guess, qd_k, qdd_k, lam, chart, None if turns is None else turns.copy())
-            start, first = target[:, 0], False
+            start, first = None if drawn is None else target[:, 0], False
 
     watch = Watch(None, False, given, times, _ANALYSIS, out.partial)
     return run_keeping_results(loop, out.partial, watch)
