@@ -500,8 +500,9 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, weight,
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, gap_rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
             k_n, c_n = _law_slopes(values, k, -gap, -gap_rate)
-            _pair_jacobian(axes, i, j, s_i, s_j, G)
-            if values[k, 0] != SLIDE_STOP:
+            if values[k, 0] == SLIDE_STOP:
+                _pair_jacobian(axes, i, j, s_i, s_j, G)
+            else:
                 _turn_jacobian(axes, i, j, G)
             row = h @ G  # the coordinate's rate per coordinate rate
             blocks[k] = (k_n + weight * c_n) * np.outer(row, row)
