@@ -167,3 +167,53 @@ def test_drift_is_measured_row_by_row_in_the_model_s_own_length():
                                 constraint_tol=1e-8)
     assert loose.stats["projections"] > 0
     assert loose.stats["max_drift"] > 1e-8
+
+
+def _offset_slider_crank(size: float = 1e-3) -> mb.Model:
+    """A crank driven harmonically, a massless rod (a Distance joint: its row's constant is
+    the length) to a slider drawn turned by 0.4 rad on a rail along x (the rail's rotation row
+    keeps that angle as its constant), all of ``size``."""
+    from mbd3d.joints import Distance
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    r, L, phi = 0.4 * size, size, 0.7
+    a = np.array([r * math.cos(phi), r * math.sin(phi)])
+    x_b = a[0] + math.sqrt(L * L - a[1] ** 2)
+    crank = b.add_body("crank", mass=0.1, inertia=0.1 * r * r / 3, position=a / 2, angle=phi)
+    slider = b.add_body("slider", mass=0.2, inertia=0.2 * (size / 4) ** 2,
+                        position=(x_b, 0.0), angle=0.4)
+    pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
+    b.add(Distance("rod", crank, slider, at_i=a, at_j=(x_b, 0.0)))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0)))
+    b.add(RotationDriver("motor", pin, motion=mb.Harmonic(0.3, 5.0, offset=phi)))
+    return b.build()
+
+
+def test_the_compiled_drift_measure_is_the_rows_residuals_in_the_model_s_units():
+    """The explicit loop's drift (what triggers a projection) against the constraint rows
+    evaluated in Python: the largest position residual ``C = c(q) - c0 - f(t)`` and velocity
+    residual ``Cq qd - f'(t)`` of each row over its scale (lengths over the model's), at
+    states off the constraints, one where the positions are furthest off, one the rates."""
+    from mbd3d.model import constraints
+    from mbd3d.numerics.compiled.integration import drift
+    from mbd3d.numerics.compiled.structures import workspace
+    model = _offset_slider_crank()
+    assert np.any(model.c0 != 0.0) and model.length_scale < 1e-2
+    arrays = model._core.arrays(python_accelerations=False)
+    work = workspace(False, arrays)
+    rng = np.random.default_rng(2)
+    n = model.n_coordinates
+    # where the motor stands still (f' = 0), its angle 0.3 rad off and the rest slightly,
+    # at rest; then positions solved at a time it turns, the rates off
+    t_late = 0.37
+    solved = mb.solve_position(model, model.q0, t_late)
+    for t, q, qd in ((math.pi / 10, model.q0 + 1e-7 * rng.normal(size=n), np.zeros(n)),
+                     (t_late, solved + 1e-12 * rng.normal(size=n), 0.3 * rng.normal(size=n))):
+        fr = constraints.frames(model, q)
+        position = constraints.largest_relative(model, constraints.residual(model, t, q, fr))
+        velocity = constraints.largest_relative(
+            model, constraints.jacobian(model, t, q, fr, sparse=False) @ qd
+            - constraints.velocity_rhs(model, t, fr))
+        expected = max(position, velocity)
+        assert expected > 10 * min(position, velocity)  # each part the larger in turn
+        found = drift(arrays, 0, t, np.concatenate([q, qd]), None, work)
+        assert found == pytest.approx(expected, rel=1e-10)
