@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import mbd3d as mb
-from mbd3d.joints import Prismatic
+from mbd3d.joints import Prismatic, Revolute
 from mbd3d.mechanisms import pendulum_chain, slider_crank, spatial_chain
 from test_examples import load
 from test_published_problems import four_bar_oscillator
@@ -284,32 +284,39 @@ def test_contact_tangent_equals_finite_differences_where_nothing_is_left_out(dim
         pair, charts, data = _spatial_pair(second, mb.HertzContact(stiffness=4e6, restitution=0.5),
                                            friction=0.4)
         q = _overlapping_state(pair, charts, data, second, rng)
-        qd = rng.normal(size=12) * 0.03  # slipping at about the slip velocity, 0.05 m/s
-        _, _, D = _differenced_tangent(pair, q, qd, charts, weight)
-        velocity_part = (_contact_tangent(pair, q, qd, charts, weight)
-                         - _contact_tangent(pair, q, qd, charts, 0.0)) / weight
-        assert np.abs(D).max() > 10.0
-        np.testing.assert_allclose(velocity_part, D, rtol=0, atol=1e-6 * np.abs(D).max())
+        # slipping at about the slip velocity, 0.05 m/s; then at rest (no slip: friction's
+        # slope there is its steepest, mu F_n / v_slip, the same every way in the plane)
+        for qd in (rng.normal(size=12) * 0.03, np.zeros(12)):
+            _, _, D = _differenced_tangent(pair, q, qd, charts, weight)
+            velocity_part = (_contact_tangent(pair, q, qd, charts, weight)
+                             - _contact_tangent(pair, q, qd, charts, 0.0)) / weight
+            assert np.abs(D).max() > 10.0
+            np.testing.assert_allclose(velocity_part, D, rtol=0, atol=1e-6 * np.abs(D).max())
 
 
-@pytest.mark.parametrize("hole", [False, True])
-def test_contact_tangent_turns_the_normal_between_centres(hole):
+@pytest.mark.parametrize("hole, dim", [(False, 3), (True, 2), (True, 3)])
+def test_contact_tangent_turns_the_normal_between_centres(hole, dim):
     """Two spheres pressed together (spatial, turned bodies) and a pin pressed into the wall of
-    its hole (planar), each shape centred on its body: the normal turns as the centres move,
-    a stiffness of the force over the centres' distance, negative between spheres, positive
-    in the hole; the whole tangent against central differences, the relative velocity along
-    the normal (so that the damper's rate does not turn with it)."""
-    dim = 2 if hole else 3
+    its hole, each shape centred on its body, away from the origin: the normal turns as the
+    centres move, a stiffness of the force over the centres' distance, negative between
+    spheres, positive in the hole (none along a spatial hole's axis); the whole tangent
+    against central differences, the relative velocity along the normal (so that the
+    damper's rate does not turn with it). In a spatial hole the axis turns with the hole, a
+    term the tangent leaves out: there the translations' block."""
     law = mb.HuntCrossley(stiffness=3e6, restitution=0.6, impact_speed=1.0, exponent=1.5)
     b = mb.ModelBuilder(dim=dim)
-    one = b.add_body("one", mass=1.0, inertia=0.01 if hole else (0.01, 0.02, 0.03),
-                     position=(0.0,) * dim)
-    d = np.array([0.6, 0.8]) if hole else np.array([0.48, 0.6, 0.64])  # unit
+    centre = np.array([0.3, -0.2, 0.5])[:dim]
+    one = b.add_body("one", mass=1.0, inertia=0.01 if dim == 2 else (0.01, 0.02, 0.03),
+                     position=centre)
+    d = np.array([0.6, 0.8]) if dim == 2 else np.array([0.48, 0.6, 0.64])  # unit
+    if hole and dim == 3:
+        d = np.array([0.6, 0.8, 0.0])  # square to the hole's axis, z
     gap = 0.002
-    two = b.add_body("two", mass=2.0, inertia=0.03 if hole else (0.03, 0.02, 0.01),
-                     position=d * ((0.1 - gap) if not hole else 0.003 + gap))
+    two = b.add_body("two", mass=2.0, inertia=0.03 if dim == 2 else (0.03, 0.02, 0.01),
+                     position=centre + d * ((0.1 - gap) if not hole else 0.003 + gap))
     if hole:  # pin radius 0.05 in a hole 0.053: the pin 3 mm + 2 mm off the hole's centre
-        b.add(mb.Contact("pin", mb.Sphere(one, 0.05), mb.Hole(two, 0.053), law=law))
+        axis = {} if dim == 2 else {"axis": (0.0, 0.0, 1.0)}
+        b.add(mb.Contact("pin", mb.Sphere(one, 0.05), mb.Hole(two, 0.053, **axis), law=law))
     else:
         b.add(mb.Contact("pair", mb.Sphere(one, 0.04), mb.Sphere(two, 0.06), law=law))
     with warnings.catch_warnings():
@@ -324,33 +331,56 @@ def test_contact_tangent_turns_the_normal_between_centres(hole):
     numeric, K, _ = _differenced_tangent(model, q, qd, model.charts0, weight)
     analytic = _contact_tangent(model, q, qd, model.charts0, weight)
     assert np.abs(K).max() > 1e4
+    if hole and dim == 3:
+        moves = np.r_[0:3, 6:9]
+        numeric, analytic = numeric[np.ix_(moves, moves)], analytic[np.ix_(moves, moves)]
+        assert abs(numeric[2, 2]) < 1e-6 * np.abs(numeric).max()  # along the axis: none
     np.testing.assert_allclose(analytic, numeric, rtol=0, atol=1e-6 * np.abs(numeric).max())
+
+
+def _hinged_bars(dim: int, law) -> mb.Model:
+    """Two free bars hinged at their ends (axis z), the hinge limited to +-0.5 rad."""
+    b = mb.ModelBuilder(dim=dim)
+    inertia = 0.1 if dim == 2 else np.diag([0.01, 0.1, 0.1])
+    first = b.add_body("first", mass=1.0, inertia=inertia, position=(0.5,) + (0.0,) * (dim - 1))
+    second = b.add_body("second", mass=1.5, inertia=inertia,
+                        position=(1.5,) + (0.0,) * (dim - 1))
+    hinge = b.add(Revolute("hinge", first, second, at=(1.0,) + (0.0,) * (dim - 1),
+                           axis=None if dim == 2 else (0.0, 0.0, 1.0)))
+    b.add(mb.JointLimit("stop", hinge, lower=-0.5, upper=0.5, law=law))
+    return b.build()
 
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_stop_tangent_equals_finite_differences(dim):
     """A slider past its upper stop (the force along a fixed axis through the block's centre)
-    and, in the plane, a pendulum past its hinge stop: the whole tangent exact; a spatial
-    hinge's velocity part."""
+    and, in the plane, a pendulum past its hinge stop and two free bars past theirs (the angle
+    linear in both bodies' coordinates): the whole tangent exact; in space the hinges'
+    velocity part (their axes turn with the bodies, which the tangent leaves out)."""
     from test_contacts import _pendulum, _slider
     law = mb.HuntCrossley(stiffness=2e5, restitution=0.7, impact_speed=0.5, exponent=1.0)
     slider = _slider(dim, law)
     pendulum, _, _ = _pendulum(dim, law, lower=-0.5)
+    bars = _hinged_bars(dim, law)
     rng = np.random.default_rng(5)
-    for model, past in ((slider, True), (pendulum, False)):
+    for model in (slider, pendulum, bars):
         q, qd = model.q0.copy(), rng.normal(size=model.n_coordinates)
-        if past:  # the block 3 mm past the stop, moving on into it
+        if model is slider:  # the block 3 mm past the stop, moving on into it
             q[0], qd[0] = 0.203, 0.2
-        elif dim == 2:  # the rod turned 0.01 rad past its stop at -0.5 rad, still turning on
+        elif model is pendulum and dim == 2:  # 0.01 rad past its stop at -0.5, turning on
             q[:3], qd[2] = (0.5 * np.cos(-0.51), 0.5 * np.sin(-0.51), -0.51), -0.3
-        else:
+        elif model is pendulum:
             q[:3], q[5], qd[5] = (0.5 * np.cos(-0.51), 0.5 * np.sin(-0.51), 0.0), \
                 math.tan(-0.51 / 2), -0.15
+        elif dim == 2:  # the second bar turned 0.51 rad from the first, and turning on
+            q[2], q[5], qd[2], qd[5] = 0.2, 0.71, -0.4, 0.3
+        else:
+            q[5], q[11], qd[5], qd[11] = math.tan(0.1), math.tan(0.355), -0.2, 0.15
         weight = 300.0
         numeric, _, D = _differenced_tangent(model, q, qd, model.charts0, weight)
         analytic = _contact_tangent(model, q, qd, model.charts0, weight)
         assert np.abs(numeric).max() > 1e3
-        if dim == 3 and model is pendulum:
+        if dim == 3 and model is not slider:
             analytic = (analytic - _contact_tangent(model, q, qd, model.charts0, 0.0)) / weight
             numeric = D
         np.testing.assert_allclose(analytic, numeric, rtol=0,
