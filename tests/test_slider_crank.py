@@ -202,12 +202,16 @@ def test_the_compiled_drift_measure_is_the_rows_residuals_in_the_model_s_units()
     work = workspace(False, arrays)
     rng = np.random.default_rng(2)
     n = model.n_coordinates
-    # where the motor stands still (f' = 0), its angle 0.3 rad off and the rest slightly,
-    # at rest; then positions solved at a time it turns, the rates off
-    t_late = 0.37
-    solved = mb.solve_position(model, model.q0, t_late)
-    for t, q, qd in ((math.pi / 10, model.q0 + 1e-7 * rng.normal(size=n), np.zeros(n)),
-                     (t_late, solved + 1e-12 * rng.normal(size=n), 0.3 * rng.normal(size=n))):
+    # where the motor stands still (f' = 0), at rest, the positions 1e-7 m (rad) off; then
+    # where it turns, positions solved and the rates 1e-6 off: the rows' residuals are then
+    # as small as the errors, so that a constant, a driver's value or rate, or a scale
+    # misplaced is the largest
+    t_still, t_turning = math.pi / 10, 0.37
+    still = mb.solve_position(model, model.q0, t_still)
+    turning = mb.solve_position(model, model.q0, t_turning)
+    rates = mb.solve_velocity(model, turning, t_turning)
+    for t, q, qd in ((t_still, still + 1e-7 * rng.normal(size=n), np.zeros(n)),
+                     (t_turning, turning, rates + 1e-6 * rng.normal(size=n))):
         fr = constraints.frames(model, q)
         position = constraints.largest_relative(model, constraints.residual(model, t, q, fr))
         velocity = constraints.largest_relative(
