@@ -95,15 +95,18 @@ def test_hanging_pendulum_at_rest_carries_its_weight():
 
 @pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853"])
 def test_the_explicit_pairs_step_as_scipys_solve_ivp_does(method):
-    """A free body on a spring (no constraints: the same ODE in the same coordinates) through
-    SciPy's solve_ivp with the same pair and tolerances: the compiled loop's step-size control
-    (its error norm, safety factor and limits) takes the steps SciPy's does, within a few
-    (the first step's guess differs slightly), and lands on the same state."""
+    """A free body on a spring under a torque varying in time (no constraints: the same ODE in
+    the same coordinates) through SciPy's solve_ivp with the same pair and tolerances: the
+    compiled loop's step-size control (its error norm, safety factor and limits) and its
+    stages' times take the steps SciPy's does, within a few (the first step's guess differs
+    slightly), with as many evaluations, and land on the same state."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     body = b.add_body("b", mass=1.3, inertia=0.05, position=(0.3, -0.2), angle=0.4,
                       velocity=(0.5, 0.1), angular_velocity=2.0)
     b.add(mb.SpringDamper("s", b.ground, body, point_i=(0.0, 0.0), point_j=(0.1, 0.05),
                           stiffness=200.0, free_length=0.2))
+    # a torque that varies in time: the stages must be evaluated at their own times
+    b.add(mb.Torque("wobble", body, mb.Harmonic(0.3, 9.0)))
     model = b.build()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", mb.StiffnessWarning)
@@ -116,4 +119,7 @@ def test_the_explicit_pairs_step_as_scipys_solve_ivp_does(method):
                     rtol=1e-8, atol=1e-10)
     steps = len(sol.t) - 1
     assert abs(res.stats["steps"] - steps) <= 0.05 * steps, (res.stats["steps"], steps)
+    # and evaluates the right-hand side as often (the stages of accepted and rejected steps)
+    assert abs(res.stats["rhs_evaluations"] - sol.nfev) <= 0.05 * sol.nfev, (
+        res.stats["rhs_evaluations"], sol.nfev)
     np.testing.assert_allclose(res.q[-1], sol.y[:3, -1], rtol=0, atol=1e-6)
