@@ -484,10 +484,12 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, weight,
             + weight mu F_n (w (P - e e^T) + (1 - tanh^2(s / v)) / v e e^T)
 
     the law's spring and damper along the normal, the friction's slope in the slip and the
-    friction's change with the normal force. Left out, as for the spring-dampers: the change
-    of the normal, the contact point and the Jacobians with the positions (terms of the size
-    of the force over the shapes' sizes, which change how fast the iteration converges, not
-    where)."""
+    friction's change with the normal force; between two centres (spheres, capsules, a pin
+    in its hole) also the normal's turning as they move (:func:`_turning_normal`). Left
+    out, as for the spring-dampers: the normal's turning with a plane or a box and with a
+    hole's axis, and the change of the contact point and of the Jacobians with the positions
+    (terms of the size of the force over the shapes' sizes, which change how fast the
+    iteration converges, not where)."""
     point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
     work = np.zeros((6, 3))
