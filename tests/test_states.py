@@ -90,7 +90,7 @@ def test_robot_dynamics_at_states_match_pinocchio(name):
 
 def test_bad_states_are_named():
     model = slider_crank(crank_speed=2 * math.pi)
-    for given, message in (({"motr": 1.0}, "'motr', which is not a driver; did you mean "
+    for given, message in (({"motr": 1.0}, r"'motr', which is not a driver \(did you mean "
                                            "'motor'"),
                            ({}, "no value for driver 'motor'"),
                            ({"motor": [1.0, np.nan]}, "q of driver 'motor' is not finite in "

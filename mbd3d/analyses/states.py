@@ -14,16 +14,16 @@ Jacobian), so the answers are those of :func:`mbd3d.inverse_dynamics` at the sam
 from __future__ import annotations
 
 import copy
-import difflib
 from typing import Any, Mapping
 
 import numpy as np
 
 from mbd3d.analyses.kinematics import (_PointSolver, _require_fully_driven, initial_guess)
-from mbd3d.errors import ModelError
+from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io.observers import Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
+from mbd3d.joints import RotationDriver, TranslationDriver
 from mbd3d.model import constraints
 from mbd3d.model.motion import Motion
 from mbd3d.numerics.rotations import to_quaternion
@@ -62,10 +62,9 @@ def _column(model, names: tuple, given: Any, label: str) -> np.ndarray:
     if isinstance(given, Mapping):
         unknown = [key for key in given if key not in names]
         if unknown:
-            close = difflib.get_close_matches(str(unknown[0]), names, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else f"; its drivers: {list(names)}"
             raise ModelError(f"{_ANALYSIS} of '{model.name}': {label} names '{unknown[0]}', "
-                             f"which is not a driver{hint}")
+                             f"which is not a driver{did_you_mean(unknown[0], names)}; its "
+                             f"drivers: {list(names)}")
         missing = [name for name in names if name not in given]
         if missing:
             raise ModelError(f"{_ANALYSIS} of '{model.name}': {label} has no value for "
@@ -132,11 +131,10 @@ def _drawn(model, t: float) -> tuple[np.ndarray, np.ndarray] | None:
     values, units = [], []
     for name in driven_coordinates(model):
         element = drawing.joint(name).element
-        kind = type(element).__name__
-        if kind == "RotationDriver":
+        if isinstance(element, RotationDriver):
             values.append(drawing.joint(name).angle[0] - element.offset)
             units.append(_PIECE)
-        elif kind == "TranslationDriver":
+        elif isinstance(element, TranslationDriver):
             values.append(drawing.joint(name).displacement[0] - element.offset)
             units.append(_PIECE * model.length_scale)
         else:
