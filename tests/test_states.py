@@ -13,8 +13,12 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
+from mbd3d.io.model_file import read
 from mbd3d.mechanisms import slider_crank
+from four_bar_loop import four_bar_by_hand
 from slider_crank_oracle import SliderCrankOracle
+
+MODELS = pathlib.Path(__file__).resolve().parents[1] / "examples" / "models"
 
 
 def test_slider_crank_efforts_at_states_over_many_turns_in_any_order():
@@ -42,6 +46,36 @@ def test_slider_crank_efforts_at_states_over_many_turns_in_any_order():
                                rtol=1e-10, atol=0)
     np.testing.assert_allclose(b[:, 0], [oracle.driving_torque(p, r) for p, r in
                                          zip(phi, rate)], rtol=1e-10, atol=1e-12)
+
+
+def test_a_driver_s_offset_is_taken_off_the_coordinate_it_starts_from():
+    """States near the drawing are reached from the drawing's coordinate, the driven angle or
+    slide less the driver's offset: counted with the offset, the way there is the offset long
+    and leads a closed loop onto its other branch or out of reach."""
+    # answers to the model files' printed digits and Newton-Raphson's tolerance: the other
+    # branch is radians away
+    # the four-bar's crank angle with an offset of 4 rad: its rocker on the open branch
+    four_bar = read(MODELS / "four_bar.yaml", {"joints.motor.offset": 4.0}).model
+    drawn = math.pi / 3 - 4.0
+    phi = np.array([drawn + 0.05, drawn - 0.05])
+    res = mb.inverse_dynamics_at(four_bar, {"motor": phi}, 1.0, 0.0)
+    np.testing.assert_allclose(res.body("rocker").angle,
+                               [four_bar_by_hand(p + 4.0)[0][1] for p in phi], rtol=0,
+                               atol=1e-10)
+    # the slider-crank (crank drawn at 65 degrees) driven at its slider with 0.2 m of offset:
+    # the crank above the rail
+    r, l, drawn = 0.12, 0.26, math.radians(65.0)
+    x0 = r * math.cos(drawn) + math.sqrt(l * l - (r * math.sin(drawn)) ** 2)
+    by_slide = read(MODELS / "slider_crank.yaml", {
+        "joints.motor.type": "TranslationDriver", "joints.motor.joint": "rail",
+        "joints.motor.motion": {"type": "Ramp", "initial": x0 - 0.2, "rate": 0.0},
+        "joints.motor.offset": 0.2}).model
+    # and from 0.37 m to 0.16 m, walked in pieces of a quarter of the model's length (in one,
+    # Newton-Raphson turns the crank below the rail)
+    x = np.array([x0 + 0.02, x0 - 0.02, 0.37, 0.16])
+    res = mb.inverse_dynamics_at(by_slide, {"motor": x - 0.2}, 0.0, 0.0)
+    crank_up = np.arccos((r * r + x * x - l * l) / (2 * r * x))
+    np.testing.assert_allclose(res.body("crank").angle, crank_up, rtol=0, atol=1e-10)
 
 
 def _robot(name: str) -> pathlib.Path:
