@@ -78,6 +78,34 @@ def test_spatial_pendulum_swings_alike_both_ways_and_spins_freely():
     assert modes.equilibrium.stats["stability"] == ["neutral"]
 
 
+def test_mode_animations_swing_in_the_phases_of_their_shapes():
+    """With the damper at one pin only, a double pendulum's modes are complex (its parts do
+    not swing in phase): the animation is q0 + a Re(shape e^(i w t)) to first order in a,
+    each coordinate at its own phase. A spatial mode's animation carries the charts."""
+    modes = mb.vibration_modes(hanging_bars([0.6, 0.9], [1.5, 2.5], damper=0.8))
+    q0 = modes.equilibrium.q[0]
+    for mode in (0, 1):
+        shape, w = modes.shapes[mode], 2 * math.pi * modes.frequencies[mode]
+        assert np.max(np.abs(shape.imag)) > 0.02
+        swing = modes.animation(mode, amplitude=1e-3, frames=16, cycles=1)
+        first_order = q0 + 1e-3 * (shape[None, :] * np.exp(1j * w * swing.t)[:, None]).real
+        np.testing.assert_allclose(swing.q, first_order, rtol=0, atol=1e-6)
+
+    m, L = 1.5, 1.2
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    bar = b.add_body("bar", mass=m, inertia=m * L * L * np.array([1 / 12, 1 / 12, 1e-2]),
+                     position=(0.0, 0.0, -L / 2))
+    b.add(Spherical("ball", b.ground, bar, at=(0.0, 0.0, 0.0)))
+    model = b.build()
+    swing = mb.vibration_modes(model).animation(2, amplitude=0.01, frames=8, cycles=1)
+    assert swing.charts.shape == (9,) + model.charts0.shape
+    assert swing.position_residual.max() < 1e-12
+    # the shape is led by the centre's sideways motion, 0.01 m; the lower end, twice as far
+    # from the ball joint, swings twice as far
+    end = swing.point("bar", (0.0, 0.0, -L / 2)).position
+    assert np.max(np.hypot(end[:, 0], end[:, 1])) == pytest.approx(0.02, rel=1e-3)
+
+
 def test_an_inverted_pendulum_grows_at_the_rate_of_its_equation():
     """Upright, I_O theta'' = m g L/2 theta: a real root sqrt(3 g / 2 L) (damping ratio -1)."""
     L = 0.8
@@ -128,9 +156,24 @@ def test_four_bar_on_an_elastic_shaft_along_its_turn():
     assert swing.t[-1] == pytest.approx(period)
     # to first order in the amplitude (putting the positions back on the constraints moves
     # them by its square)
-    np.testing.assert_allclose(twist, 0.05 * np.cos(2 * math.pi * swing.t / period)
-                               * modes.shapes[0, i_crank].real, rtol=0, atol=0.5 * 0.05 ** 2)
-    with pytest.raises(mb.ModelError, match="1 modes"):
+    w, shape = 2 * math.pi / period, modes.shapes[0, i_crank].real
+    np.testing.assert_allclose(twist, 0.05 * np.cos(w * swing.t) * shape, rtol=0,
+                               atol=0.5 * 0.05 ** 2)
+    # one point per frame and the period's end; the rates and accelerations those of the
+    # first-order motion, its derivatives
+    assert len(swing.t) == 17 and "mode 1 of 1" in swing.message
+    np.testing.assert_allclose(swing.qd[:, i_crank], -0.05 * w * np.sin(w * swing.t) * shape,
+                               rtol=0, atol=1e-12 * w)
+    np.testing.assert_allclose(swing.qdd[:, i_crank], -0.05 * w * w * np.cos(w * swing.t)
+                               * shape, rtol=0, atol=1e-12 * w * w)
+    # by default the coordinate leading the shape swings by a tenth of a radian, or of the
+    # model's length
+    lead = int(np.argmax(np.abs(modes.shapes[0])))
+    unit = model.length_scale if model.position_coordinates[lead] else 1.0
+    default = modes.animation(frames=4, cycles=3)
+    assert len(default.t) == 13 and default.t[-1] == pytest.approx(3 * period)
+    np.testing.assert_allclose(np.max(np.abs(default.qd[:, lead])), 0.1 * unit * w, rtol=1e-12)
+    with pytest.raises(mb.ModelError, match=r"1 modes here \(0 to 0\)"):
         modes.animation(3)
 
 
