@@ -122,4 +122,13 @@ def test_the_explicit_pairs_step_as_scipys_solve_ivp_does(method):
     # and evaluates the right-hand side as often (the stages of accepted and rejected steps)
     assert abs(res.stats["rhs_evaluations"] - sol.nfev) <= 0.05 * sol.nfev, (
         res.stats["rhs_evaluations"], sol.nfev)
+    # each tried step evaluates the pair's new stages once (after the first evaluation and
+    # the first step's guess, as SciPy counts), DOP853 its interpolant's three more at the
+    # output: so as many steps are rejected as SciPy's evaluations say it rejected
+    stages = {"RK23": 3, "RK45": 6, "DOP853": 12}[method]
+    tried = res.stats["steps"] + res.stats["rejected_steps"]
+    assert res.stats["rhs_evaluations"] == 2 + stages * tried + 3 * (method == "DOP853")
+    rejected = (sol.nfev - 2) // stages - steps
+    assert abs(res.stats["rejected_steps"] - rejected) <= 0.05 * steps, (
+        res.stats["rejected_steps"], rejected)
     np.testing.assert_allclose(res.q[-1], sol.y[:3, -1], rtol=0, atol=1e-6)

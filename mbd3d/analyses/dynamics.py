@@ -131,9 +131,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     -------
     Results
         With ``lam`` (reactions, driver efforts) at every output time; ``stats`` holds
-        ``steps``, ``rhs_evaluations``, ``projections``, ``chart_resets`` (spatial bodies
+        ``steps`` (accepted), ``rejected_steps`` (tried and shortened: by the error control,
+        at a contact's switch, or because a stage could not be evaluated),
+        ``rhs_evaluations``, ``projections``, ``chart_resets`` (spatial bodies
         re-referenced), ``max_drift`` (largest residual found at a step end before projection)
-        and ``wall_time`` [s]. ``status`` is "stopped" when an event stopped the run.
+        and ``wall_time`` [s]; generalized-alpha's also its Newton iterations and
+        factorizations. ``status`` is "stopped" when an event stopped the run.
 
     Raises
     ------

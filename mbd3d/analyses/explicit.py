@@ -50,7 +50,8 @@ class ExplicitRungeKutta(Integrator):
                              f"{request.method} integrator chooses its own steps (limit them "
                              "with max_step)")
         self.request, self.tableau = request, TABLEAUS[request.method]
-        self.stats = {"method": request.method, "steps": 0, "rhs_evaluations": 0,
+        self.stats = {"method": request.method, "steps": 0, "rejected_steps": 0,
+                      "rhs_evaluations": 0,
                       "projections": 0, "chart_resets": 0, "max_drift": 0.0,
                       "singular_outputs": [], "wall_time": 0.0}
         self.n, self.spatial = model.n_coordinates, model.dim == 3
@@ -156,6 +157,7 @@ class ExplicitRungeKutta(Integrator):
         self.stats.update(steps=int(c[stepping.STEPS]),
                           rhs_evaluations=int(c[stepping.RHS_EVALUATIONS]),
                           chart_resets=int(c[stepping.CHART_RESETS]),
+                          rejected_steps=int(c[stepping.REJECTED]),
                           max_drift=float(self.drift[0]))
         kind, dense, y_old = self.tableau.dense_kind, self.dense, self.y_old
 
