@@ -104,6 +104,20 @@ def test_mode_animations_swing_in_the_phases_of_their_shapes():
     # from the ball joint, swings twice as far
     end = swing.point("bar", (0.0, 0.0, -L / 2)).position
     assert np.max(np.hypot(end[:, 0], end[:, 1])) == pytest.approx(0.02, rel=1e-3)
+    # by default a shape led by a position swings by a tenth of the model's length
+    default = mb.vibration_modes(model).animation(2, frames=4, cycles=1)
+    centre = default.body("bar").position
+    assert np.max(np.hypot(centre[:, 0], centre[:, 1])) == pytest.approx(
+        0.1 * model.length_scale, rel=1e-2)
+    assert model.length_scale != pytest.approx(1.0, rel=0.1)
+
+    # a mode damped at 0.7 of critical still oscillates: drawn over its own period
+    inertia, stiffness = 2.0 * 0.8 ** 2 / 3, 2.0 * G * 0.8 / 2
+    damped = mb.vibration_modes(hanging_bars([0.8], [2.0], damper=1.4 * math.sqrt(
+        stiffness * inertia)))
+    assert damped.damping_ratios[0] == pytest.approx(0.7, rel=1e-6)
+    swing = damped.animation(0, frames=4, cycles=1)
+    assert swing.t[-1] == pytest.approx(1.0 / damped.frequencies[0])
 
 
 def test_an_inverted_pendulum_grows_at_the_rate_of_its_equation():
