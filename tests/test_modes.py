@@ -88,8 +88,14 @@ def test_mode_animations_swing_in_the_phases_of_their_shapes():
         shape, w = modes.shapes[mode], 2 * math.pi * modes.frequencies[mode]
         assert np.max(np.abs(shape.imag)) > 0.02
         swing = modes.animation(mode, amplitude=1e-3, frames=16, cycles=1)
-        first_order = q0 + 1e-3 * (shape[None, :] * np.exp(1j * w * swing.t)[:, None]).real
-        np.testing.assert_allclose(swing.q, first_order, rtol=0, atol=1e-6)
+        turning = shape[None, :] * np.exp(1j * w * swing.t)[:, None]
+        np.testing.assert_allclose(swing.q, q0 + 1e-3 * turning.real, rtol=0, atol=1e-6)
+        # the rates and accelerations of that first-order motion, its derivatives
+        np.testing.assert_allclose(swing.qd, 1e-3 * (1j * w * turning).real, rtol=0,
+                                   atol=1e-15 * w)
+        np.testing.assert_allclose(swing.qdd, -1e-3 * w * w * turning.real, rtol=0,
+                                   atol=1e-15 * w * w)
+        assert f"mode {mode + 1} of 2" in swing.message
 
     m, L = 1.5, 1.2
     b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
@@ -104,6 +110,8 @@ def test_mode_animations_swing_in_the_phases_of_their_shapes():
     # from the ball joint, swings twice as far
     end = swing.point("bar", (0.0, 0.0, -L / 2)).position
     assert np.max(np.hypot(end[:, 0], end[:, 1])) == pytest.approx(0.02, rel=1e-3)
+    # the spin about the bar's axis does not oscillate: drawn as a swing of 1 s
+    assert mb.vibration_modes(model).animation(0, frames=4, cycles=2).t[-1] == 2.0
     # by default a shape led by a position swings by a tenth of the model's length
     default = mb.vibration_modes(model).animation(2, frames=4, cycles=1)
     centre = default.body("bar").position
