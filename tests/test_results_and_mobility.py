@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 import stat
 
 import time
@@ -13,7 +14,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
-from mbd3d.joints import Revolute
+from mbd3d.joints import Revolute, RotationDriver
 from mbd3d.mechanisms import pendulum_chain, slider_crank, spatial_slider_crank
 
 
@@ -232,9 +233,25 @@ def test_mobility_finds_the_redundancy_of_a_double_parallelogram():
         b.add(Revolute(f"top{k}", crank, coupler, at=(k, 1.0)))
     report = mb.mobility(b.build())
     assert (report.gruebler, report.rank, report.dof, report.redundant) == (0, 11, 1, 1)
-    assert "redundant" in report.message
     involved = {label.split(".")[0] for group in report.dependent for label in group}
     assert involved and involved <= {"ground0", "ground1", "ground2", "top0", "top1", "top2"}
+    # the message counts them and lists each set of rows that depend on each other in braces
+    assert report.message.startswith("1 redundant constraint equation(s): the Gruebler count "
+                                     "(0) understates the mobility (1)")
+    sets = re.findall(r"\{([^{}]+)\}", report.message)
+    assert len(sets) == len(report.dependent) == 1
+    assert set(sets[0].split(", ")) == set(report.dependent[0])
+    # a second motor on a driven crank's pin: over-driven, both drivers named
+    b = mb.ModelBuilder(dim=2)
+    crank = b.add_body("crank", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    pin = b.add(Revolute("pin", b.ground, crank, at=(0.0, 0.0)))
+    for name in ("motor", "brake"):
+        b.add(RotationDriver(name, pin, motion=0.0))
+    report = mb.mobility(b.build())
+    assert report.over_driven and report.message.startswith("over-driven")
+    sets = re.findall(r"\{([^{}]+)\}", report.message)
+    assert len(sets) == len(report.dependent) == 1
+    assert {"motor", "brake"} <= {label.split(".")[0] for label in sets[0].split(", ")}
 
 
 def _per_state(res):
