@@ -222,6 +222,17 @@ def test_free_coordinates_and_directions_complete_the_jacobian(build):
     assert "free coordinates" in str(report)
 
 
+def test_free_coordinates_are_chosen_alike_in_any_unit_of_length():
+    """The free coordinates are picked in the dimensionless Jacobian: drawn in millimetres,
+    metres or kilometres a chain and a slider-crank offer the same ones."""
+    for scale in (1e-3, 1.0, 1e3):
+        chain = mb.mobility(pendulum_chain(4, link_length=scale))
+        crank = mb.mobility(slider_crank(crank_length=0.12 * scale, rod_length=0.26 * scale,
+                                         crank_speed=None))
+        assert chain.free_coordinates == [f"link{k}.theta" for k in range(1, 5)], scale
+        assert crank.free_coordinates == ["crank.theta"], scale
+
+
 def test_mobility_finds_the_redundancy_of_a_double_parallelogram():
     # three parallel cranks and one coupler: Gruebler says 0, the linkage moves (1 DOF)
     b = mb.ModelBuilder(dim=2)
