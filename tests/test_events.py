@@ -101,6 +101,31 @@ def test_a_ball_bouncing_with_restitution_lands_at_the_closed_form_times(method,
     np.testing.assert_allclose(res.q[:, k], height, rtol=0, atol=1e-9)
 
 
+def test_forty_crossings_of_an_oscillator_are_each_found_once_at_their_times():
+    """A 2 kg block on a 200 N/m spring along a rail, released 1 cm from rest: x = 0.01
+    cos(w t), w = 10 rad/s, through its rest point at (2k + 1) pi / (2 w). Over twenty periods
+    the crossings fall anywhere in the steps (also in the last of the samples each step is
+    searched at), and every one is found once, at its time."""
+    from mbd3d.joints import Prismatic
+
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    block = b.add_body("block", mass=2.0, inertia=0.1, position=(1.01, 0.0))
+    b.add(Prismatic("rail", b.ground, block, axis=(1.0, 0.0), point_i=(0.0, 0.0),
+                    point_j=(0.0, 0.0)))
+    b.add(mb.SpringDamper("spring", b.ground, block, point_i=(0.0, 0.0), point_j=(0.0, 0.0),
+                          stiffness=200.0, free_length=1.0))
+    model = b.build()
+    k = model.coordinate_index("block.x")
+    rest = mb.Event("rest", lambda t, q, qd: q[k] - 1.0)
+    w = 10.0
+    res = mb.forward_dynamics(model, np.linspace(0.0, 40 * math.pi / w, 161), method="DOP853",
+                              rtol=1e-11, atol=1e-13, events=[rest])
+    times = [e["time"] for e in res.stats["events"]]
+    assert len(times) == 40
+    np.testing.assert_allclose(times, (2 * np.arange(40) + 1) * math.pi / (2 * w), rtol=0,
+                               atol=1e-9)
+
+
 def test_bad_events_are_refused_by_name():
     model, k = pendulum()
     with pytest.raises(mb.ModelError, match="direction"):
