@@ -68,6 +68,24 @@ def test_spatial_chain_agrees_with_dop853_through_chart_resets():
     assert np.max(np.abs(energy - energy[0])) < 1e-3 * np.max(np.abs(res.kinetic_energy))
 
 
+@pytest.mark.parametrize("build", [lambda: pendulum_chain(1, angle=0.0),
+                                   lambda: pendulum_chain(12, link_mass=2.7, link_length=0.8),
+                                   lambda: slider_crank(crank_speed=None),
+                                   lambda: spatial_chain(2)],
+                         ids=["pendulum", "banded chain", "closed loop", "spatial"])
+def test_newton_converges_in_two_iterations_a_step(build):
+    """The iteration matrix ``beta' M + p Cq^T Cq`` is the residual's exact derivative (less
+    the velocity terms', of the step's order), so Newton converges quadratically from the
+    predictor: at steps of 1 ms the first iteration corrects it and the second confirms (one
+    suffices where the predictor is already right). A matrix off in a term converges linearly
+    and takes more."""
+    model = build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 6), method="generalized-alpha",
+                              step=1e-3)
+    assert res.stats["steps"] == 500
+    assert res.stats["newton_iterations"] <= 2 * res.stats["steps"]
+
+
 def stiff_oscillator(stiffness: float, damping: float) -> mb.Model:
     """A 2 kg slider on a rail along x, held by a spring-damper to a ground point 1 m away."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
