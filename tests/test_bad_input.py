@@ -187,6 +187,9 @@ def test_bad_times_and_options():
         mb.forward_dynamics(model, [0.0, 1.0], rtol=-1.0)
     with pytest.raises(mb.ModelError, match="hold.*'link1.z'"):
         mb.forward_dynamics(model, [0.0, 1.0], hold=["link1.z"])
+    # a coordinate by its index: the three of the one link are 0 to 2
+    with pytest.raises(mb.ModelError, match=r"hold: coordinate index 3 out of range 0\.\.2$"):
+        mb.forward_dynamics(model, [0.0, 1.0], hold=[3])
 
 
 @pytest.mark.parametrize("options, words", [
