@@ -177,6 +177,43 @@ def test_lock_up_is_reported_with_time_and_joints_and_partial_results():
     assert len(err.results) == 4 and err.results.status == "failed"
 
 
+def test_a_nearly_singular_jacobian_is_reported_with_its_conditioning_in_model_units():
+    """Two 1 m links pinned to the ground 1.9999 m apart nearly lie straight: the rows are
+    independent, but one combination hardly counts. The message gives the smallest singular
+    value over the largest of the Jacobian in the model's units (rows over their scales,
+    coordinates times theirs), as NumPy's SVD finds it. A Jacobian too large for an SVD is
+    reported without one."""
+    import re
+
+    from mbd3d.analyses.position import singular_error
+    from mbd3d.mechanisms import spatial_chain
+    from mbd3d.model import constraints
+
+    run, rise = 0.99995, math.sqrt(1.0 - 0.99995 ** 2)
+    b = mb.ModelBuilder(dim=2)
+    first = b.add_body("first", mass=1.0, inertia=1 / 12, position=(run / 2, rise / 2),
+                       angle=math.atan2(rise, run))
+    second = b.add_body("second", mass=1.0, inertia=1 / 12, position=(1.5 * run, rise / 2),
+                        angle=-math.atan2(rise, run))
+    b.add(Revolute("O", b.ground, first, at=(0.0, 0.0)))
+    b.add(Revolute("A", first, second, at=(run, rise)))
+    b.add(Revolute("B", second, b.ground, at=(2 * run, 0.0)))
+    model = b.build()
+    Cq = constraints.jacobian(model, 0.0, model.q0, sparse=False)
+    message = str(singular_error(model, Cq, 0.5, "a test"))
+    assert "nearly singular at t = 0.5 s" in message
+    printed = float(re.search(r"smallest singular value is (\S+) of its largest", message)[1])
+    s = np.linalg.svd(Cq / model.row_scale[:, None] * model.coordinate_scale[None, :],
+                      compute_uv=False)
+    assert s[-1] / s[0] < 1e-2
+    assert printed == pytest.approx(s[-1] / s[0], rel=0.06)  # printed to two digits
+
+    chain = spatial_chain(1000)
+    Cq = constraints.jacobian(chain, 0.0, chain.q0)
+    error = singular_error(chain, Cq, 0.0, "a test")
+    assert "too large (3000 x 6000)" in str(error) and error.joints == []
+
+
 def test_bad_times_and_options():
     model = pendulum_chain(1)
     with pytest.raises(mb.ModelError, match="strictly increasing"):
