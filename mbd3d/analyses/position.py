@@ -249,6 +249,7 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
         The rows are known to depend on each other (see :func:`mbd3d.analyses.mobility`): every step
         is the mass-weighted least-change one by the augmented Lagrangian, never an LU of the
         dependent rows (which rounding can let through with an arbitrary null-space part).
+        Without it, an iteration that fails is tried again so before the error is raised.
 
     Returns
     -------
@@ -278,6 +279,28 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
             time=t)
 
     equations = _PositionEquations(model, t, charts, held, q_held, tol)
+    try:
+        return _newton_raphson(model, equations, q, t, charts, redundant, max_iterations)
+    except (AssemblyError, SingularJacobianError) as error:
+        if redundant:
+            raise
+        # rounding can let the LU of rows that depend on each other pass its pivot test (a
+        # redundant mechanism not declared so): its steps then carry an arbitrary part along
+        # the dependent directions and stall, where least-change steps converge; at a lock-up
+        # these fail too, and the first error says more
+        try:
+            return _newton_raphson(model, equations, q, t, charts, True, max_iterations)
+        except (AssemblyError, SingularJacobianError):
+            raise error from None
+
+
+def _newton_raphson(model, equations: _PositionEquations, q: np.ndarray, t: float, charts,
+                    redundant: bool, max_iterations: int) -> np.ndarray:
+    """The iteration of :func:`solve_position` from ``q``: Newton steps (least-change ones
+    where the rows depend on each other, or all of them with ``redundant``) shortened by
+    backtracking until ``|C|`` decreases."""
+    held, n, m = equations.held, model.n_coordinates, model.n_constraints
+    m_total = m + len(held)
     C = equations.residual(q)
     norm = float(np.linalg.norm(equations.relative(C)))
     history = []
