@@ -131,3 +131,32 @@ def test_a_four_bar_of_ten_micrometres_is_analysed_like_one_of_ten_centimetres()
         np.testing.assert_allclose(res.driver("motor").effort / (b * a * a),
                                    reference.driver("motor").effort,
                                    rtol=1e-9, atol=1e-12 * np.abs(reference.lam).max())
+
+
+@pytest.mark.parametrize("far", [0.0, 1e6])
+def test_a_slider_crank_far_from_the_origin_moves_as_one_at_it(far):
+    """Drawn 1000 km along x, a 0.29 m slider-crank's coordinates carry 1e6 m, whose rounding
+    (1e-10 m) is far above the 1e-12 of its length the tolerance asks: Newton-Raphson stops at
+    the rounding its coordinates allow (100 eps (L + max |R|), 2e-8 m) instead of failing,
+    and the slider follows the closed form to it."""
+    r, l = 0.12, 0.26
+    a0, rod0, b0 = slider_crank_positions(math.radians(65.0), r, l)
+    origin = np.array([far, 0.0])
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    crank = b.add_body("crank", mass=1.0, inertia=1e-3, position=origin + a0 / 2,
+                       angle=math.radians(65.0))
+    rod = b.add_body("rod", mass=2.0, inertia=1e-2, position=origin + (a0 + b0) / 2,
+                     angle=rod0)
+    slider = b.add_body("slider", mass=4.0, inertia=2e-2, position=origin + b0)
+    pin = b.add(Revolute("O", b.ground, crank, at=origin))
+    b.add(Revolute("A", crank, rod, at=origin + a0))
+    b.add(Revolute("B", rod, slider, at=origin + b0))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0), at=origin))
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(math.radians(65.0), 2 * math.pi)))
+    t = np.linspace(0.0, 1.0, 9)
+    res = mb.kinematic_analysis(b.build(), t)
+    expected = [slider_crank_positions(math.radians(65.0) + 2 * math.pi * tk, r, l)[2][0]
+                for tk in t]
+    floor = 100 * np.finfo(float).eps * (0.29 + far)  # [m]
+    np.testing.assert_allclose(res.body("slider").position[:, 0] - far, expected, rtol=0,
+                               atol=max(floor, 1e-12))
