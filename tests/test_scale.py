@@ -160,3 +160,24 @@ def test_a_slider_crank_far_from_the_origin_moves_as_one_at_it(far):
     floor = 100 * np.finfo(float).eps * (0.29 + far)  # [m]
     np.testing.assert_allclose(res.body("slider").position[:, 0] - far, expected, rtol=0,
                                atol=max(floor, 1e-12))
+
+
+def test_a_crank_a_million_radians_round_moves_as_in_its_first_turn():
+    """A crank angle of 1e6 rad (160,000 turns) carries a rounding of 1e-10 rad, which moves
+    its pin by 1e-11 m, above the 1e-12 of the length the tolerance asks: Newton-Raphson
+    stops at the rounding the angles allow (100 eps (1 + max |angle|) of the length, for the
+    points too) instead of failing as stuck at a singular position, and the slider follows
+    the closed form to it."""
+    from mbd3d.mechanisms import slider_crank
+
+    # the drawn 65 degrees plus 159,155 turns: the drawing is the start's position
+    start = math.radians(65.0) + 2 * math.pi * round(1e6 / (2 * math.pi))
+    model = slider_crank(crank_motion=mb.Ramp(start, 2 * math.pi))
+    t = np.linspace(0.0, 1.0, 9)
+    res = mb.kinematic_analysis(model, t)
+    expected = [slider_crank_positions(start + 2 * math.pi * tk, 0.12, 0.26)[2][0] for tk in t]
+    # residuals to the floor, 100 eps (1 + max |angle|) of the 0.29 m length, times the
+    # slider's sensitivity to them (a few)
+    floor = 100 * np.finfo(float).eps * (1.0 + start)
+    np.testing.assert_allclose(res.body("slider").position[:, 0], expected, rtol=0,
+                               atol=5 * floor * 0.29)

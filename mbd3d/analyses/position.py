@@ -137,9 +137,10 @@ class _PositionEquations:
         # Residuals are judged relative to the model's scale: length rows (and held
         # positions) in units of its length, angle rows in radians, so that a micrometre
         # mechanism converges as tightly as a metre one. The rounding floor of each kind
-        # comes from the coordinates that kind sums: positions for lengths, angles for angles
-        # (which keep counting turns), so that a wild angle cannot loosen the test of the
-        # points.
+        # comes from the coordinates that kind sums: positions and angles for lengths (a
+        # point a body's length from its origin moves by that length times the rounding of
+        # the body's angle, which keeps counting turns), angles for angles; so a wild
+        # position cannot loosen the test of the angles.
         self.scale = np.concatenate([model.row_scale, model.coordinate_scale[held]])
         self.is_length = np.concatenate([model.length_rows, model.position_coordinates[held]])
 
@@ -182,9 +183,10 @@ class _PositionEquations:
         model, positions = self.model, self.model.position_coordinates
         eps100 = 100 * np.finfo(float).eps
         size = np.abs(self.relative(C))
+        angles = float(np.max(np.abs(qq[~positions]), initial=0.0))
         floor_length = eps100 * (1.0 + float(np.max(np.abs(qq[positions]), initial=0.0))
-                                 / model.length_scale)
-        floor_angle = eps100 * (1.0 + float(np.max(np.abs(qq[~positions]), initial=0.0)))
+                                 / model.length_scale + angles)
+        floor_angle = eps100 * (1.0 + angles)
         limit = np.where(self.is_length, max(self.tol, floor_length), max(self.tol, floor_angle))
         return float(np.max(size / limit, initial=0.0)), float(np.max(size, initial=0.0))
 
@@ -237,8 +239,9 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     tol : float
         Convergence when every row satisfies ``|C| <= tol``, relative to the model's scale:
         length rows in units of ``model.length_scale``, angle rows in radians. Each kind is
-        raised to the rounding level of the coordinates it sums, ``100 eps (1 + max |R| /
-        L)`` for lengths and ``100 eps (1 + max |angle|)`` for angles, when that is larger.
+        raised to the rounding level of the coordinates it sums, ``100 eps (1 + max |R| / L
+        + max |angle|)`` for lengths and ``100 eps (1 + max |angle|)`` for angles, when that
+        is larger (a crank of 1e5 turns puts its points to 1e-10 of their distance).
     max_iterations : int
     hold : iterable of str or int, optional
         Coordinates kept at their guessed values, e.g. ``["crank.theta"]``.
