@@ -181,3 +181,40 @@ def test_a_crank_a_million_radians_round_moves_as_in_its_first_turn():
     floor = 100 * np.finfo(float).eps * (1.0 + start)
     np.testing.assert_allclose(res.body("slider").position[:, 0], expected, rtol=0,
                                atol=5 * floor * 0.29)
+
+
+def test_velocities_off_their_rows_are_judged_alike_at_any_size():
+    """The last guard of a kinematic time point: velocities whose rows miss by more than
+    1e-10 of the terms they sum are refused, with the relative residual named. The slider's
+    speed off by 1e-12 of itself passes; off by 1e-9 and 1e-8 it is refused, at the same
+    relative residual (in proportion) whether the mechanism measures millimetres or
+    kilometres."""
+    import re
+
+    from mbd3d.analyses.kinematics import _check_velocities
+    from mbd3d.mechanisms import slider_crank
+    from mbd3d.model import constraints
+
+    printed = {}
+    for size in (1e-3, 1.0, 1e3):
+        model = slider_crank(crank_length=0.12 * size, rod_length=0.26 * size,
+                             crank_inertia=1e-3 * size ** 2, rod_inertia=1e-2 * size ** 2,
+                             slider_inertia=2e-2 * size ** 2)
+        q = mb.solve_position(model)
+        fr = constraints.frames(model, q)
+        Cq = constraints.jacobian(model, 0.0, q, fr, sparse=False)
+        nu = constraints.velocity_rhs(model, 0.0, fr)
+        qd = np.linalg.solve(Cq, nu)
+        k = model.coordinate_index("slider.x")
+        for off in (1e-12, 1e-9, 1e-8):
+            wrong = qd.copy()
+            wrong[k] *= 1.0 + off
+            if off == 1e-12:
+                _check_velocities(model, Cq, wrong, nu, 0.0, "a test")
+                continue
+            with pytest.raises(mb.AnalysisError, match="do not satisfy the constraints") as info:
+                _check_velocities(model, Cq, wrong, nu, 0.0, "a test")
+            printed[size, off] = float(re.search(r"relative residual (\S+)\)", str(info.value))[1])
+    for off in (1e-9, 1e-8):
+        assert printed[1e-3, off] == printed[1.0, off] == printed[1e3, off]
+    assert printed[1.0, 1e-8] == pytest.approx(10 * printed[1.0, 1e-9], rel=0.05)
