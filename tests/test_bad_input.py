@@ -4,6 +4,7 @@ are kept."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -133,6 +134,10 @@ def test_newton_raphson_failure_names_the_worst_constraints():
     message = str(info.value)
     assert "t = 0.25 s" in message and "after 1 Newton-Raphson iterations" in message
     assert "pin" in message and info.value.time == 0.25
+    # the three worst rows (all lengths here), the largest first
+    listed = re.search(r"Largest residuals: (.*?)\. Check", message)[1].split("; ")
+    sizes = [abs(float(entry.split(" = ")[1].split()[0])) for entry in listed]
+    assert len(sizes) == 3 and sizes == sorted(sizes, reverse=True) and sizes[0] > sizes[-1]
 
 
 def test_joints_that_cannot_be_assembled_are_named():
@@ -183,8 +188,6 @@ def test_a_nearly_singular_jacobian_is_reported_with_its_conditioning_in_model_u
     value over the largest of the Jacobian in the model's units (rows over their scales,
     coordinates times theirs), as NumPy's SVD finds it. A Jacobian too large for an SVD is
     reported without one."""
-    import re
-
     from mbd3d.analyses.position import singular_error
     from mbd3d.mechanisms import spatial_chain
     from mbd3d.model import constraints
