@@ -230,6 +230,10 @@ def test_bad_times_and_options():
     # a coordinate by its index: the three of the one link are 0 to 2
     with pytest.raises(mb.ModelError, match=r"hold: coordinate index 3 out of range 0\.\.2$"):
         mb.forward_dynamics(model, [0.0, 1.0], hold=[3])
+    # a coordinate held where the rows already fix all
+    with pytest.raises(mb.AssemblyError, match="9 constraint equations and 1 held "
+                                               "coordinates for 9 coordinates"):
+        mb.solve_position(slider_crank(), hold=["crank.x"])
 
 
 @pytest.mark.parametrize("options, words", [
