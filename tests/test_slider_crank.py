@@ -124,6 +124,22 @@ def test_assembles_from_a_guess_tens_of_degrees_off():
     assert res.body("rod").angle[0] == pytest.approx(SliderCrankOracle().rod_angle(PHI0), abs=1e-12)
 
 
+def test_velocities_with_the_crank_s_rate_held_are_the_closed_form_ones():
+    """The free slider-crank with its crank's rate held at 30 rad/s: the rest follows from
+    the rows, the slider at the closed-form speed dx/dphi * 30."""
+    model = slider_crank(crank_angle=PHI0, crank_speed=None)
+    q = mb.solve_position(model)
+    guess = np.zeros(model.n_coordinates)
+    k = model.coordinate_index("crank.theta")
+    guess[k] = 30.0
+    qd = mb.solve_velocity(model, q, qd_guess=guess, hold=["crank.theta"])
+    assert qd[k] == 30.0
+    r, l, phi = 0.12, 0.26, PHI0
+    dx = -r * math.sin(phi) - r * r * math.sin(phi) * math.cos(phi) / math.sqrt(
+        l * l - (r * math.sin(phi)) ** 2)
+    assert qd[model.coordinate_index("slider.x")] == pytest.approx(30.0 * dx, rel=1e-12)
+
+
 def test_forward_dynamics_energy_balance_and_lagrange_equation():
     torque = 2.0
     model = slider_crank(crank_angle=PHI0, crank_speed=None, crank_torque=torque)
