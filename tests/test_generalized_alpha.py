@@ -132,8 +132,12 @@ def test_stiff_spring_damper_matches_the_closed_form():
     exact = 0.01 * np.exp(-zeta * w * t) * (np.cos(wd * t) + zeta * w / wd * np.sin(wd * t))
     res = mb.forward_dynamics(model, t, method="generalized-alpha", step=2e-5, rho_inf=1.0)
     np.testing.assert_allclose(res.body("block").position[:, 0] - 1.0, exact, rtol=0, atol=2e-6)
-    # Newton converges in a few iterations per step: the force tangent is in the matrix
-    assert res.stats["newton_iterations"] <= 3 * res.stats["steps"]
+    # at a tenth of the period the spring's stiffness is a tenth of the mass term beta' M:
+    # Newton still converges in two iterations a step because the force tangent is in the
+    # matrix (without it, or with its sign turned, it converges linearly, by a tenth a step)
+    coarse = mb.forward_dynamics(model, t, method="generalized-alpha",
+                                 step=0.1 * 2 * math.pi / w, rho_inf=1.0)
+    assert coarse.stats["newton_iterations"] <= 2 * coarse.stats["steps"]
 
 
 def test_bad_integrator_options_are_named():
