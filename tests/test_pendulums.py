@@ -80,26 +80,32 @@ def test_double_pendulum_matches_minimal_equations():
     np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-8)
 
 
-def test_dop853_s_dense_output_between_steps_under_a_torque_varying_in_time():
-    """DOP853's interpolant takes three more stages at their own times within the step: the
-    outputs between its steps of a body under a torque varying in time agree with SciPy's
-    DOP853 on the same equations (a tight run: their difference is the pair's accuracy)."""
+def _wobbling_body(torque: float):
+    """A free body on a spring under a torque varying in time, and its equations as SciPy's
+    solve_ivp takes them (no constraints: the same ODE in the same coordinates)."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
     body = b.add_body("b", mass=1.3, inertia=0.05, position=(0.3, -0.2), angle=0.4,
                       velocity=(0.5, 0.1), angular_velocity=2.0)
     b.add(mb.SpringDamper("s", b.ground, body, point_i=(0.0, 0.0), point_j=(0.1, 0.05),
                           stiffness=200.0, free_length=0.2))
-    b.add(mb.Torque("wobble", body, mb.Harmonic(3.0, 9.0)))
+    b.add(mb.Torque("wobble", body, mb.Harmonic(torque, 9.0)))
     model = b.build()
+
+    def f(t, y):
+        return np.concatenate([y[3:], mb.forward_accelerations(model, t, y[:3], y[3:])[0]])
+
+    return model, f, np.concatenate([model.q0, model.qd0])
+
+
+def test_dop853_s_dense_output_between_steps_under_a_torque_varying_in_time():
+    """DOP853's interpolant takes three more stages at their own times within the step: the
+    outputs between its steps of a body under a torque varying in time agree with SciPy's
+    DOP853 on the same equations (a tight run: their difference is the pair's accuracy)."""
+    model, f, y0 = _wobbling_body(3.0)
     t = np.linspace(0.0, 2.0, 401)
     res = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-10, atol=1e-12)
     assert res.stats["steps"] < len(t) / 2  # most outputs lie between steps
-
-    def f(tt, y):
-        return np.concatenate([y[3:], mb.forward_accelerations(model, tt, y[:3], y[3:])[0]])
-
-    sol = solve_ivp(f, (0.0, 2.0), np.concatenate([model.q0, model.qd0]), method="DOP853",
-                    rtol=1e-13, atol=1e-14, t_eval=t)
+    sol = solve_ivp(f, (0.0, 2.0), y0, method="DOP853", rtol=1e-13, atol=1e-14, t_eval=t)
     np.testing.assert_allclose(res.q, sol.y[:3].T, rtol=0, atol=1e-8)
 
 
@@ -123,23 +129,13 @@ def test_the_explicit_pairs_step_as_scipys_solve_ivp_does(method):
     compiled loop's step-size control (its error norm, safety factor and limits) and its
     stages' times take the steps SciPy's does, within a few (the first step's guess differs
     slightly), with as many evaluations, and land on the same state."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
-    body = b.add_body("b", mass=1.3, inertia=0.05, position=(0.3, -0.2), angle=0.4,
-                      velocity=(0.5, 0.1), angular_velocity=2.0)
-    b.add(mb.SpringDamper("s", b.ground, body, point_i=(0.0, 0.0), point_j=(0.1, 0.05),
-                          stiffness=200.0, free_length=0.2))
     # a torque that varies in time: the stages must be evaluated at their own times
-    b.add(mb.Torque("wobble", body, mb.Harmonic(0.3, 9.0)))
-    model = b.build()
+    model, f, y0 = _wobbling_body(0.3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", mb.StiffnessWarning)
         res = mb.forward_dynamics(model, [0.0, 2.0], method=method, rtol=1e-8, atol=1e-10)
 
-    def f(t, y):
-        return np.concatenate([y[3:], mb.forward_accelerations(model, t, y[:3], y[3:])[0]])
-
-    sol = solve_ivp(f, (0.0, 2.0), np.concatenate([model.q0, model.qd0]), method=method,
-                    rtol=1e-8, atol=1e-10)
+    sol = solve_ivp(f, (0.0, 2.0), y0, method=method, rtol=1e-8, atol=1e-10)
     steps = len(sol.t) - 1
     assert abs(res.stats["steps"] - steps) <= 0.05 * steps, (res.stats["steps"], steps)
     # and evaluates the right-hand side as often (the stages of accepted and rejected steps)
