@@ -378,15 +378,25 @@ def test_an_over_driven_mechanism_is_called_so_naming_its_drivers():
     pin = b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
     b.add(RotationDriver("motor1", pin, motion=mb.Ramp(0.0, 1.0)))
     b.add(RotationDriver("motor2", pin, motion=mb.Ramp(0.0, 2.0)))
-    for model, drivers in ((b.build(), {"motor1", "motor2"}),
-                           (parallelogram_with_two_motors(), {"motor", "rocker motor"})):
+    # what they fight: each other, or the joints (which leave the four-bar one freedom)
+    fights = ["motions that the other drivers already fix",
+              "motions that the joints already fix (the joints alone leave 1 degree(s) of "
+              "freedom for 2 driven motion(s)) (joints involved: "]
+    for model, drivers, fight in ((b.build(), {"motor1", "motor2"}, fights[0]),
+                                  (parallelogram_with_two_motors(), {"motor", "rocker motor"},
+                                   fights[1])):
         report = mb.mobility(model)
         assert set(report.over_driven) == drivers and "over-driven" in report.message
         for analysis in (mb.kinematic_analysis, mb.inverse_dynamics, mb.forward_dynamics):
             with pytest.raises(mb.OverDrivenError, match="is over-driven") as info:
                 analysis(model, [0.0, 0.1])
             assert set(info.value.drivers) == drivers, analysis
-            assert "singular" not in str(info.value)
+            message = str(info.value)
+            assert "singular" not in message and fight in message
+            # the rows that depend on each other, in braces, the drivers' among them
+            rows = [row for group in re.findall(r"\{([^{}]+)\}", message)
+                    for row in group.split(", ")]
+            assert drivers <= {row.split(".")[0] for row in rows}
 
 
 def test_a_stiff_model_under_an_explicit_method_is_named_early():
