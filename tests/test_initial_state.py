@@ -77,6 +77,29 @@ def test_velocities_the_constraints_change_are_reported_and_can_be_refused():
     assert again.stats["initial_state"] == {"positions": {}, "velocities": {}}
 
 
+def test_many_changed_rates_are_listed_largest_change_first():
+    """A chain of four links given rates that the pins do not allow: the warning names the
+    five largest changes, largest first, and counts the others; the stats have them all."""
+    from mbd3d.mechanisms import pendulum_chain
+
+    model = pendulum_chain(4)
+    qd0 = np.random.default_rng(5).normal(size=model.n_coordinates)
+    with pytest.warns(mb.InitialStateWarning) as caught:
+        res = mb.forward_dynamics(model, [0.0, 0.01], qd0=qd0)
+    changed = res.stats["initial_state"]["velocities"]
+    assert len(changed) > 6
+    message = str(caught[0].message)
+    listed = message.split("changes ")[1].split(f" and {len(changed) - 5} more")[0]
+    sizes = []
+    for entry in listed.split(", "):
+        label, change = entry.rsplit(" ", 3)[0], entry.rsplit(" ", 3)[1:]
+        before, after = changed[label]
+        assert change == [f"{before:.6g}", "->", f"{after:.6g}"]
+        sizes.append(abs(after - before))
+    largest = sorted((abs(b - a) for a, b in changed.values()), reverse=True)[:5]
+    np.testing.assert_allclose(sizes, largest, rtol=0, atol=0)
+
+
 def test_impossible_rates_are_refused_by_name():
     model = free_slider_crank()
     with pytest.raises(mb.ModelError, match="cannot all be given"):
