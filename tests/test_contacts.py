@@ -17,7 +17,7 @@ from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
-from mbd3d.joints import Prismatic, Revolute, Spherical, Universal
+from mbd3d.joints import Prismatic, Revolute, Universal
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces
 
