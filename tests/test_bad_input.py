@@ -127,6 +127,22 @@ def test_kinematic_analysis_of_a_mechanism_that_is_not_fully_driven():
         mb.kinematic_analysis(model, [0.0])
 
 
+def test_surplus_rows_that_leave_a_freedom_undriven_are_named():
+    """A bar on two pins at one point: four rows for three coordinates, but the twins repeat
+    each other, so only two count and the bar's turn is not driven."""
+    b = mb.ModelBuilder(dim=2)
+    bar = b.add_body("bar", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
+    b.add(Revolute("twin", b.ground, bar, at=(0.0, 0.0)))
+    with pytest.raises(mb.NotFullyDrivenError) as info:
+        mb.kinematic_analysis(b.build(), [0.0])
+    message = str(info.value)
+    assert ("4 constraint equations for 3 coordinates, but only 2 are independent" in message
+            and "so 1 degree(s) of freedom are not driven" in message)
+    sets = [set(group.split(", ")) for group in re.findall(r"\{([^{}]+)\}", message)]
+    assert sorted(sets, key=sorted) == [{"pin.x", "twin.x"}, {"pin.y", "twin.y"}]
+
+
 def test_newton_raphson_failure_names_the_worst_constraints():
     model = pendulum_chain(3)
     guess = model.q0 + 0.4
