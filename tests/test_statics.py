@@ -10,7 +10,7 @@ import pytest
 from scipy.optimize import brentq, minimize
 
 import mbd3d as mb
-from mbd3d.joints import Revolute, RotationDriver, Spherical
+from mbd3d.joints import Prismatic, Revolute, RotationDriver, Spherical
 
 G = 9.81
 
@@ -40,6 +40,22 @@ def test_sprung_pendulum_rests_where_spring_and_gravity_balance(k):
                                rtol=0, atol=1e-9)
     # the second derivative of the potential, k - m g L/2 sin(theta), is positive
     assert res.stats["stability"] == ["stable"]
+
+
+def test_a_block_hanging_on_a_spring_rests_at_its_stretch_in_a_few_iterations():
+    """A 2 kg block on a vertical rail under a 100 N/m spring of free length 0.5 m rests at
+    y = -(0.5 + m g / k). The balance is linear: Newton's method takes a few iterations (one
+    with an exact stiffness; this one is differenced), and says how many."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    block = b.add_body("block", mass=2.0, inertia=0.1, position=(0.0, -1.0))
+    b.add(Prismatic("rail", b.ground, block, axis=(0.0, 1.0), point_i=(0.0, 0.0),
+                    point_j=(0.0, 0.0)))
+    b.add(mb.SpringDamper("spring", b.ground, block, point_i=(0.0, 0.0), point_j=(0.0, 0.0),
+                          stiffness=100.0, free_length=0.5))
+    res = mb.static_equilibrium(b.build())
+    assert res.body("block").position[0, 1] == pytest.approx(-(0.5 + 2.0 * G / 100.0),
+                                                             rel=1e-10)
+    assert 1 <= res.stats["newton_iterations"] <= 4
 
 
 def test_the_inverted_pendulum_is_found_unstable_and_the_hanging_one_stable():
