@@ -86,6 +86,25 @@ def test_newton_converges_in_two_iterations_a_step(build):
     assert res.stats["newton_iterations"] <= 2 * res.stats["steps"]
 
 
+def test_a_fully_driven_mechanism_moves_and_pushes_as_its_inverse_dynamics_say():
+    """A crank driven harmonically, a Distance rod (its row's constant is the length) to a
+    slider turned 0.4 rad on its rail (a constant kept by the rail's rotation row): fully
+    driven, so generalized-alpha must reproduce the kinematic inverse dynamics, the positions
+    to the Newton tolerance and the motor's effort with them (the drivers' motions and the
+    rows' constants enter its residual as they enter the position analysis)."""
+    from test_slider_crank import _offset_slider_crank
+
+    model = _offset_slider_crank(1.0)
+    assert np.any(model.c0 != 0.0)
+    t = np.linspace(0.0, 1.0, 11)
+    res = mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-3)
+    reference = mb.inverse_dynamics(model, t)
+    np.testing.assert_allclose(res.q, reference.q, rtol=0, atol=1e-10)
+    effort = reference.joint("motor").effort
+    np.testing.assert_allclose(res.joint("motor").effort, effort, rtol=0,
+                               atol=1e-8 * np.max(np.abs(effort)))
+
+
 def stiff_oscillator(stiffness: float, damping: float) -> mb.Model:
     """A 2 kg slider on a rail along x, held by a spring-damper to a ground point 1 m away."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
