@@ -84,6 +84,8 @@ def test_newton_converges_in_two_iterations_a_step(build):
                               step=1e-3)
     assert res.stats["steps"] == 500
     assert res.stats["newton_iterations"] <= 2 * res.stats["steps"]
+    # and each iteration factors its matrix once
+    assert res.stats["factorizations"] == res.stats["newton_iterations"]
 
 
 def test_a_fully_driven_mechanism_moves_and_pushes_as_its_inverse_dynamics_say():
