@@ -138,7 +138,7 @@ def test_a_slider_crank_far_from_the_origin_moves_as_one_at_it(far):
     """Drawn 1000 km along x, a 0.29 m slider-crank's coordinates carry 1e6 m, whose rounding
     (1e-10 m) is far above the 1e-12 of its length the tolerance asks: Newton-Raphson stops at
     the rounding its coordinates allow (100 eps (L + max |R|), 2e-8 m) instead of failing,
-    and the slider follows the closed form to it."""
+    and the slider follows the closed form to that (times its sensitivity)."""
     r, l = 0.12, 0.26
     a0, rod0, b0 = slider_crank_positions(math.radians(65.0), r, l)
     origin = np.array([far, 0.0])
@@ -157,9 +157,11 @@ def test_a_slider_crank_far_from_the_origin_moves_as_one_at_it(far):
     res = mb.kinematic_analysis(b.build(), t)
     expected = [slider_crank_positions(math.radians(65.0) + 2 * math.pi * tk, r, l)[2][0]
                 for tk in t]
-    floor = 100 * np.finfo(float).eps * (0.29 + far)  # [m]
+    # residuals to the floor, 100 eps (L + max |R|) [m], times the slider's sensitivity to
+    # them (a few)
+    floor = 100 * np.finfo(float).eps * (0.29 + far)
     np.testing.assert_allclose(res.body("slider").position[:, 0] - far, expected, rtol=0,
-                               atol=max(floor, 1e-12))
+                               atol=max(5 * floor, 1e-12))
 
 
 def test_a_crank_a_million_radians_round_moves_as_in_its_first_turn():
@@ -215,6 +217,7 @@ def test_velocities_off_their_rows_are_judged_alike_at_any_size():
             with pytest.raises(mb.AnalysisError, match="do not satisfy the constraints") as info:
                 _check_velocities(model, Cq, wrong, nu, 0.0, "a test")
             printed[size, off] = float(re.search(r"relative residual (\S+)\)", str(info.value))[1])
-    for off in (1e-9, 1e-8):
-        assert printed[1e-3, off] == printed[1.0, off] == printed[1e3, off]
+    for off in (1e-9, 1e-8):  # printed to two digits
+        assert printed[1e-3, off] == pytest.approx(printed[1.0, off], rel=0.05)
+        assert printed[1e3, off] == pytest.approx(printed[1.0, off], rel=0.05)
     assert printed[1.0, 1e-8] == pytest.approx(10 * printed[1.0, 1e-9], rel=0.05)
