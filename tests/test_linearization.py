@@ -18,10 +18,10 @@ from test_modes import hanging_bars
 G = 9.81
 
 
-def cart_pole(cart_mass=1.5, pole_mass=0.5, length=0.8):
+def cart_pole(cart_mass=1.5, pole_mass=0.5, length=0.8, gravity=G):
     """A cart on a horizontal rail with a uniform pole pinned on it, upright; a force on the
     cart (zero: it is the input)."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -gravity))
     cart = b.add_body("cart", mass=cart_mass, inertia=0.1, position=(0.0, 0.0))
     pole = b.add_body("pole", mass=pole_mass, inertia=pole_mass * length ** 2 / 12,
                       position=(0.0, length / 2), angle=math.pi / 2)
@@ -62,6 +62,28 @@ def test_cart_pole_against_its_lagrangian():
     assert lin.eigenvalues[0].real == pytest.approx(rate, rel=1e-8)
 
 
+def test_cart_pole_drawn_in_millimetres_linearises_as_in_metres():
+    """Lengths in mm and g = 9810 mm/s^2: the cart's position and rate grow by 1000, the
+    angles stay, so A_mm = T A_m T^-1 with T = diag(1000, 1, 1000, 1). The differencing steps
+    follow the model's size (steps of 1e-9 mm lose the forces' digits to rounding), and so does
+    the check that the state is on the constraints: 1e-10 of the size off is rounding, 1e-7 is
+    another state."""
+    scale = 1000.0
+    metres, millimetres = cart_pole(), cart_pole(length=0.8 * scale, gravity=G * scale)
+    coordinates = ["cart.x", "pole.theta"]
+    A_m = mb.linearize(metres, metres.q0, coordinates=coordinates).A
+    T = np.diag([scale, 1.0, scale, 1.0])
+    q = millimetres.q0.copy()
+    pole_y = millimetres.coordinate_index("pole.y")
+    q[pole_y] += 0.8 * scale * 1e-10
+    lin = mb.linearize(millimetres, q, coordinates=coordinates)
+    expected = T @ A_m @ np.linalg.inv(T)
+    np.testing.assert_allclose(lin.A, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+    q[pole_y] += 0.8 * scale * 1e-7
+    with pytest.raises(mb.ModelError, match="position"):
+        mb.linearize(millimetres, q, coordinates=coordinates)
+
+
 @pytest.mark.parametrize("coordinates", [None, ["bar1.x"], ["bar1.theta"]])
 def test_pendulum_about_hanging_whatever_the_coordinate(coordinates):
     """I_O theta'' + m g L/2 theta = 0: eigenvalues +-i sqrt(3 g / 2 L) in any independent
@@ -80,14 +102,22 @@ def test_pendulum_about_hanging_whatever_the_coordinate(coordinates):
 def test_double_pendulum_mass_and_stiffness_in_its_angles():
     """Absolute angles: the 2 x 2 Lagrangian of test_modes, exactly (not only its
     eigenvalues)."""
-    (L1, L2), (m1, m2) = (0.6, 0.9), (1.5, 2.5)
-    model = hanging_bars([L1, L2], [m1, m2])
+    (L1, L2), (m1, m2), (k, c) = (0.6, 0.9), (1.5, 2.5), (4.0, 0.7)
+    model = hanging_bars([L1, L2], [m1, m2], spring=k, damper=c)
     lin = mb.linearize(model, model.q0, coordinates=["bar1.theta", "bar2.theta"])
     M = np.array([[(m1 / 3 + m2) * L1 * L1, m2 * L1 * L2 / 2],
                   [m2 * L1 * L2 / 2, m2 * L2 * L2 / 3]])
-    K = np.diag([(m1 / 2 + m2) * G * L1, m2 * G * L2 / 2])
+    # the torsion spring-damper at the top pin turns with bar 1's angle alone
+    K = np.diag([(m1 / 2 + m2) * G * L1 + k, m2 * G * L2 / 2])
     np.testing.assert_allclose(lin.mass, M, rtol=1e-12)
     np.testing.assert_allclose(lin.stiffness, K, rtol=1e-7, atol=1e-8 * K.max())
+    np.testing.assert_allclose(lin.damping, np.diag([c, 0.0]), rtol=1e-7, atol=1e-8 * c)
+    np.testing.assert_allclose(lin.A[2:], -la.solve(M, np.hstack([K, np.diag([c, 0.0])])),
+                               rtol=1e-7, atol=1e-8)
+    # without outputs named, the outputs are the states
+    assert lin.outputs == lin.states
+    np.testing.assert_array_equal(lin.C, np.eye(4))
+    np.testing.assert_array_equal(lin.D, np.zeros((4, 0)))
     # the dependent coordinates follow the angles: bar 2's centre moves with both
     basis = lin.basis[model.coordinate_index("bar2.x")]
     np.testing.assert_allclose(basis, [L1, L2 / 2], rtol=1e-12)
@@ -240,6 +270,11 @@ def test_a_motor_released_as_the_input_about_the_position_it_holds():
     np.testing.assert_allclose(lin.D[0], [1.0], rtol=1e-7)
     np.testing.assert_allclose(lin.C[0], 0.0, rtol=0, atol=1e-7)
     np.testing.assert_allclose(lin.D[1], [m * L / 2 * math.cos(angle) / inertia], rtol=1e-6)
+    # about the held position theta'' = 0: the pin force varies with the angle only through
+    # (L/2) cos(angle) theta'' (were the reference effort the holding torque's opposite, the
+    # bar would accelerate there and -(L/2) sin(angle) theta''_0 would add)
+    np.testing.assert_allclose(lin.C[1], [m * L / 2 * math.cos(angle) * lin.A[1, 0], 0.0],
+                               rtol=1e-6, atol=1e-7)
     with pytest.raises(mb.ModelError, match="0 degrees of freedom.*release"):
         mb.linearize(model, rest.q[0], coordinates=["bar.theta"])
 
