@@ -279,6 +279,33 @@ def test_a_motor_released_as_the_input_about_the_position_it_holds():
         mb.linearize(model, rest.q[0], coordinates=["bar.theta"])
 
 
+def test_a_pendulum_under_a_cart_driven_at_constant_speed_swings_as_under_a_fixed_one():
+    """The cart's driver keeps its speed v: the pole hangs in a frame moving uniformly, so
+    I_O theta'' = -m g L/2 theta about hanging. A state whose rates break the driver's row (the
+    pole left behind, or the cart still) is another motion and is refused, naming the rows."""
+    from mbd3d.joints import TranslationDriver
+    m, L, v = 0.7, 0.6, 1.5
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    cart = b.add_body("cart", mass=2.0, inertia=0.1, position=(0.0, 0.0))
+    pole = b.add_body("pole", mass=m, inertia=m * L * L / 12, position=(0.0, -L / 2),
+                      angle=-math.pi / 2)
+    rail = b.add(Prismatic("rail", b.ground, cart, axis=(1.0, 0.0)))
+    b.add(TranslationDriver("drive", rail, motion=mb.Ramp(0.0, v)))
+    b.add(Revolute("hinge", cart, pole, at=(0.0, 0.0)))
+    model = b.build()
+    qd = np.zeros(model.n_coordinates)
+    qd[[model.coordinate_index("cart.x"), model.coordinate_index("pole.x")]] = v
+    lin = mb.linearize(model, model.q0, qd, coordinates=["pole.theta"])
+    np.testing.assert_allclose(lin.A, [[0.0, 1.0], [-m * G * L / 2 / (m * L * L / 3), 0.0]],
+                               rtol=1e-7, atol=1e-9)
+    left_behind = qd.copy()
+    left_behind[model.coordinate_index("pole.x")] = 0.0
+    still = np.zeros(model.n_coordinates)
+    for rates, row in ((left_behind, "hinge"), (still, "drive")):
+        with pytest.raises(mb.ModelError, match=f"velocity.*{row}"):
+            mb.linearize(model, model.q0, rates, coordinates=["pole.theta"])
+
+
 def test_a_singular_position_is_reported_as_the_linearisation_s():
     from mbd3d.mechanisms import four_bar
     # a parallelogram four-bar lying flat: every body on one line, the Jacobian singular
