@@ -434,6 +434,23 @@ def test_a_stiff_model_under_an_explicit_method_is_named_early(start):
     assert implicit.stats["steps"] < explicit.stats["steps"] / 10
 
 
+def test_a_fast_oscillation_sampled_finely_is_not_called_stiff():
+    """A 1 kg block on a 1e6 N/m spring (period 6.3 ms) sampled every 0.5 ms: the steps are
+    short because the motion is fast, a few per output, not a crawl between outputs; no
+    warning (the stiffness check looks only at steps 100 times shorter than the spacing)."""
+    import warnings
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    block = b.add_body("block", mass=1.0, inertia=0.1, position=(0.1, 0.0))
+    b.add(Prismatic("rail", b.ground, block, axis=(1.0, 0.0)))
+    b.add(mb.SpringDamper("spring", b.ground, block, point_i=(-0.9, 0.0), point_j=(0.0, 0.0),
+                          stiffness=1e6, free_length=0.999))
+    model = b.build()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.StiffnessWarning)
+        res = mb.forward_dynamics(model, np.linspace(0.0, 0.2, 401), method="RK45")
+    assert res.stats["steps"] > 2 * 200  # the check ran, twice
+
+
 def test_forward_accelerations_names_a_state_of_the_wrong_size():
     from mbd3d.mechanisms import slider_crank
 
