@@ -99,6 +99,32 @@ def test_pendulum_about_hanging_whatever_the_coordinate(coordinates):
         assert lin.stiffness[0, 0] == pytest.approx(m * G * L / 2, rel=1e-8)
 
 
+def test_spatial_double_pendulum_swings_as_the_planar_one():
+    """Two bars hanging on hinges about y, drawn in space: the six bodies' coordinates less
+    ten hinge rows leave the planar double pendulum's two modes, omega^2 the eigenvalues of
+    K and M of the test below, whatever the independent coordinates picked."""
+    from mbd3d.mechanisms import frame_along
+    (L1, L2), (m1, m2) = (0.6, 0.9), (1.5, 2.5)
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    previous, top = b.ground, 0.0
+    for k, (L, m) in enumerate(((L1, m1), (L2, m2))):
+        bar = b.add_body(f"bar{k + 1}", mass=m, inertia=m * L * L * np.array([1e-2, 1, 1]) / 12,
+                         position=(0.0, 0.0, top - L / 2),
+                         orientation=frame_along(np.array([0.0, 0.0, -1.0])))
+        b.add(Revolute(f"pin{k + 1}", previous, bar, at=(0.0, 0.0, top), axis=(0.0, 1.0, 0.0)))
+        previous, top = bar, top - L
+    model = b.build()
+    lin = mb.linearize(model, model.q0)
+    M = np.array([[(m1 / 3 + m2) * L1 * L1, m2 * L1 * L2 / 2],
+                  [m2 * L1 * L2 / 2, m2 * L2 * L2 / 3]])
+    K = np.diag([(m1 / 2 + m2) * G * L1, m2 * G * L2 / 2])
+    omega = np.sqrt(la.eigvalsh(K, M))
+    values = lin.eigenvalues
+    assert len(values) == 4
+    np.testing.assert_allclose(np.sort(np.abs(values.imag)), np.repeat(omega, 2), rtol=1e-8)
+    np.testing.assert_allclose(values.real, 0.0, rtol=0, atol=1e-7 * omega[0])
+
+
 def test_double_pendulum_mass_and_stiffness_in_its_angles():
     """Absolute angles: the 2 x 2 Lagrangian of test_modes, exactly (not only its
     eigenvalues)."""
@@ -323,7 +349,8 @@ def test_a_spinning_top_nutates_at_rouths_frequency_in_the_precessing_frame(root
     axes the motion is not steady (the spin turns them), but in a frame turning at Omega about
     the vertical it is: there the small nutation has Routh's frequency, the second
     derivative of the effective potential (p_phi - p_psi cos theta)^2 / (2 I1 sin^2 theta) +
-    m g l cos theta over I1, the same at any time of the motion."""
+    m g l cos theta over I1, the same at any time of the motion. The world is drawn tilted
+    (the vertical along no axis), so every component of the frame's rate counts."""
     m, radius, l, theta0, w3 = 1.0, 0.1, 0.05, math.radians(40), 60.0
     I3, transverse = m * radius ** 2 / 2, m * radius ** 2 / 4
     I1 = transverse + m * l * l
@@ -342,10 +369,12 @@ def test_a_spinning_top_nutates_at_rouths_frequency_in_the_precessing_frame(root
     closed = math.sqrt(Omega ** 2 * s * s + (I3 * w3 - 2 * I1 * Omega * c) ** 2 / I1 ** 2)
     assert routh == pytest.approx(closed, rel=1e-6)  # the differences' own accuracy
 
-    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
-    attitude = mb.rotations.axis_angle((1.0, 0.0, 0.0), theta0)
+    world = mb.rotations.axis_angle(np.array([1.0, 2.0, 3.0]) / math.sqrt(14.0), 0.7)
+    vertical = world[:, 2]
+    b = mb.ModelBuilder(dim=3, gravity=-G * vertical)
+    attitude = world @ mb.rotations.axis_angle((1.0, 0.0, 0.0), theta0)
     axis = attitude[:, 2]
-    omega = np.array([0.0, 0.0, Omega]) + (w3 - Omega * c) * axis
+    omega = Omega * vertical + (w3 - Omega * c) * axis
     top = b.add_body("top", mass=m, inertia=(transverse, transverse, I3), position=l * axis,
                      orientation=attitude, velocity=np.cross(omega, l * axis),
                      angular_velocity=omega)
@@ -354,11 +383,11 @@ def test_a_spinning_top_nutates_at_rouths_frequency_in_the_precessing_frame(root
     period = 2 * math.pi / Omega
     run = mb.forward_dynamics(model, np.linspace(0.0, period, 7), method="DOP853", rtol=1e-11,
                               atol=1e-12)
-    np.testing.assert_allclose(np.arccos(run.body("top").rotation[:, 2, 2]), theta0, rtol=0,
-                               atol=1e-8)
+    np.testing.assert_allclose(np.arccos(run.body("top").rotation[:, :, 2] @ vertical), theta0,
+                               rtol=0, atol=1e-8)
     for k in (0, 2, 5):  # anywhere along the steady motion
         lin = mb.linearize(model, run.q[k], run.qd[k], run.t[k], charts=run.charts[k],
-                           frame_rate=(0.0, 0.0, Omega))
+                           frame_rate=Omega * vertical)
         values = lin.eigenvalues
         oscillating = values[np.argsort(-np.abs(values))[:2]]
         np.testing.assert_allclose(np.sort(oscillating.imag), [-closed, closed], rtol=1e-7)
