@@ -114,15 +114,17 @@ def test_spatial_double_pendulum_swings_as_the_planar_one():
         b.add(Revolute(f"pin{k + 1}", previous, bar, at=(0.0, 0.0, top), axis=(0.0, 1.0, 0.0)))
         previous, top = bar, top - L
     model = b.build()
-    lin = mb.linearize(model, model.q0)
     M = np.array([[(m1 / 3 + m2) * L1 * L1, m2 * L1 * L2 / 2],
                   [m2 * L1 * L2 / 2, m2 * L2 * L2 / 3]])
     K = np.diag([(m1 / 2 + m2) * G * L1, m2 * G * L2 / 2])
     omega = np.sqrt(la.eigvalsh(K, M))
-    values = lin.eigenvalues
-    assert len(values) == 4
-    np.testing.assert_allclose(np.sort(np.abs(values.imag)), np.repeat(omega, 2), rtol=1e-8)
-    np.testing.assert_allclose(values.real, 0.0, rtol=0, atol=1e-7 * omega[0])
+    # in the bodies' axes, and in a frame that does not turn (the global axes)
+    for frame_rate in (None, (0.0, 0.0, 0.0)):
+        values = mb.linearize(model, model.q0, frame_rate=frame_rate).eigenvalues
+        assert len(values) == 4
+        np.testing.assert_allclose(np.sort(np.abs(values.imag)), np.repeat(omega, 2),
+                                   rtol=1e-8)
+        np.testing.assert_allclose(values.real, 0.0, rtol=0, atol=1e-7 * omega[0])
 
 
 def test_double_pendulum_mass_and_stiffness_in_its_angles():
