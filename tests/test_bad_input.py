@@ -434,6 +434,29 @@ def test_a_stiff_model_under_an_explicit_method_is_named_early(start):
     assert implicit.stats["steps"] < explicit.stats["steps"] / 10
 
 
+def test_the_stiffest_elements_are_rated_on_the_reduced_mass_of_their_bodies():
+    """sqrt(k / m) of a spring and c / m of a damper, m the reduced mass m_i m_j / (m_i + m_j)
+    of the two bodies (the body's own where the other is the ground), fastest first: what
+    the stiffness warning names."""
+    from mbd3d.analyses.explicit import stiffest_elements
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    light = b.add_body("light", mass=2.0, inertia=0.1, position=(0.0, 0.0))
+    heavy = b.add_body("heavy", mass=3.0, inertia=0.1, position=(1.0, 0.0))
+    bar = b.add_body("bar", mass=1.0, inertia=0.02, position=(0.0, 1.0))
+    for body in (light, heavy):
+        b.add(Prismatic(f"rail {body.name}", b.ground, body, axis=(1.0, 0.0)))
+    b.add(Revolute("pin", b.ground, bar, at=(0.0, 1.0)))
+    b.add(mb.SpringDamper("coupling", light, heavy, stiffness=1.2e5))
+    b.add(mb.SpringDamper("brake", b.ground, heavy, point_i=(2.0, 0.0), point_j=(0.0, 0.0),
+                          damping=600.0))
+    b.add(mb.RotationalSpringDamper("torsion", b.ground, bar, stiffness=50.0))
+    rated = stiffest_elements(b.build())
+    np.testing.assert_allclose([rate for rate, _ in rated], [math.sqrt(1.2e5 / 1.2),
+                                                             600.0 / 3.0, math.sqrt(50 / 0.02)],
+                               rtol=1e-12)
+    assert "on 1.2 kg" in rated[0][1] and "on 0.02 kg m^2" in rated[2][1]
+
+
 def test_a_fast_oscillation_sampled_finely_is_not_called_stiff():
     """A 1 kg block on a 1e6 N/m spring (period 6.3 ms) sampled every 0.5 ms: the steps are
     short because the motion is fast, a few per output, not a crawl between outputs; no
