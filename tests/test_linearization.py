@@ -62,6 +62,29 @@ def test_cart_pole_against_its_lagrangian():
     assert lin.eigenvalues[0].real == pytest.approx(rate, rel=1e-8)
 
 
+def test_a_falling_cart_pole_takes_the_push_through_its_tilted_mass_matrix():
+    """Tilted phi = 30 degrees and at rest, the pole falls (qdd != 0): the push still acts
+    through M(phi) = [[Mc + m, -m l cos phi], [-m l cos phi, I + m l^2]], B = M^-1 (1, 0), and
+    an output read from the accelerations (the cart's) responds with B's first rate row and
+    follows the state as A's."""
+    Mc, m, L, phi = 1.5, 0.5, 0.8, math.radians(30)
+    l, inertia = L / 2, m * L * L / 12
+    model = cart_pole(Mc, m, L)
+    q = model.q0.copy()
+    q[model.coordinate_index("pole.x")] = -l * math.sin(phi)
+    q[model.coordinate_index("pole.y")] = l * math.cos(phi)
+    q[model.coordinate_index("pole.theta")] = math.pi / 2 + phi
+    cart_x = model.coordinate_index("cart.x")
+    lin = mb.linearize(model, q, coordinates=["cart.x", "pole.theta"], inputs=["push.x"],
+                       outputs={"cart acceleration": lambda r: r.qdd[0, cart_x]})
+    M = np.array([[Mc + m, -m * l * math.cos(phi)], [-m * l * math.cos(phi), inertia + m * l * l]])
+    assert la.solve(M, [0.0, m * G * l * math.sin(phi)])[1] > 1.0  # falling
+    np.testing.assert_allclose(lin.B[:, 0], np.r_[0.0, 0.0, la.solve(M, [1.0, 0.0])],
+                               rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(lin.D[0], lin.B[2], rtol=1e-7)
+    np.testing.assert_allclose(lin.C[0], lin.A[2], rtol=1e-6, atol=1e-7 * np.abs(lin.A).max())
+
+
 def test_cart_pole_drawn_in_millimetres_linearises_as_in_metres():
     """Lengths in mm and g = 9810 mm/s^2, with the cart's and the pole's centre's x as
     coordinates: every state is a length or its rate, so A is the same in mm as in m. The
@@ -287,7 +310,8 @@ def test_a_motor_released_as_the_input_about_the_position_it_holds():
     assert rest.driver("motor").effort[0] == pytest.approx(m * G * L / 2 * math.cos(angle))
     lin = mb.linearize(model, rest.q[0], inputs=["motor"], coordinates=["bar.theta"],
                        outputs={"effort": lambda r: r.driver("motor").effort[0],
-                                "pin y": lambda r: r.joint("O").reaction().force[0, 1]})
+                                "pin y": lambda r: r.joint("O").reaction().force[0, 1],
+                                "effort^2": lambda r: r.driver("motor").effort[0] ** 2})
     inertia = m * L * L / 3
     np.testing.assert_allclose(lin.A, [[0, 1], [m * G * L / 2 * math.sin(angle) / inertia, 0]],
                                rtol=1e-7, atol=1e-9)
@@ -295,6 +319,8 @@ def test_a_motor_released_as_the_input_about_the_position_it_holds():
     # the effort output is the input itself; the pin's vertical force carries the weight less
     # m times the centre's vertical acceleration, (L/2) cos(angle) theta''
     np.testing.assert_allclose(lin.D[0], [1.0], rtol=1e-7)
+    # an output not linear in the effort: d(tau^2) = 2 tau0 du, tau0 the holding torque
+    np.testing.assert_allclose(lin.D[2], [2 * m * G * L / 2 * math.cos(angle)], rtol=1e-7)
     np.testing.assert_allclose(lin.C[0], 0.0, rtol=0, atol=1e-7)
     np.testing.assert_allclose(lin.D[1], [m * L / 2 * math.cos(angle) / inertia], rtol=1e-6)
     # about the held position theta'' = 0: the pin force varies with the angle only through
