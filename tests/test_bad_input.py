@@ -428,8 +428,16 @@ def test_a_stiff_model_under_an_explicit_method_is_named_early(start):
                           stiffness=1e12))
     model = b.build()
     times = start + np.linspace(0.0, 2e-4, 3)
-    with pytest.warns(mb.StiffnessWarning, match="spring-damper 'stiff'.*generalized-alpha"):
+    with pytest.warns(mb.StiffnessWarning, match="spring-damper 'stiff'.*generalized-alpha"
+                      ) as caught:
         explicit = mb.forward_dynamics(model, times, method="RK45")
+    # the figures it gives hold together: the steps' average times the "times shorter" is
+    # the spacing (to the one digit printed)
+    found = re.search(r"steps average (\S+) s, (\S+) times shorter than the output spacing of "
+                      r"(\S+) s", next(str(w.message) for w in caught
+                                        if issubclass(w.category, mb.StiffnessWarning)))
+    average, shorter, spacing = (float(x) for x in found.groups())
+    assert spacing == pytest.approx(1e-4) and 0.6 < average * shorter / spacing < 1.6
     implicit = mb.forward_dynamics(model, times, method="generalized-alpha", step=1e-5)
     assert implicit.stats["steps"] < explicit.stats["steps"] / 10
 
