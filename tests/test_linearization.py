@@ -305,24 +305,28 @@ def test_a_motor_released_as_the_input_about_the_position_it_holds():
                      position=(L / 2 * math.cos(angle), L / 2 * math.sin(angle)), angle=angle)
     pin = b.add(Revolute("O", b.ground, bar, at=(0.0, 0.0)))
     b.add(RotationDriver("motor", pin, motion=mb.Ramp(angle, 0.0)))
+    b.add(mb.Torque("kick", bar, torque=0.0))
     model = b.build()
     rest = mb.static_equilibrium(model)
     assert rest.driver("motor").effort[0] == pytest.approx(m * G * L / 2 * math.cos(angle))
-    lin = mb.linearize(model, rest.q[0], inputs=["motor"], coordinates=["bar.theta"],
+    lin = mb.linearize(model, rest.q[0], inputs=["motor", "kick"], coordinates=["bar.theta"],
                        outputs={"effort": lambda r: r.driver("motor").effort[0],
                                 "pin y": lambda r: r.joint("O").reaction().force[0, 1],
                                 "effort^2": lambda r: r.driver("motor").effort[0] ** 2})
     inertia = m * L * L / 3
     np.testing.assert_allclose(lin.A, [[0, 1], [m * G * L / 2 * math.sin(angle) / inertia, 0]],
                                rtol=1e-7, atol=1e-9)
-    np.testing.assert_allclose(lin.B[:, 0], [0.0, 1.0 / inertia], rtol=1e-12)
+    # the motor's effort and a torque applied to the bar turn it alike
+    np.testing.assert_allclose(lin.B, [[0.0, 0.0], [1.0 / inertia, 1.0 / inertia]], rtol=1e-12)
     # the effort output is the input itself; the pin's vertical force carries the weight less
     # m times the centre's vertical acceleration, (L/2) cos(angle) theta''
-    np.testing.assert_allclose(lin.D[0], [1.0], rtol=1e-7)
+    np.testing.assert_allclose(lin.D[0], [1.0, 0.0], rtol=1e-7, atol=1e-9)
     # an output not linear in the effort: d(tau^2) = 2 tau0 du, tau0 the holding torque
-    np.testing.assert_allclose(lin.D[2], [2 * m * G * L / 2 * math.cos(angle)], rtol=1e-7)
+    np.testing.assert_allclose(lin.D[2], [2 * m * G * L / 2 * math.cos(angle), 0.0], rtol=1e-7,
+                               atol=1e-7)
     np.testing.assert_allclose(lin.C[0], 0.0, rtol=0, atol=1e-7)
-    np.testing.assert_allclose(lin.D[1], [m * L / 2 * math.cos(angle) / inertia], rtol=1e-6)
+    np.testing.assert_allclose(lin.D[1], np.full(2, m * L / 2 * math.cos(angle) / inertia),
+                               rtol=1e-6)
     # about the held position theta'' = 0: the pin force varies with the angle only through
     # (L/2) cos(angle) theta'' (were the reference effort the holding torque's opposite, the
     # bar would accelerate there and -(L/2) sin(angle) theta''_0 would add)
