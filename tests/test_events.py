@@ -48,6 +48,22 @@ def test_recorded_crossings_of_the_bottom_are_the_odd_quarter_periods(method, op
     np.testing.assert_allclose(times, expected, rtol=0, atol=TIME_TOL[method])
 
 
+def test_a_height_passed_up_and_down_within_one_step_is_recorded_twice():
+    """A ball thrown up at 10 m/s from the floor passes 5 m, 10 cm below its apex, at the
+    roots of 5 = 10 t - g t^2 / 2, 0.28 s apart. Its flight is a parabola, which DOP853
+    integrates exactly, so its steps grow long: both passages lie inside one of them (the
+    first once hid the second), and each is recorded."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    b.add_body("ball", mass=0.2, inertia=1e-4, position=(0.0, 0.0), velocity=(0.0, 10.0))
+    model = b.build()
+    k = model.coordinate_index("ball.y")
+    height = mb.Event("5 m", lambda t, q, qd: q[k] - 5.0)
+    res = mb.forward_dynamics(model, [0.0, 2.0], method="DOP853", events=[height])
+    roots = np.sort(np.roots([-G / 2, 10.0, -5.0]))
+    np.testing.assert_allclose([e["time"] for e in res.stats["events"]], roots, rtol=0,
+                               atol=1e-12)
+
+
 @pytest.mark.parametrize("method,options", METHODS, ids=[m for m, _ in METHODS])
 def test_a_stopping_event_ends_the_run_at_the_crossing_in_its_direction(method, options):
     model, k = pendulum()

@@ -259,7 +259,8 @@ class _Events:
             for t, g in zip(times, values):
                 if g_prev is not None and event.crosses(g_prev, g):
                     crossings.append((self._root(event, segment, t_prev, t), k))
-                    break
+                    if event.action != "record":
+                        break  # it acts at its first crossing: nothing after it happens
                 t_prev, g_prev = t, g
             g_end.append(values[-1])
         self.g = g_end
