@@ -269,12 +269,11 @@ def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0
     held = hold_indices(model, hold)
     q_held = q[held].copy()
     m, n = model.n_constraints, model.n_coordinates
-    m_total = m + len(held)
     if m > n and not len(held):
         # more equations than coordinates: only redundant rows can be satisfied together,
         # so every step is the least-change one (a lock-up shows as a stalled iteration)
         redundant = True
-    elif m_total > n:
+    elif m + len(held) > n:
         raise AssemblyError(
             f"position analysis of '{model.name}': {m} constraint equations"
             f"{f' and {len(held)} held coordinates' if len(held) else ''} for {n} coordinates; "
