@@ -29,10 +29,8 @@ __all__ = ["BodyAxes", "TurningFrame", "measure"]
 
 
 def _skew(x: np.ndarray) -> np.ndarray:
-    """``x~`` (..., 3, 3), with ``x~ y = x cross y``."""
-    out = np.zeros(np.shape(x)[:-1] + (3, 3))
-    out[..., 0, 1], out[..., 0, 2], out[..., 1, 2] = -x[..., 2], x[..., 1], -x[..., 0]
-    return out - np.swapaxes(out, -1, -2)
+    """``x~`` (3, 3), with ``x~ y = x cross y``."""
+    return np.array([[0.0, -x[2], x[1]], [x[2], 0.0, -x[0]], [-x[1], x[0], 0.0]])
 
 
 class BodyAxes:
