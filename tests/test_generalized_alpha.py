@@ -477,6 +477,28 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
     assert abs(res.body("link1").angle[-1] - exact.body("link1").angle[-1]) < 1e-3
 
 
+@pytest.mark.parametrize("drop", [0.0, G / 1e5], ids=["pressed in", "set down"])
+def test_a_ball_resting_on_the_floor_is_stepped_at_the_nominal_step(drop):
+    """A 1 kg ball on a 1e5 N/m floor (restitution 0.2: the contact's oscillation has a
+    period of 20 ms), pressed in to its static depth m g / k (closed from the start: no
+    impact), or set down on it at zero speed (an impact that dies out within its three
+    periods of short steps): after that, generalized-alpha takes its own 10 ms step, and the
+    ball rests m g / k deep."""
+    k, depth = 1e5, G / 1e5
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.1 - depth + drop))
+    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
+                     law=mb.LinearContact(stiffness=k, restitution=0.2)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.ContactWarning)  # pressed in: as intended
+        model = b.build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 2.0, 5), method="generalized-alpha",
+                              step=1e-2)
+    impact_steps = 3 * 100 if drop else 0  # three periods at a hundred steps each
+    assert res.stats["steps"] <= 200 + impact_steps + 20
+    np.testing.assert_allclose(res.q[-1, 1], 0.1 - depth, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("law", [mb.LinearContact(stiffness=1e8, restitution=0.8),
                                  mb.LinearContact(stiffness=1e6, restitution=1.0),
                                  mb.HertzContact(stiffness=1e8, restitution=0.5),
