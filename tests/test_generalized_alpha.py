@@ -66,6 +66,19 @@ def test_spatial_chain_agrees_with_dop853_through_chart_resets():
     assert 3.0 < errors[0] / errors[1] < 5.0
     energy = res.kinetic_energy + res.potential_energy
     assert np.max(np.abs(energy - energy[0])) < 1e-3 * np.max(np.abs(res.kinetic_energy))
+    assert res.singular_passages == []  # a regular motion, through the resets
+
+
+def test_steps_shortened_a_hundredfold_to_land_on_outputs_pass_no_singular_position():
+    """The indicator of singular positions, log|det S| - n log beta' - log det M, is free of
+    the step: outputs 10.01 ms apart make every tenth-and-a-bit step of 1 ms a 10 us one
+    (beta' ten thousand times larger for it), and the free slider-crank, regular all along,
+    still reports no passage."""
+    t = np.arange(50) * 0.01001
+    res = mb.forward_dynamics(slider_crank(crank_speed=None), t, method="generalized-alpha",
+                              step=1e-3)
+    assert res.stats["steps"] == 49 * 11
+    assert res.singular_passages == []
 
 
 @pytest.mark.parametrize("build", [lambda: pendulum_chain(1, angle=0.0),
