@@ -493,6 +493,31 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
     assert abs(res.body("link1").angle[-1] - exact.body("link1").angle[-1]) < 1e-3
 
 
+@pytest.mark.parametrize("law", [mb.LinearContact(stiffness=1e6, restitution=1.0),
+                                 mb.HertzContact(stiffness=1e8, restitution=0.5)],
+                         ids=["linear elastic", "Hertz"])
+def test_a_falling_ball_s_step_lands_just_past_the_touch(law):
+    """A ball falling 0.4 m onto a floor whose force starts from zero: the steps of 10 ms
+    reach t = 0.2856 s in 28, and the 29th, aimed by the gap's closing at its rate and
+    acceleration (gap + v s + a s^2 / 2 = 0, exact in free fall), ends just past the touch:
+    no step is retried, none added. (A linear law with damping pushes at once at the touch,
+    c v: its landing step is retried; not this test.)"""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.5))
+    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
+                     law=law))
+    model = b.build()
+    touch = math.sqrt(2 * 0.4 / G)
+    # an output a nanosecond past the touch: the 29th step reaches it
+    through = mb.forward_dynamics(model, [0.0, touch + 1e-9], method="generalized-alpha",
+                                  step=1e-2)
+    assert through.stats["steps"] == 29
+    # on into the impact: the landing step is not retried for ending too far past the touch
+    after = mb.forward_dynamics(model, [0.0, touch + 1e-3], method="generalized-alpha",
+                                step=1e-2)
+    assert after.stats["contact_retries"] == 0 and after.stats["rejected_steps"] == 0
+
+
 @pytest.mark.parametrize("drop", [0.0, G / 1e5], ids=["pressed in", "set down"])
 def test_a_ball_resting_on_the_floor_is_stepped_at_the_nominal_step(drop):
     """A 1 kg ball on a 1e5 N/m floor (restitution 0.2: the contact's oscillation has a
