@@ -105,8 +105,9 @@ def test_a_fully_driven_mechanism_moves_and_pushes_as_its_inverse_dynamics_say()
     """A crank driven harmonically, a Distance rod (its row's constant is the length) to a
     slider turned 0.4 rad on its rail (a constant kept by the rail's rotation row): fully
     driven, so generalized-alpha must reproduce the kinematic inverse dynamics, the positions
-    to the Newton tolerance and the motor's effort with them (the drivers' motions and the
-    rows' constants enter its residual as they enter the position analysis)."""
+    to the Newton tolerance, the rates it reports and the motor's effort with them (the
+    drivers' motions and the rows' constants enter its residual as they enter the position
+    analysis)."""
     from test_slider_crank import _offset_slider_crank
 
     model = _offset_slider_crank(1.0)
@@ -115,6 +116,9 @@ def test_a_fully_driven_mechanism_moves_and_pushes_as_its_inverse_dynamics_say()
     res = mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-3)
     reference = mb.inverse_dynamics(model, t)
     np.testing.assert_allclose(res.q, reference.q, rtol=0, atol=1e-10)
+    # the reported rates are projected onto Cq qd = -Ct, the driver's rate included
+    np.testing.assert_allclose(res.qd, reference.qd, rtol=0,
+                               atol=1e-8 * np.max(np.abs(reference.qd)))
     effort = reference.joint("motor").effort
     np.testing.assert_allclose(res.joint("motor").effort, effort, rtol=0,
                                atol=1e-8 * np.max(np.abs(effort)))
