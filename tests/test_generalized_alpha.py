@@ -69,15 +69,16 @@ def test_spatial_chain_agrees_with_dop853_through_chart_resets():
     assert res.singular_passages == []  # a regular motion, through the resets
 
 
-def test_steps_shortened_a_hundredfold_to_land_on_outputs_pass_no_singular_position():
+def test_steps_halved_to_land_on_outputs_pass_no_singular_position():
     """The indicator of singular positions, log|det S| - n log beta' - log det M, is free of
-    the step: outputs 10.01 ms apart make every tenth-and-a-bit step of 1 ms a 10 us one
-    (beta' ten thousand times larger for it), and the free slider-crank, regular all along,
-    still reports no passage."""
+    the step: outputs 10.01 ms apart end every interval with two steps of 0.505 ms instead of
+    a 1 ms one and a sliver (beta' four times larger for them: n log 4 = 12.5 for the nine
+    coordinates, more than the dip that marks a passage), and the free slider-crank, regular
+    all along, still reports no passage."""
     t = np.arange(50) * 0.01001
     res = mb.forward_dynamics(slider_crank(crank_speed=None), t, method="generalized-alpha",
                               step=1e-3)
-    assert res.stats["steps"] == 49 * 11
+    assert res.stats["steps"] == 49 * 11  # nine of 1 ms and two of 0.505 ms each
     assert res.singular_passages == []
 
 
