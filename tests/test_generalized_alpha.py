@@ -498,6 +498,30 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
     assert abs(res.body("link1").angle[-1] - exact.body("link1").angle[-1]) < 1e-3
 
 
+def ball_over_floor(law, height: float, speed: float = 0.0) -> mb.Model:
+    """A 1 kg ball of radius 0.1 m, its centre ``height`` [m] above a floor of ``law``,
+    falling at ``speed`` [m/s]."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, height),
+                      velocity=(0.0, -speed))
+    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
+                     law=law))
+    return b.build()
+
+
+def bounce_energy_error(model, t: np.ndarray, after: float, in_flight: int
+                        ) -> tuple[float, mb.Results]:
+    """Largest difference [J/kg] between the ball's energy under generalized-alpha (10 ms
+    steps) and DOP853 at the output times past ``after`` where both are in flight (at least
+    ``in_flight`` of them), and the generalized-alpha run."""
+    reference = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12)
+    res = mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-2)
+    energy = [0.5 * r.qd[:, 1] ** 2 + G * r.q[:, 1] for r in (res, reference)]
+    flying = (t > after) & (reference.q[:, 1] > 0.1) & (res.q[:, 1] > 0.1)
+    assert np.sum(flying) >= in_flight
+    return float(np.max(np.abs(energy[0] - energy[1])[flying])), res
+
+
 @pytest.mark.parametrize("law", [mb.LinearContact(stiffness=1e6, restitution=1.0),
                                  mb.HertzContact(stiffness=1e8, restitution=0.5)],
                          ids=["linear elastic", "Hertz"])
@@ -507,11 +531,7 @@ def test_a_falling_ball_s_step_lands_just_past_the_touch(law):
     acceleration (gap + v s + a s^2 / 2 = 0, exact in free fall), ends just past the touch:
     no step is retried, none added. (A linear law with damping pushes at once at the touch,
     c v: its landing step is retried; not this test.)"""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
-    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.5))
-    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
-                     law=law))
-    model = b.build()
+    model = ball_over_floor(law, 0.5)
     touch = math.sqrt(2 * 0.4 / G)
     # an output a nanosecond past the touch: the 29th step reaches it
     through = mb.forward_dynamics(model, [0.0, touch + 1e-9], method="generalized-alpha",
@@ -532,21 +552,10 @@ def test_a_first_step_across_the_touch_is_retried_to_end_at_it(law):
     10 ms (gap / speed): it crosses the touch by 2.6 ms, so it is retried at half, and the
     next one ends at the touch. The bounce then keeps DOP853's energy to 2e-3 of the drop's
     (a first step left across the touch loses 60 % of it)."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
-    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.101),
-                      velocity=(0.0, -0.1))
-    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
-                     law=law))
-    model = b.build()
-    t = np.linspace(0.0, 0.1, 11)
-    reference = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12)
-    res = mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-2)
+    error, res = bounce_energy_error(ball_over_floor(law, 0.101, speed=0.1),
+                                     np.linspace(0.0, 0.1, 11), after=0.02, in_flight=2)
     assert res.stats["contact_retries"] == 1
-    energy = [0.5 * r.qd[:, 1] ** 2 + G * r.q[:, 1] for r in (res, reference)]
-    flying = (t > 0.02) & (reference.q[:, 1] > 0.1) & (res.q[:, 1] > 0.1)
-    assert np.sum(flying) >= 2
-    drop = 0.5 * 0.1 ** 2 + G * 1e-3
-    assert np.max(np.abs(energy[0] - energy[1])[flying]) < 2e-3 * drop
+    assert error < 2e-3 * (0.5 * 0.1 ** 2 + G * 1e-3)
 
 
 @pytest.mark.parametrize("drop", [0.0, G / 1e5], ids=["pressed in", "set down"])
@@ -556,14 +565,11 @@ def test_a_ball_resting_on_the_floor_is_stepped_at_the_nominal_step(drop):
     impact), or set down on it at zero speed (an impact that dies out within its three
     periods of short steps): after that, generalized-alpha takes its own 10 ms step, and the
     ball rests m g / k deep."""
-    k, depth = 1e5, G / 1e5
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
-    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.1 - depth + drop))
-    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
-                     law=mb.LinearContact(stiffness=k, restitution=0.2)))
+    depth = G / 1e5
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", mb.ContactWarning)  # pressed in: as intended
-        model = b.build()
+        model = ball_over_floor(mb.LinearContact(stiffness=1e5, restitution=0.2),
+                                0.1 - depth + drop)
     res = mb.forward_dynamics(model, np.linspace(0.0, 2.0, 5), method="generalized-alpha",
                               step=1e-2)
     impact_steps = 3 * 100 if drop else 0  # three periods at a hundred steps each
@@ -584,17 +590,8 @@ def test_a_long_step_resolves_an_impact_on_a_stiff_floor(law):
     resolution: 0.2 % at most over linear and Hertz laws of 1e5 to 1e8 and restitutions 0.5
     to 1, falling as the square of the steps per period). A fixed step left this ball 2.8 m
     high, moving up at 7 m/s."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
-    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.5))
-    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
-                     law=law))
-    model = b.build()
-    t = np.linspace(0.0, 0.6, 13)
-    reference = mb.forward_dynamics(model, t, method="DOP853", rtol=1e-11, atol=1e-12)
-    res = mb.forward_dynamics(model, t, method="generalized-alpha", step=1e-2)
-    energy = [0.5 * r.qd[:, 1] ** 2 + G * r.q[:, 1] for r in (res, reference)]
-    flying = (t > 0.3) & (reference.q[:, 1] > 0.1) & (res.q[:, 1] > 0.1)
-    assert np.sum(flying) >= 3  # after the bounce, in flight
-    assert np.max(np.abs(energy[0] - energy[1])[flying]) < 2.5e-3 * G * 0.4
+    error, res = bounce_energy_error(ball_over_floor(law, 0.5), np.linspace(0.0, 0.6, 13),
+                                     after=0.3, in_flight=3)
+    assert error < 2.5e-3 * G * 0.4
     # in flight the nominal step: a few hundred steps for the impact, not 0.6 s of them
     assert res.stats["steps"] < 400
