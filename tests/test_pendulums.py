@@ -80,15 +80,18 @@ def test_double_pendulum_matches_minimal_equations():
     np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-8)
 
 
-def _wobbling_body(torque: float):
+def _wobbling_body(torque: float, position=(0.3, -0.2), angle=0.4, velocity=(0.5, 0.1),
+                   angular_velocity=2.0, gravity=(0.0, -9.81), spring=True):
     """A free body on a spring under a torque varying in time, and its equations as SciPy's
     solve_ivp takes them (no constraints: the same ODE in the same coordinates)."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
-    body = b.add_body("b", mass=1.3, inertia=0.05, position=(0.3, -0.2), angle=0.4,
-                      velocity=(0.5, 0.1), angular_velocity=2.0)
-    b.add(mb.SpringDamper("s", b.ground, body, point_i=(0.0, 0.0), point_j=(0.1, 0.05),
-                          stiffness=200.0, free_length=0.2))
-    b.add(mb.Torque("wobble", body, mb.Harmonic(torque, 9.0)))
+    b = mb.ModelBuilder(dim=2, gravity=gravity)
+    body = b.add_body("b", mass=1.3, inertia=0.05, position=position, angle=angle,
+                      velocity=velocity, angular_velocity=angular_velocity)
+    if spring:
+        b.add(mb.SpringDamper("s", b.ground, body, point_i=(0.0, 0.0), point_j=(0.1, 0.05),
+                              stiffness=200.0, free_length=0.2))
+    if torque:
+        b.add(mb.Torque("wobble", body, mb.Harmonic(torque, 9.0)))
     model = b.build()
 
     def f(t, y):
@@ -151,6 +154,41 @@ def test_the_explicit_pairs_step_as_scipys_solve_ivp_does(method):
     assert abs(res.stats["rejected_steps"] - rejected) <= 0.05 * steps, (
         res.stats["rejected_steps"], rejected)
     np.testing.assert_allclose(res.q[-1], sol.y[:3, -1], rtol=0, atol=1e-6)
+
+
+_FIRST_STEP_CASES = {
+    # the general rule: the step from the sizes of y, f and a difference of f
+    "moving": (dict(torque=0.3), (0.5, 2.0)),
+    # the same, capped at a short interval
+    "short interval": (dict(torque=0.3), (0.5, 0.5002)),
+    # y = 0: the trial step is 1e-6 s, and the guess at most 100 times that
+    "at the origin": (dict(torque=0.3, position=(0.0, 0.0), angle=0.0, velocity=(0.0, 0.0),
+                           angular_velocity=0.0, spring=False), (0.0, 2.0)),
+    # f = 0 and f does not change: the guess of last resort
+    "at rest, no forces": (dict(torque=0.0, velocity=(0.0, 0.0), angular_velocity=0.0,
+                                gravity=(0.0, 0.0), spring=False), (0.0, 2.0)),
+}
+
+
+@pytest.mark.parametrize("case", _FIRST_STEP_CASES)
+@pytest.mark.parametrize("method", ["RK23", "RK45", "DOP853"])
+def test_the_first_step_is_scipys_guess(method, case):
+    """The explicit methods' first step is guessed as SciPy's solve_ivp guesses it (Hairer,
+    Norsett and Wanner, II.4), with the same tolerances per coordinate (atol in the model's
+    units): the same step to rounding, in each of the rule's branches."""
+    import scipy.integrate
+
+    options, (t0, t1) = _FIRST_STEP_CASES[case]
+    model, f, y0 = _wobbling_body(**options)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.StiffnessWarning)
+        res = mb.forward_dynamics(model, [t0, t1], method=method, rtol=1e-8, atol=1e-10)
+    atol = 1e-10 * np.tile(model.coordinate_scale, 2)
+    solver = getattr(scipy.integrate, method)(f, t0, y0, t1, rtol=1e-8, atol=atol)
+    solver.step()
+    stages = {"RK23": 3, "RK45": 6, "DOP853": 12}[method]
+    assert solver.nfev == 2 + stages  # SciPy's first step was accepted: it is its guess
+    np.testing.assert_allclose(res.stats["initial_step"], solver.step_size, rtol=1e-12)
 
 
 def test_a_drifted_state_is_projected_mass_weighted_from_one_factorization():

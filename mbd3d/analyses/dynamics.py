@@ -135,8 +135,9 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         at a contact's switch, or because a stage could not be evaluated),
         ``rhs_evaluations``, ``projections``, ``chart_resets`` (spatial bodies
         re-referenced), ``max_drift`` (largest residual found at a step end before projection)
-        and ``wall_time`` [s]; generalized-alpha's also its Newton iterations and
-        factorizations. ``status`` is "stopped" when an event stopped the run.
+        and ``wall_time`` [s]; the explicit methods' also ``initial_step`` [s] (the first
+        step tried, by the rule of Hairer, Norsett and Wanner that SciPy's solve_ivp uses);
+        generalized-alpha's also its Newton iterations and factorizations. ``status`` is "stopped" when an event stopped the run.
 
     Raises
     ------

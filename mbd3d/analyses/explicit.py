@@ -130,6 +130,7 @@ class ExplicitRungeKutta(Integrator):
         self.h = _initial_step(self.arrays, self.key, self.tableau, t0, self.y, self.f,
                                self.charts, r.rtol, self.atol_y,
                                min(r.max_step, r.t[-1] - t0), self.counters, self.work)
+        self.stats["initial_step"] = self.h
         self.t_now = t0
         self.check_at = _STIFFNESS_CHECK_STEPS
         return first
