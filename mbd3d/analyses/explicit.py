@@ -412,10 +412,11 @@ def _initial_step(arrays, key, tableau, t0: float, y: np.ndarray,
     status = stepping.derivative(arrays, key, t0 + h0, y + h0 * f, charts, f1, work)
     counters[stepping.RHS_EVALUATIONS] += 1
     if status != 0:
-        return min(h0, interval)
+        return h0
     d2 = rms(f1 - f, scale) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
+        # the rule's max(1e-6, 1e-3 h0): h0 is at most 1e-6 here (d1 is below 1e-5)
+        h1 = 1e-6
     else:
         h1 = (0.01 / max(d1, d2)) ** (1.0 / (tableau.error_order + 1))
     return min(100 * h0, h1, interval)
