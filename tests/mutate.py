@@ -9,7 +9,9 @@ Run from the repository root (it works on a copy; the checkout is never written)
 A mutant is one of: an additive term dropped (``a + b`` becomes ``a`` and ``b``; ``a - b``
 becomes ``a`` and ``-b``), ``+``/``-`` and ``*``/``/`` swapped (``+=``/``-=`` too), a unary
 minus dropped, a float factor halved. Each runs the chosen tests in a scratch copy of the
-working tree, stopping at the first failure, with the compiled core interpreted
+working tree, stopping at the first failure (the tests that killed the mutants just before
+first, then the rest quickest first, as the unchanged code's run timed them), with the compiled
+core interpreted
 (``NUMBA_DISABLE_JIT=1``: a mutant of a kernel would otherwise recompile the whole core) unless
 ``--compiled`` is given. A survivor is either a gap in the tests or an equivalent change (one
 that cannot change a result, such as a term that is zero by construction); say which where the
@@ -26,6 +28,7 @@ import concurrent.futures
 import contextlib
 import dataclasses
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -123,20 +126,50 @@ def apply(text: str, mutant: Mutant) -> str:
     return "".join(lines[:l0 - 1]) + head + mutant.replacement + tail + "".join(lines[l1:])
 
 
-def run_tests(copy: Path, tests: list[str], compiled: bool, timeout: float) -> str:
-    """``killed`` when the tests fail (or time out), else ``survived``."""
+def _pytest(copy: Path, args: list[str], compiled: bool, timeout: float):
+    """The completed pytest run in ``copy`` (None when it timed out)."""
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
     if compiled:
         env["NUMBA_CACHE_DIR"] = str(copy / ".numba-cache")
     else:
         env["NUMBA_DISABLE_JIT"] = "1"
-    command = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-               "-p", "no:randomly", "--no-header", *tests]
+    command = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+               "-p", "no:randomly", "--no-header", *args]
     try:
-        done = subprocess.run(command, cwd=copy, env=env, capture_output=True, timeout=timeout)
+        return subprocess.run(command, cwd=copy, env=env, capture_output=True, timeout=timeout)
     except subprocess.TimeoutExpired:
-        return "killed"  # a mutant that makes a loop run away is caught by the time limit
-    return "survived" if done.returncode == 0 else "killed"
+        return None
+
+
+def run_tests(copy: Path, tests: list[str], compiled: bool, timeout: float
+              ) -> tuple[str, str | None]:
+    """``("killed", the test that failed)`` when the tests fail (or time out: no test),
+    else ``("survived", None)``; the run stops at the first failure."""
+    done = _pytest(copy, ["-x", *tests], compiled, timeout)
+    if done is None:
+        return "killed", None  # a mutant that makes a loop run away is caught by the time limit
+    if done.returncode == 0:
+        return "survived", None
+    failed = re.search(r"^(?:FAILED|ERROR) (.+?)(?: - .*)?$",
+                       done.stdout.decode(errors="replace"), re.MULTILINE)
+    return "killed", failed.group(1) if failed else None
+
+
+def timed_tests(copy: Path, tests: list[str], compiled: bool, timeout: float
+                ) -> list[str] | None:
+    """The unchanged code's run: the node ids of ``tests``, quickest first (each mutant
+    then runs them in that order, after the tests that killed the mutants before it, so
+    that most mutants die in seconds), or None when the tests fail."""
+    done = _pytest(copy, ["--durations=0", "--durations-min=0", *tests], compiled, timeout)
+    if done is None or done.returncode != 0:
+        return None
+    seconds: dict[str, float] = {}
+    for line in done.stdout.decode(errors="replace").splitlines():
+        timed = re.match(r"^\s*([\d.]+)s (?:setup|call|teardown)\s+(\S.*)$", line)
+        if timed:
+            node = timed.group(2).strip()
+            seconds[node] = seconds.get(node, 0.0) + float(timed.group(1))
+    return sorted(seconds, key=seconds.get) or list(tests)
 
 
 def scratch_copy(into: Path) -> Path:
@@ -193,18 +226,27 @@ def main(argv: list[str] | None = None) -> int:
     with (contextlib.nullcontext(args.scratch) if args.scratch
           else tempfile.TemporaryDirectory(prefix="mbd3d-mutate-")) as scratch:
         copies = [scratch_copy(Path(scratch) / f"job{k}") for k in range(max(1, args.jobs))]
+        order = None
         for copy in copies:  # the unchanged tests must pass, or nothing can be judged
             # (given longer: compiled, this first run fills the copy's kernel cache)
-            if run_tests(copy, args.tests, args.compiled, max(args.timeout, 1800.0)) != "survived":
+            order = timed_tests(copy, args.tests, args.compiled, max(args.timeout, 1800.0))
+            if order is None:
                 print("the tests fail on the unchanged code: fix them first", file=sys.stderr)
                 return 2
-        free = list(copies)
+        free, killers = list(copies), []
 
         def judge(mutant: Mutant) -> str:
             copy = free.pop()
             try:
                 (copy / args.module).write_text(apply(text, mutant))
-                return run_tests(copy, args.tests, args.compiled, args.timeout)
+                # neighbouring mutants tend to die by the same test: the latest killers first
+                first = list(dict.fromkeys(killers[::-1]))
+                tests = first + [node for node in order if node not in first]
+                outcome, killer = run_tests(copy, tests, args.compiled, args.timeout)
+                if killer is not None:
+                    killers.append(killer)
+                    del killers[:-20]
+                return outcome
             finally:
                 (copy / args.module).write_text(text)
                 free.append(copy)
