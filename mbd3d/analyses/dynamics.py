@@ -137,7 +137,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         re-referenced), ``max_drift`` (largest residual found at a step end before projection)
         and ``wall_time`` [s]; the explicit methods' also ``initial_step`` [s] (the first
         step tried, by the rule of Hairer, Norsett and Wanner that SciPy's solve_ivp uses);
-        generalized-alpha's also its Newton iterations and factorizations. ``status`` is "stopped" when an event stopped the run.
+        generalized-alpha's also its Newton iterations and factorizations. ``status`` is
+        "stopped" when an event stopped the run.
 
     Raises
     ------
