@@ -69,16 +69,26 @@ def test_spatial_chain_agrees_with_dop853_through_chart_resets():
     assert res.singular_passages == []  # a regular motion, through the resets
 
 
-def test_steps_halved_to_land_on_outputs_pass_no_singular_position():
+def test_steps_shortened_at_a_stop_pass_no_singular_position():
     """The indicator of singular positions, log|det S| - n log beta' - log det M, is free of
-    the step: outputs 10.01 ms apart end every interval with two steps of 0.505 ms instead of
-    a 1 ms one and a sliver (beta' four times larger for them: n log 4 = 12.5 for the nine
-    coordinates, more than the dip that marks a passage), and the free slider-crank, regular
-    all along, still reports no passage."""
-    t = np.arange(50) * 0.01001
-    res = mb.forward_dynamics(slider_crank(crank_speed=None), t, method="generalized-alpha",
-                              step=1e-3)
-    assert res.stats["steps"] == 49 * 11  # nine of 1 ms and two of 0.505 ms each
+    the step: a slider-crank falling from level whose slider strikes a stop has its steps
+    cut a hundredfold while each strike lasts (beta' 1e4 times larger: n log 1e4 = 83 for
+    the nine coordinates, far more than the dip that marks a passage), and, regular all
+    along, reports no passage."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    crank = b.add_body("crank", mass=1.0, inertia=1e-3, position=(0.05, 0.0))
+    rod = b.add_body("rod", mass=1.5, inertia=0.01, position=(0.25, 0.0))
+    slider = b.add_body("slider", mass=0.5, inertia=1e-3, position=(0.4, 0.0))
+    b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
+    b.add(Revolute("A", crank, rod, at=(0.1, 0.0)))
+    b.add(Revolute("B", rod, slider, at=(0.4, 0.0)))
+    rail = b.add(Prismatic("rail", b.ground, slider, at=(0.4, 0.0), axis=(1.0, 0.0)))
+    b.add(mb.JointLimit("stop", rail, lower=-0.03,
+                        law=mb.LinearContact(stiffness=1e6, restitution=0.5)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 101),
+                              method="generalized-alpha", step=1e-3)
+    assert np.any(res.contacts().normal_force[:, 0] > 0)  # it struck
+    assert res.stats["steps"] > 1100  # steps cut while it did
     assert res.singular_passages == []
 
 
@@ -561,6 +571,32 @@ def test_twenty_steps_a_swing_as_an_independent_index3_generalized_alpha_takes_t
                        r"the step shortened from 0.1 s.*unstable.*rho_inf below 0.9, e\.g\. "
                        "0.45"):
         mb.forward_dynamics(model, np.r_[0.0, t], method="generalized-alpha", step=0.1)
+
+
+def test_outputs_between_steps_are_interpolated_without_changing_the_steps():
+    """Outputs every 1.1 steps of a bar released level (500 steps a swing): the steps stay
+    10 ms (cut to land on the outputs, 10 ms then 1 ms, they disturbed the recursion until
+    Newton failed at t = 0.7 s), the states at the step ends are those of a run with an
+    output at every step, and between them the interpolated states are on the constraints
+    and as close to the minimal equation's solution as the step ends are."""
+    model = pendulum_chain(1, link_length=1.0, link_mass=1.0, angle=0.0)
+    every = mb.forward_dynamics(model, np.linspace(0.0, 4.95, 496),
+                                method="generalized-alpha", step=0.01)
+    t = np.linspace(0.0, 4.95, 451)  # 11 ms apart
+    res = mb.forward_dynamics(model, t, method="generalized-alpha", step=0.01)
+    assert res.stats["steps"] == every.stats["steps"] == 495
+    np.testing.assert_allclose(res.q[::10], every.q[::11], rtol=0, atol=1e-12)
+    assert np.max(np.abs(res.position_residual)) < 1e-10
+    k = 1.5 * G  # theta'' = -(3 g / 2 L) cos(theta)
+    exact = solve_ivp(lambda _, y: [y[1], -k * math.cos(y[0])], (0.0, 4.95), [0.0, 0.0],
+                      t_eval=t, rtol=1e-12, atol=1e-12).y
+    at_ends = solve_ivp(lambda _, y: [y[1], -k * math.cos(y[0])], (0.0, 4.95), [0.0, 0.0],
+                        t_eval=every.t, rtol=1e-12, atol=1e-12).y
+    error_at_ends = np.max(np.abs(every.body("link1").angle - at_ends[0]))
+    assert 1e-3 < error_at_ends < 1e-2  # the method's error at 500 steps a swing
+    assert np.max(np.abs(res.body("link1").angle - exact[0])) < 1.05 * error_at_ends
+    assert np.max(np.abs(res.body("link1").angular_velocity - exact[1])) < 1.05 * np.max(
+        np.abs(every.body("link1").angular_velocity - at_ends[1]))
 
 
 def ball_over_floor(law, height: float, speed: float = 0.0) -> mb.Model:
