@@ -88,9 +88,10 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
     max_step : float
         Largest step [s].
     step : float, optional
-        "generalized-alpha" only, and required there: the fixed step [s] (shortened to land on
-        output times, and at contacts and stops to end at each touch and resolve each impact
-        with a hundred steps per period of the contact's oscillation while it lasts; see
+        "generalized-alpha" only, and required there: the fixed step [s] (kept between output
+        times, whose states are interpolated; shortened to land on the last one, and at
+        contacts and stops to end at each touch and resolve each impact with a hundred steps
+        per period of the contact's oscillation while it lasts; see
         :mod:`mbd3d.analyses.contact_steps`). Its error is second order: halving the step
         quarters it.
     rho_inf : float
