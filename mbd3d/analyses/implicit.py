@@ -272,16 +272,14 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.contacts.start(t0, q, qd, self.charts)
         return self.qdd, self.lam
 
-    def _trial_step(self, target: float) -> float:
-        """The next step: the nominal one, ended on the output time ``target`` when it
-        would end within rounding of it, and shortened to land on the run's end."""
+    def _trial_step(self) -> float:
+        """The next step: the nominal one, shortened to land on the run's end (an output
+        time it ends within rounding of is snapped to in :meth:`_step`)."""
         tt, h = self.tt, min(self.h, self.contacts.limit(self.tt))
         end = float(self.request.t[-1])
-        h_try = min(h, end - tt)
-        if abs(target - (tt + h_try)) < 1e-9 * max(h, 1e-300):
-            h_try = target - tt
-        elif end - (tt + h_try) < 1e-9 * max(h, 1e-300):
-            h_try = end - tt
+        h_try = h
+        if end - (tt + h_try) < 1e-9 * max(h, 1e-300):
+            h_try = end - tt  # past the end, or within rounding of it
         elif end - (tt + h_try) < 0.05 * h:
             h_try = 0.5 * (end - tt)  # two even steps instead of a sliver
         if self.meshes:
@@ -324,7 +322,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         passages, the state's finiteness and the turn per step checked; returns the step's
         start ``(t_old, q_old, qd_old)`` and its end before it was snapped to the target."""
         while True:
-            h_try = self._trial_step(t_target)
+            h_try = self._trial_step()
             result = self.newton(self.tt + h_try, h_try, self.q, self.qd, self.qdd, self.a,
                                  self.lam, self.charts)
             if result is not None:
