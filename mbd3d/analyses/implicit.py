@@ -366,7 +366,7 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     def _no_convergence(self, h_try: float) -> str:
         """What to say when no step, however short, converges from the state reached. With
-        steps long for the motion (a tenth of a swing and more), index-3 generalized-alpha's
+        steps long for the motion (20 a swing or fewer), index-3 generalized-alpha's
         velocities can start to alternate from step to step and grow until the state is off
         its path: an independent implementation with a full Newton iteration does the same
         on a bar pendulum released level, at rho_inf = 0.9 and 20 steps a swing."""
