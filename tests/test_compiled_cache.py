@@ -92,3 +92,64 @@ def test_every_kernel_of_the_compiled_core_is_keyed_on_its_folder():
         locator = kernel._cache._impl.locator
         assert isinstance(locator, PackageKeyedLocator)
         assert locator.get_source_stamp()[1] == digest
+
+
+KINDS = """
+import numpy as np
+import mbd3d as mb
+from mbd3d.joints import Revolute
+from mbd3d.mechanisms import pendulum_chain, spatial_chain
+from mbd3d.numerics.compiled import accelerations, generalized_alpha, integration
+
+def planar(spring, torque_function=False):
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    bar = b.add_body("bar", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    b.add(Revolute("O", b.ground, bar, at=(0.0, 0.0)))
+    if spring:
+        b.add(mb.SpringDamper("s", b.ground, bar, point_i=(0.0, 1.0), point_j=(0.5, 0.0),
+                              stiffness=50.0, damping=0.5, free_length=1.0))
+    if torque_function:
+        b.add(mb.Torque("t", bar, lambda t: 0.1 * t))
+    return b.build()
+
+def spatial_ball_on_floor():
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    ball = b.add_body("ball", mass=1.0, inertia=(0.004, 0.004, 0.004), position=(0, 0, 0.2))
+    b.add(mb.Contact("floor", mb.Plane(b.ground, normal=(0, 0, 1)), mb.Sphere(ball, radius=0.1),
+                     law=mb.LinearContact(frequency=50.0, restitution=0.5)))
+    return b.build()
+
+models = {"planar, no forces": planar(False), "planar, a spring": planar(True),
+          "planar, a torque f(t)": planar(False, True),
+          "planar chain, range-space solve": pendulum_chain(40),
+          "spatial chain, no forces": spatial_chain(3),
+          "spatial chain, range-space solve": spatial_chain(40),
+          "spatial ball on a floor": spatial_ball_on_floor()}
+for name, model in models.items():
+    mb.forward_accelerations(model, 0.0, model.q0, model.qd0)
+    mb.forward_dynamics(model, [0.0, 0.01], method="RK45")
+    mb.forward_dynamics(model, [0.0, 0.01], method="generalized-alpha", step=1e-3)
+print(sorted(models[k]._augmented_pattern.layout for k in models))
+for kernel in (accelerations.accelerations_with_parts, integration.advance,
+               generalized_alpha.newton_step):
+    print(kernel.__name__, len(kernel.signatures))
+"""
+
+
+def test_the_kernels_are_compiled_once_per_body_type_not_per_kind_of_model(tmp_path):
+    """Models with and without force elements, with forces given as Python functions, solved
+    densely or in the range space, planar and spatial, run on kernels of two types only (one
+    planar, one spatial). A record field that is None for some models made each combination a
+    type of its own, and the whole core was compiled once per combination: up to 11 times
+    over the test suite, most of its first run's ten minutes."""
+    # a new process, so that only these models' kernels are loaded; it imports the mbd3d
+    # under test, whatever is installed
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        filter(None, (root, os.environ.get("PYTHONPATH")))))
+    run = subprocess.run([sys.executable, "-c", KINDS], capture_output=True, text=True,
+                         cwd=tmp_path, env=env, check=True)
+    lines = run.stdout.split("\n")
+    assert lines[0] == str(sorted(["dense"] * 5 + ["range"] * 2))
+    counts = dict(line.split() for line in lines[1:] if line)
+    assert counts == {"accelerations_with_parts": "2", "advance": "2", "newton_step": "2"}

@@ -230,7 +230,8 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.stats["singular_passages"] = self.passages.passages
         # spatial models: the charts as quaternions whose signs follow the motion
         self._turns = None if model.charts0 is None else to_quaternion(model.charts0)
-        self.charts = model.charts0
+        # a writable copy: the kernels are compiled for writable arrays (model.charts0 is not)
+        self.charts = None if model.charts0 is None else np.array(model.charts0)
         self.meshes = constraints.has_spatial_meshes(model)
         self._turn_warned = False
         self.newton = _NewtonStep(model, self.coefficients, self.stats, self.newton_tol,

@@ -99,8 +99,9 @@ class _Core:
         driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
         rotation_table = motion_table([] if self.python_parts
                                       else terms[len(model.driver_rows):])
-        #: the fields of the records of the force elements and of the range-space solve (None:
-        #: none); made into records with the model's (see arrays), so that it stays picklable
+        #: the fields of the records of the force elements and of the range-space solve (empty
+        #: tables: none); made into records with the model's (see arrays), so that it stays
+        #: picklable
         self._forces = _force_fields(model, [] if self.python_parts else force_tables)
         self._range_space = _range_space_fields(range_space)
         # writable contiguous copies: the compiled functions are typed (and cached) for those
@@ -143,12 +144,11 @@ class _Core:
         key = bool(python_accelerations)
         if key not in self._records:
             forces, range_space = self._forces, self._range_space
-            fields = dict(self._fields, python_accelerations=key, forces=None if forces is None
-                          else structures.force_arrays(*(forces[name] for name in
-                                                         structures.FORCE_FIELDS)),
-                          range_space=None if range_space is None
-                          else structures.range_space_arrays(*(range_space[name] for name in
-                                                               structures.RANGE_FIELDS)))
+            fields = dict(self._fields, python_accelerations=key,
+                          forces=structures.force_arrays(*(forces[name] for name in
+                                                           structures.FORCE_FIELDS)),
+                          range_space=structures.range_space_arrays(
+                              *(range_space[name] for name in structures.RANGE_FIELDS)))
             self._records[key] = structures.model_arrays(
                 *(fields[name] for name in structures.MODEL_FIELDS))
         return self._records[key]
@@ -196,21 +196,22 @@ class _Core:
         self.__dict__.update(state, _records={}, _penalty=None, _scratch=threading.local())
 
 
-def _range_space_fields(pattern) -> dict | None:
-    """The fields of the model's :class:`~mbd3d.numerics.compiled.structures.RangeSpaceArrays`, or
-    None for a model solved otherwise."""
+def _range_space_fields(pattern) -> dict:
+    """The fields of the model's :class:`~mbd3d.numerics.compiled.structures.RangeSpaceArrays`,
+    empty for a model solved otherwise (every model's record has the same type: see
+    :mod:`~mbd3d.numerics.compiled.structures`)."""
     if pattern is None:
-        return None
+        nothing = np.zeros(0, dtype=np.int64)
+        return dict(slot=nothing, body_start=np.zeros(1, dtype=np.int64), positions=nothing,
+                    row_position=nothing, bandwidth=0)
     return dict(slot=pattern.slot, body_start=pattern.body_start, positions=pattern.positions,
                 row_position=pattern.row_position, bandwidth=pattern.bandwidth)
 
 
-def _force_fields(model, tables: list[dict]) -> dict | None:
+def _force_fields(model, tables: list[dict]) -> dict:
     """The fields of the model's :class:`~mbd3d.numerics.compiled.structures.ForceArrays` from its
-    force groups' tables (each kind at most one group, empty for the kinds the model has not),
-    or None without any."""
-    if not tables:
-        return None
+    force groups' tables (each kind at most one group, empty for the kinds the model has not,
+    all empty without any)."""
     dim = model.dim
     fields = {
         "spring_bodies": np.zeros((0, 2), dtype=np.int64),
@@ -278,11 +279,17 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     """
     q, qd = _coordinates(model, q, "q"), _coordinates(model, qd, "qd")
     core = model._core
-    # a planar model has no charts (and its compiled functions no spatial code)
+    # a planar model has no charts (and its compiled functions no spatial code); the kernels
+    # are compiled for writable arrays (the model's own charts are read-only), and a
+    # read-only argument would compile them all again
     charts = (model.charts0 if charts is None else charts) if core.spatial else None
+    if charts is not None and not charts.flags.writeable:
+        charts = np.array(charts)
     if not core.python_parts:
         return _solved(model, t, q, qd, charts,
-                       *kernel.accelerations(core.workspace(), float(t), q, qd, charts))
+                       *kernel.accelerations_with_parts(core.workspace(), float(t), q, qd,
+                                                        charts, core.no_forces, core.no_motions,
+                                                        core.no_motions))
     fr = frames(model, q, qd, charts)
     extra = core.no_forces
     if model.force_groups:
@@ -330,12 +337,13 @@ def _solved(model, t: float, q: np.ndarray, qd: np.ndarray, charts, x: np.ndarra
 
 
 def _coordinates(model, x, name: str) -> np.ndarray:
-    """``x`` as the contiguous float array (n,) the compiled core takes."""
+    """``x`` as the contiguous, writable float array (n,) the compiled core takes (a read-only
+    one, such as the model's ``q0``, would be a type of its own, compiled again)."""
     if (type(x) is np.ndarray and x.dtype == np.float64 and x.shape == (model.n_coordinates,)
-            and x.flags.c_contiguous):
+            and x.flags.c_contiguous and x.flags.writeable):
         return x
     try:
-        array = np.ascontiguousarray(x, dtype=float)
+        array = np.array(x, dtype=float, order="C")
     except (TypeError, ValueError):
         raise ModelError(f"{name} must be an array of {model.n_coordinates} numbers "
                          f"(the coordinates of '{model.name}'), got {x!r}") from None

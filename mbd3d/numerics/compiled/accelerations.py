@@ -12,8 +12,8 @@ bandwidth is too large for band storage (SuperLU).
 
 Every intermediate array lives in a :class:`~mbd3d.numerics.compiled.structures.Workspace`: the
 integrator loop makes one per run segment and evaluates thousands of right-hand sides without
-allocating, and a single call (:func:`accelerations`, :func:`accelerations_with_parts`) takes
-one too. A planar model passes
+allocating, and a single call (:func:`accelerations_with_parts`) takes one too (one entry
+point: each one compiles the whole of the augmented equations into itself once more). A planar model passes
 ``charts=None``, and compiles no spatial code.
 
 ``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state (or a force or
@@ -36,7 +36,7 @@ from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_int
 from mbd3d.numerics.compiled.motions import motion_values_into
 from mbd3d.numerics.compiled.range_space import range_space_solve_into
 from mbd3d.numerics.compiled.rows import constraint_rows_into
-from mbd3d.numerics.compiled.structures import BANDED, DENSE, SPARSE
+from mbd3d.numerics.compiled.structures import BANDED, DENSE, RANGE, SPARSE
 
 SOLVED, SINGULAR, NOT_FINITE = 0, 1, 2
 
@@ -84,10 +84,12 @@ def forces_into(forces, work, t: float, rhs) -> bool:
     """Add the generalized forces of the force elements ``forces``
     (:class:`~mbd3d.numerics.compiled.structures.ForceArrays`) at ``t`` to ``rhs`` (n,), from the
     frames and coordinates in ``work``; False when a spring's points or two contact spheres'
-    centres coincide or an actuator is not finite. ``forces`` is None for a model without compiled force elements: Numba then
-    compiles nothing of this (the branch is decided by the argument's type), so that such
-    models pay neither run time nor compile time for it."""
-    if forces is None:
+    centres coincide or an actuator is not finite. A model without compiled force elements
+    has a record of empty tables, and returns at once: one type for every model, so that the
+    kernels are compiled once, not once for models with forces and once for those without."""
+    if (forces.spring_bodies.shape[0] == 0 and forces.rotary_bodies.shape[0] == 0
+            and forces.point_bodies.shape[0] == 0 and forces.torque_bodies.shape[0] == 0
+            and forces.contact_bodies.shape[0] == 0):
         return True
     motion_values_into(forces.spring_first, forces.spring_kinds, forces.spring_starts,
                        forces.spring_params, t, work.spring_actuation)
@@ -130,7 +132,10 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
     motions ``(f, f', f'')`` of the rotation drivers ``phi`` (k, 3) and of the drivers
     ``drivers`` (n_drivers, 3); otherwise the motions are evaluated here. ``charts``:
     reference rotations of a spatial model's bodies, None for a planar model (which then
-    compiles no spatial code: Numba drops the branches decided by ``charts is None``).
+    compiles no spatial code: Numba drops the branches decided by ``charts is None``, and
+    ``nc`` below is a constant of each). Every model's record has the same type (see
+    :mod:`~mbd3d.numerics.compiled.structures`), so these are compiled twice in all: planar
+    and spatial.
     """
     if not (_finite(q) and _finite(qd)):
         return NOT_FINITE
@@ -161,7 +166,7 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
         nc = 6
     else:
         nc = 3
-    return SOLVED if _solve_into(nc, model.range_space, model, work) else SINGULAR
+    return SOLVED if _solve_into(nc, model, work) else SINGULAR
 
 
 @jit
@@ -193,14 +198,13 @@ def applied_forces_into(model, work, t, q, qd, charts, extra) -> bool:
 
 
 @jit
-def _solve_into(nc, range_space, model, work) -> bool:
+def _solve_into(nc, model, work) -> bool:
     """Solve the augmented system whose mass blocks, Jacobian values and right-hand side
     :func:`accelerations_into` left in ``work``, for the model's layout; returns whether the
-    matrix is regular (the ``SPARSE`` layout: the caller solves). ``range_space``: the
-    model's :class:`~mbd3d.numerics.compiled.structures.RangeSpaceArrays`, None unless its layout is
-    ``RANGE`` (Numba then compiles none of that solve)."""
+    matrix is regular (the ``SPARSE`` layout: the caller solves)."""
     blocks, data, rhs = work.blocks, work.data, work.rhs
-    if range_space is not None:
+    if model.layout == RANGE:
+        range_space = model.range_space
         return range_space_solve_into(
             nc, blocks, data, range_space.slot, range_space.body_start, range_space.positions,
             range_space.row_position, range_space.bandwidth, model.pivot_tolerance, rhs,
@@ -239,19 +243,10 @@ def _result(model, work, status):
 @jit
 def accelerations_with_parts(work, t, q, qd, charts, extra, phi, drivers):
     """``(x, status)`` of :func:`accelerations_into` for the model of the workspace ``work``
-    (:func:`~mbd3d.numerics.compiled.structures.workspace`) with parts that are Python objects (see
-    :func:`accelerations_into` for ``extra``, ``phi`` and ``drivers``); ``x`` as in
+    (:func:`~mbd3d.numerics.compiled.structures.workspace`): ``extra``, ``phi`` and ``drivers``
+    as in :func:`accelerations_into` for a model with parts that are Python objects, the
+    model's empty ``no_forces``, ``no_motions`` and ``no_motions`` otherwise; ``x`` as in
     :func:`_result`."""
     model = work.model
     return _result(model, work, accelerations_into(model, work, t, q, qd, charts, extra, phi,
                                                    drivers))
-
-
-@jit
-def accelerations(work, t, q, qd, charts):
-    """As :func:`accelerations_with_parts`, for a model without parts that are Python objects
-    (three arguments fewer to hand over at each call from Python)."""
-    model = work.model
-    return _result(model, work, accelerations_into(model, work, t, q, qd, charts,
-                                                   model.no_forces, model.no_motions,
-                                                   model.no_motions))

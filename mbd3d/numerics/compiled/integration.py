@@ -159,17 +159,12 @@ def drift(model, key, t, y, charts, work):
 
 @jit
 def switch_count(forces) -> int:
-    """How many contacts and joint stops a model's ``forces`` hold (None: no force elements;
-    Numba drops the branch by the argument's type, which it does not for a field)."""
-    if forces is None:
-        return 0
+    """How many contacts and joint stops a model's ``forces`` hold."""
     return forces.contact_bodies.shape[0]
 
 
 @jit
 def _contact_switches(forces, A, omega, Q, Qd, out) -> None:
-    if forces is None:
-        return
     switches_into(A, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
                   forces.contact_values, out)
 

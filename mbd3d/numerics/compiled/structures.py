@@ -1,11 +1,18 @@
 """The records the compiled core passes around: a model's fixed arrays (:class:`ModelArrays`,
-with its force elements and range-space structure as records of their own, or None), the
-scratch arrays of one evaluation (:class:`Workspace`), and generalized-alpha's iteration
-matrix pattern (:class:`PenaltyArrays`).
+with its force elements and range-space structure as records of their own), the scratch
+arrays of one evaluation (:class:`Workspace`), and generalized-alpha's iteration matrix
+pattern (:class:`PenaltyArrays`).
 
 They are Numba structure references: one pointer per record in every call, with named fields,
 instead of tuples of dozens of arrays whose every member is copied and reference-counted at
 each call (which cost both run time and minutes of compilation).
+
+Every model's records have the same types: a model without force elements has a force record
+of empty tables, one not solved in the range space an empty range-space record. A field that
+is None for some models and a record for others makes each combination a type of its own,
+and every kernel that takes the model was compiled once per combination (up to 11 times over
+the test suite, several minutes of a first run). Only planar and spatial models differ in
+type (their charts), so each kernel is compiled twice at most.
 """
 
 from __future__ import annotations
@@ -62,8 +69,8 @@ class PenaltyArraysType(_Record):
 #: kinematics and mass, the row table of the primitives (mbd3d.model.primitives.RowTable), the
 #: drivers' rows, where the Jacobian values go, the drivers' and rotation drivers' motions
 #: (tables of mbd3d.numerics.compiled.motions, used unless python_parts), the compiled force
-#: elements (a ForceArrays, or None: see FORCE_FIELDS), the augmented matrix's pattern
-#: (mbd3d.numerics.linalg) and the structure of Cq M^-1 Cq^T (a RangeSpaceArrays, or None: see
+#: elements (a ForceArrays: see FORCE_FIELDS), the augmented matrix's pattern
+#: (mbd3d.numerics.linalg) and the structure of Cq M^-1 Cq^T (a RangeSpaceArrays: see
 #: RANGE_FIELDS), the rows' constants and scales, and empty arrays for the parts of a model that
 #: are not Python objects
 MODEL_FIELDS = (
@@ -84,8 +91,8 @@ MODEL_FIELDS = (
 )
 
 #: the structure of Cq M^-1 Cq^T of a model of the RANGE layout
-#: (mbd3d.numerics.patterns.RangeSpacePattern; see mbd3d.numerics.compiled.range_space); None for
-#: the other layouts, whose compiled functions then contain none of that solve
+#: (mbd3d.numerics.patterns.RangeSpacePattern; see mbd3d.numerics.compiled.range_space); empty
+#: for the other layouts
 RANGE_FIELDS = ("slot", "body_start", "positions", "row_position", "bandwidth")
 
 #: generalized-alpha's iteration matrix (mbd3d.numerics.patterns.PenaltyPattern: where the mass
@@ -99,8 +106,8 @@ PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat",
 #: (mbd3d.numerics.compiled.forces; filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
 #: rotational ones, point forces and torques, and their actuators' motions, and the compliant
 #: contacts (mbd3d.numerics.compiled.contacts). A model without
-#: force elements, or with a value given as a Python function, has None instead, and its
-#: compiled functions contain no force code (the branch is decided by the field's type)
+#: force elements, or with a value given as a Python function (evaluated in Python), has
+#: empty tables
 FORCE_FIELDS = (
     "spring_bodies", "spring_points", "spring_values", "rotary_bodies", "rotary_values",
     "rotary_vectors", "point_bodies", "point_points", "point_forces", "point_body_frame",
@@ -206,11 +213,12 @@ def penalty_arrays(*fields):
 
 
 @jit
-def _range_sizes(range_space, n_rows: int, n_bodies: int, nc: int):
+def _range_sizes(model, n_rows: int, n_bodies: int, nc: int):
     """Sizes of the range-space solve's scratch: the bodies' copies of the Jacobian rows,
     the band of S, its rows and the coordinates; none for the other layouts."""
-    if range_space is None:
+    if model.layout != RANGE:
         return 0, 0, 0, 0
+    range_space = model.range_space
     return (range_space.body_start[-1] * nc, (range_space.bandwidth + 1) * n_rows, n_rows,
             n_bodies * nc)
 
@@ -218,9 +226,7 @@ def _range_sizes(range_space, n_rows: int, n_bodies: int, nc: int):
 @jit
 def _force_sizes(forces, bodies: int):
     """Rows of the force elements' scratch: bodies (with the ground), springs and rotational
-    springs; none without compiled forces."""
-    if forces is None:
-        return 0, 0, 0
+    springs."""
     return bodies, forces.spring_first.shape[0] - 1, forces.rotary_first.shape[0] - 1
 
 
@@ -241,7 +247,7 @@ def workspace(spatial: bool, model):
     band_size = (2 * model.kl + model.ku + 1) * size if model.layout == BANDED else 0
     chart_bodies = b if spatial else 0
     range_jacobian, range_band, range_rows, range_forces = _range_sizes(
-        model.range_space, n_rows, n_bodies, nc)
+        model, n_rows, n_bodies, nc)
     force_bodies, springs, rotary_springs = _force_sizes(model.forces, b)
     return Workspace(
         model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)),
