@@ -607,6 +607,25 @@ def test_outputs_between_steps_are_interpolated_without_changing_the_steps():
         np.abs(every.body("link1").angular_velocity - at_ends[1]))
 
 
+@pytest.mark.parametrize("past, steps, smallest", [
+    (0.3, 51, 0.3),  # 50 steps of 10 ms, then the 3 ms left
+    (0.04, 51, 0.52),  # 49 steps, then two of 5.2 ms: not a sliver of 0.4 ms
+    (1e-11, 50, 1.0)])  # the end within rounding of a step's: no step of 1e-13 s
+def test_the_run_s_end_is_landed_on_without_a_sliver_of_a_step(past, steps, smallest):
+    """A run that ends ``past`` steps after its 50th step of 10 ms: generalized-alpha lands
+    on the end exactly; a remainder shorter than a twentieth of a step is not taken as a
+    sliver (a step far shorter than the others disturbs the method's recursion, and its
+    iteration matrix scales with 1 / h^2) but shared with the step before it, two even steps;
+    ``stats["smallest_step"]`` reports the shortest step taken."""
+    h = 0.01
+    model = pendulum_chain(1, link_length=1.0, link_mass=1.0, angle=0.0)
+    end = (50 + past) * h
+    res = mb.forward_dynamics(model, [0.0, end], method="generalized-alpha", step=h)
+    assert res.t[-1] == end
+    assert res.stats["steps"] == steps
+    assert res.stats["smallest_step"] == pytest.approx(smallest * h, rel=1e-9)
+
+
 def ball_over_floor(law, height: float, speed: float = 0.0) -> mb.Model:
     """A 1 kg ball of radius 0.1 m, its centre ``height`` [m] above a floor of ``law``,
     falling at ``speed`` [m/s]."""

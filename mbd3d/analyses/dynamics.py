@@ -138,7 +138,10 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         re-referenced), ``max_drift`` (largest residual found at a step end before projection)
         and ``wall_time`` [s]; the explicit methods' also ``initial_step`` [s] (the first
         step tried, by the rule of Hairer, Norsett and Wanner that SciPy's solve_ivp uses);
-        generalized-alpha's also its Newton iterations and factorizations. ``status`` is
+        generalized-alpha's also its Newton iterations and factorizations and
+        ``smallest_step`` [s] (the shortest step taken: shortened at contacts, after failed
+        Newton iterations, or to land on the run's end, which it reaches by two even steps
+        rather than by a sliver of less than a twentieth of a step). ``status`` is
         "stopped" when an event stopped the run.
 
     Raises

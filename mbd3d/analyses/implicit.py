@@ -224,7 +224,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.stats = {"method": "generalized-alpha", "rho_inf": request.rho_inf, "steps": 0,
                       "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
                       "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [],
-                      "wall_time": 0.0}
+                      "smallest_step": math.inf, "wall_time": 0.0}
         self.redundant = False  # set at the start: the constraint rows depend on each other
         self.passages = PassageWatch(model)
         self.stats["singular_passages"] = self.passages.passages
@@ -347,6 +347,7 @@ class GeneralizedAlphaIntegrator(Integrator):
                                                    self.redundant)
             a = qdd.copy()
         self.stats["steps"] += 1
+        self.stats["smallest_step"] = min(self.stats["smallest_step"], h_try)
         self.q, self.qd, self.qdd, self.a, self.lam, self.S = q, qd, qdd, a, lam, S
         t_step = self.tt  # where passages are noted: the step's end before it is snapped
         self.passages.step(t_step, S.indicator, q, self.charts)
