@@ -63,7 +63,11 @@ class PlanarBody(BodyType):
     def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
                charts: np.ndarray | None = None) -> Frames:
         velocities = Qd is not None
-        A, axes, omega3, kappa = planar_frames(Q, Qd if velocities else Q, velocities)
+        # C-contiguous writable arrays: the kernel is compiled for those, and a view or a
+        # read-only array would each be compiled again
+        Q = np.require(Q, float, ("C", "W"))
+        Qd = np.require(Qd, float, ("C", "W")) if velocities else Q
+        A, axes, omega3, kappa = planar_frames(Q, Qd, velocities)
         fr = Frames(Q=Q, A=A, R=Q[:, :2], axes=axes, omega3=omega3, kappa=kappa)
         if velocities:
             fr.Qd, fr.Rd, fr.omega = Qd, Qd[:, :2], Qd[:, 2]

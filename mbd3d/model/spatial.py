@@ -96,10 +96,13 @@ class SpatialBody(BodyType):
     def frames(self, Q: np.ndarray, Qd: np.ndarray | None = None,
                charts: np.ndarray | None = None) -> Frames:
         velocities = Qd is not None
-        if charts is None:
-            charts = np.broadcast_to(np.eye(3), (len(Q), 3, 3))
-        A, AG, omega, kappa, Gb, omega_bar = spatial_frames(
-            Q, Qd if velocities else Q, charts, velocities)
+        # C-contiguous writable arrays: the kernel is compiled for those, and a view or a
+        # read-only array would each be compiled again
+        Q = np.require(Q, float, ("C", "W"))
+        Qd = np.require(Qd, float, ("C", "W")) if velocities else Q
+        charts = (np.tile(np.eye(3), (len(Q), 1, 1)) if charts is None
+                  else np.require(charts, float, ("C", "W")))
+        A, AG, omega, kappa, Gb, omega_bar = spatial_frames(Q, Qd, charts, velocities)
         fr = Frames(Q=Q, A=A, R=Q[:, :3], g=Q[:, 3:6], Gbar=Gb, AG=AG, axes=AG, omega3=omega,
                     kappa=kappa)
         if velocities:
