@@ -13,8 +13,8 @@ bandwidth is too large for band storage (SuperLU).
 Every intermediate array lives in a :class:`~mbd3d.numerics.compiled.structures.Workspace`: the
 integrator loop makes one per run segment and evaluates thousands of right-hand sides without
 allocating, and a single call (:func:`accelerations_with_parts`) takes one too (one entry
-point: each one compiles the whole of the augmented equations into itself once more). A planar model passes
-``charts=None``, and compiles no spatial code.
+point: each one compiles the whole of the augmented equations into itself once more). A
+planar model passes ``charts=None``, and compiles no spatial code.
 
 ``status``: 0 solved, 1 singular matrix (dependent rows), 2 non-finite state (or a force or
 motion that cannot be evaluated there: the caller evaluates it in Python for the message).
