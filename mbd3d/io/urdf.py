@@ -44,9 +44,11 @@ from typing import Any, Mapping
 import numpy as np
 
 from mbd3d.errors import ModelError, did_you_mean, user_stacklevel
+from mbd3d.io.robot_parts import (INERTIA_ROUNDING, add_driver, add_limit, composite,
+                                   joint_names, limit_law, physical)
 from mbd3d.model.motion import Motion, as_motion
 
-__all__ = ["urdf_builder", "load_urdf", "UrdfWarning"]
+__all__ = ["urdf_builder", "load_urdf", "UrdfWarning", "INERTIA_ROUNDING"]
 
 
 class UrdfWarning(UserWarning):
@@ -208,8 +210,9 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     owner = _welded_groups(order, roots[0])
     bodies = _add_bodies(b, links, order, owner, frames, roots[0] if fixed_base else None,
                          (path, what, files_read, meshes))
-    names = _joint_names(order, set(bodies) | {b.ground.name}, what)
-    limit_law = _limit_law(joint_limits, what)
+    names = joint_names([joint.name for joint in order if joint.type != "fixed"],
+                        set(bodies) | {b.ground.name}, what, UrdfWarning)
+    law = limit_law(joint_limits, what)
     limited, mimic = [], []
     for joint in order:
         if joint.type == "fixed":
@@ -219,16 +222,17 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
         if joint.limit is not None and joint.type in ("revolute", "prismatic") and (
                 joint.limit.lower is not None or joint.limit.upper is not None):
             q0 = float(positions.get(joint.name, 0.0))
-            if not _add_limit(b, joint, names[joint.name], element, axis, q0, limit_law):
+            if not add_limit(b, joint.type == "prismatic", names[joint.name], element, axis, q0,
+                             (joint.limit.lower, joint.limit.upper), law):
                 limited.append(f"{joint.name} [{joint.limit.lower}, {joint.limit.upper}]")
         if joint.mimic is not None:
             mimic.append(f"{joint.name} = {joint.mimic.multiplier or 1.0} x "
                          f"{joint.mimic.joint} + {joint.mimic.offset or 0.0}")
         if joint.name in drive:
-            _add_driver(b, joint, names[joint.name], element, axis, drive[joint.name],
-                        float(positions.get(joint.name, 0.0)), what)
+            add_driver(b, joint.type == "prismatic", names[joint.name], element, axis,
+                       drive[joint.name], float(positions.get(joint.name, 0.0)))
     if limited:
-        why = ("joint_limits='ignore'" if limit_law is None
+        why = ("joint_limits='ignore'" if law is None
                else "a spatial hinge's angle is measured within half a turn of the drawing, "
                     "and equal ends are no range")
         warnings.warn(f"{what}: joint limits are not enforced ({why}): {', '.join(limited)}",
@@ -271,7 +275,10 @@ def _add_bodies(b, links: dict, order: list, owner: dict, frames: dict, welded: 
                              "the free base; give it an <inertial>, or weld it: "
                              "fixed_base=True")
         frame = frames[first][:3, :3]
-        inertia = _physical(frame.T @ inertia @ frame, first, group, what)
+        links = ", ".join(link.name for link in group)
+        inertia = physical(frame.T @ inertia @ frame, f"link '{first}'",
+                           f" (with the links welded to it: {links})", "<inertia>", what,
+                           UrdfWarning)
         body_frame = np.eye(4)
         body_frame[:3, :3], body_frame[:3, 3] = frame, centre
         shapes = [_shape(link, np.linalg.inv(body_frame) @ frames[link.name], source)
@@ -284,31 +291,6 @@ def _add_bodies(b, links: dict, order: list, owner: dict, frames: dict, welded: 
         bodies[first] = b.add_body(name, mass=mass, inertia=inertia, position=centre,
                                    orientation=frame, shape=_joined(shapes))
     return bodies
-
-
-#: the largest relative excess of J3 over J1 + J2 repaired as rounding of published values
-INERTIA_ROUNDING = 0.01
-
-
-def _physical(inertia: np.ndarray, first: str, group: list, what: str) -> np.ndarray:
-    """A body's inertia (body axes) whose principal moments break ``J1 + J2 >= J3`` by at
-    most :data:`INERTIA_ROUNDING` of ``J3``, repaired to ``J3 = J1 + J2`` (a warning says
-    so); refused beyond it, naming the links."""
-    moments, axes = np.linalg.eigh(inertia)
-    excess = moments[2] - moments[0] - moments[1]
-    if not excess > 1e-9 * moments[2]:
-        return inertia
-    links = ", ".join(link.name for link in group)
-    if excess > INERTIA_ROUNDING * moments[2]:
-        raise ModelError(f"{what}: link '{first}' (with the links welded to it: {links}) has "
-                         f"principal moments of inertia {moments} [kg m^2], whose largest "
-                         f"exceeds the sum of the others by {excess / moments[2]:.1%}; no "
-                         "real body has them (more than rounding): correct its <inertia>")
-    warnings.warn(f"{what}: link '{first}': principal moments of inertia {moments} break J1 + "
-                  f"J2 >= J3 by {excess / moments[2]:.2%} (rounding of the published values); "
-                  "J3 lowered to J1 + J2", UrdfWarning, stacklevel=user_stacklevel())
-    moments[2] = moments[0] + moments[1]
-    return axes @ np.diag(moments) @ axes.T
 
 
 def _without_massless_branches(order: list, links: dict, drive: Mapping, what: str) -> list:
@@ -350,39 +332,12 @@ def _composite(group: list, frames: dict, what: str) -> tuple[float, np.ndarray,
             T = frames[link.name] @ _origin(link.inertial.origin)
             R = T[:3, :3]
             parts.append((m, T[:3, 3], R @ np.asarray(link.inertial.inertia, float) @ R.T))
-    mass = float(sum(m for m, _, _ in parts))
-    if not mass > 0:
-        return 0.0, np.zeros(3), np.zeros((3, 3))
-    centre = sum(m * c for m, c, _ in parts) / mass
-    inertia = np.zeros((3, 3))
-    for m, c, I in parts:
-        d = c - centre
-        inertia += I + m * ((d @ d) * np.eye(3) - np.outer(d, d))
-    return mass, centre, 0.5 * (inertia + inertia.T)
+    return composite(parts)
 
 
 def _joined(shapes: list):
     import trimesh  # noqa: PLC0415
     return trimesh.util.concatenate(shapes) if shapes else None
-
-
-def _joint_names(order: list, taken: set, what: str) -> dict:
-    """The model's name of each moving URDF joint: its own, or ``"<name>_joint"`` where a
-    link (a body) has it, since URDF keeps links and joints apart and mbd3d does not."""
-    names, renamed = {}, []
-    for joint in order:
-        name = joint.name
-        if joint.type != "fixed" and name in taken:
-            name = f"{joint.name}_joint"
-            while name in taken:
-                name += "_"
-            renamed.append(f"'{joint.name}' -> '{name}'")
-        names[joint.name] = name
-        taken.add(name)
-    if renamed:
-        warnings.warn(f"{what}: joints named as links are renamed in the model: "
-                      f"{', '.join(renamed)}", UrdfWarning, stacklevel=user_stacklevel())
-    return names
 
 
 def _add_joint(b, joint, name: str, parent, child, frame: np.ndarray, what: str) -> tuple:
@@ -451,76 +406,6 @@ def _mass(link, what: str) -> float:
         raise ModelError(f"{what}: link '{link.name}': <mass value> must be a finite number "
                          f">= 0 [kg], got {mass}")
     return float(mass)
-
-
-def _add_driver(b, joint, name: str, element, axis: np.ndarray, motion: Motion, q0: float,
-                what: str) -> None:
-    """Drive the URDF joint's coordinate (``q0`` in the drawing) by ``motion``."""
-    from mbd3d.joints import RotationDriver, TranslationDriver  # noqa: PLC0415
-
-    # the offsets make the drivers' coordinates the URDF's (see mbd3d.inverse_dynamics_at)
-    if joint.type == "prismatic":
-        b.add(TranslationDriver(f"{name}_drive", element, motion=motion, offset=-q0))
-    elif joint.type in ("revolute", "continuous"):
-        offset = _drive_offset(element.body_i, element.body_j, axis) - q0
-        b.add(RotationDriver(f"{name}_drive", element, motion=motion, offset=offset))
-    else:
-        raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
-
-
-def _add_limit(b, joint, name: str, element, axis: np.ndarray, q0: float, law) -> bool:
-    """Add the URDF joint's ``<limit>`` as a JointLimit on ``element`` (its ends moved from
-    the URDF coordinate, ``q0`` in the drawing, to the angle or slide mbd3d measures); False
-    when it is not added (no law, equal ends, or a hinge's ends beyond half a turn of the
-    drawing)."""
-    from mbd3d.model.contacts import JointLimit  # noqa: PLC0415
-
-    offset = -q0
-    if joint.type == "revolute":
-        offset += _drive_offset(element.body_i, element.body_j, axis)
-    ends = [None if end is None else float(end) + offset
-            for end in (joint.limit.lower, joint.limit.upper)]
-    if law is None or (joint.type == "revolute" and any(
-            end is not None and not -np.pi < end < np.pi for end in ends)):
-        return False
-    if None not in ends and not ends[0] < ends[1]:
-        return False  # lower = upper = 0: what some files write for "no limits"
-    b.add(JointLimit(f"{name}_limit", element, lower=ends[0], upper=ends[1], law=law))
-    return True
-
-
-def _limit_law(joint_limits: Any, what: str):
-    """The contact law of the URDF's joint limits, or None (``"ignore"``)."""
-    from mbd3d.model.contact_laws import ContactLaw, LinearContact  # noqa: PLC0415
-
-    if isinstance(joint_limits, ContactLaw):
-        return joint_limits
-    if joint_limits == "stop":
-        return LinearContact(frequency=100.0, restitution=0.5)
-    if joint_limits == "ignore":
-        return None
-    raise ModelError(f"{what}: joint_limits must be 'stop', 'ignore' or a contact law "
-                     f"(mbd3d.LinearContact, ...), got {joint_limits!r}")
-
-
-def _drive_offset(body_i, body_j, axis: np.ndarray) -> float:
-    """The angle a RotationDriver reads in the drawing: from body i's to body j's x axis (y
-    where x lies along the axis), projected on the plane normal to the axis."""
-    def reference(body) -> np.ndarray:
-        R = np.eye(3) if body.is_ground else body.chart @ _rodrigues_matrix(body.q0[3:])
-        for column in (0, 1):
-            v = R[:, column] - (R[:, column] @ axis) * axis
-            if np.linalg.norm(v) >= 1e-6:
-                return v / np.linalg.norm(v)
-        raise AssertionError("a body's x and y axes cannot both lie along one axis")
-
-    f_i, f_j = reference(body_i), reference(body_j)
-    return float(np.arctan2(np.cross(f_i, f_j) @ axis, f_i @ f_j))
-
-
-def _rodrigues_matrix(g: np.ndarray) -> np.ndarray:
-    from mbd3d.numerics.rotations import from_rodrigues  # noqa: PLC0415
-    return from_rodrigues(np.asarray(g, dtype=float))
 
 
 def _shape(link, to_body: np.ndarray, source: tuple):
