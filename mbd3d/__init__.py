@@ -50,6 +50,7 @@ from mbd3d.io.results import Results, format_table
 from mbd3d.io.model_file import load
 from mbd3d.io.model_writer import save
 from mbd3d.io.urdf import UrdfWarning, load_urdf, urdf_builder
+from mbd3d.io.mjcf import MjcfWarning, load_mjcf, mjcf_builder
 
 __version__ = "0.1.0"
 
@@ -69,7 +70,7 @@ __all__ = [
     "forward_accelerations",
     "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "load", "save", "load_urdf", "urdf_builder",
-    "UrdfWarning",
+    "UrdfWarning", "load_mjcf", "mjcf_builder", "MjcfWarning",
     "format_table", "kinetic_energy", "potential_energy",
     "Observer", "ProgressBar",
     "MBDError", "ModelError", "NotFullyDrivenError", "OverDrivenError", "AnalysisError",

@@ -14,6 +14,8 @@ The format, version 1 (every field in SI units)::
     gravity: [0.0, -9.81]          # optional, [m/s^2]
     urdf: {file: arm.urdf}         # optional, dim 3: a robot to start from (see mbd3d.io.urdf;
                                    # also fixed_base, joint_positions, drive)
+    mjcf: {file: arm.xml}          # optional, dim 3: a MuJoCo model to start from (see
+                                   # mbd3d.io.mjcf; also joint_positions, drive, keyframe)
     bodies:                        # the arguments of ModelBuilder.add_body, by name
       - {name: crank, mass: 1.0, inertia: 0.01, position: [0.05, 0.0], angle: 0.0}
       - {name: arm, shape: arm.stl, density: 7850.0, position: [0, 0, 0]}   # a mesh file
@@ -75,9 +77,10 @@ FORMAT_VERSION = 1
 #: the largest model file read [bytes]: reading takes about 2 s per MB (libyaml's tree and the
 #: YAML 1.2 reading of it), so a hostile file cannot hold a run for more than a few minutes
 MAX_FILE_BYTES = 64_000_000
-_TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "urdf", "bodies", "joints", "forces",
+_TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "urdf", "mjcf", "bodies", "joints", "forces",
               "analyses")
 _URDF_FIELDS = ("file", "fixed_base", "joint_positions", "drive")
+_MJCF_FIELDS = ("file", "joint_positions", "drive", "keyframe")
 _BODY_FIELDS = ("name", "mass", "inertia", "position", "angle", "orientation", "velocity",
                 "angular_velocity", "shape", "density")
 #: constructor arguments that name a body or a joint
@@ -275,8 +278,9 @@ class _Reader:
         named: dict[str, Any] = {"ground": builder.ground}
         self.sources: list[str] = []
         self.places: dict[str, tuple[tuple, dict]] = {}  # name -> (field path, entry)
-        if "urdf" in data:
-            self._urdf(data["urdf"], builder, named)
+        for robot in ("urdf", "mjcf"):
+            if robot in data:
+                self._robot(robot, data[robot], builder, named)
         for index, entry in enumerate(self._list(data, "bodies")):
             where = ("bodies", index)
             entry = self._mapping(entry, where)
@@ -315,30 +319,34 @@ class _Reader:
                     for index, entry in enumerate(self._list(data, "analyses"))]
         return ModelFile(model, analyses, data, self.path, tuple(dict.fromkeys(self.sources)))
 
-    def _urdf(self, entry, builder, named: dict) -> None:
-        """The robot of a URDF file, the start of the model (bodies and joints by name)."""
+    def _robot(self, kind: str, entry, builder, named: dict) -> None:
+        """The robot of a URDF or MJCF file (``kind``), the start of the model (bodies and
+        joints by name)."""
+        from mbd3d.io.mjcf import mjcf_builder  # noqa: PLC0415
         from mbd3d.io.urdf import urdf_builder  # noqa: PLC0415
 
-        where = ("urdf",)
+        where = (kind,)
+        fields = _URDF_FIELDS if kind == "urdf" else _MJCF_FIELDS
         entry = self._mapping(entry, where)
         for key in entry:
-            if key not in _URDF_FIELDS:
-                raise self.error(where + (key,), f"unknown urdf field"
-                                                 f"{did_you_mean(key, _URDF_FIELDS)} (fields: "
-                                                 f"{', '.join(_URDF_FIELDS)})")
+            if key not in fields:
+                raise self.error(where + (key,), f"unknown {kind} field"
+                                                 f"{did_you_mean(key, fields)} (fields: "
+                                                 f"{', '.join(fields)})")
         if "file" not in entry:
-            raise self.error(where, "urdf needs its file (relative to this file)")
+            raise self.error(where, f"{kind} needs its file (relative to this file)")
         if builder.dim != 3:
-            raise self.error(("dim",), "a URDF robot is spatial: dim: 3")
+            raise self.error(("dim",), f"a {kind.upper()} robot is spatial: dim: 3")
         _, _, motion_types = _types()
         drive = {joint: (self._motion(value, where + ("drive", joint), motion_types)
                          if isinstance(value, dict) else value)
                  for joint, value in (entry.get("drive") or {}).items()}
+        options = ({"fixed_base": entry.get("fixed_base", True)} if kind == "urdf"
+                   else {"keyframe": entry.get("keyframe")})
         with self._at(where):
-            urdf_builder(self.folder / str(entry["file"]),
-                         fixed_base=entry.get("fixed_base", True),
-                         joint_positions=entry.get("joint_positions"), drive=drive,
-                         builder=builder, files_read=self.sources)
+            (urdf_builder if kind == "urdf" else mjcf_builder)(
+                self.folder / str(entry["file"]), joint_positions=entry.get("joint_positions"),
+                drive=drive, builder=builder, files_read=self.sources, **options)
         named.update({body.name: body for body in builder._bodies})
         named.update({element.name: element for element in builder._elements})
 

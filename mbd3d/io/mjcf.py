@@ -1,0 +1,375 @@
+"""MJCF import: mechanisms described in MuJoCo's format, read by MuJoCo's own compiler.
+
+MuJoCo (``pip install "mbd3d[mjcf]"``) parses the file, applies its defaults, ``<include>``s
+and compiler options (angles in degrees or radians, Euler sequences, inertias computed from
+geoms) and places every body; this module only reads the compiled model, so that an MJCF
+means here what it means in MuJoCo. In the drawing at ``joint_positions`` (default each
+joint's ``ref``, MuJoCo's ``qpos0``):
+
+- each body that a joint carries, together with the bodies welded to it (nested without a
+  joint), becomes one spatial body named after it: their summed mass and inertia at their
+  common centre of mass, with the body's axes; bodies welded to the world are the ground;
+- a ``hinge`` joint is a :class:`~mbd3d.joints.Revolute` about its axis through its anchor, a
+  ``slide`` a :class:`~mbd3d.joints.Prismatic`, a ``ball`` a :class:`~mbd3d.joints.Spherical`,
+  and a ``free`` joint leaves its body free;
+- a limited hinge's or slide's ``range`` becomes a :class:`~mbd3d.JointLimit` (as URDF's
+  ``<limit>``: ``joint_limits``);
+- ``drive={"joint": motion}`` adds a driver named ``"<joint>_drive"`` whose coordinate is
+  MuJoCo's ``qpos`` of that joint [rad or m], so its effort is the joint's generalised force;
+- geoms are the bodies' shapes for the viewer (spheres, capsules, cylinders, boxes,
+  ellipsoids and meshes; planes and height fields are not drawn).
+
+A body with more than one joint is refused, naming it (mbd3d joins two bodies by one joint:
+nest a body, with mass, per joint). What the file holds that the model leaves out is said in a
+:class:`MjcfWarning`: actuators, tendons, equality constraints, joint springs, damping,
+armature and dry friction, contacts between geoms, a ball joint's range.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import warnings
+from typing import Any, Mapping
+
+import numpy as np
+
+from mbd3d.errors import ModelError, user_stacklevel
+from mbd3d.io.robot_parts import (add_driver, add_limit, composite, joint_names, limit_law,
+                                  physical)
+from mbd3d.model.motion import Motion, as_motion
+
+__all__ = ["mjcf_builder", "load_mjcf", "MjcfWarning"]
+
+#: MuJoCo's joint types (mjtJoint)
+_FREE, _BALL, _SLIDE, _HINGE = 0, 1, 2, 3
+_KINDS = {_FREE: "free", _BALL: "ball", _SLIDE: "slide", _HINGE: "hinge"}
+#: the largest MJCF file read [bytes]: MuJoCo parses the whole file in memory
+MAX_FILE_BYTES = 64 * 2**20
+
+
+class MjcfWarning(UserWarning):
+    """What an MJCF file holds that the model leaves out (actuators, tendons, equality
+    constraints, joint springs and damping, contacts between geoms), or what loading it
+    mended (renamed joints, repaired inertias)."""
+
+
+def load_mjcf(path: str | os.PathLike, **options: Any):
+    """The model of an MJCF file: :func:`mjcf_builder` built. Returns a :class:`Model`."""
+    return mjcf_builder(path, **options).build()
+
+
+def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float] | None = None,
+                 drive: Mapping[str, Motion | float] | None = None, keyframe: str | None = None,
+                 name: str | None = None, joint_limits: Any = "stop", builder=None,
+                 files_read: list[str] | None = None):
+    """A :class:`ModelBuilder` holding the mechanism of an MJCF file, to extend before
+    building (drivers, loop-closing joints, forces, contacts).
+
+    Parameters
+    ----------
+    path : str or path
+        The MJCF file (its includes and meshes are found as MuJoCo finds them).
+    joint_positions : mapping, optional
+        Hinge or slide joint name -> its ``qpos`` [rad or m] in the drawing the bodies start
+        from (default: a driven joint's motion at t = 0, else the keyframe's, else the
+        joint's ``ref``).
+    drive : mapping, optional
+        Hinge or slide joint name -> motion (a Motion or a constant) of its ``qpos``.
+    keyframe : str, optional
+        The ``<key>`` whose ``qpos`` is the drawing (free and ball joints too) and whose
+        ``qvel`` the bodies' initial velocities (for forward dynamics).
+    name : str, optional
+        The model's name (default the file's ``<mujoco model>``).
+    joint_limits : "stop", "ignore" or ContactLaw
+        What a limited hinge's or slide's ``range`` becomes, as for
+        :func:`mbd3d.load_urdf`: a :class:`~mbd3d.JointLimit` named ``"<joint>_limit"``.
+    builder : ModelBuilder, optional
+        Add the mechanism to this spatial builder (its body names must be free) instead of a
+        new one; its gravity is kept (a warning says so where the file's differs).
+    files_read : list, optional
+        Appended with the path of every file read: the MJCF file, the files it includes and
+        its asset files (meshes, height fields, textures), e.g. to tell when a result made
+        from it is stale.
+
+    Returns
+    -------
+    ModelBuilder
+        Spatial; a new one has the file's gravity (``<option gravity>``, default 9.81 m/s^2
+        down z).
+
+    Raises
+    ------
+    ModelError
+        MuJoCo missing, a file MuJoCo refuses (its message, with the line), a body with more
+        than one joint, a moving body without mass, an unknown or unfit joint in
+        ``joint_positions`` or ``drive``.
+    """
+    mujoco = _mujoco()
+    path = pathlib.Path(path)
+    what = f"MJCF '{path}'"
+    m = _compiled(mujoco, path, what)
+    if files_read is not None:
+        files_read.extend(_files_read(m, path))
+    joints = {_name(mujoco, m, "joint", j): j for j in range(m.njnt)}
+    drive = {key: as_motion(value, f"{what}: drive of '{key}'")
+             for key, value in (drive or {}).items()}
+    positions = dict(joint_positions or {})
+    for key, motion in drive.items():
+        positions.setdefault(key, motion.evaluate(0.0)[0])
+    d = _drawing(mujoco, m, joints, positions, _key(mujoco, m, keyframe, what), what)
+
+    b = _builder(builder, m, name or m.names[:m.names.index(b"\0")].decode() or path.stem,
+                 what)
+    owner, bodies = _add_bodies(mujoco, m, d, b, what)
+    taken = {body.name for body in bodies.values()} | {b.ground.name}
+    names = joint_names([j for j in joints if m.jnt_type[joints[j]] != _FREE], taken, what,
+                        MjcfWarning)
+    law = limit_law(joint_limits, what)
+    left_out = _not_modelled(mujoco, m, owner)
+    for joint, j in joints.items():
+        kind, body = int(m.jnt_type[j]), int(m.jnt_bodyid[j])
+        if kind == _FREE:
+            continue
+        element = _add_joint(b, kind, names[joint], bodies[owner[int(m.body_parentid[body])]],
+                             bodies[body], d.xanchor[j].copy(), d.xaxis[j].copy())
+        qpos = float(d.qpos[m.jnt_qposadr[j]])
+        if m.jnt_limited[j] and kind == _BALL:
+            left_out.append(f"the range of ball joint '{joint}'")
+        elif m.jnt_limited[j] and not add_limit(b, kind == _SLIDE, names[joint], element,
+                                                d.xaxis[j].copy(), qpos, tuple(m.jnt_range[j]),
+                                                law):
+            lower, upper = m.jnt_range[j]
+            unit = "m" if kind == _SLIDE else "rad"
+            left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint '{joint}'")
+        if joint in drive:
+            add_driver(b, kind == _SLIDE, names[joint], element, d.xaxis[j].copy(),
+                       drive[joint], qpos)
+    if left_out:
+        warnings.warn(f"{what}: not modelled: {'; '.join(left_out)}", MjcfWarning,
+                      stacklevel=user_stacklevel())
+    return b
+
+
+def _builder(builder, m, name: str, what: str):
+    """A new spatial builder with the file's gravity, or ``builder`` (spatial), warned where
+    its gravity is not the file's."""
+    from mbd3d.model.builder import ModelBuilder  # noqa: PLC0415
+
+    gravity = np.array(m.opt.gravity, dtype=float)
+    if builder is None:
+        return ModelBuilder(dim=3, gravity=tuple(gravity), name=name)
+    if builder.dim != 3:
+        raise ModelError(f"{what}: an MJCF mechanism is spatial; the builder is planar")
+    if not np.allclose(builder.gravity, gravity, rtol=1e-12, atol=0.0):
+        warnings.warn(f"{what}: the model's gravity {tuple(builder.gravity)} is kept, not the "
+                      f"file's {tuple(gravity)} [m/s^2]", MjcfWarning,
+                      stacklevel=user_stacklevel())
+    return builder
+
+
+def _mujoco():
+    try:
+        import mujoco  # noqa: PLC0415
+    except ImportError:
+        raise ModelError('MJCF import needs MuJoCo: pip install "mbd3d[mjcf]"') from None
+    return mujoco
+
+
+def _compiled(mujoco, path: pathlib.Path, what: str):
+    """MuJoCo's compiled model of the file, its refusal as a ModelError."""
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise ModelError(f"{what} cannot be read: {exc.strerror}") from None
+    if size > MAX_FILE_BYTES:
+        raise ModelError(f"{what} is {size / 2**20:.0f} MiB; an MJCF file of more than "
+                         f"{MAX_FILE_BYTES / 2**20:.0f} MiB is refused (is it one?)")
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as exc:  # MuJoCo's parse and compile errors, with the element and line
+        raise ModelError(f"{what}: MuJoCo refuses it: {' '.join(str(exc).split())}") from None
+
+
+def _files_read(m, path: pathlib.Path) -> list[str]:
+    """The MJCF file, those it includes (relative to its folder, as MuJoCo finds them) and
+    the asset files MuJoCo read (relative to the compiler's ``meshdir``, ``texturedir`` or
+    ``assetdir``), those found."""
+    from xml.etree import ElementTree  # noqa: PLC0415 (files MuJoCo has already parsed)
+
+    folder, found, queue = path.resolve().parent, [], [path.resolve()]
+    folders = {"mesh": "", "texture": ""}
+    while queue:
+        file = queue.pop()
+        if str(file) in found or not file.is_file():
+            continue
+        found.append(str(file))
+        for element in ElementTree.parse(file).iter():
+            if element.tag == "include" and element.get("file"):
+                queue.append(folder / element.get("file"))
+            elif element.tag == "compiler":
+                for kind in folders:
+                    folders[kind] = element.get(f"{kind}dir", element.get("assetdir",
+                                                                          folders[kind]))
+    ends = np.flatnonzero(np.frombuffer(m.paths, dtype=np.uint8) == 0)
+    starts = {"mesh": m.mesh_pathadr, "hfield": m.hfield_pathadr, "skin": m.skin_pathadr,
+              "texture": m.tex_pathadr}
+    for kind, addresses in starts.items():
+        for start in addresses[addresses >= 0]:
+            name = m.paths[start:ends[np.searchsorted(ends, start)]].decode()
+            asset = folder / folders["texture" if kind == "texture" else "mesh"] / name
+            if name and asset.is_file() and str(asset.resolve()) not in found:
+                found.append(str(asset.resolve()))
+    return found
+
+
+def _name(mujoco, m, kind: str, index: int) -> str:
+    """The element's name in the file, or ``"<kind><index>"`` for an unnamed one."""
+    objects = {"body": mujoco.mjtObj.mjOBJ_BODY, "joint": mujoco.mjtObj.mjOBJ_JOINT}
+    return mujoco.mj_id2name(m, objects[kind], index) or f"{kind}{index}"
+
+
+def _key(mujoco, m, keyframe: str | None, what: str) -> int | None:
+    """The index of the keyframe named ``keyframe``, or None."""
+    if keyframe is None:
+        return None
+    k = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, str(keyframe))
+    if k < 0:
+        keys = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_KEY, i) for i in range(m.nkey)]
+        raise ModelError(f"{what}: no keyframe '{keyframe}' (named keyframes: "
+                         f"{', '.join(key for key in keys if key) or 'none'})")
+    return k
+
+
+def _drawing(mujoco, m, joints: dict, positions: Mapping[str, float], key: int | None,
+             what: str):
+    """MuJoCo's kinematics and velocities at ``qpos0`` (the keyframe ``key``'s ``qpos`` and
+    ``qvel``) with the given hinge and slide coordinates."""
+    d = mujoco.MjData(m)
+    d.qpos[:] = m.qpos0 if key is None else m.key_qpos[key]
+    if key is not None:
+        d.qvel[:] = m.key_qvel[key]
+    for key, value in positions.items():
+        if key not in joints:
+            raise ModelError(f"{what}: no joint '{key}' (joints: {', '.join(sorted(joints))})")
+        j = joints[key]
+        if m.jnt_type[j] not in (_HINGE, _SLIDE):
+            raise ModelError(f"{what}: joint '{key}' is a {_KINDS[int(m.jnt_type[j])]} joint; "
+                             "only hinge and slide joints take a coordinate or a drive")
+        d.qpos[m.jnt_qposadr[j]] = float(value)
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_comVel(m, d)
+    return d
+
+
+def _add_bodies(mujoco, m, d, b, what: str) -> tuple[dict, dict]:
+    """A body per group of welded MuJoCo bodies (the world's group is the ground). Returns
+    each MuJoCo body's group (its first body's index) and the model's body of each group."""
+    owner, members = {0: 0}, {0: [0]}
+    for k in range(1, m.nbody):  # parents before children
+        count = int(m.body_jntnum[k])
+        if count > 1:
+            first = int(m.body_jntadr[k])
+            raise ModelError(
+                f"{what}: body '{_name(mujoco, m, 'body', k)}' has {count} joints ("
+                + ", ".join(_name(mujoco, m, "joint", first + i) for i in range(count))
+                + "); mbd3d joins two bodies by one joint: nest a body, with mass, per joint")
+        owner[k] = k if count else owner[int(m.body_parentid[k])]
+        members.setdefault(owner[k], []).append(k)
+    bodies = {0: b.ground}
+    for first, group in members.items():
+        if first == 0:
+            continue
+        mass, centre, inertia = composite(
+            (float(m.body_mass[k]), d.xipos[k],
+             d.ximat[k].reshape(3, 3) @ np.diag(m.body_inertia[k]) @ d.ximat[k].reshape(3, 3).T)
+            for k in group)
+        body = _name(mujoco, m, "body", first)
+        if body == b.ground.name:
+            warnings.warn(f"{what}: body '{body}' is the body '{body}_body' (the model's "
+                          f"ground is '{body}')", MjcfWarning, stacklevel=user_stacklevel())
+            body = f"{body}_body"
+        if not mass > 0:
+            raise ModelError(f"{what}: body '{body}' moves on its joint but has no mass (nor "
+                             "have the bodies welded to it); give it an <inertial> or geoms")
+        frame = d.xmat[first].reshape(3, 3)
+        welded = ", ".join(_name(mujoco, m, "body", k) for k in group)
+        inertia = physical(frame.T @ inertia @ frame, f"body '{body}'",
+                           f" (with the bodies welded to it: {welded})", "<inertial>", what,
+                           MjcfWarning)
+        to_body = np.eye(4)
+        to_body[:3, :3], to_body[:3, 3] = frame.T, -frame.T @ centre
+        velocity = np.zeros(6)  # angular, then linear at its centre of mass (global axes)
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, first, velocity, 0)
+        omega = velocity[:3].copy()
+        bodies[first] = b.add_body(
+            body, mass=mass, inertia=inertia, position=centre, orientation=frame,
+            velocity=velocity[3:] + np.cross(omega, centre - d.xipos[first]),
+            angular_velocity=omega, shape=_shape(mujoco, m, d, group, to_body))
+    return owner, bodies
+
+
+def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis: np.ndarray):
+    """The hinge, slide or ball joint ``name`` at ``anchor`` (global) along ``axis``."""
+    from mbd3d.joints import Prismatic, Revolute, Spherical  # noqa: PLC0415
+
+    if kind == _BALL:
+        return b.add(Spherical(name, parent, child, at=anchor))
+    joint = Prismatic if kind == _SLIDE else Revolute
+    return b.add(joint(name, parent, child, at=anchor, axis=axis))
+
+
+def _not_modelled(mujoco, m, owner: dict) -> list[str]:
+    """What of the file the model leaves out, each said once."""
+    out = []
+    for count, label in ((m.nu, "actuators"), (m.ntendon, "tendons"),
+                         (m.neq, "equality constraints")):
+        if count:
+            out.append(f"{count} {label}")
+    dof = {"damping": m.dof_damping, "armature": m.dof_armature,
+           "frictionloss": m.dof_frictionloss}
+    for label, values in [("stiffness", m.jnt_stiffness)] + list(dof.items()):
+        joints = sorted({_name(mujoco, m, "joint", int(m.dof_jntid[k]) if label in dof else k)
+                         for k in np.flatnonzero(values)})
+        if joints:
+            out.append(f"joint {label} ({', '.join(joints)})")
+    collide = {owner[int(m.geom_bodyid[g])] for g in range(m.ngeom)
+               if m.geom_contype[g] or m.geom_conaffinity[g]}
+    if len(collide) > 1 and not m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT:
+        out.append("contacts between geoms (add mb.Contact between shapes)")
+    return out
+
+
+def _shape(mujoco, m, d, group: list, to_body: np.ndarray):
+    """The geoms of the welded bodies ``group`` as one mesh in their body's frame
+    (``to_body``: global to body, 4x4), or None."""
+    import trimesh  # noqa: PLC0415
+
+    types = mujoco.mjtGeom
+    parts = []
+    for g in np.flatnonzero(np.isin(m.geom_bodyid, group)):
+        kind, size = int(m.geom_type[g]), m.geom_size[g]
+        if kind == types.mjGEOM_SPHERE:
+            mesh = trimesh.creation.icosphere(radius=size[0], subdivisions=2)
+        elif kind == types.mjGEOM_ELLIPSOID:
+            mesh = trimesh.creation.icosphere(radius=1.0, subdivisions=2)
+            mesh.apply_scale(size)
+        elif kind == types.mjGEOM_CAPSULE:
+            mesh = trimesh.creation.capsule(height=2 * size[1], radius=size[0])
+        elif kind == types.mjGEOM_CYLINDER:
+            mesh = trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=32)
+        elif kind == types.mjGEOM_BOX:
+            mesh = trimesh.creation.box(extents=2 * size)
+        elif kind == types.mjGEOM_MESH:
+            k = int(m.geom_dataid[g])
+            vertices = m.mesh_vert[m.mesh_vertadr[k]:m.mesh_vertadr[k] + m.mesh_vertnum[k]]
+            faces = m.mesh_face[m.mesh_faceadr[k]:m.mesh_faceadr[k] + m.mesh_facenum[k]]
+            mesh = trimesh.Trimesh(vertices.copy(), faces.copy(), process=False)
+        else:
+            continue  # planes and height fields: no body of finite size
+        pose = np.eye(4)
+        pose[:3, :3], pose[:3, 3] = d.geom_xmat[g].reshape(3, 3), d.geom_xpos[g]
+        mesh.apply_transform(to_body @ pose)
+        parts.append(mesh)
+    return trimesh.util.concatenate(parts) if parts else None

@@ -1,0 +1,244 @@
+"""MJCF import against MuJoCo itself (the `test` extra's `mujoco`): an arm drawn with MuJoCo's
+conventions (angles in degrees, Euler angles, a quaternion, a joint's reference angle, a skew
+and unnormalised axis, inertias from geoms and an inertial frame, a body welded on) has
+MuJoCo's inverse dynamics at random states; a free-floating mechanism with a ball joint,
+started from a keyframe's velocities, tumbles as MuJoCo integrates it; a limited hinge stops
+at MuJoCo's range. What the model leaves out is said; what it cannot read is refused by name."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+
+mujoco = pytest.importorskip("mujoco")
+
+ARM = """<mujoco model="arm">
+  <compiler angle="degree"/>
+  <option gravity="0.3 -0.2 -9.81"><flag contact="disable"/></option>
+  <worldbody>
+    <geom type="plane" size="1 1 0.1"/>
+    <body name="base" pos="0 0 0.1" euler="0 0 30">
+      <joint name="yaw" type="hinge" axis="0 0 1"/>
+      <geom type="cylinder" size="0.05 0.05" density="2000"/>
+      <body name="upper" pos="0 0 0.1" quat="0.9 0.1 0.3 0.2">
+        <joint name="shoulder" type="hinge" axis="0 2 0" ref="20"/>
+        <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.03"/>
+        <body name="sensor" pos="0.2 0.05 0" euler="10 20 30">
+          <geom type="box" size="0.02 0.03 0.04" mass="0.3"/>
+        </body>
+        <body name="fore" pos="0.4 0 0">
+          <joint name="elbow" type="hinge" axis="0 1 1" range="-90 90"/>
+          <inertial pos="0.15 0.01 0" mass="1.2" diaginertia="0.01 0.02 0.025" euler="5 10 15"/>
+          <body name="tool" pos="0.3 0 0">
+            <joint name="extend" type="slide" axis="1 0.2 0"/>
+            <geom type="sphere" size="0.04" mass="0.5"/>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>"""
+JOINTS = ("yaw", "shoulder", "elbow", "extend")
+
+FLOATING = """<mujoco model="floating">
+  <option gravity="0 0 0" integrator="RK4" timestep="1e-4"/>
+  <worldbody>
+    <body name="hub" pos="0.1 0.2 1" quat="0.8 0.2 -0.3 0.4">
+      <freejoint name="float"/>
+      <geom type="box" size="0.2 0.1 0.05" density="1000"/>
+      <body name="arm" pos="0.25 0 0">
+        <joint name="ball" type="ball"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0.05 0" size="0.03" density="800"/>
+        <body name="flap" pos="0.3 0.05 0" euler="0.3 0.2 0.1">
+          <joint name="hinge" type="hinge" axis="1 1 0"/>
+          <geom type="ellipsoid" size="0.05 0.08 0.02" density="1200"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe>
+    <key name="spin" qpos="0.1 0.2 1 0.8 0.2 -0.3 0.4 0.9 0.1 0.3 -0.2 0.5"
+         qvel="0.3 -0.2 0.1 1.0 -2.0 0.5 3.0 -1.0 2.0 4.0"/>
+  </keyframe>
+</mujoco>"""
+
+
+def _file(tmp_path, text: str, name: str = "model.xml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_an_arm_has_mujocos_inverse_dynamics(tmp_path):
+    """Each joint's generalised force for random positions, rates and accelerations of all
+    four joints (MuJoCo's qpos: the shoulder's reference angle of 20 degrees included) against
+    MuJoCo's mj_inverse, to 1e-12 of the largest."""
+    path = _file(tmp_path, ARM)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing left out: contacts are disabled
+        model = mb.load_mjcf(path, drive={joint: 0.0 for joint in JOINTS})
+    assert [body.name for body in model.bodies] == ["base", "upper", "fore", "tool"]
+    assert model.name == "arm"
+    # the tool's sphere geom is drawn about its centre of mass, the geom's centre
+    np.testing.assert_allclose(np.linalg.norm(model.bodies[3].shape.vertices, axis=1), 0.04,
+                               rtol=1e-12)
+    rng = np.random.default_rng(1)
+    q, qd, qdd = rng.uniform(-1, 1, (6, 4)), rng.uniform(-2, 2, (6, 4)), rng.uniform(-3, 3, (6, 4))
+    res = mb.inverse_dynamics_at(model, q, qd, qdd)
+    ours = np.column_stack([res.joint(f"{joint}_drive").effort for joint in JOINTS])
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    theirs = np.zeros_like(ours)
+    for k in range(len(q)):
+        d.qpos[:], d.qvel[:], d.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(m, d)
+        theirs[k] = d.qfrc_inverse
+    np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max())
+
+
+def test_a_free_floating_mechanism_tumbles_as_mujoco_integrates_it(tmp_path):
+    """A box on a free joint carrying a capsule on a ball joint and a flap on a hinge, in zero
+    gravity, from a keyframe's pose and velocities (every rate nonzero): the centres of mass
+    after 0.5 s against MuJoCo's RK4 at 1e-4 s (whose own error is about 1e-12 m: 4e-9 m at
+    1e-3 s), and the initial state taken as given (consistent, so not changed)."""
+    path = _file(tmp_path, FLOATING)
+    with pytest.warns(mb.MjcfWarning, match="not modelled: contacts between geoms"):
+        model = mb.load_mjcf(path, keyframe="spin")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.InitialStateWarning)
+        res = mb.forward_dynamics(model, [0.0, 0.5], method="DOP853", rtol=1e-11, atol=1e-12)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    for _ in range(5000):
+        mujoco.mj_step(m, d)
+    for k, name in enumerate(["hub", "arm", "flap"], 1):
+        np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
+
+
+def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
+    """A pendulum on a skew hinge with a reference angle, released at rest beside its range
+    [-30, 40] degrees: it swings into the upper end and rebounds; at the deepest point of the
+    stop (rate zero) its centre of mass is where MuJoCo places it at qpos = 40 degrees, to
+    the stop's dent (a stiff law: about 1e-4 rad)."""
+    text = """<mujoco model="limited"><compiler angle="degree"/>
+  <worldbody><body name="bob" pos="0 0 1" euler="10 -20 5">
+    <joint name="swing" type="hinge" axis="1 0.2 0.1" ref="15" range="-30 40"/>
+    <inertial pos="0 0 -0.5" mass="2" diaginertia="0.02 0.03 0.04"/>
+  </body></worldbody></mujoco>"""
+    path = _file(tmp_path, text)
+    law = mb.LinearContact(frequency=2000.0, restitution=0.5)
+    model = mb.load_mjcf(path, joint_positions={"swing": np.radians(-25.0)}, joint_limits=law)
+    assert "swing_limit" in [force.name for force in model.forces]
+    times = np.linspace(0.0, 1.0, 4001)
+    res = mb.forward_dynamics(model, times, method="DOP853", rtol=1e-10, atol=1e-12)
+    rate = res.joint("swing").angle_rate
+    deepest = np.argmax(res.joint("swing").angle)
+    assert rate[deepest - 1] > 0 > rate[deepest + 1]  # the turn, not the end of the run
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    d.qpos[0] = np.radians(40.0)
+    mujoco.mj_kinematics(m, d)
+    np.testing.assert_allclose(res.body("bob").position[deepest], d.xipos[1], rtol=0,
+                               atol=5e-4 * 0.5)
+
+
+def test_what_mjcf_import_leaves_out_is_said(tmp_path):
+    """Actuators, tendons, equality constraints, joint springs, damping, armature and dry
+    friction, a ball joint's range and contacts between geoms: one warning names them."""
+    text = """<mujoco model="extras">
+  <worldbody><geom name="floor" type="plane" size="1 1 0.1"/>
+    <body name="a" pos="0 0 1"><joint name="j1" type="hinge" axis="0 1 0" damping="0.1"
+      stiffness="2" armature="0.01" frictionloss="0.2"/><geom type="sphere" size="0.1"/>
+      <site name="s1"/>
+      <body name="b" pos="0 0 -0.3"><joint name="j2" type="ball" range="0 30"/>
+        <geom type="sphere" size="0.1"/><site name="s2"/></body></body></worldbody>
+  <tendon><spatial name="t"><site site="s1"/><site site="s2"/></spatial></tendon>
+  <equality><connect body1="a" body2="world" anchor="0 0 0"/></equality>
+  <actuator><motor joint="j1"/></actuator>
+</mujoco>"""
+    with pytest.warns(mb.MjcfWarning) as caught:
+        model = mb.load_mjcf(_file(tmp_path, text))
+    message = str(caught[0].message)
+    for part in ("1 actuators", "1 tendons", "1 equality constraints", "joint stiffness (j1)",
+                 "joint damping (j1)", "joint armature (j1)", "joint frictionloss (j1)",
+                 "the range of ball joint 'j2'", "contacts between geoms"):
+        assert part in message
+    assert [body.name for body in model.bodies] == ["a", "b"]
+
+
+@pytest.mark.parametrize("text, options, message", [
+    ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><joint name='j2' "
+     "axis='0 1 0'/><geom size='0.1'/></body></worldbody></mujoco>", {},
+     r"body 'a' has 2 joints \(j1, j2\); mbd3d joins two bodies by one joint"),
+    ("<mujoco><worldbody><body name='a'>\n<joint name='j1' axis='0 0 1'/>\n<geom size='0.1' "
+     "type='nonsense'/></body></worldbody></mujoco>", {}, r"MuJoCo refuses it: .*line 3"),
+    ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><geom size='0.1'/>"
+     "</body></worldbody></mujoco>", {"drive": {"j2": 0.0}}, r"no joint 'j2' \(joints: j1\)"),
+    ("<mujoco><worldbody><body name='a'><joint name='j1' type='ball'/><geom size='0.1'/>"
+     "</body></worldbody></mujoco>", {"drive": {"j1": 0.0}},
+     r"joint 'j1' is a ball joint; only hinge and slide joints take a coordinate"),
+    ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><geom size='0.1'/>"
+     "</body></worldbody><keyframe><key name='home'/></keyframe></mujoco>",
+     {"keyframe": "start"}, r"no keyframe 'start' \(named keyframes: home\)"),
+])
+def test_mjcf_mistakes_are_named_with_the_file(tmp_path, text, options, message):
+    path = _file(tmp_path, text, "broken.xml")
+    with pytest.raises(mb.ModelError, match=r"MJCF '.*broken\.xml'.*" + message):
+        mb.load_mjcf(path, **options)
+
+
+def test_a_missing_file_is_named(tmp_path):
+    with pytest.raises(mb.ModelError, match=r"MJCF '.*gone\.xml' cannot be read"):
+        mb.load_mjcf(tmp_path / "gone.xml")
+
+
+def test_a_model_file_starts_from_an_mjcf_file(tmp_path):
+    """``mjcf: {file, drive}`` in a model file gives the model load_mjcf gives (the same
+    efforts to the last bit); a mistyped field is named with its line."""
+    _file(tmp_path, ARM, "arm.xml")
+    drives = ", ".join(f"{joint}: 0.0" for joint in JOINTS)
+    text = (f"mbd3d: 1\ndim: 3\ngravity: [0.3, -0.2, -9.81]\n"
+            f"mjcf: {{file: arm.xml, drive: {{{drives}}}}}\n")
+    (tmp_path / "arm.yaml").write_text(text)
+    from_file = mb.load(tmp_path / "arm.yaml")
+    direct = mb.load_mjcf(tmp_path / "arm.xml", drive={joint: 0.0 for joint in JOINTS})
+
+    def efforts(model) -> list[float]:
+        res = mb.inverse_dynamics_at(model, [0.1, 0.2, 0.3, 0.05], [1.0, -1.0, 0.5, 0.2],
+                                     [0.5, 0.1, -2.0, 1.0])
+        return [res.joint(f"{joint}_drive").effort[0] for joint in JOINTS]
+
+    assert efforts(from_file) == efforts(direct)
+    (tmp_path / "typo.yaml").write_text(text.replace("drive:", "drives:"))
+    with pytest.raises(mb.ModelError, match=r"typo\.yaml:4: mjcf\.drives: unknown mjcf field "
+                                            r"\(did you mean 'drive'\?\)"):
+        mb.load(tmp_path / "typo.yaml")
+    (tmp_path / "still.yaml").write_text(text.replace("gravity: [0.3, -0.2, -9.81]\n", ""))
+    with pytest.warns(mb.MjcfWarning, match=r"the model's gravity .* is kept, not the file's"):
+        mb.load(tmp_path / "still.yaml")
+
+
+def test_the_files_read_are_the_file_its_includes_and_its_meshes(tmp_path):
+    """A body in an included file drawn by a mesh in the compiler's ``meshdir``: the mesh is
+    the body's shape (its volume, a 0.2 x 0.1 x 0.4 m box) and every file read is listed."""
+    trimesh = pytest.importorskip("trimesh")
+    (tmp_path / "meshes").mkdir()
+    trimesh.creation.box(extents=(0.2, 0.1, 0.4)).export(tmp_path / "meshes" / "block.stl")
+    _file(tmp_path, "<mujoco><worldbody><body name='block' pos='0 0 1'><joint name='j' "
+                    "axis='0 1 0'/><geom type='mesh' mesh='block'/></body></worldbody>"
+                    "</mujoco>", "part.xml")
+    main = _file(tmp_path, "<mujoco><compiler meshdir='meshes'/><asset><mesh name='block' "
+                           "file='block.stl'/></asset><include file='part.xml'/></mujoco>")
+    read: list = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # one body's geoms: no contacts left out
+        model = mb.load_mjcf(main, files_read=read)
+    assert read == [str(main.resolve()), str((tmp_path / "part.xml").resolve()),
+                    str((tmp_path / "meshes" / "block.stl").resolve())]
+    # STL holds single precision: the box's corners to about 1e-8 m
+    assert model.bodies[0].shape.volume == pytest.approx(0.2 * 0.1 * 0.4, rel=1e-6)
