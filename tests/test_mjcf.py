@@ -67,6 +67,31 @@ FLOATING = """<mujoco model="floating">
 </mujoco>"""
 
 
+GIMBALS = """<mujoco model="gimbals">
+  <option integrator="RK4" timestep="1e-4"/>
+  <worldbody>
+    <body name="torso" pos="0 0 1" euler="0.2 0.1 0.3">
+      <joint name="bend_z" type="hinge" axis="0 0 1" pos="0 0 0.1"/>
+      <joint name="bend_y" type="hinge" axis="0 1 0" pos="0 0 0.1"/>
+      <geom type="box" size="0.15 0.1 0.08" density="1000"/>
+      <body name="thigh" pos="0.1 0 -0.1">
+        <joint name="hip_x" type="hinge" axis="1 0 0"/>
+        <joint name="hip_z" type="hinge" axis="0.2 0 1"/>
+        <joint name="hip_y" type="hinge" axis="0 1 0.3" range="-170 170"/>
+        <geom type="capsule" fromto="0 0 0 0.05 0.02 -0.3" size="0.04" density="900"/>
+        <body name="shin" pos="0.05 0.02 -0.3">
+          <joint name="knee" type="hinge" axis="0 -1 0"/>
+          <geom type="capsule" fromto="0 0 0 0 0.03 -0.25" size="0.03" density="1100"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe>
+    <key name="kick" qpos="0.3 -0.2 0.4 0.1 -0.5 0.6" qvel="1.0 -0.5 2.0 -1.0 0.7 3.0"/>
+  </keyframe>
+</mujoco>"""
+
+
 def _file(tmp_path, text: str, name: str = "model.xml"):
     path = tmp_path / name
     path.write_text(text)
@@ -117,6 +142,71 @@ def test_a_free_floating_mechanism_tumbles_as_mujoco_integrates_it(tmp_path):
     for _ in range(5000):
         mujoco.mj_step(m, d)
     for k, name in enumerate(["hub", "arm", "flap"], 1):
+        np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
+
+
+def test_a_bodys_two_and_three_hinges_through_one_point_move_as_in_mujoco(tmp_path):
+    """A torso on two perpendicular hinges through one point (read as a universal joint), a
+    thigh on three skew hinges through one point (a ball joint) and a shin on a knee, swinging
+    under gravity from a keyframe's pose and rates: the centres of mass after 0.5 s (0.5 m of
+    travel) against MuJoCo's RK4 at 1e-4 s; a range on one of three hinges (wide: MuJoCo would
+    enforce it) is said to be left out, and such a hinge cannot be driven."""
+    path = _file(tmp_path, GIMBALS)
+    with pytest.warns(mb.MjcfWarning, match=r"the ranges of joints hip_y \(the ball joint "
+                                            r"'hip_x\+hip_z\+hip_y'\)"):
+        model = mb.load_mjcf(path, keyframe="kick")
+    assert [type(joint).__name__ for joint in model.joints] == ["Universal", "Spherical",
+                                                                 "Revolute"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.InitialStateWarning)
+        res = mb.forward_dynamics(model, [0.0, 0.5], method="DOP853", rtol=1e-11, atol=1e-12)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    for _ in range(5000):
+        mujoco.mj_step(m, d)
+    for k, name in enumerate(["torso", "thigh", "shin"], 1):
+        np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
+    with pytest.raises(mb.ModelError, match=r"joint 'bend_y' is one of the joints mbd3d models "
+                                            r"as the universal joint 'bend_z\+bend_y'"):
+        mb.load_mjcf(path, drive={"bend_y": 0.0})
+
+
+WALKER = """<mujoco model="walker">
+  <option integrator="RK4" timestep="1e-4"/>
+  <worldbody>
+    <body name="torso" pos="0.1 0 1.2" euler="0 0.3 0">
+      <joint name="rootx" type="slide" axis="1 0 0" pos="0 0 0.2"/>
+      <joint name="rootz" type="slide" axis="0.6 0 0.8" pos="0 0 0.2"/>
+      <joint name="rooty" type="hinge" axis="0 1 0" pos="0.05 0 0.1"/>
+      <geom type="capsule" fromto="0 0 0.2 0 0 -0.2" size="0.05"/>
+      <body name="leg" pos="0 0 -0.2">
+        <joint name="hip" type="hinge" axis="0 -1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.1 0 -0.4" size="0.04"/>
+      </body>
+    </body>
+  </worldbody>
+  <keyframe><key name="push" qpos="0.2 -0.1 0.4 -0.6" qvel="1.0 2.0 -3.0 4.0"/></keyframe>
+</mujoco>"""
+
+
+def test_a_planar_robots_root_moves_as_in_mujoco(tmp_path):
+    """A walker's torso on MuJoCo's usual planar root (two slides, not perpendicular, and a
+    hinge normal to them, read as a planar joint) with a leg, thrown from a keyframe under
+    gravity: the centres of mass after 0.5 s against MuJoCo's RK4 at 1e-4 s."""
+    path = _file(tmp_path, WALKER)
+    with pytest.warns(mb.MjcfWarning, match="contacts between geoms"):
+        model = mb.load_mjcf(path, keyframe="push")
+    assert [type(joint).__name__ for joint in model.joints] == ["Planar", "Revolute"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.InitialStateWarning)
+        res = mb.forward_dynamics(model, [0.0, 0.5], method="DOP853", rtol=1e-11, atol=1e-12)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    for _ in range(5000):
+        mujoco.mj_step(m, d)
+    for k, name in enumerate(["torso", "leg"], 1):
         np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
 
 
@@ -173,8 +263,18 @@ def test_what_mjcf_import_leaves_out_is_said(tmp_path):
 
 @pytest.mark.parametrize("text, options, message", [
     ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><joint name='j2' "
-     "axis='0 1 0'/><geom size='0.1'/></body></worldbody></mujoco>", {},
-     r"body 'a' has 2 joints \(j1, j2\); mbd3d joins two bodies by one joint"),
+     "axis='0 1 1'/><geom size='0.1'/></body></worldbody></mujoco>", {},
+     r"body 'a' has 2 joints \(j1 \(hinge\), j2 \(hinge\)\); mbd3d joins two bodies by one "
+     r"joint, and reads several only as two hinges about perpendicular axes"),
+    ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><joint name='j2' "
+     "type='slide' axis='0 1 0'/><geom size='0.1'/></body></worldbody></mujoco>", {},
+     r"body 'a' has 2 joints \(j1 \(hinge\), j2 \(slide\)\)"),
+    ("<mujoco><worldbody><body name='a'><joint name='j1' type='slide' axis='1 0 0'/><joint "
+     "name='j2' type='slide' axis='0 1 0.1'/><joint name='j3' axis='0 0 1'/><geom size='0.1'/>"
+     "</body></worldbody></mujoco>", {}, r"or a hinge and two slides normal to it"),
+    ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><joint name='j2' "
+     "axis='0 1 0' pos='0 0 0.1'/><geom size='0.1'/></body></worldbody></mujoco>", {},
+     r"all through one point"),
     ("<mujoco><worldbody><body name='a'>\n<joint name='j1' axis='0 0 1'/>\n<geom size='0.1' "
      "type='nonsense'/></body></worldbody></mujoco>", {}, r"MuJoCo refuses it: .*line 3"),
     ("<mujoco><worldbody><body name='a'><joint name='j1' axis='0 0 1'/><geom size='0.1'/>"

@@ -19,10 +19,14 @@ joint's ``ref``, MuJoCo's ``qpos0``):
 - geoms are the bodies' shapes for the viewer (spheres, capsules, cylinders, boxes,
   ellipsoids and meshes; planes and height fields are not drawn).
 
-A body with more than one joint is refused, naming it (mbd3d joins two bodies by one joint:
-nest a body, with mass, per joint). What the file holds that the model leaves out is said in a
-:class:`MjcfWarning`: actuators, tendons, equality constraints, joint springs, damping,
-armature and dry friction, contacts between geoms, a ball joint's range.
+Two hinges of one body through one point about perpendicular axes are a
+:class:`~mbd3d.joints.Universal` joint, three about independent axes a
+:class:`~mbd3d.joints.Spherical` one, a hinge and two independent slides normal to it (a
+planar robot's root) a :class:`~mbd3d.joints.Planar` one (named after their joints joined by
+``+``; the same motion, but those joints cannot be driven and their ranges are not stops);
+other bodies with more than one joint are refused, naming them. What the file holds that the model leaves out
+is said in a :class:`MjcfWarning`: actuators, tendons, equality constraints, joint springs,
+damping, armature and dry friction, contacts between geoms, a ball joint's range.
 """
 
 from __future__ import annotations
@@ -101,8 +105,8 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     Raises
     ------
     ModelError
-        MuJoCo missing, a file MuJoCo refuses (its message, with the line), a body with more
-        than one joint, a moving body without mass, an unknown or unfit joint in
+        MuJoCo missing, a file MuJoCo refuses (its message, with the line), a body with
+        joints mbd3d cannot read as one, a moving body without mass, an unknown or unfit joint in
         ``joint_positions`` or ``drive``.
     """
     mujoco = _mujoco()
@@ -123,28 +127,39 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                  what)
     owner, bodies = _add_bodies(mujoco, m, d, b, what)
     taken = {body.name for body in bodies.values()} | {b.ground.name}
-    names = joint_names([j for j in joints if m.jnt_type[joints[j]] != _FREE], taken, what,
-                        MjcfWarning)
+    sets = _joint_sets(mujoco, m)
+    names = joint_names(list(sets), taken, what, MjcfWarning)
     law = limit_law(joint_limits, what)
     left_out = _not_modelled(mujoco, m, owner)
-    for joint, j in joints.items():
-        kind, body = int(m.jnt_type[j]), int(m.jnt_bodyid[j])
-        if kind == _FREE:
+    for label, (body, js) in sets.items():
+        parent, child = bodies[owner[int(m.body_parentid[body])]], bodies[body]
+        if len(js) > 1:
+            kind = _add_joint_set(b, m, names[label], parent, child, d, js)
+            hinges = [_name(mujoco, m, "joint", j) for j in js]
+            for hinge in set(hinges) & set(drive):
+                raise ModelError(f"{what}: joint '{hinge}' is one of the joints mbd3d models "
+                                 f"as the {kind} joint '{names[label]}'; it cannot be driven "
+                                 "(drive a joint that is its body's only one)")
+            limited = [hinge for hinge, j in zip(hinges, js) if m.jnt_limited[j]]
+            if limited:
+                left_out.append(f"the ranges of joints {', '.join(limited)} (the {kind} joint "
+                                f"'{names[label]}')")
             continue
-        element = _add_joint(b, kind, names[joint], bodies[owner[int(m.body_parentid[body])]],
-                             bodies[body], d.xanchor[j].copy(), d.xaxis[j].copy())
+        j, kind = js[0], int(m.jnt_type[js[0]])
+        element = _add_joint(b, kind, names[label], parent, child, d.xanchor[j].copy(),
+                             d.xaxis[j].copy())
         qpos = float(d.qpos[m.jnt_qposadr[j]])
         if m.jnt_limited[j] and kind == _BALL:
-            left_out.append(f"the range of ball joint '{joint}'")
-        elif m.jnt_limited[j] and not add_limit(b, kind == _SLIDE, names[joint], element,
+            left_out.append(f"the range of ball joint '{label}'")
+        elif m.jnt_limited[j] and not add_limit(b, kind == _SLIDE, names[label], element,
                                                 d.xaxis[j].copy(), qpos, tuple(m.jnt_range[j]),
                                                 law):
             lower, upper = m.jnt_range[j]
             unit = "m" if kind == _SLIDE else "rad"
-            left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint '{joint}'")
-        if joint in drive:
-            add_driver(b, kind == _SLIDE, names[joint], element, d.xaxis[j].copy(),
-                       drive[joint], qpos)
+            left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint '{label}'")
+        if label in drive:
+            add_driver(b, kind == _SLIDE, names[label], element, d.xaxis[j].copy(),
+                       drive[label], qpos)
     if left_out:
         warnings.warn(f"{what}: not modelled: {'; '.join(left_out)}", MjcfWarning,
                       stacklevel=user_stacklevel())
@@ -270,11 +285,7 @@ def _add_bodies(mujoco, m, d, b, what: str) -> tuple[dict, dict]:
     for k in range(1, m.nbody):  # parents before children
         count = int(m.body_jntnum[k])
         if count > 1:
-            first = int(m.body_jntadr[k])
-            raise ModelError(
-                f"{what}: body '{_name(mujoco, m, 'body', k)}' has {count} joints ("
-                + ", ".join(_name(mujoco, m, "joint", first + i) for i in range(count))
-                + "); mbd3d joins two bodies by one joint: nest a body, with mass, per joint")
+            _check_joint_set(mujoco, m, k, what)
         owner[k] = k if count else owner[int(m.body_parentid[k])]
         members.setdefault(owner[k], []).append(k)
     bodies = {0: b.ground}
@@ -308,6 +319,73 @@ def _add_bodies(mujoco, m, d, b, what: str) -> tuple[dict, dict]:
             velocity=velocity[3:] + np.cross(omega, centre - d.xipos[first]),
             angular_velocity=omega, shape=_shape(mujoco, m, d, group, to_body))
     return owner, bodies
+
+
+def _joint_sets(mujoco, m) -> dict[str, tuple[int, list[int]]]:
+    """Each moving body's joints (free ones aside) by their name in the file (several hinges'
+    joined by '+'): the body and the joints' indices."""
+    sets = {}
+    for k in range(1, m.nbody):
+        first, count = int(m.body_jntadr[k]), int(m.body_jntnum[k])
+        if count and m.jnt_type[first] != _FREE:
+            js = list(range(first, first + count))
+            sets["+".join(_name(mujoco, m, "joint", j) for j in js)] = (k, js)
+    return sets
+
+
+def _joint_set_kind(m, js: list) -> str | None:
+    """Which one joint of mbd3d the joints ``js`` of one body make: two hinges about
+    perpendicular axes through one point a universal joint, three about independent axes a
+    ball joint, a hinge and two independent slides normal to it a planar joint; else None."""
+    axes = np.array([m.jnt_axis[j] / np.linalg.norm(m.jnt_axis[j]) for j in js])
+    types = sorted(int(m.jnt_type[j]) for j in js)
+    one_point = all(np.allclose(m.jnt_pos[j], m.jnt_pos[js[0]], rtol=0, atol=1e-12)
+                    for j in js)
+    if types == [_HINGE, _HINGE] and one_point and abs(axes[0] @ axes[1]) <= 1e-9:
+        return "universal"
+    if types == [_HINGE] * 3 and one_point and abs(np.linalg.det(axes)) > 1e-6:
+        return "ball"
+    if types == [_SLIDE, _SLIDE, _HINGE]:
+        normal = axes[[m.jnt_type[j] == _HINGE for j in js]][0]
+        slides = axes[[m.jnt_type[j] == _SLIDE for j in js]]
+        if (np.all(np.abs(slides @ normal) <= 1e-9)
+                and np.linalg.norm(np.cross(*slides)) > 1e-6):
+            return "planar"
+    return None
+
+
+def _check_joint_set(mujoco, m, k: int, what: str) -> None:
+    """Refuse body ``k``'s several joints unless they make one joint of mbd3d's."""
+    first, count = int(m.body_jntadr[k]), int(m.body_jntnum[k])
+    js = list(range(first, first + count))
+    if _joint_set_kind(m, js) is None:
+        listed = ", ".join(f"{_name(mujoco, m, 'joint', j)} ({_KINDS[int(m.jnt_type[j])]})"
+                           for j in js)
+        raise ModelError(
+            f"{what}: body '{_name(mujoco, m, 'body', k)}' has {count} joints ({listed}); "
+            "mbd3d joins two bodies by one joint, and reads several only as two hinges about "
+            "perpendicular axes or three about independent axes, all through one point (a "
+            "universal or a ball joint), or a hinge and two slides normal to it (a planar "
+            "joint): nest a body, with mass, per joint")
+
+
+def _add_joint_set(b, m, name: str, parent, child, d, js: list) -> str:
+    """The one joint of mbd3d's that the joints ``js`` of a body make (see
+    :func:`_joint_set_kind`; a universal joint's first axis fixed in the parent, the second
+    in the child, as MuJoCo turns them in turn); returns which."""
+    from mbd3d.joints import Planar, Spherical, Universal  # noqa: PLC0415
+
+    kind = _joint_set_kind(m, js)
+    if kind == "universal":
+        b.add(Universal(name, parent, child, axis_i=d.xaxis[js[0]].copy(),
+                        axis_j=d.xaxis[js[1]].copy(), at=d.xanchor[js[0]].copy()))
+    elif kind == "ball":
+        b.add(Spherical(name, parent, child, at=d.xanchor[js[0]].copy()))
+    else:
+        hinge = next(j for j in js if m.jnt_type[j] == _HINGE)
+        b.add(Planar(name, parent, child, axis=d.xaxis[hinge].copy(),
+                     at=d.xanchor[hinge].copy()))
+    return kind
 
 
 def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis: np.ndarray):
