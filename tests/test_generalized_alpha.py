@@ -191,7 +191,8 @@ def test_free_slider_crank_recovers_from_rejected_steps_without_diverging():
     """The free slider-crank started at 30 rad/s whips its light crank up to 80 rad/s near
     t = 0.11 s, where steps of 1e-3 s are rejected. Returning to the nominal step at once
     after each recovery made the recursion diverge there (IntegrationError at t = 0.113 s);
-    now the run goes on, and the finer step converges to the DOP853 reference."""
+    now the run goes on, the step growing back by doubling (held by the count of steps), and
+    the finer step converges to the DOP853 reference."""
     model = slider_crank(crank_speed=None)
     q0 = mb.solve_position(model)
     guess = np.zeros(model.n_coordinates)
@@ -200,12 +201,18 @@ def test_free_slider_crank_recovers_from_rejected_steps_without_diverging():
     t = [0.0, 0.25]
     reference = mb.forward_dynamics(model, t, q0=q0, qd0=qd0, method="DOP853", rtol=1e-12,
                                     atol=1e-14).body("crank").angle[-1]
-    errors = []
+    errors, runs = [], []
     for step in (1e-3, 5e-4):
-        res = mb.forward_dynamics(model, t, q0=q0, qd0=qd0, method="generalized-alpha",
-                                  step=step)
-        errors.append(abs(res.body("crank").angle[-1] - reference))
-    assert res.stats["rejected_steps"] == 0
+        runs.append(mb.forward_dynamics(model, t, q0=q0, qd0=qd0, method="generalized-alpha",
+                                        step=step))
+        errors.append(abs(runs[-1].body("crank").angle[-1] - reference))
+    # at 1e-3 one step is rejected and the step grows back by doubling: h/4, h/2, then h,
+    # which leaves h/4 of the last nominal step to a step of its own: 250 + 2 steps (going
+    # straight back to h from h/4 would take 250 + 1)
+    coarse = runs[0].stats
+    assert (coarse["rejected_steps"], coarse["steps"]) == (1, 252)
+    assert coarse["smallest_step"] == pytest.approx(0.25e-3, rel=1e-9)
+    assert runs[1].stats["rejected_steps"] == 0
     # 0.094 and 0.0032 rad measured: at 1e-3 the step is too long for the whip (about
     # 0.08 rad of crank per step), not unstable
     assert errors[0] < 0.15 and errors[1] < 0.01
