@@ -210,6 +210,34 @@ def test_a_planar_robots_root_moves_as_in_mujoco(tmp_path):
         np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
 
 
+def test_hinge_springs_and_dampers_act_as_in_mujoco(tmp_path):
+    """A double pendulum whose hinges carry MuJoCo's joint stiffness (about a ``springref``
+    other than the drawing's, a reference angle between them) and damping, swinging from a
+    keyframe: the centres of mass after 1 s against MuJoCo's RK4 at 1e-4 s."""
+    text = """<mujoco model="sprung"><option integrator="RK4" timestep="1e-4"/>
+  <worldbody><body name="upper" pos="0 0 1" euler="0.2 0 0.1">
+    <joint name="shoulder" axis="0 1 0.2" stiffness="12" damping="0.4" springref="0.3"
+      ref="0.1"/>
+    <geom type="capsule" fromto="0 0 0 0.3 0 -0.1" size="0.03"/>
+    <body name="lower" pos="0.3 0 -0.1"><joint name="elbow" axis="0 1 0" damping="0.05"/>
+      <geom type="capsule" fromto="0 0 0 0.25 0.05 0" size="0.025"/></body>
+  </body></worldbody>
+  <keyframe><key name="swing" qpos="-0.4 0.8" qvel="2.0 -1.0"/></keyframe>
+</mujoco>"""
+    path = _file(tmp_path, text)
+    with pytest.warns(mb.MjcfWarning, match="contacts between geoms"):
+        model = mb.load_mjcf(path, keyframe="swing")
+    assert [force.name for force in model.forces] == ["shoulder_spring", "elbow_spring"]
+    res = mb.forward_dynamics(model, [0.0, 1.0], method="DOP853", rtol=1e-11, atol=1e-12)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    for _ in range(10000):
+        mujoco.mj_step(m, d)
+    for k, name in enumerate(["upper", "lower"], 1):
+        np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
+
+
 def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
     """A pendulum on a skew hinge with a reference angle, released at rest beside its range
     [-30, 40] degrees: it swings into the upper end and rebounds; at the deepest point of the
@@ -238,14 +266,16 @@ def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
 
 
 def test_what_mjcf_import_leaves_out_is_said(tmp_path):
-    """Actuators, tendons, equality constraints, joint springs, damping, armature and dry
-    friction, a ball joint's range and contacts between geoms: one warning names them."""
+    """Actuators, tendons, equality constraints, a ball joint's spring and damping, armature
+    and dry friction, a ball joint's range and contacts between geoms: one warning names them
+    (a hinge's spring and damping are modelled: not named)."""
     text = """<mujoco model="extras">
   <worldbody><geom name="floor" type="plane" size="1 1 0.1"/>
     <body name="a" pos="0 0 1"><joint name="j1" type="hinge" axis="0 1 0" damping="0.1"
       stiffness="2" armature="0.01" frictionloss="0.2"/><geom type="sphere" size="0.1"/>
       <site name="s1"/>
-      <body name="b" pos="0 0 -0.3"><joint name="j2" type="ball" range="0 30"/>
+      <body name="b" pos="0 0 -0.3"><joint name="j2" type="ball" range="0 30" damping="0.3"
+        stiffness="1"/>
         <geom type="sphere" size="0.1"/><site name="s2"/></body></body></worldbody>
   <tendon><spatial name="t"><site site="s1"/><site site="s2"/></spatial></tendon>
   <equality><connect body1="a" body2="world" anchor="0 0 0"/></equality>
@@ -254,11 +284,12 @@ def test_what_mjcf_import_leaves_out_is_said(tmp_path):
     with pytest.warns(mb.MjcfWarning) as caught:
         model = mb.load_mjcf(_file(tmp_path, text))
     message = str(caught[0].message)
-    for part in ("1 actuators", "1 tendons", "1 equality constraints", "joint stiffness (j1)",
-                 "joint damping (j1)", "joint armature (j1)", "joint frictionloss (j1)",
+    for part in ("1 actuators", "1 tendons", "1 equality constraints", "joint stiffness (j2)",
+                 "joint damping (j2)", "joint armature (j1)", "joint frictionloss (j1)",
                  "the range of ball joint 'j2'", "contacts between geoms"):
         assert part in message
     assert [body.name for body in model.bodies] == ["a", "b"]
+    assert [force.name for force in model.forces] == ["j1_spring"]
 
 
 @pytest.mark.parametrize("text, options, message", [

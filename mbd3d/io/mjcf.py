@@ -24,9 +24,13 @@ Two hinges of one body through one point about perpendicular axes are a
 :class:`~mbd3d.joints.Spherical` one, a hinge and two independent slides normal to it (a
 planar robot's root) a :class:`~mbd3d.joints.Planar` one (named after their joints joined by
 ``+``; the same motion, but those joints cannot be driven and their ranges are not stops);
-other bodies with more than one joint are refused, naming them. What the file holds that the model leaves out
-is said in a :class:`MjcfWarning`: actuators, tendons, equality constraints, joint springs,
-damping, armature and dry friction, contacts between geoms, a ball joint's range.
+other bodies with more than one joint are refused, naming them.
+
+A hinge's ``stiffness`` and ``damping`` (a body's only joint) are a
+:class:`~mbd3d.RotationalSpringDamper` named ``"<joint>_spring"``, at rest at the joint's
+``springref``. What the file holds that the model leaves out is said in a
+:class:`MjcfWarning`: actuators, tendons, equality constraints, the springs and damping of
+other joints, armature and dry friction, contacts between geoms, a ball joint's range.
 """
 
 from __future__ import annotations
@@ -39,8 +43,8 @@ from typing import Any, Mapping
 import numpy as np
 
 from mbd3d.errors import ModelError, user_stacklevel
-from mbd3d.io.robot_parts import (add_driver, add_limit, composite, joint_names, limit_law,
-                                  physical)
+from mbd3d.io.robot_parts import (add_driver, add_limit, composite, drive_offset, joint_names,
+                                  limit_law, physical)
 from mbd3d.model.motion import Motion, as_motion
 
 __all__ = ["mjcf_builder", "load_mjcf", "MjcfWarning"]
@@ -128,42 +132,70 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     owner, bodies = _add_bodies(mujoco, m, d, b, what)
     taken = {body.name for body in bodies.values()} | {b.ground.name}
     sets = _joint_sets(mujoco, m)
-    names = joint_names(list(sets), taken, what, MjcfWarning)
-    law = limit_law(joint_limits, what)
-    left_out = _not_modelled(mujoco, m, owner)
-    for label, (body, js) in sets.items():
+    joining = _Joints(mujoco, m, d, b, drive, limit_law(joint_limits, what), what)
+    for label, name in joint_names(list(sets), taken, what, MjcfWarning).items():
+        body, js = sets[label]
         parent, child = bodies[owner[int(m.body_parentid[body])]], bodies[body]
         if len(js) > 1:
-            kind = _add_joint_set(b, m, names[label], parent, child, d, js)
-            hinges = [_name(mujoco, m, "joint", j) for j in js]
-            for hinge in set(hinges) & set(drive):
-                raise ModelError(f"{what}: joint '{hinge}' is one of the joints mbd3d models "
-                                 f"as the {kind} joint '{names[label]}'; it cannot be driven "
-                                 "(drive a joint that is its body's only one)")
-            limited = [hinge for hinge, j in zip(hinges, js) if m.jnt_limited[j]]
-            if limited:
-                left_out.append(f"the ranges of joints {', '.join(limited)} (the {kind} joint "
-                                f"'{names[label]}')")
-            continue
-        j, kind = js[0], int(m.jnt_type[js[0]])
-        element = _add_joint(b, kind, names[label], parent, child, d.xanchor[j].copy(),
-                             d.xaxis[j].copy())
-        qpos = float(d.qpos[m.jnt_qposadr[j]])
-        if m.jnt_limited[j] and kind == _BALL:
-            left_out.append(f"the range of ball joint '{label}'")
-        elif m.jnt_limited[j] and not add_limit(b, kind == _SLIDE, names[label], element,
-                                                d.xaxis[j].copy(), qpos, tuple(m.jnt_range[j]),
-                                                law):
-            lower, upper = m.jnt_range[j]
-            unit = "m" if kind == _SLIDE else "rad"
-            left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint '{label}'")
-        if label in drive:
-            add_driver(b, kind == _SLIDE, names[label], element, d.xaxis[j].copy(),
-                       drive[label], qpos)
+            joining.several(label, name, parent, child, js)
+        else:
+            joining.one(label, name, parent, child, js[0])
+    left_out = _not_modelled(mujoco, m, owner, joining.sprung) + joining.left_out
     if left_out:
         warnings.warn(f"{what}: not modelled: {'; '.join(left_out)}", MjcfWarning,
                       stacklevel=user_stacklevel())
     return b
+
+
+class _Joints:
+    """Adds the file's joints to the builder ``b``, noting what of them is left out."""
+
+    def __init__(self, mujoco, m, d, b, drive: Mapping[str, Motion], law, what: str):
+        self.mujoco, self.m, self.d, self.b = mujoco, m, d, b
+        self.drive, self.law, self.what = drive, law, what
+        self.left_out: list[str] = []
+        self.sprung: set[int] = set()  # the joints whose stiffness and damping are modelled
+
+    def one(self, label: str, name: str, parent, child, j: int) -> None:
+        """Joint ``j`` (hinge, slide or ball), its range, drive and spring-damper."""
+        m, d, kind = self.m, self.d, int(self.m.jnt_type[j])
+        axis = d.xaxis[j].copy()
+        element = _add_joint(self.b, kind, name, parent, child, d.xanchor[j].copy(), axis)
+        qpos = float(d.qpos[m.jnt_qposadr[j]])
+        if m.jnt_limited[j] and kind == _BALL:
+            self.left_out.append(f"the range of ball joint '{label}'")
+        elif m.jnt_limited[j] and not add_limit(self.b, kind == _SLIDE, name, element, axis,
+                                                qpos, tuple(m.jnt_range[j]), self.law):
+            lower, upper = m.jnt_range[j]
+            unit = "m" if kind == _SLIDE else "rad"
+            self.left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint "
+                                 f"'{label}'")
+        if label in self.drive:
+            add_driver(self.b, kind == _SLIDE, name, element, axis, self.drive[label], qpos)
+        stiffness, damping = float(m.jnt_stiffness[j]), float(m.dof_damping[m.jnt_dofadr[j]])
+        if kind == _HINGE and (stiffness or damping):
+            from mbd3d.model.forces import RotationalSpringDamper  # noqa: PLC0415
+            # MuJoCo's spring is at rest at qpos_spring; the angle mbd3d measures is the
+            # drawing's plus the change of qpos
+            rest = float(m.qpos_spring[m.jnt_qposadr[j]])
+            free = drive_offset(parent, child, axis) + rest - qpos
+            self.b.add(RotationalSpringDamper(f"{name}_spring", joint=element,
+                                              stiffness=stiffness, damping=damping,
+                                              free_angle=free))
+            self.sprung.add(j)
+
+    def several(self, label: str, name: str, parent, child, js: list) -> None:
+        """The joints ``js`` of one body as one joint of mbd3d's; they cannot be driven."""
+        kind = _add_joint_set(self.b, self.m, name, parent, child, self.d, js)
+        hinges = [_name(self.mujoco, self.m, "joint", j) for j in js]
+        for hinge in set(hinges) & set(self.drive):
+            raise ModelError(f"{self.what}: joint '{hinge}' is one of the joints mbd3d models "
+                             f"as the {kind} joint '{name}'; it cannot be driven (drive a "
+                             "joint that is its body's only one)")
+        limited = [hinge for hinge, j in zip(hinges, js) if self.m.jnt_limited[j]]
+        if limited:
+            self.left_out.append(f"the ranges of joints {', '.join(limited)} (the {kind} joint "
+                                 f"'{name}')")
 
 
 def _builder(builder, m, name: str, what: str):
@@ -398,8 +430,9 @@ def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis:
     return b.add(joint(name, parent, child, at=anchor, axis=axis))
 
 
-def _not_modelled(mujoco, m, owner: dict) -> list[str]:
-    """What of the file the model leaves out, each said once."""
+def _not_modelled(mujoco, m, owner: dict, sprung: set) -> list[str]:
+    """What of the file the model leaves out, each said once (the stiffness and damping of
+    the joints ``sprung`` are modelled)."""
     out = []
     for count, label in ((m.nu, "actuators"), (m.ntendon, "tendons"),
                          (m.neq, "equality constraints")):
@@ -408,8 +441,11 @@ def _not_modelled(mujoco, m, owner: dict) -> list[str]:
     dof = {"damping": m.dof_damping, "armature": m.dof_armature,
            "frictionloss": m.dof_frictionloss}
     for label, values in [("stiffness", m.jnt_stiffness)] + list(dof.items()):
-        joints = sorted({_name(mujoco, m, "joint", int(m.dof_jntid[k]) if label in dof else k)
-                         for k in np.flatnonzero(values)})
+        found = {int(m.dof_jntid[k]) if label in dof else int(k)
+                 for k in np.flatnonzero(values)}
+        if label in ("stiffness", "damping"):
+            found -= sprung
+        joints = sorted(_name(mujoco, m, "joint", j) for j in found)
         if joints:
             out.append(f"joint {label} ({', '.join(joints)})")
     collide = {owner[int(m.geom_bodyid[g])] for g in range(m.ngeom)
