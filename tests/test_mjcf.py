@@ -267,11 +267,12 @@ def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
 
 def test_what_mjcf_import_leaves_out_is_said(tmp_path):
     """Actuators, tendons, equality constraints, a ball joint's spring and damping, armature
-    and dry friction, a ball joint's range and contacts between geoms: one warning names them
-    (a hinge's spring and damping are modelled: not named)."""
-    text = """<mujoco model="extras">
+    and dry friction, a ball joint's range, fluid forces, gravity compensation and contacts
+    between geoms: one warning names them (a hinge's spring and damping are modelled: not
+    named)."""
+    text = """<mujoco model="extras"><option viscosity="0.1"/>
   <worldbody><geom name="floor" type="plane" size="1 1 0.1"/>
-    <body name="a" pos="0 0 1"><joint name="j1" type="hinge" axis="0 1 0" damping="0.1"
+    <body name="a" pos="0 0 1" gravcomp="1"><joint name="j1" axis="0 1 0" damping="0.1"
       stiffness="2" armature="0.01" frictionloss="0.2"/><geom type="sphere" size="0.1"/>
       <site name="s1"/>
       <body name="b" pos="0 0 -0.3"><joint name="j2" type="ball" range="0 30" damping="0.3"
@@ -286,7 +287,8 @@ def test_what_mjcf_import_leaves_out_is_said(tmp_path):
     message = str(caught[0].message)
     for part in ("1 actuators", "1 tendons", "1 equality constraints", "joint stiffness (j2)",
                  "joint damping (j2)", "joint armature (j1)", "joint frictionloss (j1)",
-                 "the range of ball joint 'j2'", "contacts between geoms"):
+                 "the range of ball joint 'j2'", "contacts between geoms",
+                 "fluid forces (density 0, viscosity 0.1)", "gravity compensation"):
         assert part in message
     assert [body.name for body in model.bodies] == ["a", "b"]
     assert [force.name for force in model.forces] == ["j1_spring"]

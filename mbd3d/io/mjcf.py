@@ -30,7 +30,8 @@ A hinge's ``stiffness`` and ``damping`` (a body's only joint) are a
 :class:`~mbd3d.RotationalSpringDamper` named ``"<joint>_spring"``, at rest at the joint's
 ``springref``. What the file holds that the model leaves out is said in a
 :class:`MjcfWarning`: actuators, tendons, equality constraints, the springs and damping of
-other joints, armature and dry friction, contacts between geoms, a ball joint's range.
+other joints, armature and dry friction, fluid forces, gravity compensation, contacts
+between geoms, a ball joint's range.
 """
 
 from __future__ import annotations
@@ -448,6 +449,10 @@ def _not_modelled(mujoco, m, owner: dict, sprung: set) -> list[str]:
         joints = sorted(_name(mujoco, m, "joint", j) for j in found)
         if joints:
             out.append(f"joint {label} ({', '.join(joints)})")
+    if m.opt.density > 0 or m.opt.viscosity > 0:
+        out.append(f"fluid forces (density {m.opt.density:g}, viscosity {m.opt.viscosity:g})")
+    if np.any(m.body_gravcomp):
+        out.append("gravity compensation")
     collide = {owner[int(m.geom_bodyid[g])] for g in range(m.ngeom)
                if m.geom_contype[g] or m.geom_conaffinity[g]}
     if len(collide) > 1 and not m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT:

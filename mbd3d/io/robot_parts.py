@@ -44,8 +44,8 @@ def physical(inertia: np.ndarray, who: str, welded: str, fix: str, what: str,
     if not excess > 1e-9 * moments[2]:
         return inertia
     if excess > INERTIA_ROUNDING * moments[2]:
-        raise ModelError(f"{what}: {who}{welded} has principal moments of inertia {moments} [kg m^2], "
-                         f"whose largest exceeds the sum of the others by "
+        raise ModelError(f"{what}: {who}{welded} has principal moments of inertia {moments} "
+                         f"[kg m^2], whose largest exceeds the sum of the others by "
                          f"{excess / moments[2]:.1%}; no real body has them (more than "
                          f"rounding): correct its {fix}")
     warnings.warn(f"{what}: {who}: principal moments of inertia {moments} break J1 + J2 >= J3 "
