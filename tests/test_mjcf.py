@@ -238,6 +238,48 @@ def test_hinge_springs_and_dampers_act_as_in_mujoco(tmp_path):
         np.testing.assert_allclose(res.body(name).position[-1], d.xipos[k], rtol=0, atol=1e-9)
 
 
+def _four_bar(crank: float, coupler: float, rocker: float, ground: float) -> str:
+    """A four-bar in the x-z plane drawn at crank angle 0 (hinges about y), its loop closed
+    at B by a ``connect`` of the coupler to the rocker."""
+    d = ground - crank
+    along = (coupler**2 - rocker**2 + d**2) / (2 * d)
+    up = np.sqrt(coupler**2 - along**2)
+    return f"""<mujoco model="four-bar"><compiler angle="radian"/><worldbody>
+  <body name="crank"><joint name="O2" axis="0 -1 0"/>
+    <geom type="capsule" fromto="0 0 0 {crank} 0 0" size="0.01"/>
+    <body name="coupler" pos="{crank} 0 0"><joint name="A" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 {along} 0 {up}" size="0.01"/></body></body>
+  <body name="rocker" pos="{ground} 0 0"><joint name="O4" axis="0 1 0"/>
+    <geom type="capsule" fromto="0 0 0 {crank + along - ground} 0 {up}" size="0.01"/></body>
+</worldbody>
+<equality><connect name="B" body1="coupler" body2="rocker" anchor="{along} 0 {up}"/></equality>
+</mujoco>"""
+
+
+def test_a_connect_closes_a_four_bar_that_moves_as_its_closed_form(tmp_path):
+    """A crank-rocker four-bar whose loop MuJoCo closes by a ``connect``, its crank driven a
+    full turn: the rocker's centre (the middle of the rocker, a uniform capsule) where the
+    circles about the crank pin and the rocker pivot meet, to 1e-10 m."""
+    crank, coupler, rocker, ground = 0.1, 0.3, 0.25, 0.3
+    path = _file(tmp_path, _four_bar(crank, coupler, rocker, ground))
+    with pytest.warns(mb.MjcfWarning, match="contacts between geoms"):
+        model = mb.load_mjcf(path, drive={"O2": mb.Ramp(0.0, 2 * np.pi)})
+    assert [(type(joint).__name__, joint.name) for joint in model.joints] == [
+        ("Revolute", "O2"), ("RotationDriver", "O2_drive"), ("Revolute", "A"),
+        ("Revolute", "O4"), ("Spherical", "B")]
+    times = np.linspace(0.0, 1.0, 37)
+    res = mb.kinematic_analysis(model, times)
+    theta = 2 * np.pi * times
+    A = crank * np.column_stack([np.cos(theta), np.zeros_like(theta), np.sin(theta)])
+    e = np.array([ground, 0.0, 0.0]) - A
+    d = np.linalg.norm(e, axis=1)[:, None]
+    along = (coupler**2 - rocker**2 + d**2) / (2 * d)
+    normal = np.column_stack([-e[:, 2], np.zeros_like(theta), e[:, 0]]) / d
+    B = A + along * e / d + np.sqrt(coupler**2 - along**2) * normal
+    np.testing.assert_allclose(res.body("rocker").position, (B + [ground, 0.0, 0.0]) / 2,
+                               rtol=0, atol=1e-10)
+
+
 def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
     """A pendulum on a skew hinge with a reference angle, released at rest beside its range
     [-30, 40] degrees: it swings into the upper end and rebounds; at the deepest point of the
@@ -279,13 +321,14 @@ def test_what_mjcf_import_leaves_out_is_said(tmp_path):
         stiffness="1"/>
         <geom type="sphere" size="0.1"/><site name="s2"/></body></body></worldbody>
   <tendon><spatial name="t"><site site="s1"/><site site="s2"/></spatial></tendon>
-  <equality><connect body1="a" body2="world" anchor="0 0 0"/></equality>
+  <equality><joint joint1="j1"/></equality>
   <actuator><motor joint="j1"/></actuator>
 </mujoco>"""
     with pytest.warns(mb.MjcfWarning) as caught:
         model = mb.load_mjcf(_file(tmp_path, text))
     message = str(caught[0].message)
-    for part in ("1 actuators", "1 tendons", "1 equality constraints", "joint stiffness (j2)",
+    for part in ("1 actuators", "1 tendons", "1 equality constraints (other than connect)",
+                 "joint stiffness (j2)",
                  "joint damping (j2)", "joint armature (j1)", "joint frictionloss (j1)",
                  "the range of ball joint 'j2'", "contacts between geoms",
                  "fluid forces (density 0, viscosity 0.1)", "gravity compensation"):

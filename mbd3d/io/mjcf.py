@@ -31,7 +31,9 @@ A hinge's ``stiffness`` and ``damping`` (a body's only joint) are a
 ``springref``. What the file holds that the model leaves out is said in a
 :class:`MjcfWarning`: actuators, tendons, equality constraints, the springs and damping of
 other joints, armature and dry friction, fluid forces, gravity compensation, contacts
-between geoms, a ball joint's range.
+between geoms, a ball joint's range, equality constraints other than an active ``connect``
+(which is a :class:`~mbd3d.joints.Spherical` joint between its two points, closing a loop
+exactly where MuJoCo's is soft).
 """
 
 from __future__ import annotations
@@ -134,14 +136,20 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     taken = {body.name for body in bodies.values()} | {b.ground.name}
     sets = _joint_sets(mujoco, m)
     joining = _Joints(mujoco, m, d, b, drive, limit_law(joint_limits, what), what)
-    for label, name in joint_names(list(sets), taken, what, MjcfWarning).items():
+    connects = _connects(mujoco, m)
+    for label, name in joint_names(list(sets) + list(connects), taken, what,
+                                   MjcfWarning).items():
+        if label in connects:
+            joining.connect(name, connects[label], bodies, owner)
+            continue
         body, js = sets[label]
         parent, child = bodies[owner[int(m.body_parentid[body])]], bodies[body]
         if len(js) > 1:
             joining.several(label, name, parent, child, js)
         else:
             joining.one(label, name, parent, child, js[0])
-    left_out = _not_modelled(mujoco, m, owner, joining.sprung) + joining.left_out
+    left_out = (_not_modelled(mujoco, m, owner, joining.sprung, len(connects))
+                + joining.left_out)
     if left_out:
         warnings.warn(f"{what}: not modelled: {'; '.join(left_out)}", MjcfWarning,
                       stacklevel=user_stacklevel())
@@ -184,6 +192,22 @@ class _Joints:
                                               stiffness=stiffness, damping=damping,
                                               free_angle=free))
             self.sprung.add(j)
+
+    def connect(self, name: str, k: int, bodies: dict, owner: dict) -> None:
+        """Equality constraint ``k``, a ``connect``: a ball joint between the points of its
+        two bodies (anchors, or sites) that MuJoCo holds together."""
+        from mbd3d.joints import Spherical  # noqa: PLC0415
+
+        m, d = self.m, self.d
+        one, two = int(m.eq_obj1id[k]), int(m.eq_obj2id[k])
+        if m.eq_objtype[k] == self.mujoco.mjtObj.mjOBJ_SITE:
+            ends = [(int(m.site_bodyid[s]), d.site_xpos[s]) for s in (one, two)]
+        else:
+            ends = [(b, d.xpos[b] + d.xmat[b].reshape(3, 3) @ m.eq_data[k, 3 * i:3 * i + 3])
+                    for i, b in enumerate((one, two))]
+        (b_i, p_i), (b_j, p_j) = [(bodies[owner[b]], p) for b, p in ends]
+        self.b.add(Spherical(name, b_i, b_j, point_i=_local(b_i, p_i),
+                             point_j=_local(b_j, p_j)))
 
     def several(self, label: str, name: str, parent, child, js: list) -> None:
         """The joints ``js`` of one body as one joint of mbd3d's; they cannot be driven."""
@@ -431,12 +455,29 @@ def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis:
     return b.add(joint(name, parent, child, at=anchor, axis=axis))
 
 
-def _not_modelled(mujoco, m, owner: dict, sprung: set) -> list[str]:
+def _connects(mujoco, m) -> dict[str, int]:
+    """The active ``connect`` equality constraints by name (``"connect<k>"`` unnamed)."""
+    return {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, k) or f"connect{k}": k
+            for k in range(m.neq)
+            if m.eq_type[k] == mujoco.mjtEq.mjEQ_CONNECT and m.eq_active0[k]}
+
+
+def _local(body, p: np.ndarray) -> np.ndarray:
+    """The global point ``p`` (drawing) in ``body``'s frame."""
+    from mbd3d.numerics.rotations import from_rodrigues  # noqa: PLC0415
+
+    if body.is_ground:
+        return np.array(p, dtype=float)
+    R = body.chart @ from_rodrigues(np.asarray(body.q0[3:], dtype=float))
+    return R.T @ (np.asarray(p, dtype=float) - body.q0[:3])
+
+
+def _not_modelled(mujoco, m, owner: dict, sprung: set, connects: int) -> list[str]:
     """What of the file the model leaves out, each said once (the stiffness and damping of
-    the joints ``sprung`` are modelled)."""
+    the joints ``sprung`` and ``connects`` active connect constraints are modelled)."""
     out = []
     for count, label in ((m.nu, "actuators"), (m.ntendon, "tendons"),
-                         (m.neq, "equality constraints")):
+                         (m.neq - connects, "equality constraints (other than connect)")):
         if count:
             out.append(f"{count} {label}")
     dof = {"damping": m.dof_damping, "armature": m.dof_armature,
