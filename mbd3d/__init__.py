@@ -44,8 +44,8 @@ from mbd3d.analyses.initial import InitialStateWarning
 from mbd3d.analyses.linearization import LinearModel, linearize
 from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
-from mbd3d.analyses.states import (driven_coordinates, inverse_dynamics_at,
-                                  joint_space_dynamics_at)
+from mbd3d.analyses.states import (driven_coordinates, forward_dynamics_at,
+                                  inverse_dynamics_at, joint_space_dynamics_at)
 from mbd3d.io.results import Results, format_table
 from mbd3d.io.model_file import load
 from mbd3d.io.model_writer import save
@@ -64,6 +64,7 @@ __all__ = [
     "contact_states", "ContactStates",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "inverse_dynamics_at", "joint_space_dynamics_at", "driven_coordinates",
+    "forward_dynamics_at",
     "static_equilibrium", "vibration_modes", "Modes",
     "vibration_modes_along", "ModesAlong", "linearize",
     "LinearModel", "forward_dynamics", "Event",

@@ -101,7 +101,8 @@ def _file(tmp_path, text: str, name: str = "model.xml"):
 def test_an_arm_has_mujocos_inverse_dynamics(tmp_path):
     """Each joint's generalised force for random positions, rates and accelerations of all
     four joints (MuJoCo's qpos: the shoulder's reference angle of 20 degrees included) against
-    MuJoCo's mj_inverse, to 1e-12 of the largest."""
+    MuJoCo's mj_inverse, to 1e-12 of the largest; under those forces, the accelerations
+    (mb.forward_dynamics_at) against MuJoCo's mj_forward and the ones asked for."""
     path = _file(tmp_path, ARM)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # nothing left out: contacts are disabled
@@ -123,6 +124,13 @@ def test_an_arm_has_mujocos_inverse_dynamics(tmp_path):
         mujoco.mj_inverse(m, d)
         theirs[k] = d.qfrc_inverse
     np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max())
+    # and forward: the accelerations under the same efforts are MuJoCo's (mj_forward)
+    qdd_ours = mb.forward_dynamics_at(model, q, qd, theirs)
+    for k in range(len(q)):
+        d.qpos[:], d.qvel[:], d.qfrc_applied[:] = q[k], qd[k], theirs[k]
+        mujoco.mj_forward(m, d)
+        np.testing.assert_allclose(qdd_ours[k], d.qacc, rtol=0, atol=1e-9 * np.abs(d.qacc).max())
+        np.testing.assert_allclose(qdd_ours[k], qdd[k], rtol=0, atol=1e-9 * np.abs(qdd[k]).max())
 
 
 def test_a_free_floating_mechanism_tumbles_as_mujoco_integrates_it(tmp_path):

@@ -120,6 +120,33 @@ def test_robot_dynamics_at_states_match_pinocchio(name):
         np.testing.assert_allclose(M[s], crba, rtol=0, atol=1e-10 * np.max(np.abs(crba)))
         np.testing.assert_allclose(b[s], pin.nonLinearEffects(reference, data, x, v[s]),
                                    rtol=0, atol=1e-10 * scale)
+    # forward: the accelerations under random efforts against Pinocchio's articulated-body
+    # algorithm
+    efforts = rng.normal(size=(k, d)) * np.max(np.abs(b), axis=1, keepdims=True)
+    qdd = mb.forward_dynamics_at(model, q, v, efforts)
+    for s in range(k):
+        x = np.concatenate([(np.cos(q[s, j]), np.sin(q[s, j])) if joint.nq == 2 else
+                            (q[s, j],) for j, joint in enumerate(reference.joints[1:])])
+        aba = pin.aba(reference, data, x, v[s], efforts[s])
+        np.testing.assert_allclose(qdd[s], aba, rtol=0, atol=1e-8 * np.max(np.abs(aba)))
+
+
+def test_a_slider_crank_under_a_torque_accelerates_as_its_augmented_equations_say():
+    """The closed loop's crank acceleration from its joint-space mass and bias (inverse
+    dynamics at states) against the same mechanism without its motor and with a torque on
+    the crank, its augmented equations of all coordinates solved at each state (forward
+    dynamics' own path), over a turn with rates and torques both ways."""
+    driven = slider_crank(crank_speed=2 * math.pi)
+    theta = np.linspace(0.0, 2 * math.pi, 7)[:-1] + 0.3
+    omega, torque = np.linspace(-8.0, 8.0, 6), np.linspace(-3.0, 2.0, 6)
+    qdd = mb.forward_dynamics_at(driven, {"motor": theta}, {"motor": omega},
+                                 {"motor": torque})
+    states = mb.inverse_dynamics_at(driven, {"motor": theta}, {"motor": omega}, 0.0)
+    for s in range(len(theta)):
+        free = slider_crank(crank_speed=None, crank_torque=float(torque[s]))
+        expected, _ = mb.forward_accelerations(free, 0.0, states.q[s], states.qd[s])
+        crank = expected[free.coordinate_index("crank.theta")]
+        assert qdd[s, 0] == pytest.approx(crank, rel=1e-9, abs=1e-9)
 
 
 def test_bad_states_are_named():
@@ -138,3 +165,6 @@ def test_bad_states_are_named():
     free.add_body("puck", mass=1.0, inertia=0.1, position=(0.0, 0.0))
     with pytest.raises(mb.ModelError, match="has no drivers"):
         mb.inverse_dynamics_at(free.build(), 0.0, 0.0, 0.0)
+    with pytest.raises(mb.ModelError, match="forward dynamics at given states of 'slider-crank': "
+                                            "efforts give 2 states, q and qd 3"):
+        mb.forward_dynamics_at(model, {"motor": [1.0, 2.0, 3.0]}, 0.0, [[1.0], [2.0]])

@@ -1,7 +1,8 @@
 """Analyses at given states of a model's driven coordinates, in any order, not along a
 motion: inverse dynamics (the efforts and reactions that hold a mechanism in a state of
-positions, rates and accelerations of its drivers), and the joint-space mass matrix and bias
-forces of the driven coordinates.
+positions, rates and accelerations of its drivers), the joint-space mass matrix and bias
+forces of the driven coordinates, and forward dynamics (their accelerations under given
+efforts).
 
 The drivers' coordinates are the joint terms: a :class:`~mbd3d.joints.RotationDriver`'s angle,
 a :class:`~mbd3d.joints.TranslationDriver`'s slide (a URDF's joint angles when it was loaded
@@ -19,7 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from mbd3d.analyses.kinematics import (_PointSolver, _require_fully_driven, initial_guess)
-from mbd3d.errors import ModelError, did_you_mean
+from mbd3d.errors import AnalysisError, ModelError, did_you_mean
 from mbd3d.io.observers import Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
@@ -28,7 +29,8 @@ from mbd3d.model import constraints
 from mbd3d.model.motion import Motion
 from mbd3d.numerics.rotations import to_quaternion
 
-__all__ = ["driven_coordinates", "inverse_dynamics_at", "joint_space_dynamics_at"]
+__all__ = ["driven_coordinates", "inverse_dynamics_at", "joint_space_dynamics_at",
+           "forward_dynamics_at"]
 
 _ANALYSIS = "inverse dynamics at given states"
 
@@ -56,23 +58,24 @@ class _Given(Motion):
         return float(f) + self.offset, float(df), float(d2f)
 
 
-def _column(model, names: tuple, given: Any, label: str) -> np.ndarray:
+def _column(model, names: tuple, given: Any, label: str, analysis: str = _ANALYSIS
+            ) -> np.ndarray:
     """``given`` (a mapping by driver name, or an array whose last axis follows ``names``) as
     an array (k, d)."""
     if isinstance(given, Mapping):
         unknown = [key for key in given if key not in names]
         if unknown:
-            raise ModelError(f"{_ANALYSIS} of '{model.name}': {label} names '{unknown[0]}', "
+            raise ModelError(f"{analysis} of '{model.name}': {label} names '{unknown[0]}', "
                              f"which is not a driver{did_you_mean(unknown[0], names)}; its "
                              f"drivers: {list(names)}")
         missing = [name for name in names if name not in given]
         if missing:
-            raise ModelError(f"{_ANALYSIS} of '{model.name}': {label} has no value for "
+            raise ModelError(f"{analysis} of '{model.name}': {label} has no value for "
                              f"driver '{missing[0]}' (give every driver's: {list(names)})")
         columns = [np.asarray(given[name], dtype=float).reshape(-1) for name in names]
         sizes = {len(c) for c in columns}
         if len(sizes) > 1 and 1 not in sizes or len(sizes) > 2:
-            raise ModelError(f"{_ANALYSIS} of '{model.name}': the drivers' {label} have "
+            raise ModelError(f"{analysis} of '{model.name}': the drivers' {label} have "
                              f"different numbers of states: {sorted(sizes)}")
         k = max(sizes)
         return np.column_stack([np.broadcast_to(c, (k,)) for c in columns])
@@ -82,29 +85,30 @@ def _column(model, names: tuple, given: Any, label: str) -> np.ndarray:
     if array.ndim == 1:
         array = array[None, :]
     if array.ndim != 2 or array.shape[1] != len(names):
-        raise ModelError(f"{_ANALYSIS} of '{model.name}': {label} must have one column per "
+        raise ModelError(f"{analysis} of '{model.name}': {label} must have one column per "
                          f"driver ({len(names)}: {list(names)}), got shape {np.shape(given)}")
     return array
 
 
-def _states(model, q: Any, qd: Any, qdd: Any) -> np.ndarray:
-    """The states as ``(k, d, 3)``: each driver's ``(f, f', f'')``, checked."""
+def _states(model, q: Any, qd: Any, qdd: Any, analysis: str = _ANALYSIS) -> np.ndarray:
+    """The states as ``(k, d, 3)``: each driver's ``(f, f', f'')``, checked (errors name
+    ``analysis``)."""
     names = driven_coordinates(model)
     if not names:
-        raise ModelError(f"{_ANALYSIS} of '{model.name}': the model has no drivers; the "
+        raise ModelError(f"{analysis} of '{model.name}': the model has no drivers; the "
                          "states are given in the drivers' coordinates (drive the joints, "
                          "e.g. load_urdf(..., drive={joint: 0.0, ...}))")
-    parts = [_column(model, names, value, label)
+    parts = [_column(model, names, value, label, analysis)
              for value, label in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
     k = max(len(p) for p in parts)
     if any(len(p) not in (1, k) for p in parts):
-        raise ModelError(f"{_ANALYSIS} of '{model.name}': q, qd and qdd give "
+        raise ModelError(f"{analysis} of '{model.name}': q, qd and qdd give "
                          f"{[len(p) for p in parts]} states")
     states = np.stack([np.broadcast_to(p, (k, len(names))) for p in parts], axis=2)
     bad = np.argwhere(~np.isfinite(states))
     if len(bad):
         s, d, part = bad[0]
-        raise ModelError(f"{_ANALYSIS} of '{model.name}': {('q', 'qd', 'qdd')[part]} of "
+        raise ModelError(f"{analysis} of '{model.name}': {('q', 'qd', 'qdd')[part]} of "
                          f"driver '{names[d]}' is not finite in state {s}")
     return states
 
@@ -252,3 +256,57 @@ def joint_space_dynamics_at(model, q: Any, qd: Any, t: float = 0.0, *, q_guess: 
     efforts = np.column_stack([res.joint(name).effort for name in names]).reshape(k, d + 2, d)
     M = np.swapaxes(efforts[:, 2:, :] - efforts[:, 1:2, :], 1, 2)
     return M, efforts[:, 0, :]
+
+
+def forward_dynamics_at(model, q: Any, qd: Any, efforts: Any, t: float = 0.0, *,
+                        q_guess: Any = None, tol: float = 1e-12) -> np.ndarray:
+    """The accelerations of the drivers' coordinates at given states when the drivers exert
+    the given efforts instead of imposing their motions: ``M(q) qdd = efforts - b(q, qd)``
+    (see :func:`joint_space_dynamics_at`).
+
+    Parameters
+    ----------
+    model : Model
+        Fully driven: the drivers' coordinates are the mechanism's independent ones.
+    q, qd : mapping or array_like
+        As for :func:`inverse_dynamics_at`.
+    efforts : mapping or array_like
+        Each driver's effort [N m or N] (what :func:`inverse_dynamics_at` returns as
+        ``res.joint(driver).effort``), as ``q`` is given; one state broadcasts to all.
+    t, q_guess, tol
+        As for :func:`inverse_dynamics_at`.
+
+    Returns
+    -------
+    ndarray (k, d)
+        ``qdd[s, i]``: driver ``i``'s acceleration [rad/s^2 or m/s^2] in state ``s``, in the
+        order of :func:`driven_coordinates`.
+
+    Raises
+    ------
+    ModelError
+        As for :func:`inverse_dynamics_at`, and for efforts given for another number of states.
+    AnalysisError
+        A state where a driver's coordinate moves no mass (the mass matrix is singular).
+    """
+    what = "forward dynamics at given states"
+    k = len(_states(model, q, qd, 0.0, what))
+    tau = _column(model, driven_coordinates(model), efforts, "efforts", what)
+    if len(tau) not in (1, k):
+        raise ModelError(f"{what} of '{model.name}': efforts give {len(tau)} states, q and qd "
+                         f"{k}")
+    if not np.all(np.isfinite(tau)):
+        raise ModelError(f"{what} of '{model.name}': the efforts are not all finite")
+    M, b = joint_space_dynamics_at(model, q, qd, t, q_guess=q_guess, tol=tol)
+    rhs = np.broadcast_to(tau, b.shape) - b
+    qdd = np.empty_like(b)
+    for s in range(len(M)):
+        # a coordinate that moves no mass (or one whose inertia is lost to rounding) leaves
+        # its acceleration undetermined: said, not returned as noise
+        if np.linalg.cond(M[s]) > 1e12:
+            raise AnalysisError(f"{what} of '{model.name}': in state {s} the drivers' mass "
+                                f"matrix is singular (condition "
+                                f"{np.linalg.cond(M[s]):.3g}): a driven coordinate moves no "
+                                "mass")
+        qdd[s] = np.linalg.solve(M[s], rhs[s])
+    return qdd
