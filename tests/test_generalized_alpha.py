@@ -521,6 +521,15 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
         res = mb.forward_dynamics(model, [0.0, 1.0], method="generalized-alpha", step=0.02)
     exact = mb.forward_dynamics(model, [0.0, 1.0], method="DOP853", rtol=1e-10)
     assert abs(res.body("link1").angle[-1] - exact.body("link1").angle[-1]) < 1e-3
+    # the same bar on a ball joint: its turn is read from the Rodrigues parameters, which
+    # change by about half the angle; steps of 0.2 s turn it by about a radian at the bottom
+    # (5.4 rad/s), steps of 0.1 s by half of one
+    spatial = spatial_chain(1)
+    with pytest.warns(mb.AccuracyWarning, match="body 'link1' turned by .* rad in the step"):
+        mb.forward_dynamics(spatial, [0.0, 1.0], method="generalized-alpha", step=0.2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.AccuracyWarning)
+        mb.forward_dynamics(spatial, [0.0, 1.0], method="generalized-alpha", step=0.1)
 
 
 def _index3_generalized_alpha(h: float, rho_inf: float, steps: int):
