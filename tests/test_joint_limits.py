@@ -229,6 +229,16 @@ def test_a_stops_rate_is_the_rate_of_its_coordinate_with_both_bodies_moving(stop
     states = mb.contact_states(model, q, qd, charts)
     assert states.gap_rate[0] == pytest.approx(expected, rel=1e-7, abs=1e-9)
     assert abs(expected) > 0.1
+    # what the stop reports: the direction it pushes body two, back from its upper end
+    # (against the slide's axis, or the turn about the hinge's or about the cone's tilt),
+    # and for the slide the point it pushes, the joint's point of body two
+    a = np.array([0.3, 0.4, 1.0]) / np.linalg.norm([0.3, 0.4, 1.0])
+    R1, R2 = _rotation(charts[0], q[3:6]), _rotation(charts[1], q[9:12])
+    h = np.cross(R1 @ a, R2 @ a) if stop == "cone" else R1 @ a
+    np.testing.assert_allclose(states.normal[0], -h / np.linalg.norm(h), rtol=0, atol=1e-12)
+    if stop == "slide":
+        np.testing.assert_allclose(states.point[0], q[6:9] + R2 @ [-0.1, 0.0, -0.1], rtol=0,
+                                   atol=1e-12)
 
 
 def test_a_planar_joint_stops_each_coordinate_with_its_restitution():
