@@ -532,6 +532,18 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
         mb.forward_dynamics(spatial, [0.0, 1.0], method="generalized-alpha", step=0.1)
 
 
+def test_an_iterate_thrown_half_a_turn_is_a_rejected_step_not_a_singular_model():
+    """A bar on a ball joint released level and stepped 1 s at once: Newton's first iterates
+    turn it by nearly half a turn, where the Rodrigues parameters run to 1e4 and the
+    iteration matrix is singular at the iterate. That is a step too long, not a model without
+    inertia: the step is shortened (it was refused, blaming light bodies) and the too-long
+    step is warned of."""
+    with pytest.warns(mb.AccuracyWarning, match="body 'link1' turned by"):
+        res = mb.forward_dynamics(spatial_chain(1), [0.0, 1.0], method="generalized-alpha",
+                                  step=1.0)
+    assert res.status == "complete" and res.stats["rejected_steps"] > 0
+
+
 def _index3_generalized_alpha(h: float, rho_inf: float, steps: int):
     """An independent index-3 generalized-alpha (Arnold and Bruls 2007, eqs. 9-12) on a
     uniform 1 m, 1 kg bar pinned at one end, released level, in absolute coordinates

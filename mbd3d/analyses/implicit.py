@@ -384,6 +384,11 @@ class GeneralizedAlphaIntegrator(Integrator):
             text += (f"Body '{model.bodies[k].name}' turns at {speed[k]:.3g} rad/s there, "
                      f"{speed[k] * step:.3g} rad per step: the run may have gone unstable "
                      "before (velocities alternating from step to step and growing). ")
+        elif self.newton.singular:  # not a run gone unstable: the model
+            text += ("The iteration matrix was numerically singular there (a pivot at the "
+                     "rounding level of its column): a direction with neither inertia nor "
+                     "constraint stiffness, such as a body many orders of magnitude lighter "
+                     "than the others. ")
         rho = self.request.rho_inf
         damping = (f", or more numerical damping (rho_inf below {rho:g}, e.g. {rho / 2:g})"
                    if rho > 0 else "")
@@ -453,6 +458,8 @@ class _NewtonStep:
         self.beta, self.gamma = coefficients.beta, coefficients.gamma
         self.newton_tol, self.relative_penalty = newton_tol, relative_penalty
         self.max_iterations = max_iterations
+        #: whether the last step tried failed on a singular iteration matrix
+        self.singular = False
         n, m = model.n_coordinates, model.n_constraints
         self.spatial = model.dim == 3
         self.work = model._core.workspace()
@@ -524,13 +531,11 @@ class _NewtonStep:
             self.penalty, self.lam_effective, *self.buffers, self.counters)
         self.stats["newton_iterations"], self.stats["factorizations"] = (
             int(self.counters[0]), int(self.counters[1]))
-        if outcome == kernel.SINGULAR_MATRIX:
-            raise IntegrationError(
-                f"forward dynamics of '{model.name}': the generalized-alpha iteration "
-                f"matrix is numerically singular at t = {tt:.6g} s: a pivot fell to the "
-                "rounding level of its column, a direction with neither inertia nor "
-                "constraint stiffness. Check for bodies many orders of magnitude lighter "
-                "than the others (or give them mass).", time=tt)
+        # a singular iteration matrix is a failed step like any other: an iterate thrown
+        # far off by a step too long for the motion (a body's Rodrigues parameters at 1e5,
+        # nearly half a turn) is singular at the iterate, not in the model; a shorter step
+        # is tried, and the refusal says which it was if none converges
+        self.singular = outcome == kernel.SINGULAR_MATRIX
         if outcome == kernel.NOT_FINITE and np.all(np.isfinite(q)):
             # a force element or motion that cannot be evaluated there is named
             constraints.driver_values(model, tt)

@@ -77,6 +77,16 @@ def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJaco
         if scaling is not None:
             A = scaling[0][:, None] * A * scaling[1][None, :]
         s = np.linalg.svd(A, compute_uv=False)
+        light = _light_body(model)
+        if s[-1] > _REGULAR * s[0] and light:
+            # the rows are well apart and the masses are not: what the solvers found
+            # singular is the mass-weighted system, not the mechanism (a body 1e12 times
+            # lighter than its neighbour made a regular pendulum read as a "lock-up")
+            return SingularJacobianError(
+                f"{what}: the equations are singular at t = {t:.6g} s although the "
+                f"constraint Jacobian is not (its smallest singular value is "
+                f"{s[-1] / s[0]:.1e} of its largest, in the model's units): {light}",
+                joints=[], time=t, results=results)
         state = (f"nearly singular at t = {t:.6g} s (its smallest singular value is "
                  f"{s[-1] / s[0]:.1e} of its largest, in the model's units)")
     return SingularJacobianError(
@@ -85,6 +95,29 @@ def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJaco
         f"{summarize(joints)}. This is a lock-up or toggle position of the mechanism, or "
         "redundant constraints. Forward dynamics passes singular positions with "
         "method='generalized-alpha'.", joints=joints, time=t, results=results)
+
+
+#: a scaled constraint Jacobian whose smallest singular value is above this fraction of its
+#: largest is regular for every solver here (their pivot tests are at 1e-12)
+_REGULAR = 1e-6
+#: bodies whose masses differ by more than this are more than the augmented equations
+#: resolve in double precision beside the constraints' rows
+_MASS_SPREAD = 1e8
+
+
+def _light_body(model) -> str:
+    """What to say of a body too light beside the others for the mass-weighted equations,
+    or "" when the masses are within :data:`_MASS_SPREAD` of each other."""
+    if not len(model.mass):
+        return ""
+    light, heavy = int(np.argmin(model.mass)), int(np.argmax(model.mass))
+    ratio = model.mass[heavy] / model.mass[light]
+    if not ratio > _MASS_SPREAD:
+        return ""
+    return (f"body '{model.bodies[light].name}' has {model.mass[light]:.3g} kg against "
+            f"{model.mass[heavy]:.3g} kg of '{model.bodies[heavy].name}', a ratio of "
+            f"{ratio:.1e}, more than double precision resolves beside the constraints. Give "
+            "it a mass (and inertia) nearer the others', or weld it to a neighbour.")
 
 
 def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
