@@ -5,6 +5,7 @@ the explicit integrators on the same model, and its own order of convergence."""
 from __future__ import annotations
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -511,8 +512,16 @@ def test_a_step_far_too_long_for_the_swing_is_warned_and_a_fitting_one_is_not():
     # (energy: omega^2 = 3 g / L for a uniform rod): a step of 10 s (landing on t = 1 s) takes
     # it a radian and more per step, a wrong swing (-4.13 rad at t = 1 s, against -3.13)
     model = pendulum_chain(1, link_length=1.0, link_mass=1.0, angle=0.0)
-    with pytest.warns(mb.AccuracyWarning, match="body 'link1' turned by .* rad in the step"):
+    with pytest.warns(mb.AccuracyWarning, match="body 'link1' turned by .* rad in the step") \
+            as caught:
         mb.forward_dynamics(model, [0.0, 1.0], method="generalized-alpha", step=10.0)
+    # the step it advises is a tenth of a radian per step at the swing's fastest (sqrt(3 g /
+    # L), within the quarter its long steps misjudge the rate by), and is not warned of
+    advised = float(re.search(r"Use step <= (\S+) s", str(caught[0].message))[1])
+    assert advised * math.sqrt(3 * G / 1.0) == pytest.approx(0.1, rel=0.25)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.AccuracyWarning)
+        mb.forward_dynamics(model, [0.0, 1.0], method="generalized-alpha", step=advised)
     # 0.11 rad per step at the bottom: no warning, and the swing within 1e-3 rad of DOP853's;
     # nor at 0.8 rad per step, below the documented radian (a phase error of 5 % a step)
     with warnings.catch_warnings():
