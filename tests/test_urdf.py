@@ -113,8 +113,11 @@ def test_what_urdf_import_does_not_model_is_reported(tmp_path):
     text = PUMA.read_text()
     (tmp_path / "floating.urdf").write_text(text.replace('name="joint4" type="revolute"',
                                                          'name="joint4" type="floating"'))
-    with pytest.raises(mb.ModelError, match="joint 'joint4' is floating"):
-        load_urdf(tmp_path / "floating.urdf")
+    with pytest.raises(mb.ModelError, match="joint 'joint4' is floating; it cannot be driven"):
+        load_urdf(tmp_path / "floating.urdf", drive={"joint4": 0.1})
+    with pytest.raises(mb.ModelError, match="joint 'joint4' is floating; its child is drawn "
+                                            "where the URDF puts it"):
+        load_urdf(tmp_path / "floating.urdf", joint_positions={"joint4": 0.1})
     (tmp_path / "mimic.urdf").write_text(text.replace(
         '<joint name="joint6" type="revolute">',
         '<joint name="joint6" type="revolute"><mimic joint="joint5" multiplier="2"/>'))
@@ -370,6 +373,55 @@ def test_a_urdf_limit_stops_the_joint_at_its_ends_in_urdf_terms(tmp_path):
     np.testing.assert_allclose(rate, [2.0, 2.0, -1.0, -1.0, 0.5], rtol=1e-7, atol=0)
     with pytest.raises(mb.ModelError, match="joint_limits must be 'stop', 'ignore' or a"):
         load_urdf(urdf, joint_limits="yes")
+
+
+FLOATY = """<robot name="floaty">
+  <link name="world"/>
+  <link name="puck"><inertial><origin xyz="0.01 0 0"/><mass value="2"/>
+    <inertia ixx="0.02" iyy="0.03" izz="0.04" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
+  <link name="arm"><inertial><origin xyz="0.2 0 0.1"/><mass value="0.5"/>
+    <inertia ixx="0.001" iyy="0.004" izz="0.004" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="base" type="KIND"><parent link="world"/><child link="puck"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/><axis xyz="0 0 1"/></joint>
+  <joint name="swing" type="revolute"><parent link="puck"/><child link="arm"/>
+    <origin xyz="0.05 0 0"/><axis xyz="1 0.3 0"/></joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("kind", ["planar", "floating"])
+def test_a_planar_or_floating_base_recoils_from_a_swinging_arm(tmp_path, kind):
+    """A puck on a planar joint (or a floating one) carrying an arm whose hinge, skew to the
+    plane, is driven to swing, in zero gravity from rest. Planar: the puck keeps its plane
+    (its normal and its height along it, to 1e-9) and the centre of mass of the two stays
+    put along the plane (no force along it), while the puck recoils. Floating: the centre of
+    mass stays put in all three directions and the puck tilts out of its plane."""
+    path = tmp_path / "floaty.urdf"
+    path.write_text(FLOATY.replace("KIND", kind))
+    model = load_urdf(path, gravity=(0.0, 0.0, 0.0), drive={"swing": mb.Harmonic(0.8, 5.0)})
+    assert [type(joint).__name__ for joint in model.joints] == (
+        ["Planar"] if kind == "planar" else []) + ["Revolute", "RotationDriver"]
+    res = mb.forward_dynamics(model, np.linspace(0.0, 1.0, 11), method="DOP853", rtol=1e-11,
+                              atol=1e-12)
+    c, s = np.cos, np.sin
+    rx, ry, rz = 0.3, 0.2, 0.1  # URDF's rpy: R = Rz Ry Rx
+    R = (np.array([[c(rz), -s(rz), 0], [s(rz), c(rz), 0], [0, 0, 1]])
+         @ np.array([[c(ry), 0, s(ry)], [0, 1, 0], [-s(ry), 0, c(ry)]])
+         @ np.array([[1, 0, 0], [0, c(rx), -s(rx)], [0, s(rx), c(rx)]]))
+    normal = R[:, 2]
+    puck, arm = res.body("puck").position, res.body("arm").position
+    centre = (2.0 * puck + 0.5 * arm) / 2.5
+    drift = centre - centre[0]
+    tilt = np.linalg.norm(res.body("puck").rotation[:, :, 2] - normal, axis=1)
+    if kind == "planar":
+        along = drift @ normal
+        np.testing.assert_allclose(drift - along[:, None] * normal, 0.0, rtol=0, atol=1e-9)
+        np.testing.assert_allclose((puck - puck[0]) @ normal, 0.0, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(tilt, 0.0, rtol=0, atol=1e-9)
+    else:
+        np.testing.assert_allclose(drift, 0.0, rtol=0, atol=1e-9)
+        assert tilt.max() > 1e-2
+    assert np.max(np.linalg.norm(puck - puck[0], axis=1)) > 1e-3  # it recoils
 
 
 WELDED = """<robot name="welded">

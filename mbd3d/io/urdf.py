@@ -12,7 +12,8 @@ Joints become constraints between those bodies, given in the drawing of the robo
 - ``revolute`` and ``continuous``: :class:`~mbd3d.joints.Revolute` about the joint axis;
 - ``prismatic``: :class:`~mbd3d.joints.Prismatic` along it;
 - ``fixed``: nothing (its child is part of its parent's body; its axis is not read);
-- ``floating`` and ``planar``: refused, naming the joint.
+- ``floating``: nothing either, its child is free (a floating base);
+- ``planar``: :class:`~mbd3d.joints.Planar`, its axis the plane's normal.
 
 URDF keeps the names of links and of joints apart, a model does not: a joint named as a link
 is renamed ``"<name>_joint"`` (a :class:`UrdfWarning` lists them).
@@ -197,10 +198,11 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
 
     if meshes not in ("load", "require", "skip"):
         raise ModelError(f"{what}: meshes must be 'load', 'require' or 'skip', got {meshes!r}")
+    for joint in joints:
+        if joint.type in ("fixed", "floating", "planar") and joint.name in drive:
+            raise ModelError(f"{what}: joint '{joint.name}' is {joint.type}; it cannot be "
+                             "driven (drive a revolute, continuous or prismatic joint)")
     frames, order = _drawing_frames(links, joints, roots[0], positions, what)
-    for joint in order:
-        if joint.type == "fixed" and joint.name in drive:
-            raise ModelError(f"{what}: joint '{joint.name}' is fixed; it cannot be driven")
     order = _without_massless_branches(order, links, drive, what)
 
     b = builder if builder is not None else ModelBuilder(
@@ -219,6 +221,8 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
             continue  # its child is part of its parent's body
         element, axis = _add_joint(b, joint, names[joint.name], bodies[owner[joint.parent]],
                                    bodies[joint.child], frames[joint.child], what)
+        if element is None:
+            continue  # floating: its child is free
         if joint.limit is not None and joint.type in ("revolute", "prismatic") and (
                 joint.limit.lower is not None or joint.limit.upper is not None):
             q0 = float(positions.get(joint.name, 0.0))
@@ -342,11 +346,15 @@ def _joined(shapes: list):
 
 def _add_joint(b, joint, name: str, parent, child, frame: np.ndarray, what: str) -> tuple:
     """The moving joint ``joint`` between two bodies, at its child's frame ``frame`` of the
-    drawing; returns it and its axis (drawing)."""
-    from mbd3d.joints import Prismatic, Revolute  # noqa: PLC0415
+    drawing; returns it and its axis (drawing), or None for a floating joint (nothing joins
+    its child to its parent)."""
+    from mbd3d.joints import Planar, Prismatic, Revolute  # noqa: PLC0415
 
     point, axis = frame[:3, 3], frame[:3, :3] @ _axis(joint, what)
-    kind = Prismatic if joint.type == "prismatic" else Revolute
+    if joint.type == "floating":
+        return None, axis
+    # a planar joint's axis is the normal of the plane its child moves in
+    kind = {"prismatic": Prismatic, "planar": Planar}.get(joint.type, Revolute)
     return b.add(kind(name, parent, child, at=point, axis=axis)), axis
 
 
@@ -390,10 +398,14 @@ def _motion(joint, q: float, what: str) -> np.ndarray:
         T[:3, :3] = axis_angle(_axis(joint, what), q)
     elif joint.type == "prismatic":
         T[:3, 3] = q * _axis(joint)
+    elif joint.type in ("floating", "planar"):
+        if q != 0.0:
+            raise ModelError(f"{what}: joint '{joint.name}' is {joint.type}; its child is drawn "
+                             "where the URDF puts it (a joint_positions value is for a "
+                             "revolute, continuous or prismatic joint)")
     elif joint.type != "fixed":
         raise ModelError(f"{what}: joint '{joint.name}' is {joint.type}; mbd3d models revolute, "
-                         "continuous, prismatic and fixed joints (leave the base free with "
-                         "fixed_base=False instead of a floating joint)")
+                         "continuous, prismatic, fixed, floating and planar joints")
     return T
 
 
