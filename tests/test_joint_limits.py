@@ -231,14 +231,14 @@ def test_a_stops_rate_is_the_rate_of_its_coordinate_with_both_bodies_moving(stop
     assert abs(expected) > 0.1
     # what the stop reports: the direction it pushes body two, back from its upper end
     # (against the slide's axis, or the turn about the hinge's or about the cone's tilt),
-    # and for the slide the point it pushes, the joint's point of body two
+    # and the point it pushes: the slide's the joint's point of body two, a turn's body two's
+    # centre of mass (a torque has no point of its own)
     a = np.array([0.3, 0.4, 1.0]) / np.linalg.norm([0.3, 0.4, 1.0])
     R1, R2 = _rotation(charts[0], q[3:6]), _rotation(charts[1], q[9:12])
     h = np.cross(R1 @ a, R2 @ a) if stop == "cone" else R1 @ a
     np.testing.assert_allclose(states.normal[0], -h / np.linalg.norm(h), rtol=0, atol=1e-12)
-    if stop == "slide":
-        np.testing.assert_allclose(states.point[0], q[6:9] + R2 @ [-0.1, 0.0, -0.1], rtol=0,
-                                   atol=1e-12)
+    point = q[6:9] + R2 @ [-0.1, 0.0, -0.1] if stop == "slide" else q[6:9]
+    np.testing.assert_allclose(states.point[0], point, rtol=0, atol=1e-12)
 
 
 def test_a_planar_joint_stops_each_coordinate_with_its_restitution():
