@@ -271,6 +271,12 @@ def test_a_connect_closes_a_four_bar_that_moves_as_its_closed_form(tmp_path):
     B = A + along * e / d + np.sqrt(coupler**2 - along**2) * normal
     np.testing.assert_allclose(res.body("rocker").position, (B + [ground, 0.0, 0.0]) / 2,
                                rtol=0, atol=1e-10)
+    # MuJoCo keeps equality names apart from joint names: a connect named as a joint is kept
+    same = _file(tmp_path, _four_bar(crank, coupler, rocker, ground).replace(
+        'connect name="B"', 'connect name="A"'), "same.xml")
+    with pytest.warns(mb.MjcfWarning):
+        named = [joint.name for joint in mb.load_mjcf(same).joints]
+    assert named == ["O2", "A", "O4", "A_connect"]
 
 
 def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):

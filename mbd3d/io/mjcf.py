@@ -136,7 +136,11 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     taken = {body.name for body in bodies.values()} | {b.ground.name}
     sets = _joint_sets(mujoco, m)
     joining = _Joints(mujoco, m, d, b, drive, limit_law(joint_limits, what), what)
-    connects = _connects(mujoco, m)
+    connects = {}  # by a name apart from the joints' (MuJoCo keeps the two apart)
+    for label, k in _connects(mujoco, m).items():
+        while label in sets or label in connects:
+            label += "_connect"
+        connects[label] = k
     for label, name in joint_names(list(sets) + list(connects), taken, what,
                                    MjcfWarning).items():
         if label in connects:
