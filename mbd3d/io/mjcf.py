@@ -3,8 +3,8 @@
 MuJoCo (``pip install "mbd3d[mjcf]"``) parses the file, applies its defaults, ``<include>``s
 and compiler options (angles in degrees or radians, Euler sequences, inertias computed from
 geoms) and places every body; this module only reads the compiled model, so that an MJCF
-means here what it means in MuJoCo. In the drawing at ``joint_positions`` (default each
-joint's ``ref``, MuJoCo's ``qpos0``):
+means here what it means in MuJoCo. In the drawing at ``joint_positions`` (default the
+``keyframe``'s pose, else each joint's ``ref``: MuJoCo's ``qpos0``):
 
 - each body that a joint carries, together with the bodies welded to it (nested without a
   joint), becomes one spatial body named after it: their summed mass and inertia at their
@@ -28,12 +28,11 @@ other bodies with more than one joint are refused, naming them.
 
 A hinge's ``stiffness`` and ``damping`` (a body's only joint) are a
 :class:`~mbd3d.RotationalSpringDamper` named ``"<joint>_spring"``, at rest at the joint's
-``springref``. What the file holds that the model leaves out is said in a
-:class:`MjcfWarning`: actuators, tendons, equality constraints, the springs and damping of
-other joints, armature and dry friction, fluid forces, gravity compensation, contacts
-between geoms, a ball joint's range, equality constraints other than an active ``connect``
-(which is a :class:`~mbd3d.joints.Spherical` joint between its two points, closing a loop
-exactly where MuJoCo's is soft).
+``springref``; an active ``connect`` equality is a :class:`~mbd3d.joints.Spherical` joint
+between its two points (closing a loop exactly, where MuJoCo's is soft). What the file holds
+that the model leaves out is said in a :class:`MjcfWarning`: actuators, tendons, other
+equality constraints, the springs and damping of other joints, armature and dry friction,
+fluid forces, gravity compensation, contacts between geoms, a ball joint's range.
 """
 
 from __future__ import annotations
