@@ -106,18 +106,26 @@ _MASS_SPREAD = 1e8
 
 
 def _light_body(model) -> str:
-    """What to say of a body too light beside the others for the mass-weighted equations,
-    or "" when the masses are within :data:`_MASS_SPREAD` of each other."""
+    """What to say of a body too light beside the others for the mass-weighted equations
+    (its mass, or a principal moment of inertia), or "" when the masses and the moments are
+    each within :data:`_MASS_SPREAD` of each other."""
     if not len(model.mass):
         return ""
-    light, heavy = int(np.argmin(model.mass)), int(np.argmax(model.mass))
-    ratio = model.mass[heavy] / model.mass[light]
-    if not ratio > _MASS_SPREAD:
-        return ""
-    return (f"body '{model.bodies[light].name}' has {model.mass[light]:.3g} kg against "
-            f"{model.mass[heavy]:.3g} kg of '{model.bodies[heavy].name}', a ratio of "
-            f"{ratio:.1e}, more than double precision resolves beside the constraints. Give "
-            "it a mass (and inertia) nearer the others', or weld it to a neighbour.")
+    inertia = np.asarray(model.inertia, dtype=float)
+    moments = (inertia.reshape(len(model.mass), 1) if inertia.ndim == 1
+               else np.linalg.eigvalsh(inertia))
+    for values, what, unit in ((model.mass, "a mass", "kg"),
+                               (moments, "a principal moment of inertia", "kg m^2")):
+        light = int(np.argmin(values.min(axis=1) if values.ndim == 2 else values))
+        heavy = int(np.argmax(values.max(axis=1) if values.ndim == 2 else values))
+        low, high = np.min(values[light]), np.max(values[heavy])
+        if high > _MASS_SPREAD * low:
+            return (f"body '{model.bodies[light].name}' has {what} of {low:.3g} {unit} against "
+                    f"{high:.3g} {unit} of '{model.bodies[heavy].name}', a ratio of "
+                    f"{high / low:.1e}, more than double precision resolves beside the "
+                    "constraints. Give it a mass and inertia nearer the others', or weld it to "
+                    "a neighbour.")
+    return ""
 
 
 def _check_finite(model, q: np.ndarray, what: str) -> np.ndarray:
