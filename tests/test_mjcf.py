@@ -176,9 +176,12 @@ def test_a_bodys_two_and_three_hinges_through_one_point_move_as_in_mujoco(tmp_pa
     assert [type(joint).__name__ for joint in model.joints] == ["Universal", "Spherical",
                                                                  "Revolute"]
     _moves_as_in_mujoco(path, model, 0.5, ["torso", "thigh", "shin"])
+    # refused before anything is added to a builder given
+    builder = mb.ModelBuilder(dim=3)
     with pytest.raises(mb.ModelError, match=r"joint 'bend_y' is one of the joints mbd3d models "
                                             r"as the universal joint 'bend_z\+bend_y'"):
-        mb.load_mjcf(path, drive={"bend_y": 0.0})
+        mb.mjcf_builder(path, drive={"bend_y": 0.0}, builder=builder)
+    builder.add_body("torso", mass=1.0, inertia=(0.1, 0.1, 0.1), position=(0, 0, 0))  # free
 
 
 WALKER = """<mujoco model="walker">

@@ -128,13 +128,21 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     for key, motion in drive.items():
         positions.setdefault(key, motion.evaluate(0.0)[0])
     d = _drawing(mujoco, m, joints, positions, _key(mujoco, m, keyframe, what), what)
+    # everything that can be refused is checked before the builder (maybe the caller's) is
+    # touched, so that a refusal leaves no part of the mechanism in it
+    law = limit_law(joint_limits, what)
+    sets = _joint_sets(mujoco, m)
+    for label, (_, js) in sets.items():
+        for hinge in sorted(set(label.split("+")) & set(drive) if len(js) > 1 else ()):
+            raise ModelError(f"{what}: joint '{hinge}' is one of the joints mbd3d models as "
+                             f"the {_joint_set_kind(m, js)} joint '{label}'; it cannot be "
+                             "driven (drive a joint that is its body's only one)")
 
     b = _builder(builder, m, name or m.names[:m.names.index(b"\0")].decode() or path.stem,
                  what)
     owner, bodies = _add_bodies(mujoco, m, d, b, what)
     taken = {body.name for body in bodies.values()} | {b.ground.name}
-    sets = _joint_sets(mujoco, m)
-    joining = _Joints(mujoco, m, d, b, drive, limit_law(joint_limits, what), what)
+    joining = _Joints(mujoco, m, d, b, drive, law, what)
     connects = {}  # by a name apart from the joints' (MuJoCo keeps the two apart)
     for label, k in _connects(mujoco, m).items():
         while label in sets or label in connects:
@@ -213,13 +221,10 @@ class _Joints:
                              point_j=_local(b_j, p_j)))
 
     def several(self, label: str, name: str, parent, child, js: list) -> None:
-        """The joints ``js`` of one body as one joint of mbd3d's; they cannot be driven."""
+        """The joints ``js`` of one body as one joint of mbd3d's (not driven: refused
+        before)."""
         kind = _add_joint_set(self.b, self.m, name, parent, child, self.d, js)
         hinges = [_name(self.mujoco, self.m, "joint", j) for j in js]
-        for hinge in set(hinges) & set(self.drive):
-            raise ModelError(f"{self.what}: joint '{hinge}' is one of the joints mbd3d models "
-                             f"as the {kind} joint '{name}'; it cannot be driven (drive a "
-                             "joint that is its body's only one)")
         limited = [hinge for hinge, j in zip(hinges, js) if self.m.jnt_limited[j]]
         if limited:
             self.left_out.append(f"the ranges of joints {', '.join(limited)} (the {kind} joint "
@@ -324,13 +329,14 @@ def _drawing(mujoco, m, joints: dict, positions: Mapping[str, float], key: int |
     d.qpos[:] = m.qpos0 if key is None else m.key_qpos[key]
     if key is not None:
         d.qvel[:] = m.key_qvel[key]
-    for key, value in positions.items():
-        if key not in joints:
-            raise ModelError(f"{what}: no joint '{key}' (joints: {', '.join(sorted(joints))})")
-        j = joints[key]
+    for joint, value in positions.items():
+        if joint not in joints:
+            raise ModelError(f"{what}: no joint '{joint}' (joints: "
+                             f"{', '.join(sorted(joints))})")
+        j = joints[joint]
         if m.jnt_type[j] not in (_HINGE, _SLIDE):
-            raise ModelError(f"{what}: joint '{key}' is a {_KINDS[int(m.jnt_type[j])]} joint; "
-                             "only hinge and slide joints take a coordinate or a drive")
+            raise ModelError(f"{what}: joint '{joint}' is a {_KINDS[int(m.jnt_type[j])]} "
+                             "joint; only hinge and slide joints take a coordinate or a drive")
         d.qpos[m.jnt_qposadr[j]] = float(value)
     mujoco.mj_kinematics(m, d)
     mujoco.mj_comPos(m, d)
