@@ -14,6 +14,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d.io.model_file import read
+from mbd3d.joints import Revolute, RotationDriver
 from mbd3d.mechanisms import slider_crank
 from four_bar_loop import four_bar_by_hand
 from slider_crank_oracle import SliderCrankOracle
@@ -168,3 +169,13 @@ def test_bad_states_are_named():
     with pytest.raises(mb.ModelError, match="forward dynamics at given states of 'slider-crank': "
                                             "efforts give 2 states, q and qd 3"):
         mb.forward_dynamics_at(model, {"motor": [1.0, 2.0, 3.0]}, 0.0, [[1.0], [2.0]])
+    # a driven coordinate that moves (almost) nothing: its acceleration is not an answer
+    chain = mb.ModelBuilder(dim=2)
+    arm = chain.add_body("arm", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+    tip = chain.add_body("tip", mass=1e-20, inertia=1e-20, position=(1.5, 0.0))
+    for name, i, j, at in (("O", chain.ground, arm, 0.0), ("A", arm, tip, 1.0)):
+        joint = chain.add(Revolute(name, i, j, at=(at, 0.0)))
+        chain.add(RotationDriver(f"{name}_drive", joint, motion=mb.Ramp(0.0, 0.0)))
+    with pytest.raises(mb.AnalysisError, match=r"in state 0 the drivers' mass matrix is "
+                                               r"singular \(condition .*moves no mass"):
+        mb.forward_dynamics_at(chain.build(), [0.1, 0.2], 0.0, [1.0, 0.0])

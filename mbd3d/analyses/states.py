@@ -298,15 +298,12 @@ def forward_dynamics_at(model, q: Any, qd: Any, efforts: Any, t: float = 0.0, *,
     if not np.all(np.isfinite(tau)):
         raise ModelError(f"{what} of '{model.name}': the efforts are not all finite")
     M, b = joint_space_dynamics_at(model, q, qd, t, q_guess=q_guess, tol=tol)
-    rhs = np.broadcast_to(tau, b.shape) - b
-    qdd = np.empty_like(b)
-    for s in range(len(M)):
-        # a coordinate that moves no mass (or one whose inertia is lost to rounding) leaves
-        # its acceleration undetermined: said, not returned as noise
-        if np.linalg.cond(M[s]) > 1e12:
-            raise AnalysisError(f"{what} of '{model.name}': in state {s} the drivers' mass "
-                                f"matrix is singular (condition "
-                                f"{np.linalg.cond(M[s]):.3g}): a driven coordinate moves no "
-                                "mass")
-        qdd[s] = np.linalg.solve(M[s], rhs[s])
-    return qdd
+    # a coordinate that moves no mass (or one whose inertia is lost to rounding) leaves its
+    # acceleration undetermined: said, not returned as noise
+    condition = np.linalg.cond(M)
+    bad = np.flatnonzero(~(condition <= 1e12))
+    if len(bad):
+        raise AnalysisError(f"{what} of '{model.name}': in state {bad[0]} the drivers' mass "
+                            f"matrix is singular (condition {condition[bad[0]]:.3g}): a "
+                            "driven coordinate moves no mass")
+    return np.linalg.solve(M, (np.broadcast_to(tau, b.shape) - b)[..., None])[..., 0]
