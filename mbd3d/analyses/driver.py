@@ -9,6 +9,7 @@
              segment = integrator.advance(next output)     compiled steps
              integrator.check(segment)                     collapses, stiffness
              events: zero crossings on the segment's dense output, located and acted on
+               (the rigid contacts' touches among them: impacts, analyses/impacts.py)
              outputs inside the segment -> ResultsBuffer -> observers
              integrator.after_step(segment)                projections, chart resets
         3. the buffer -> Results                           io/store.py
@@ -30,6 +31,7 @@ from mbd3d.errors import ModelError
 from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
+from mbd3d.analyses.impacts import RigidContacts, RunStopped
 from mbd3d.analyses.initial import consistent_initial_state
 from mbd3d.analyses.kinematics import check_times, project_state
 from mbd3d.analyses.lift_off import warn_lift_off
@@ -234,10 +236,12 @@ _SAMPLES = 8
 
 class _Events:
     """The events of one run and their functions' values at the last segment's end (None
-    right after a restart at that event: no crossing counts until the state has left it)."""
+    right after a restart at that event: no crossing counts until the state has left it;
+    except for the events from ``armed`` on, whose action leaves their function off zero:
+    the impacts, :meth:`mbd3d.analyses.impacts.RigidContacts.act`)."""
 
-    def __init__(self, events: tuple[Event, ...], stats: dict):
-        self.events = events
+    def __init__(self, events: tuple[Event, ...], stats: dict, armed: int | None = None):
+        self.events, self.armed = events, len(events) if armed is None else armed
         self.found = stats.setdefault("events", []) if events else []
         self.g: list[float | None] = []
 
@@ -290,7 +294,9 @@ class _Events:
     def restarted(self, event: Event, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         self.found.append({"name": event.name, "time": t})
         self.start(t, q, qd)
-        self.g[self.events.index(event)] = None  # no crossing counts from where it acted
+        index = self.events.index(event)
+        if index < self.armed:
+            self.g[index] = None  # no crossing counts from where it acted
 
 
 def _new_state(event: Event, t: float, given: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -305,13 +311,22 @@ def _new_state(event: Event, t: float, given: Any, n: int) -> tuple[np.ndarray, 
     return q, qd
 
 
+def _impact_events(rigid: RigidContacts) -> tuple[Event, ...]:
+    """An event per rigid contact row: its gap closing, acted on by the impact."""
+    def gap(index: int) -> Callable:
+        return lambda t, q, qd: rigid.gap(index, t, q, qd)
+    return tuple(Event(name, gap(k), direction=-1, action=rigid.act)
+                 for k, name in enumerate(rigid.names)) if len(rigid) else ()
+
+
 def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
     """Run ``integrator`` over ``request.t`` (see the module doc); the Results of the outputs,
     kept however the run ends (:func:`mbd3d.io.store.run_keeping_results`)."""
     t, model = request.t, request.model
     stats = integrator.stats
     out = ResultsBuffer(model, "forward dynamics", t, stats)
-    events = _Events(request.events, stats)
+    rigid = RigidContacts(model, integrator.chart, lambda: integrator.redundant, stats)
+    events = _Events(request.events + _impact_events(rigid), stats, len(request.events))
 
     def store(q, qd, qdd, lam) -> None:
         out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns())
@@ -319,10 +334,12 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
     def loop() -> tuple[str, str] | None:
         q, qd, redundant = initial_state(request, integrator, integrator.rows_dependent)
         store(q, qd, *integrator.start(float(t[0]), q, qd, redundant))
+        if len(rigid):
+            rigid.start(float(t[0]), q, qd)
         events.start(float(t[0]), q, qd)
         watch.tick(t[0], 0)
         while out.done < len(t):
-            segment = integrator.advance(float(t[out.done]), bool(request.events))
+            segment = integrator.advance(float(t[out.done]), bool(events.events))
             integrator.check(segment)
             hit = events.locate(segment)
             t_end = segment.t_new if hit is None else hit[0]
@@ -345,7 +362,12 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
         if event.action == "stop":
             events.found.append({"name": event.name, "time": te})
             return "stopped", f"stopped by event '{event.name}' at t = {te:.9g} s"
-        q, qd = _new_state(event, te, event.action(te, q.copy(), qd.copy()), len(q))
+        try:
+            given = event.action(te, q.copy(), qd.copy())
+        except RunStopped as stop:
+            events.found.append({"name": event.name, "time": te})
+            return "stopped", str(stop)
+        q, qd = _new_state(event, te, given, len(q))
         q, qd = project_state(model, te, q, qd, request.projection_tol, integrator.chart(),
                               integrator.redundant)
         integrator.restart(te, q, qd)

@@ -141,8 +141,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         generalized-alpha's also its Newton iterations and factorizations and
         ``smallest_step`` [s] (the shortest step taken: shortened at contacts, after failed
         Newton iterations, or to land on the run's end, which it reaches by two even steps
-        rather than by a sliver of less than a twentieth of a step). ``status`` is
-        "stopped" when an event stopped the run.
+        rather than by a sliver of less than a twentieth of a step). With rigid contacts
+        (:class:`mbd3d.RigidImpact`, resolved by :mod:`mbd3d.analyses.impacts`),
+        ``impacts``: one dict per contact row and impact, its ``time`` [s], ``contact``,
+        ``impulse`` [N s; a turning stop's N m s], ``rate_before`` and ``rate_after`` (the
+        gap's, [m/s or rad/s]) and ``energy_lost`` [J]. ``status`` is "stopped" when an
+        event stopped the run, or a rigid contact came to rest (the message names it).
 
     Raises
     ------

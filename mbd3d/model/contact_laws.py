@@ -9,6 +9,9 @@ and penetration rate ``delta'`` [m/s], evaluated by :mod:`mbd3d.numerics.compile
   damping);
 - :class:`HuntCrossley`: ``K delta^n + K (chi / v0) delta^n delta'``.
 
+:class:`RigidImpact` is no force law: a contact or stop with it is a rigid unilateral
+constraint, whose touches forward dynamics resolves as impacts (:mod:`mbd3d.analyses.impacts`).
+
 The first two dissipate a fraction of an impact's energy that does not depend on the impact
 speed: their damping is calibrated exactly to the restitution asked for, the force never
 pulling (the calibration solves the one-degree-of-freedom impact of the effective mass ``m*``
@@ -30,8 +33,8 @@ import numpy as np
 from mbd3d.errors import ModelError
 from mbd3d.numerics.checks import finite_scalar
 
-__all__ = ["ContactLaw", "LinearContact", "HertzContact", "HuntCrossley", "clipped_restitution",
-           "hertz_stiffness"]
+__all__ = ["ContactLaw", "LinearContact", "HertzContact", "HuntCrossley", "RigidImpact",
+           "clipped_restitution", "hertz_stiffness"]
 
 
 def _restitution(value: float, what: str) -> float:
@@ -53,6 +56,9 @@ def _stiffness(value: float, what: str) -> float:
 
 class ContactLaw:
     """Base of the normal force laws: :meth:`constants` gives ``(K, n, D, p)``."""
+
+    #: whether the law is a rigid contact's (no force: impacts, :class:`RigidImpact`)
+    rigid = False
 
     def constants(self, effective_mass: float, radius: float, what: str
                   ) -> tuple[float, float, float, float]:
@@ -144,6 +150,41 @@ class HertzContact(ContactLaw):
             K = hertz_stiffness(self.young_modulus, self.poisson_ratio, radius, what)
         e = _restitution(self.restitution, f"{what}: restitution")
         return K, 1.5, _calibrated(1.5, 0.25, e) * _mass_scale(effective_mass, K), 0.25
+
+
+@dataclass(frozen=True)
+class RigidImpact(ContactLaw):
+    """Rigid bodies: the shapes never overlap, and every touch is an impact resolved by
+    Newton's law of restitution on the whole mechanism at once (the joints hold through it).
+
+    At a touch the gap's rate ``v-`` (< 0) turns into ``-e v-``, the impulse acting along the
+    contact's normal only (no friction), on every contact that touches closing at that
+    instant together (:mod:`mbd3d.analyses.impacts`); forward dynamics only (the other
+    analyses see no force).
+
+    Parameters
+    ----------
+    restitution : float
+        Newton's coefficient ``e`` in [0, 1] (1: no energy lost).
+    rest_speed : float
+        [m/s; a stop of a turning coordinate: rad/s] > 0. A contact whose gap opens slower than
+        this after an impact while its bodies still press together would bounce ever shorter
+        (an infinity of impacts in a finite time): it has come to rest. A contact at rest is
+        not modelled yet: the run stops there, naming it, with the results up to that time.
+    """
+
+    restitution: float
+    rest_speed: float = 1e-3
+
+    rigid = True
+
+    def constants(self, effective_mass, radius, what):
+        e = finite_scalar(self.restitution, f"{what}: restitution")
+        if not 0.0 <= e <= 1.0:
+            raise ModelError(f"{what}: restitution must lie in [0, 1], got "
+                             f"{self.restitution!r}")
+        _stiffness(self.rest_speed, f"{what}: rest_speed")
+        return 0.0, 1.0, 0.0, 0.0
 
 
 #: chi of the published calibrations of the Hunt-Crossley family, from the restitution e

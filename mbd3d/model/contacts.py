@@ -89,8 +89,8 @@ class Contact(ForceElement):
                              f"{type(second).__name__}")
         pair_order(first, second, f"contact '{name}'")
         if not isinstance(law, ContactLaw):
-            raise ModelError(f"contact '{name}': law must be a LinearContact, HertzContact or "
-                             f"HuntCrossley, got {law!r}")
+            raise ModelError(f"contact '{name}': law must be a LinearContact, HertzContact, "
+                             f"HuntCrossley or RigidImpact, got {law!r}")
         self.name, self.first, self.second, self.law = name, first, second, law
         self.friction, self.slip_velocity = friction, slip_velocity
         self.effective_mass = effective_mass
@@ -114,6 +114,10 @@ class Contact(ForceElement):
         slip = finite_scalar(self.slip_velocity, f"{what}: slip_velocity", positive=True)
         if mu < 0.0:
             raise ModelError(f"{what}: friction must be >= 0, got {self.friction!r}")
+        if mu > 0.0 and self.law.rigid:
+            raise ModelError(f"{what}: friction at a rigid contact (stick and slip) is not "
+                             "modelled yet; give friction=0, or a compliant law (HertzContact, "
+                             "LinearContact) with friction")
         mass = self._effective_mass(what)
         K, n, D, p = self.law.constants(mass, rows.radius, what)
         values = np.array([[kind, r_i, r_j, K, n, D, p, mu, slip]
@@ -204,8 +208,8 @@ class JointLimit(ForceElement):
                                             "axis= is a cone's; a hinge or a slide has the "
                                             "joint's own"))
         if not isinstance(law, ContactLaw):
-            raise ModelError(f"{what}: law must be a LinearContact, HertzContact or "
-                             f"HuntCrossley, got {law!r}")
+            raise ModelError(f"{what}: law must be a LinearContact, HertzContact, HuntCrossley "
+                             f"or RigidImpact, got {law!r}")
         self.name, self.joint, self.law = name, joint, law
         self.lower, self.upper, self.effective_mass = lower, upper, effective_mass
         self.coordinate, self.axis = coordinate, axis
@@ -317,6 +321,12 @@ class _Contacts(_CompiledForces):
         self._swapped = np.array([a[3] for a in arrays for _ in a[2]], dtype=bool)
         #: per row, the mass (a stop: the moment of inertia) its law is calibrated with
         self.masses = np.array([a[4] for a in arrays for _ in a[2]], dtype=float)
+        #: per row, whether it is rigid (:class:`~mbd3d.RigidImpact`: no force, impacts),
+        #: and its law's restitution and rest speed (rigid rows only, else nan)
+        laws = [e.law for e in self.owners]
+        self.rigid = np.array([law.rigid for law in laws], dtype=bool)
+        self.restitution = np.array([law.restitution if law.rigid else np.nan for law in laws])
+        self.rest_speed = np.array([law.rest_speed if law.rigid else np.nan for law in laws])
         #: the contacts' shapes in their bodies' frames, for drawing
         self.outlines = [outline(ctx, shape, e.what) for e in elements if isinstance(e, Contact)
                          for shape in (e.first, e.second)]
@@ -334,16 +344,21 @@ class _Contacts(_CompiledForces):
         :class:`~mbd3d.errors.ContactWarning`): an integration starts with that force."""
         fr = ctx.body_type.frames(ctx.frames.Q, np.zeros_like(ctx.frames.Q), charts=ctx.charts)
         report = self._report(fr, self._pairs(ctx.row))
-        for k in np.flatnonzero(report[:, kernel.GAP] < 0.0):
+        # rigid shapes drawn touching overlap by the rounding of their positions
+        rounding = 1e-12 * (1.0 + float(np.max(np.abs(ctx.frames.Q), initial=0.0)))
+        overlap = report[:, kernel.GAP] < np.where(self.rigid, -rounding, 0.0)
+        for k in np.flatnonzero(overlap):
             e = self.owners[k]
             depth, force = -report[k, kernel.GAP], report[k, kernel.NORMAL_FORCE]
             where = ("the shapes overlap by" if isinstance(e, Contact)
                      else "the joint is past its limit by")
             what = e.what.replace(f"'{e.name}'", f"'{self.names[k]}'")  # with the corner
+            force = ("a rigid contact, which forward dynamics refuses to start inside"
+                     if self.rigid[k] else f"with a force of {force:.6g} {e.units[1]}")
             warnings.warn(f"{what}: {where} {depth:.6g} {e.units[0]} in the drawing, "
-                          f"with a force of {force:.6g} {e.units[1]}; place the bodies apart (or "
-                          "at the limit) unless that is their static penetration",
-                          ContactWarning, stacklevel=user_stacklevel())
+                          f"{force}; place the bodies apart (or at the limit) unless that is "
+                          "their static penetration", ContactWarning,
+                          stacklevel=user_stacklevel())
 
     def _report(self, fr, bodies: np.ndarray, k: int = 1) -> np.ndarray:
         """A row of the core's report per contact row, normals and friction turned back to
@@ -408,10 +423,13 @@ class _Contacts(_CompiledForces):
         deeper of the penetration now and the one the closing speed reaches against the
         law's spring, ``((n + 1) m* v^2 / (2 K))^(1 / (n + 1))`` (damping only shortens it)."""
         K, n, m = self._values[:, 3], self._values[:, 4], self.masses
+        # a rigid row (K = 0) has no oscillation: its impact takes no time
+        K = np.where(self.rigid, np.inf, K)
         closing = np.maximum(-gap_rate, 0.0)
         deepest = ((n + 1.0) * m * closing ** 2 / (2.0 * K)) ** (1.0 / (n + 1.0))
         delta = np.maximum(np.maximum(-gap, deepest), 1e-300)
-        return 2.0 * math.pi * np.sqrt(m / (n * K * delta ** (n - 1.0)))
+        return np.where(self.rigid, np.inf,
+                        2.0 * math.pi * np.sqrt(m / (n * K * delta ** (n - 1.0))))
 
     def table(self, model):
         return {"contact_bodies": self._bodies(model), "contact_points": self._points,

@@ -383,7 +383,7 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
     """``out[k]``: a continuous function of the state that is positive exactly while contact
     (or stop) ``k``'s law pushes, ``min(delta, F_n / K)`` with the unclipped force, else
     ``delta`` (<= 0): the integrators end a step where it changes sign, so that no step
-    straddles the kink of a touch or a release."""
+    straddles the kink of a touch or a release. A rigid row (``K = 0``) gives -1."""
     point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
     work = np.zeros((6, 3))
@@ -396,6 +396,9 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
             gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point,
                                             n, s_i, s_j, v_i, v_j, work)
         delta, delta_rate = -gap, -rate
+        if values[k, 3] == 0.0:
+            out[k] = -1.0  # a rigid row (no law): it never pushes, its impacts are events
+            continue
         if not delta > 0.0:
             out[k] = delta if delta == delta else 0.0
             continue

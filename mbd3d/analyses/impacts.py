@@ -1,0 +1,254 @@
+"""Rigid contacts in forward dynamics: every touch an impact, resolved on the whole mechanism.
+
+A contact or joint stop with :class:`~mbd3d.RigidImpact` exerts no force. Its gap ``g(q)`` is
+an event of the run (closing), which the driver (:mod:`mbd3d.analyses.driver`) locates on the
+integrator's dense output. There, the positions frozen, the velocities jump by Newton's law of
+restitution generalized to several contacts with the joints holding::
+
+    qd+ = qd- + S G^T lam,    S = M^-1 - M^-1 Cq^T (Cq M^-1 Cq^T)^-1 Cq M^-1
+    w = W lam + (I + E) v-,   0 <= lam  _|_  w >= 0,    W = G S G^T,   v- = G qd-
+
+over the rows ``A`` that touch (gap within :data:`CLOSED` of zero) and close (rate below zero):
+``G`` their gap rows (``g' = G qd``), ``E`` their restitutions, ``lam`` the normal impulses
+[N s; a hinge's stop: N m s] and ``w`` the rates after the impact, ``-e v-`` where an impulse
+acts. ``S G^T`` is what a unit impulse on each row does to the velocities through the joints:
+the solution of the augmented system ``[M Cq^T; Cq 0] [x; y] = [G^T; 0]``, so the joints and the
+drivers hold through the impact. The complementarity problem is solved exactly by an active
+set (:func:`impulses`). An impulse can close a row that was only touching (a row of balls):
+the law is applied again to the rows then closing, until none is (the sequential impacts of
+Newton's cradle, whose struck ball alone leaves).
+
+Each row's energy lost, ``-(1 - e) lam v- / 2`` (>= 0), adds up to the kinetic energy lost
+where no driver moves. A row that is left touching, opening slower than its ``rest_speed``
+while the free motion presses it closed, would bounce ever shorter (infinitely many impacts
+in a finite time): it has come to rest, which is not modelled yet, and the run stops there
+(:class:`RunStopped`), naming it.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from mbd3d.errors import ModelError
+from mbd3d.io.history import contact_history
+from mbd3d.model import constraints
+from mbd3d.model.contacts import contact_group
+from mbd3d.model.equations import augmented_accelerations, mass_matrix
+from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, factor_model_augmented,
+                                   solve_augmented_lagrangian)
+
+__all__ = ["RigidContacts", "RunStopped", "impulses", "CLOSED", "PAST"]
+
+#: a row touches within CLOSED of zero gap; its event fires PAST beyond the touch, or beyond
+#: where an impact left it touching: PAST if idle there, so that rows resting against each
+#: other never fire by rounding, LEAVING if it leaves, which the depth of later impacts
+#: accumulates (all relative to the model's length scale; a turning stop's in rad)
+CLOSED, PAST, LEAVING = 1e-9, 1e-10, 1e-13
+#: a row closes at a rate below -CLOSING of its rest speed; it is pressed closed when its free
+#: acceleration is below -PRESSED of the model's (rounding leaves idle rows near zero)
+CLOSING, PRESSED = 1e-9, 1e-9
+#: rounds of the sequential impacts at one instant before the run is refused
+ROUNDS = 1000
+
+
+class RunStopped(Exception):
+    """Raised by an event's action: the run ends at the event, its message says why."""
+
+
+class RigidContacts:
+    """The rigid rows of a model's contacts and stops in one run: their gaps (the events'
+    functions), the impact at a touch and the rest check. ``chart()`` gives the integrator's
+    current charts (spatial), ``redundant()`` whether the joints' rows depend on each other;
+    the impacts are recorded in ``stats["impacts"]``."""
+
+    def __init__(self, model, chart: Callable, redundant: Callable[[], bool], stats: dict):
+        self.model, self._chart, self._redundant = model, chart, redundant
+        self.group = contact_group(model, required=False)
+        rigid = self.group.rigid if self.group is not None else np.zeros(0, dtype=bool)
+        self.rows = np.flatnonzero(rigid)
+        if not len(self.rows):
+            return
+        group = self.group
+        self.names = [group.names[r] for r in self.rows]
+        self.units = [group.owners[r].units[0] for r in self.rows]
+        self.scale = np.array([model.length_scale if u == "m" else 1.0 for u in self.units])
+        self.e, self.rest_speed = group.restitution[self.rows], group.rest_speed[self.rows]
+        self.floor = -PAST * self.scale
+        self.records = stats.setdefault("impacts", [])
+        self._key, self._report = None, None
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def gap(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        """The event function of rigid row ``index``: its gap [m or rad] beyond the depth
+        at which it fires."""
+        return float(self._states(q, qd)[0][index] - self.floor[index])
+
+    def _states(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(gap, rate)`` of the rigid rows at ``(q, qd)`` in the current charts; the last
+        state's are kept, since every row's event asks at the same states."""
+        chart = self._chart()
+        key = (q.tobytes(), qd.tobytes(), None if chart is None else chart.tobytes())
+        if key != self._key:
+            states = contact_history(self.model, q[None], qd[None],
+                                     None if chart is None else chart[None])
+            self._key = key
+            self._report = (states.gap[0, self.rows], states.gap_rate[0, self.rows])
+        return self._report
+
+    def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """Refuse rows inside each other at the run's start ``t``; set where rows fire."""
+        gap, _ = self._states(q, qd)
+        inside = np.flatnonzero(gap < -CLOSED * self.scale)
+        if len(inside):
+            k = inside[0]
+            raise ModelError(
+                f"rigid contact '{self.names[k]}' starts {-gap[k]:.6g} {self.units[k]} inside "
+                f"at t = {t:.9g} s: rigid shapes (and stops) must start apart or touching; "
+                "move the bodies (or give q0) so that they do not overlap")
+        self._set_floors(q, qd)
+
+    def act(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The state after the impact at ``(q, qd)`` at ``t`` (positions unchanged)."""
+        for _ in range(ROUNDS):
+            gap, rate = self._states(q, qd)
+            active = (gap <= CLOSED * self.scale) & (rate < -CLOSING * self.rest_speed)
+            if not np.any(active):
+                break
+            qd = self._impact(t, q, qd, active, rate[active])
+        else:
+            closing = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
+            raise ModelError(f"forward dynamics of '{self.model.name}': the impacts at t = "
+                             f"{t:.9g} s do not end after {ROUNDS} rounds ({closing} still "
+                             "closing); give the contacts a restitution below 1 or compliant "
+                             "laws")
+        self._check_rest(t, q, qd)
+        self._set_floors(q, qd)
+        return q, qd
+
+    def _impact(self, t, q, qd, active: np.ndarray, before: np.ndarray) -> np.ndarray:
+        """One round: Newton's law on the ``active`` rows closing at ``before``; recorded."""
+        G = self._gap_rows(q, active)
+        X = self._response(t, q, G)
+        e = self.e[active]
+        lam = impulses(G @ X, (1.0 + e) * before)
+        qd = qd + X @ lam
+        after = G @ qd
+        for a, k in enumerate(np.flatnonzero(active)):
+            if lam[a] > 0.0:
+                self.records.append({
+                    "time": t, "contact": self.names[k], "impulse": float(lam[a]),
+                    "rate_before": float(before[a]), "rate_after": float(after[a]),
+                    "energy_lost": float(-0.5 * (1.0 - e[a]) * lam[a] * before[a])})
+        return qd
+
+    def _gap_rows(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """``G`` (a, n) of the ``active`` rows: the rate of a gap is linear in the
+        velocities, so column ``c`` is the rates at the unit velocity of coordinate ``c``
+        (only the coordinates of the rows' bodies, the others' columns are zero)."""
+        model, rows = self.model, self.rows[active]
+        nb, nc = model.n_bodies, model.n_coords_per_body
+        bodies = self.group._bodies(model)[rows].ravel()
+        moving = np.unique(bodies[bodies < nb])
+        columns = (moving[:, None] * nc + np.arange(nc)).ravel()
+        unit = np.zeros((len(columns), model.n_coordinates))
+        unit[np.arange(len(columns)), columns] = 1.0
+        chart = self._chart()
+        charts = None if chart is None else np.broadcast_to(chart, (len(columns),) + chart.shape)
+        rates = contact_history(model, np.broadcast_to(q, unit.shape), unit, charts).gap_rate
+        G = np.zeros((len(rows), model.n_coordinates))
+        G[:, columns] = rates[:, rows].T
+        return G
+
+    def _response(self, t: float, q: np.ndarray, G: np.ndarray) -> np.ndarray:
+        """``S G^T`` (n, a): the velocities a unit impulse on each row gives, the joints
+        holding (module doc)."""
+        model = self.model
+        n, m = model.n_coordinates, model.n_constraints
+        fr = constraints.frames(model, q, charts=self._chart())
+        blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+        jac_data = constraints.evaluate(model, t, fr, value=False)[1]
+        if not self._redundant():
+            try:
+                factors = factor_model_augmented(model, blocks, jac_data)
+                return np.column_stack([factors.solve(np.concatenate([g, np.zeros(m)]))[:n]
+                                        for g in G])
+            except SingularMatrix:
+                pass  # dependent rows found here: the augmented Lagrangian copes with them
+        M, Cq = mass_matrix(model, fr), constraints.jacobian_matrix(model, jac_data)
+        scaling = augmented_scaling(model)
+        return np.column_stack([solve_augmented_lagrangian(M, Cq, g, np.zeros(m),
+                                                           scaling=scaling)[0] for g in G])
+
+    def _check_rest(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """Stop the run (:class:`RunStopped`) at a row left touching, opening slower than its
+        rest speed while the free motion presses it closed."""
+        gap, rate = self._states(q, qd)
+        slow = np.flatnonzero((gap <= CLOSED * self.scale) & (rate < self.rest_speed))
+        if not len(slow):
+            return
+        model = self.model
+        qdd = augmented_accelerations(model, t, q, qd, self._chart())[:model.n_coordinates]
+        # g'' = G qdd + (dG/dq qd) qd: the first by the rates' linearity, the second by a
+        # central difference along qd over a step that moves nothing by more than 1e-6
+        speed = np.max(np.abs(qd) / model.coordinate_scale, initial=0.0)
+        s = 1e-6 / speed if speed > 0.0 else 0.0
+        gdd = self._states(q, qdd)[1].copy()
+        if s > 0.0:
+            gdd += (self._states(q + s * qd, qd)[1] - self._states(q - s * qd, qd)[1]) / (2 * s)
+        gravity = float(np.linalg.norm(model.gravity)) / model.length_scale
+        scale = max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0))
+        pressed = [k for k in slow if gdd[k] < -PRESSED * scale * self.scale[k]]
+        if pressed:
+            k = pressed[0]
+            count = sum(r["contact"] == self.names[k] for r in self.records)
+            unit = f"{self.units[k]}/s"
+            raise RunStopped(
+                f"rigid contact '{self.names[k]}' came to rest at t = {t:.9g} s after {count} "
+                f"impacts: it opens at {max(rate[k], 0.0):.3g} {unit}, below its rest speed "
+                f"{self.rest_speed[k]:g} {unit}, while its bodies press together. A rigid "
+                "contact at rest is not modelled yet: the results end here; give it a compliant "
+                "law (mb.HertzContact, mb.LinearContact) to go on")
+
+    def _set_floors(self, q: np.ndarray, qd: np.ndarray) -> None:
+        """Where each row fires from now on, below its gap now: an event's function is then
+        positive where an impact leaves it, and the driver watches it from there on
+        (:data:`CLOSED`, :data:`PAST`, :data:`LEAVING`)."""
+        gap, rate = self._states(q, qd)
+        touching = gap <= CLOSED * self.scale
+        idle = touching & (rate <= CLOSING * self.rest_speed)
+        below = np.where(idle, PAST, LEAVING) * self.scale
+        self.floor = np.where(touching, np.minimum(gap, 0.0) - below, -PAST * self.scale)
+
+
+def impulses(W: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``lam >= 0`` with ``w = W lam + b >= 0`` and ``lam . w = 0``, for ``W`` symmetric
+    positive semi-definite: the minimum of ``lam^T W lam / 2 + b^T lam`` over ``lam >= 0``,
+    by Lawson and Hanson's active set (the rows that push are freed one at a time, the
+    most violated first; a step that would make one pull stops where it reaches zero)."""
+    a = len(b)
+    lam, free = np.zeros(a), np.zeros(a, dtype=bool)
+    tol = 1e-12 * max(float(np.max(np.abs(b), initial=0.0)), np.finfo(float).tiny)
+    for _ in range(4 * a + 10):
+        w = W @ lam + b
+        violated = ~free & (w < -tol)
+        if not np.any(violated):
+            return lam
+        free[np.flatnonzero(violated)[np.argmin(w[violated])]] = True
+        for _ in range(a + 1):
+            z = np.zeros(a)
+            z[free] = np.linalg.lstsq(W[np.ix_(free, free)], -b[free], rcond=None)[0]
+            if np.all(z[free] > 0.0):
+                lam = z
+                break
+            down = np.flatnonzero(free & (z <= 0.0))
+            ratios = lam[down] / (lam[down] - z[down])
+            lam = lam + float(np.min(ratios)) * (z - lam)
+            free[down[np.argmin(ratios)]] = False  # the first to reach zero, exactly
+            free &= lam > 0.0
+            lam[~free] = 0.0
+    raise ModelError("the impact's impulses were not found (its contacts' rows are "
+                     "degenerate); give the contacts compliant laws")

@@ -1,0 +1,342 @@
+"""Rigid contacts (``mb.RigidImpact``): every touch an impact by Newton's law of restitution on
+the whole mechanism, the joints holding. Checked against closed forms derived here from
+momentum, angular momentum and the restitution alone: a bouncing ball's impact times and
+flight (and its coming to rest), a rod landing flat on two supports at once and on one end,
+a pinned bar striking the floor, two balls of unequal mass head-on, a hinge's stop, Newton's
+cradle of touching balls, and energy over many elastic bounces."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d.analyses.impacts import impulses
+from mbd3d.errors import ModelError
+from mbd3d.joints import Prismatic, Revolute
+
+G, H0, RADIUS = 9.81, 1.0, 0.1
+TIGHT = dict(method="DOP853", rtol=1e-11, atol=1e-12)
+
+
+def falling_ball(dim: int, e: float, rest_speed: float = 1e-3, height: float = H0
+                 ) -> mb.Model:
+    """A ball whose lowest point is ``height`` above the floor (normal along y), at rest."""
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) + (0.0,) * (dim - 2))
+    inertia = 0.004 if dim == 2 else 0.004 * np.eye(3)
+    ball = b.add_body("ball", mass=2.0, inertia=inertia,
+                      position=(0.0, height + RADIUS) + (0.0,) * (dim - 2))
+    b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS),
+                     mb.Plane(b.ground, normal=(0.0, 1.0) + (0.0,) * (dim - 2)),
+                     law=mb.RigidImpact(restitution=e, rest_speed=rest_speed)))
+    return b.build()
+
+
+def bounce_times(e: float, n: int) -> np.ndarray:
+    """The first ``n`` impact times of a ball dropped from ``H0`` with restitution ``e``:
+    the first after ``t1 = sqrt(2 H0 / g)``, each flight ``2 e^k g t1 / g`` long."""
+    t1 = math.sqrt(2 * H0 / G)
+    return t1 + np.concatenate([[0.0], np.cumsum([2 * e ** k * t1 for k in range(1, n)])])
+
+
+def heights(t: np.ndarray, e: float, times: np.ndarray) -> np.ndarray:
+    """The height of the ball's lowest point at ``t`` in flight, from the impact times: it
+    falls from ``H0``, then leaves the k-th impact at ``e^k`` times the first impact's speed."""
+    v1 = G * times[0]
+    k = np.searchsorted(times, t)  # impacts before t
+    since = np.where(k == 0, t, t - times[np.maximum(k - 1, 0)])
+    up = np.where(k == 0, 0.0, e ** k * v1)
+    return np.where(k == 0, H0, 0.0) + up * since - 0.5 * G * since ** 2
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_ball_bounces_at_the_closed_form_times_and_comes_to_rest(dim):
+    e, rest = 0.8, 0.05
+    res = mb.forward_dynamics(falling_ball(dim, e, rest), np.linspace(0.0, 5.0, 1001), **TIGHT)
+    impacts = res.stats["impacts"]
+    v1 = G * math.sqrt(2 * H0 / G)
+    # it comes to rest at the first impact that leaves it slower than the rest speed
+    count = math.ceil(math.log(rest / v1) / math.log(e))
+    assert len(impacts) == count
+    expected = bounce_times(e, count)
+    np.testing.assert_allclose([i["time"] for i in impacts], expected, rtol=0, atol=1e-9)
+    before = np.array([i["rate_before"] for i in impacts])
+    np.testing.assert_allclose(before, -v1 * e ** np.arange(count), rtol=1e-9)
+    np.testing.assert_allclose([i["rate_after"] for i in impacts], -e * before, rtol=1e-12)
+    # the impulse turns the ball's momentum, the energy lost is its kinetic energy's change
+    np.testing.assert_allclose([i["impulse"] for i in impacts], -2.0 * (1 + e) * before,
+                               rtol=1e-12)
+    np.testing.assert_allclose([i["energy_lost"] for i in impacts],
+                               0.5 * 2.0 * (1 - e * e) * before ** 2, rtol=1e-12)
+    # the flight between impacts, at every output time
+    y = res.body("ball").position[:, 1] - RADIUS
+    np.testing.assert_allclose(y, heights(res.t, e, expected), rtol=0, atol=1e-9)
+    assert res.status == "stopped" and res.t[-1] <= expected[-1]
+    assert "'floor' came to rest" in res.message and f"after {count} impacts" in res.message
+
+
+def test_an_elastic_ball_keeps_its_energy_over_many_bounces():
+    t = np.linspace(0.0, 30.0, 3001)
+    model = falling_ball(2, 1.0)
+    res = mb.forward_dynamics(model, t, **TIGHT)
+    total = res.kinetic_energy + res.potential_energy
+    np.testing.assert_allclose(total, total[0], rtol=0, atol=1e-9 * abs(total[0]))
+    impacts = res.stats["impacts"]
+    period = 2 * math.sqrt(2 * H0 / G)
+    assert len(impacts) == int((30.0 - period / 2) / period) + 1
+    np.testing.assert_allclose([i["time"] for i in impacts],
+                               period / 2 + period * np.arange(len(impacts)), rtol=0,
+                               atol=1e-9)
+    assert res.status == "complete" and sum(i["energy_lost"] for i in impacts) == 0.0
+
+
+def rod(angle: float, pinned: bool = False, e: float = 0.5) -> tuple[mb.Model, float, float]:
+    """A rod (length 2 a, planar) its centre 0.5 m up, tilted ``angle``, with a small circle at
+    each end over the floor; ``pinned``: its left end on a pin instead. Returns the model and
+    the rod's half length and moment of inertia about its centre."""
+    a, m = 0.4, 3.0
+    inertia = m * (2 * a) ** 2 / 12
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    centre = np.array([0.0, 0.5])
+    axis = np.array([math.cos(angle), math.sin(angle)])
+    body = b.add_body("rod", mass=m, inertia=inertia, position=centre, angle=angle)
+    law = mb.RigidImpact(restitution=e)
+    floor = mb.Plane(b.ground, point=(0.0, 0.0), normal=(0.0, 1.0))
+    for label, side in (("left", -1.0), ("right", 1.0)):
+        if pinned and side < 0:
+            b.add(Revolute("pin", b.ground, body, at=centre + side * a * axis))
+            continue
+        b.add(mb.Contact(label, mb.Sphere(body, 1e-3, point=(side * a, 0.0)), floor,
+                         law=law))
+    return b.build(), a, inertia
+
+
+def test_a_rod_landing_flat_on_both_ends_takes_half_the_impulse_on_each():
+    e, m = 0.5, 3.0
+    model, _, _ = rod(0.0, e=e)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.4, 41), **TIGHT)
+    impacts = res.stats["impacts"]
+    v = G * math.sqrt(2 * (0.5 - 1e-3) / G)  # the ends fall 0.499 m
+    assert sorted(i["contact"] for i in impacts) == ["left", "right"]
+    assert impacts[0]["time"] == impacts[1]["time"]
+    # simultaneous: the two rows share the impulse m (1 + e) v equally, and the rod does not
+    # turn (one at a time, the first end would start it turning)
+    np.testing.assert_allclose([i["impulse"] for i in impacts], m * (1 + e) * v / 2,
+                               rtol=1e-9)
+    after = impacts[0]["time"] + 0.01
+    k = np.searchsorted(res.t, after)
+    np.testing.assert_allclose(res.body("rod").angular_velocity[k:], 0.0, atol=1e-9)
+    np.testing.assert_allclose(res.body("rod").velocity[k, 1],
+                               e * v - G * (res.t[k] - impacts[0]["time"]), rtol=1e-9)
+
+
+def test_a_rod_landing_on_one_end_and_a_pinned_bar_striking_the_floor():
+    """One end of a free rod: the impulse P on the end changes the centre's speed by P / m and
+    the turn by P a cos(angle) / I; Newton's law on the end's speed gives P. Pinned at the other
+    end, the pin's impulse takes part and the bar's rate simply turns over by -e."""
+    e, m, angle = 0.5, 3.0, math.radians(30.0)
+    model, a, inertia = rod(angle, e=e)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.3, 31), **TIGHT)
+    first = res.stats["impacts"][0]
+    assert first["contact"] == "left"
+    v = -first["rate_before"]
+    arm = a * math.cos(angle)  # the end's lever about the centre, across the normal
+    impulse = (1 + e) * v / (1 / m + arm ** 2 / inertia)
+    np.testing.assert_allclose(first["impulse"], impulse, rtol=1e-9)
+    np.testing.assert_allclose(first["rate_after"], e * v, rtol=1e-9)
+    # pinned at its left end: the bar turns about the pin until its right end's circle
+    # (radius 1e-3) touches, at the angle phi below the horizontal
+    model, a, inertia = rod(angle, pinned=True, e=e)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.5, 51), **TIGHT)
+    first = res.stats["impacts"][0]
+    assert first["contact"] == "right"
+    pin_y = 0.5 - a * math.sin(angle)
+    phi = math.asin((1e-3 - pin_y) / (2 * a))
+    pin_inertia = inertia + m * a ** 2
+    w = math.sqrt(2 * m * G * a * (math.sin(angle) - math.sin(phi)) / pin_inertia)
+    tip = 2 * a * w * math.cos(phi)
+    np.testing.assert_allclose(first["rate_before"], -tip, rtol=1e-9)
+    np.testing.assert_allclose(first["rate_after"], e * tip, rtol=1e-9)
+    # the pin holds: the floor's impulse is the angular impulse about the pin over the arm,
+    # not the free rod's, and the bar's rate turns over by -e
+    np.testing.assert_allclose(first["impulse"], pin_inertia * (1 + e) * w
+                               / (2 * a * math.cos(phi)), rtol=1e-9)
+    np.testing.assert_allclose(first["energy_lost"], 0.5 * pin_inertia * w ** 2 * (1 - e * e),
+                               rtol=1e-9)
+
+
+def two_balls(m1: float, m2: float, v1: float, v2: float, e: float, dim: int = 2):
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0,) * dim)
+    pad = (0.0,) * (dim - 1)
+    inertia = (lambda m: 0.4 * m * RADIUS ** 2 * (1.0 if dim == 2 else np.eye(3)))
+    first = b.add_body("first", mass=m1, inertia=inertia(m1), position=(0.0,) + pad,
+                       velocity=(v1,) + pad)
+    second = b.add_body("second", mass=m2, inertia=inertia(m2), position=(0.5,) + pad,
+                        velocity=(v2,) + pad)
+    b.add(mb.Contact("touch", mb.Sphere(first, RADIUS), mb.Sphere(second, RADIUS),
+                     law=mb.RigidImpact(restitution=e)))
+    return b.build()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_two_balls_head_on_leave_by_momentum_and_restitution(dim):
+    m1, m2, v1, v2, e = 1.0, 3.0, 2.0, -0.5, 0.7
+    res = mb.forward_dynamics(two_balls(m1, m2, v1, v2, e, dim), [0.0, 0.5], **TIGHT)
+    # closing from 0.3 m apart at 2.5 m/s (the event fires 1e-10 of the model's length past
+    # the touch)
+    np.testing.assert_allclose(res.stats["impacts"][0]["time"], 0.3 / 2.5, rtol=0, atol=1e-10)
+    p = m1 * v1 + m2 * v2
+    after1 = (p - m2 * e * (v1 - v2)) / (m1 + m2)
+    after2 = (p + m1 * e * (v1 - v2)) / (m1 + m2)
+    np.testing.assert_allclose(res.body("first").velocity[-1][0], after1, rtol=1e-12)
+    np.testing.assert_allclose(res.body("second").velocity[-1][0], after2, rtol=1e-12)
+    reduced = m1 * m2 / (m1 + m2)
+    np.testing.assert_allclose(res.stats["impacts"][0]["energy_lost"],
+                               0.5 * reduced * (1 - e * e) * (v1 - v2) ** 2, rtol=1e-12)
+
+
+def test_a_cradle_of_touching_balls_passes_the_strikers_momentum_to_the_last():
+    """Five balls on strings, touching in a row, the first released from 20 degrees: the
+    impacts at the bottom pass ball to ball within one instant, and the last ball alone
+    swings out to the height the first fell from."""
+    n, length, mass = 5, 0.3, 0.1
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    law = mb.RigidImpact(restitution=1.0)
+    balls, release = [], math.radians(20.0)
+    for k in range(n):
+        pivot = np.array([2 * RADIUS * k, length])
+        angle = -release if k == 0 else 0.0
+        centre = pivot + length * np.array([math.sin(angle), -math.cos(angle)])
+        ball = b.add_body(f"ball{k}", mass=mass, inertia=0.4 * mass * RADIUS ** 2,
+                          position=centre, angle=angle)
+        b.add(Revolute(f"string{k}", b.ground, ball, at=pivot))
+        if balls:
+            b.add(mb.Contact(f"touch{k}", mb.Sphere(balls[-1], RADIUS),
+                             mb.Sphere(ball, RADIUS), law=law))
+        balls.append(ball)
+    model = b.build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.6, 601), **TIGHT)
+    impacts = res.stats["impacts"]
+    assert [i["contact"] for i in impacts[:n - 1]] == [f"touch{k}" for k in range(1, n)]
+    assert len({i["time"] for i in impacts[:n - 1]}) == 1
+    # the striker's rate at the bottom, a ball turning about its string's pin
+    pin_inertia = mass * length ** 2 + 0.4 * mass * RADIUS ** 2
+    rate = math.sqrt(2 * mass * G * length * (1 - math.cos(release)) / pin_inertia)
+    after = res.t > impacts[0]["time"]
+    k = np.flatnonzero(after)[0]
+    swings = np.array([res.body(f"ball{j}").angular_velocity[k] for j in range(n)])
+    # each ball's turn rate at the first output after the impact (gravity acts for < 1 ms)
+    np.testing.assert_allclose(swings[:-1], 0.0, atol=1e-9)
+    # the last ball leaves at the striker's rate, slowed by gravity over < 1 ms since
+    np.testing.assert_allclose(swings[-1], rate, rtol=1e-4)
+    # from then on the last ball swings with the energy the striker fell with
+    last = res.body(f"ball{n - 1}")
+    swing = (0.5 * pin_inertia * last.angular_velocity ** 2
+             + mass * G * length * (1 - np.cos(last.angle)))
+    fell = mass * G * length * (1 - math.cos(release))
+    np.testing.assert_allclose(swing[after], fell, rtol=1e-9)
+    total = res.kinetic_energy + res.potential_energy
+    np.testing.assert_allclose(total, total[0], rtol=0, atol=1e-9 * mass * G * length)
+
+
+def test_a_hinge_stop_turns_the_pendulum_back_at_its_restitution():
+    e, length, mass = 0.6, 0.5, 1.0
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    bar = b.add_body("bar", mass=mass, inertia=mass * length ** 2 / 12,
+                     position=(length / 2, 0.0))
+    pin = b.add(Revolute("pin", b.ground, bar, at=(0.0, 0.0)))
+    b.add(mb.JointLimit("stop", pin, lower=-math.pi / 2,
+                        law=mb.RigidImpact(restitution=e)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 101), **TIGHT)
+    first = res.stats["impacts"][0]
+    # the bar falls from horizontal to hanging: I_pin w^2 / 2 = m g L / 2
+    w = math.sqrt(mass * G * length / (mass * length ** 2 / 3))
+    np.testing.assert_allclose(first["rate_before"], -w, rtol=1e-9)
+    np.testing.assert_allclose(first["rate_after"], e * w, rtol=1e-9)
+    # the angular impulse I_pin (1 + e) w, and the bar then rises to e^2 of its fall
+    np.testing.assert_allclose(first["impulse"], mass * length ** 2 / 3 * (1 + e) * w,
+                               rtol=1e-9)
+    angle = res.joint("pin").angle
+    later = res.t > first["time"]
+    rise = np.max(angle[later] + math.pi / 2)
+    np.testing.assert_allclose(1 - math.cos(rise), e * e, rtol=1e-3)
+
+
+def test_a_slide_stop_with_generalized_alpha():
+    """A block on a slide hits its rigid end at 1 m/s and leaves at e times that; the
+    implicit method takes the impact at the located touch as the explicit one does."""
+    e = 0.5
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    block = b.add_body("block", mass=2.0, inertia=0.01, position=(0.0, 0.0),
+                       velocity=(1.0, 0.0))
+    slide = b.add(Prismatic("slide", b.ground, block, at=(0.0, 0.0), axis=(1.0, 0.0)))
+    b.add(mb.JointLimit("end", slide, upper=0.25, law=mb.RigidImpact(restitution=e)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 11), method="generalized-alpha",
+                              step=1e-3)
+    first = res.stats["impacts"][0]
+    np.testing.assert_allclose(first["time"], 0.25, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.body("block").velocity[-1], [-e, 0.0], atol=1e-9)
+    np.testing.assert_allclose(res.body("block").position[-1, 0], 0.25 - e * 0.75, atol=1e-9)
+
+
+def test_the_impulses_solve_newtons_law_on_every_row():
+    """The active set against the closed form of rows that all push (``W lam = -b``), and one
+    that would pull left out with the others solved without it."""
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(4, 6))
+    W = A @ A.T
+    lam = impulses(W, -W @ np.array([1.0, 2.0, 0.5, 3.0]))
+    np.testing.assert_allclose(lam, [1.0, 2.0, 0.5, 3.0], rtol=1e-10)
+    b = rng.normal(size=4)
+    lam = impulses(W, b)
+    w = W @ lam + b
+    assert np.all(lam >= 0) and np.all(w >= -1e-12) and abs(lam @ w) < 1e-12
+    # the same minimum by brute force over the supports
+    best = min((0.5 * x @ W @ x + b @ x, tuple(x)) for x in (
+        _on_support(W, b, s) for s in range(16)) if np.all(x >= 0))[1]
+    np.testing.assert_allclose(lam, best, atol=1e-10)
+
+
+def _on_support(W, b, mask: int) -> np.ndarray:
+    free = np.array([(mask >> i) & 1 for i in range(4)], dtype=bool)
+    x = np.zeros(4)
+    if free.any():
+        x[free] = np.linalg.solve(W[np.ix_(free, free)], -b[free])
+    return x
+
+
+def test_rigid_contacts_refuse_bad_input():
+    with pytest.raises(ModelError, match="restitution must lie in"):
+        falling_ball(2, 1.5)
+    with pytest.raises(ModelError, match="rest_speed must be > 0"):
+        falling_ball(2, 0.5, rest_speed=0.0)
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.05))
+    with pytest.raises(ModelError, match="friction at a rigid contact"):
+        b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS), mb.Plane(b.ground, normal=(0, 1)),
+                         law=mb.RigidImpact(restitution=0.5), friction=0.3))
+        b.build()
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.05))
+    b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS), mb.Plane(b.ground, normal=(0, 1)),
+                     law=mb.RigidImpact(restitution=0.5)))
+    with pytest.warns(mb.ContactWarning, match="rigid contact"):
+        model = b.build()
+    with pytest.raises(ModelError, match=r"'floor' starts 0.05 m inside"):
+        mb.forward_dynamics(model, [0.0, 1.0])
+
+
+def test_a_rigid_contact_in_a_model_file(tmp_path):
+    """Written and read back, the law keeps its restitution and rest speed: the same
+    bounces."""
+    model = falling_ball(3, 0.6, rest_speed=0.2)
+    path = tmp_path / "ball.yaml"
+    mb.save(model, path)
+    assert "RigidImpact" in path.read_text()
+    t = np.linspace(0.0, 3.0, 301)
+    ran = [mb.forward_dynamics(m, t, **TIGHT) for m in (model, mb.load(path))]
+    times = [[i["time"] for i in res.stats["impacts"]] for res in ran]
+    assert times[0] == times[1] and len(times[0]) == math.ceil(
+        math.log(0.2 / math.sqrt(2 * G * H0)) / math.log(0.6))
