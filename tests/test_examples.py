@@ -162,6 +162,21 @@ def test_bouncing_ball_example(capsys, tmp_path):
     assert recorded_steps(rrd, "ball") == len(res.t) == 201
 
 
+def test_rigid_impacts_example(capsys, tmp_path):
+    rrd = tmp_path / "rod.rrd"
+    res = load("rigid_impacts").main(n_points=101, rrd=str(rrd))
+    out = capsys.readouterr().out
+    impulse, closed_form = (float(x) for x in re.search(
+        r"first impulse (\S+) N s, closed form (\S+) N s", out).groups())
+    assert impulse == pytest.approx(closed_form, rel=1e-8)
+    rows = re.findall(r"^\s+\S+\s+(left|right) end\s+(\S+)\s+(\S+)", out, re.MULTILINE)
+    assert len(rows) == len(res.stats["impacts"]) > 4
+    for _, closing, opening in rows:  # Newton's law at every touch, e = 0.5
+        assert float(opening) == pytest.approx(0.5 * float(closing), rel=1e-5)
+    assert res.status == "stopped" and "came to rest" in out
+    assert recorded_steps(rrd, "rod") == len(res.t)
+
+
 def test_rolling_disc_example(capsys, tmp_path):
     rrd = tmp_path / "disc.rrd"
     res = load("rolling_disc").main(n_points=5, rrd=str(rrd))
