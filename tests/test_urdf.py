@@ -373,6 +373,11 @@ def test_a_urdf_limit_stops_the_joint_at_its_ends_in_urdf_terms(tmp_path):
     np.testing.assert_allclose(rate, [2.0, 2.0, -1.0, -1.0, 0.5], rtol=1e-7, atol=0)
     with pytest.raises(mb.ModelError, match="joint_limits must be 'stop', 'ignore' or a"):
         load_urdf(urdf, joint_limits="yes")
+    # refused before anything is added to a builder given: its bodies' names are still free
+    builder = mb.ModelBuilder(dim=3)
+    with pytest.raises(mb.ModelError, match="joint_limits must be"):
+        urdf_builder(urdf, joint_limits="yes", builder=builder)
+    urdf_builder(urdf, builder=builder)
 
 
 FLOATY = """<robot name="floaty">

@@ -204,6 +204,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                              "driven (drive a revolute, continuous or prismatic joint)")
     frames, order = _drawing_frames(links, joints, roots[0], positions, what)
     order = _without_massless_branches(order, links, drive, what)
+    law = limit_law(joint_limits, what)  # refused before a builder given is touched
 
     b = builder if builder is not None else ModelBuilder(
         dim=3, gravity=gravity, name=name or robot.robot.name or path.stem)
@@ -214,7 +215,6 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                          (path, what, files_read, meshes))
     names = joint_names([joint.name for joint in order if joint.type != "fixed"],
                         set(bodies) | {b.ground.name}, what, UrdfWarning)
-    law = limit_law(joint_limits, what)
     limited, mimic = [], []
     for joint in order:
         if joint.type == "fixed":
