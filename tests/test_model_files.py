@@ -84,6 +84,9 @@ EXAMPLES = {
     "newtons_cradle": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.35, 5e-4),
                                              "method": "DOP853", "rtol": 1e-10,
                                              "atol": 1e-12}),
+    "rigid_impacts": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 2.0, 0.005),
+                                            "method": "DOP853", "rtol": 1e-10,
+                                            "atol": 1e-12}),
     "sweep_slider_crank": (lambda m: m.build(20.0, 0.3), {"kind": "inverse",
                                                            "t": steps(0.0, 1.0, 0.01)}),
 }

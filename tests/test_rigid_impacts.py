@@ -8,6 +8,7 @@ cradle of touching balls, and energy over many elastic bounces."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -15,17 +16,23 @@ import pytest
 import mbd3d as mb
 from mbd3d.analyses.impacts import impulses
 from mbd3d.errors import ModelError
-from mbd3d.joints import Prismatic, Revolute
+from mbd3d.joints import Prismatic, Revolute, RotationDriver
+from mbd3d.viewer import read_component, record
 
 G, H0, RADIUS = 9.81, 1.0, 0.1
 TIGHT = dict(method="DOP853", rtol=1e-11, atol=1e-12)
 
 
-def falling_ball(dim: int, e: float, rest_speed: float = 1e-3, height: float = H0
-                 ) -> mb.Model:
-    """A ball whose lowest point is ``height`` above the floor (normal along y), at rest."""
+def falling_ball(dim: int, e: float, rest_speed: float = 1e-3, height: float = H0,
+                 others: int = 0) -> mb.Model:
+    """A ball whose lowest point is ``height`` above the floor (normal along y), at rest;
+    ``others``: bodies added before it, falling beside it (its coordinates come after
+    theirs)."""
     b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) + (0.0,) * (dim - 2))
     inertia = 0.004 if dim == 2 else 0.004 * np.eye(3)
+    for k in range(others):
+        b.add_body(f"other{k}", mass=1.0, inertia=inertia,
+                   position=(1.0 + k, 2.0) + (0.0,) * (dim - 2))
     ball = b.add_body("ball", mass=2.0, inertia=inertia,
                       position=(0.0, height + RADIUS) + (0.0,) * (dim - 2))
     b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS),
@@ -54,7 +61,8 @@ def heights(t: np.ndarray, e: float, times: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("dim", [2, 3])
 def test_a_ball_bounces_at_the_closed_form_times_and_comes_to_rest(dim):
     e, rest = 0.8, 0.05
-    res = mb.forward_dynamics(falling_ball(dim, e, rest), np.linspace(0.0, 5.0, 1001), **TIGHT)
+    res = mb.forward_dynamics(falling_ball(dim, e, rest, others=2), np.linspace(0.0, 5.0, 1001),
+                              **TIGHT)
     impacts = res.stats["impacts"]
     v1 = G * math.sqrt(2 * H0 / G)
     # it comes to rest at the first impact that leaves it slower than the rest speed
@@ -63,7 +71,7 @@ def test_a_ball_bounces_at_the_closed_form_times_and_comes_to_rest(dim):
     expected = bounce_times(e, count)
     np.testing.assert_allclose([i["time"] for i in impacts], expected, rtol=0, atol=1e-9)
     before = np.array([i["rate_before"] for i in impacts])
-    np.testing.assert_allclose(before, -v1 * e ** np.arange(count), rtol=1e-9)
+    np.testing.assert_allclose(before, -v1 * e ** np.arange(count), rtol=0, atol=1e-9 * v1)
     np.testing.assert_allclose([i["rate_after"] for i in impacts], -e * before, rtol=1e-12)
     # the impulse turns the ball's momentum, the energy lost is its kinetic energy's change
     np.testing.assert_allclose([i["impulse"] for i in impacts], -2.0 * (1 + e) * before,
@@ -75,6 +83,24 @@ def test_a_ball_bounces_at_the_closed_form_times_and_comes_to_rest(dim):
     np.testing.assert_allclose(y, heights(res.t, e, expected), rtol=0, atol=1e-9)
     assert res.status == "stopped" and res.t[-1] <= expected[-1]
     assert "'floor' came to rest" in res.message and f"after {count} impacts" in res.message
+    # each impact is an event on the recording's time line, where the ball touched the floor
+    np.testing.assert_allclose([i["point"] for i in impacts],
+                               np.column_stack([np.zeros(count), np.zeros(count),
+                                                np.zeros(count)]), atol=1e-9)
+
+
+def test_impacts_are_recorded_on_the_time_line(tmp_path):
+    res = mb.forward_dynamics(falling_ball(3, 0.5, 0.5), np.linspace(0.0, 2.0, 201), **TIGHT)
+    impacts = res.stats["impacts"]
+    path = tmp_path / "ball.rrd"
+    record(res, path)
+    times, text = read_component(path, "/impacts", "TextLog:text", timeline="sim_time")
+    np.testing.assert_allclose(times.astype(np.int64) * 1e-9, [i["time"] for i in impacts],
+                               atol=1e-9)
+    assert all(str(row[0]).startswith("impact at floor: closing at") for row in text)
+    times, points = read_component(path, "/world/impacts", "Points3D:positions",
+                                   timeline="sim_time")
+    assert len(times) == len(impacts) and np.allclose(points[:, 0], 0.0, atol=1e-6)
 
 
 def test_an_elastic_ball_keeps_its_energy_over_many_bounces():
@@ -282,29 +308,53 @@ def test_a_slide_stop_with_generalized_alpha():
 
 
 def test_the_impulses_solve_newtons_law_on_every_row():
-    """The active set against the closed form of rows that all push (``W lam = -b``), and one
-    that would pull left out with the others solved without it."""
+    """The active set against the closed form of rows that all push (``W lam = -b``), and on
+    random problems (up to twelve rows, many with dependent rows, as four corners of a face)
+    against the minimum found by trying every set of pushing rows."""
     rng = np.random.default_rng(3)
     A = rng.normal(size=(4, 6))
     W = A @ A.T
     lam = impulses(W, -W @ np.array([1.0, 2.0, 0.5, 3.0]))
     np.testing.assert_allclose(lam, [1.0, 2.0, 0.5, 3.0], rtol=1e-10)
-    b = rng.normal(size=4)
-    lam = impulses(W, b)
-    w = W @ lam + b
-    assert np.all(lam >= 0) and np.all(w >= -1e-12) and abs(lam @ w) < 1e-12
-    # the same minimum by brute force over the supports
-    best = min((0.5 * x @ W @ x + b @ x, tuple(x)) for x in (
-        _on_support(W, b, s) for s in range(16)) if np.all(x >= 0))[1]
-    np.testing.assert_allclose(lam, best, atol=1e-10)
+    stepped_back = 0
+    for trial in range(300):
+        a = int(rng.integers(2, 13))
+        A = rng.normal(size=(a, int(rng.integers(max(2, a - 3), a + 3))))
+        # closing rates b = G qd (in the range of W = G S G^T, here A A^T), some raised (a
+        # restitution above another's)
+        W = A @ A.T
+        b = A @ rng.normal(size=A.shape[1]) + np.where(rng.random(a) < 0.3,
+                                                       np.abs(rng.normal(size=a)), 0.0)
+        lam = impulses(W, b)
+        w = W @ lam + b
+        scale = np.max(np.abs(b)) * max(1.0, np.max(np.abs(lam)))
+        assert np.all(lam >= 0.0) and np.all(w >= -1e-9 * scale), trial
+        assert abs(lam @ w) < 1e-9 * scale * max(1.0, np.max(np.abs(lam))), trial
+        if a <= 8:
+            best = min(_objective(W, b, x) for x in _supported(W, b))
+            assert _objective(W, b, lam) == pytest.approx(best, rel=1e-9, abs=1e-12), trial
+        # whether the greedy choice had to be undone: a row freed first ends without impulse
+        first = int(np.argmin(b))
+        stepped_back += bool(b[first] < 0 and lam[first] == 0.0)
+    assert stepped_back > 5  # the step back is exercised
 
 
-def _on_support(W, b, mask: int) -> np.ndarray:
-    free = np.array([(mask >> i) & 1 for i in range(4)], dtype=bool)
-    x = np.zeros(4)
-    if free.any():
-        x[free] = np.linalg.solve(W[np.ix_(free, free)], -b[free])
-    return x
+def _objective(W, b, x) -> float:
+    return float(0.5 * x @ W @ x + b @ x)
+
+
+def _supported(W, b) -> list:
+    """The nonnegative minimizers on every support (the least-squares one where the rows of
+    a support depend on each other)."""
+    a, out = len(b), []
+    for mask in range(2 ** a):
+        free = np.array([(mask >> i) & 1 for i in range(a)], dtype=bool)
+        x = np.zeros(a)
+        if free.any():
+            x[free] = np.linalg.lstsq(W[np.ix_(free, free)], -b[free], rcond=None)[0]
+        if np.all(x >= -1e-12):
+            out.append(np.maximum(x, 0.0))
+    return out
 
 
 def test_rigid_contacts_refuse_bad_input():
@@ -340,3 +390,51 @@ def test_a_rigid_contact_in_a_model_file(tmp_path):
     times = [[i["time"] for i in res.stats["impacts"]] for res in ran]
     assert times[0] == times[1] and len(times[0]) == math.ceil(
         math.log(0.2 / math.sqrt(2 * G * H0)) / math.log(0.6))
+
+
+@pytest.mark.parametrize("overlap", [1e-13, 1e-10])
+def test_a_rigid_contact_may_start_touching_to_rounding_but_not_inside(overlap):
+    """On a bead of a millimetre (the model's length scale 0.6 mm) touching is within 1e-9 of
+    that length: 1e-13 m is touching, 1e-10 m inside."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    bead = b.add_body("bead", mass=1e-6, inertia=4e-13, position=(0.0, 1e-3 - overlap),
+                      velocity=(0.0, 0.1))
+    b.add(mb.Contact("floor", mb.Sphere(bead, 1e-3), mb.Plane(b.ground, normal=(0, 1)),
+                     law=mb.RigidImpact(restitution=0.5)))
+    if overlap < 1e-12:
+        res = mb.forward_dynamics(b.build(), [0.0, 0.01], **TIGHT)
+        assert res.status == "complete" and not res.stats["impacts"]
+        return
+    with pytest.warns(mb.ContactWarning, match="overlap by 1e-10 m"):
+        model = b.build()
+    with pytest.raises(ModelError, match=r"'floor' starts 1e-10 m inside"):
+        mb.forward_dynamics(model, [0.0, 0.01])
+
+
+def test_a_bead_flung_along_a_spinning_rod_strikes_its_end_and_rests_there():
+    """A bead slides freely along a rod turned at a constant rate w (no gravity): along the
+    rod s'' = w^2 s, so s = s0 cosh(w t) + (v0 / w) sinh(w t) until it strikes the rod's end
+    (e = 0). There it stays, pressed out by the turning alone (the gap's rate is zero, its
+    acceleration w^2 s from how the rod's direction turns): the run stops, naming the stop."""
+    w, s0, v0, end = 3.0, 0.1, 0.2, 0.3
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    rod_ = b.add_body("rod", mass=5.0, inertia=1.0, position=(0.0, 0.0))  # centred on the pin
+    pin = b.add(Revolute("pin", b.ground, rod_, at=(0.0, 0.0)))
+    b.add(RotationDriver("spin", pin, motion=mb.Ramp(0.0, w)))
+    bead = b.add_body("bead", mass=0.1, inertia=1e-5, position=(s0, 0.0),
+                      velocity=(v0, s0 * w), angular_velocity=w)
+    slide = b.add(Prismatic("slide", rod_, bead, at=(s0, 0.0), axis=(1.0, 0.0)))
+    b.add(mb.JointLimit("end", slide, upper=end - s0, law=mb.RigidImpact(restitution=0.0)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 101), **TIGHT)
+    impacts = res.stats["impacts"]
+    # s = R cosh(w t + phi), R = sqrt(s0^2 - (v0/w)^2), tanh(phi) = v0 / (w s0)
+    R, phi = math.sqrt(s0 ** 2 - (v0 / w) ** 2), math.atanh(v0 / (w * s0))
+    strike = (math.acosh(end / R) - phi) / w
+    assert len(impacts) == 1
+    np.testing.assert_allclose(impacts[0]["time"], strike, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(-impacts[0]["rate_before"], w * R * math.sinh(w * strike + phi),
+                               rtol=1e-8)
+    assert res.status == "stopped" and "'end' came to rest" in res.message
+    # at the strike itself: the turning presses the bead out at once (no second touch needed)
+    rest = float(re.search(r"came to rest at t = (\S+) s", res.message).group(1))
+    np.testing.assert_allclose(rest, strike, rtol=0, atol=1e-9)

@@ -17,7 +17,9 @@ What is recorded (entity paths):
   requested body points;
 - ``plots/...``: time series of positions, angles, velocities, accelerations, driver efforts,
   joint reactions, energies and constraint residuals;
-- ``info``: the model, the analysis, its status and the arrow scales.
+- ``info``: the model, the analysis, its status and the arrow scales;
+- ``world/impacts`` and ``impacts``: where and when rigid contacts struck, with the impulse
+  and the energy lost (text), on ``sim_time``.
 """
 
 from __future__ import annotations
@@ -175,6 +177,7 @@ class Recorder(Observer):
         try:
             self._send(results)
             self._scene.log_info(self.stream, results)
+            self._scene.log_impacts(self.stream, results)
         finally:
             self.close()
         if self.announce and self.path is not None:

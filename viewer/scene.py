@@ -146,6 +146,8 @@ class Scene:
         #: contacts and stops (their forces plotted), whether a contact's (drawn as an arrow)
         self.contacts = [] if group is None or not self.dynamic else [
             (name, isinstance(owner, Contact)) for name, owner in zip(group.names, group.owners)]
+        #: whether any contact is rigid (its impacts are listed)
+        self.rigid = self.dynamic and group is not None and bool(np.any(group.rigid))
         self.shapes = {b.name: given[b.name] if b.name in given
                        else body_shape(model, b, self.joined[b.name], self.size)
                        for b in model.bodies}
@@ -202,11 +204,12 @@ class Scene:
                 rrb.TimeSeriesView(name="Natural frequencies [Hz]", origin="/plots/modes"),
                 rrb.Spatial2DView(name="Frequencies against position", origin="/modes"),
                 name="Vibration modes"))
-        panels.append(rrb.Tabs(rrb.TimeSeriesView(name="Energy [J]", origin="/plots/energy"),
-                               rrb.TimeSeriesView(name="Constraint residuals",
-                                                  origin="/plots/residuals"),
-                               rrb.TextDocumentView(name="Run", origin="/info"),
-                               name="Checks"))
+        checks = [rrb.TimeSeriesView(name="Energy [J]", origin="/plots/energy"),
+                  rrb.TimeSeriesView(name="Constraint residuals", origin="/plots/residuals"),
+                  rrb.TextDocumentView(name="Run", origin="/info")]
+        if self.rigid:
+            checks.append(rrb.TextLogView(name="Impacts", origin="/impacts"))
+        panels.append(rrb.Tabs(*checks, name="Checks"))
         return rrb.Blueprint(rrb.Horizontal(space, rrb.Vertical(*panels), column_shares=[3, 2]),
                              rrb.TimePanel(timeline=SIM_TIME), collapse_panels=True)
 
@@ -368,6 +371,27 @@ class Scene:
                   "cam's the contact force on its follower, at the contact point."]
         stream.log("info", rr.TextDocument("\n".join(lines), media_type="text/markdown"),
                    static=True)
+
+    def log_impacts(self, stream, results: Results) -> None:
+        """The rigid contacts' impacts (``results.stats["impacts"]``) as events on the
+        simulated time line: the point struck (until the next impact) and a line of text
+        under "Impacts" with the contact, its gap's rates, the impulse and the energy lost."""
+        impacts = results.stats.get("impacts") or []
+        if not impacts:
+            return
+        rr = _rerun()
+        t = np.array([i["time"] for i in impacts])
+        nanoseconds = np.round(t * 1e9).astype(np.int64).astype("timedelta64[ns]")
+        times = [rr.TimeColumn(SIM_TIME, duration=nanoseconds)]
+        points = np.array([i["point"] for i in impacts])
+        stream.send_columns("world/impacts", indexes=times, columns=rr.Points3D.columns(
+            positions=points, radii=np.full(len(t), 0.03 * self.size),
+            labels=[i["contact"] for i in impacts]))
+        text = [f"impact at {i['contact']}: closing at {-i['rate_before']:.6g}, opening at "
+                f"{i['rate_after']:.6g}, impulse {i['impulse']:.6g}, energy lost "
+                f"{i['energy_lost']:.6g} J" for i in impacts]
+        stream.send_columns("impacts", indexes=times, columns=rr.TextLog.columns(
+            text=text, level=["INFO"] * len(t)))
 
     # -- time series -----------------------------------------------------------------------------
     def log_block(self, stream, block: Results, first_step: int) -> None:

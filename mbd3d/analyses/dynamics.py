@@ -145,7 +145,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         (:class:`mbd3d.RigidImpact`, resolved by :mod:`mbd3d.analyses.impacts`),
         ``impacts``: one dict per contact row and impact, its ``time`` [s], ``contact``,
         ``impulse`` [N s; a turning stop's N m s], ``rate_before`` and ``rate_after`` (the
-        gap's, [m/s or rad/s]) and ``energy_lost`` [J]. ``status`` is "stopped" when an
+        gap's, [m/s or rad/s]), ``energy_lost`` [J] and ``point`` (global [m]: midway
+        between the shapes; a stop's, its joint's point on body j). ``status`` is "stopped" when an
         event stopped the run, or a rigid contact came to rest (the message names it).
 
     Raises

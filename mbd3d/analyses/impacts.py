@@ -75,9 +75,9 @@ class RigidContacts:
         self.units = [group.owners[r].units[0] for r in self.rows]
         self.scale = np.array([model.length_scale if u == "m" else 1.0 for u in self.units])
         self.e, self.rest_speed = group.restitution[self.rows], group.rest_speed[self.rows]
-        self.floor = -PAST * self.scale
+        self.floor = self.idle = None  # where the rows fire, which were left idle: start()
         self.records = stats.setdefault("impacts", [])
-        self._key, self._report = None, None
+        self._key, self._report, self._points = None, None, None
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -97,6 +97,7 @@ class RigidContacts:
                                      None if chart is None else chart[None])
             self._key = key
             self._report = (states.gap[0, self.rows], states.gap_rate[0, self.rows])
+            self._points = states.point[0, self.rows]
         return self._report
 
     def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
@@ -113,6 +114,13 @@ class RigidContacts:
 
     def act(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The state after the impact at ``(q, qd)`` at ``t`` (positions unchanged)."""
+        gap, rate = self._states(q, qd)
+        # a row left touching that sank to where it fires, closing slower than its rest speed,
+        # is resting (its bodies press together) whatever the check after its impact said
+        sunk = gap <= self.floor + 0.5 * PAST * self.scale
+        back = np.flatnonzero(self.idle & sunk & (rate > -self.rest_speed))
+        if len(back):
+            self._stop_at_rest(back[0], t, 0.0)
         for _ in range(ROUNDS):
             gap, rate = self._states(q, qd)
             active = (gap <= CLOSED * self.scale) & (rate < -CLOSING * self.rest_speed)
@@ -137,12 +145,14 @@ class RigidContacts:
         lam = impulses(G @ X, (1.0 + e) * before)
         qd = qd + X @ lam
         after = G @ qd
+        self._states(q, qd)
         for a, k in enumerate(np.flatnonzero(active)):
             if lam[a] > 0.0:
                 self.records.append({
                     "time": t, "contact": self.names[k], "impulse": float(lam[a]),
                     "rate_before": float(before[a]), "rate_after": float(after[a]),
-                    "energy_lost": float(-0.5 * (1.0 - e[a]) * lam[a] * before[a])})
+                    "energy_lost": float(-0.5 * (1.0 - e[a]) * lam[a] * before[a]),
+                    "point": self._points[k].tolist()})
         return qd
 
     def _gap_rows(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
@@ -203,15 +213,18 @@ class RigidContacts:
         scale = max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0))
         pressed = [k for k in slow if gdd[k] < -PRESSED * scale * self.scale[k]]
         if pressed:
-            k = pressed[0]
-            count = sum(r["contact"] == self.names[k] for r in self.records)
-            unit = f"{self.units[k]}/s"
-            raise RunStopped(
-                f"rigid contact '{self.names[k]}' came to rest at t = {t:.9g} s after {count} "
-                f"impacts: it opens at {max(rate[k], 0.0):.3g} {unit}, below its rest speed "
-                f"{self.rest_speed[k]:g} {unit}, while its bodies press together. A rigid "
-                "contact at rest is not modelled yet: the results end here; give it a compliant "
-                "law (mb.HertzContact, mb.LinearContact) to go on")
+            self._stop_at_rest(pressed[0], t, max(rate[pressed[0]], 0.0))
+
+    def _stop_at_rest(self, k: int, t: float, opening: float) -> None:
+        """End the run: rigid row ``k`` has come to rest at ``t``, opening at ``opening``."""
+        count = sum(r["contact"] == self.names[k] for r in self.records)
+        unit = f"{self.units[k]}/s"
+        raise RunStopped(
+            f"rigid contact '{self.names[k]}' came to rest at t = {t:.9g} s after {count} "
+            f"impacts: it opens at {opening:.3g} {unit}, below its rest speed "
+            f"{self.rest_speed[k]:g} {unit}, while its bodies press together. A rigid contact "
+            "at rest is not modelled yet: the results end here; give it a compliant law "
+            "(mb.HertzContact, mb.LinearContact) to go on")
 
     def _set_floors(self, q: np.ndarray, qd: np.ndarray) -> None:
         """Where each row fires from now on, below its gap now: an event's function is then
@@ -219,8 +232,9 @@ class RigidContacts:
         (:data:`CLOSED`, :data:`PAST`, :data:`LEAVING`)."""
         gap, rate = self._states(q, qd)
         touching = gap <= CLOSED * self.scale
-        idle = touching & (rate <= CLOSING * self.rest_speed)
-        below = np.where(idle, PAST, LEAVING) * self.scale
+        #: rows left touching without opening (an idle row that fires again closes slowly)
+        self.idle = touching & (rate <= CLOSING * self.rest_speed)
+        below = np.where(self.idle, PAST, LEAVING) * self.scale
         self.floor = np.where(touching, np.minimum(gap, 0.0) - below, -PAST * self.scale)
 
 
@@ -228,19 +242,28 @@ def impulses(W: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``lam >= 0`` with ``w = W lam + b >= 0`` and ``lam . w = 0``, for ``W`` symmetric
     positive semi-definite: the minimum of ``lam^T W lam / 2 + b^T lam`` over ``lam >= 0``,
     by Lawson and Hanson's active set (the rows that push are freed one at a time, the
-    most violated first; a step that would make one pull stops where it reaches zero)."""
+    most violated first; a step that would make one pull stops where it reaches zero).
+
+    Rows that depend on each other (a face's corners) make ``W`` singular and the impulses
+    not unique: where the rows pushing are so, ``W`` gains ``1e-12`` of its mean diagonal
+    there, a compliance far below any physical one, which shares the impulse evenly; the
+    rates ``w`` are checked with ``W`` itself."""
     a = len(b)
+    shift = 1e-12 * max(float(np.trace(W)) / max(a, 1), np.finfo(float).tiny)
     lam, free = np.zeros(a), np.zeros(a, dtype=bool)
     tol = 1e-12 * max(float(np.max(np.abs(b), initial=0.0)), np.finfo(float).tiny)
     for _ in range(4 * a + 10):
         w = W @ lam + b
         violated = ~free & (w < -tol)
         if not np.any(violated):
-            return lam
+            break
         free[np.flatnonzero(violated)[np.argmin(w[violated])]] = True
         for _ in range(a + 1):
             z = np.zeros(a)
-            z[free] = np.linalg.lstsq(W[np.ix_(free, free)], -b[free], rcond=None)[0]
+            Wf = W[np.ix_(free, free)]
+            if np.linalg.cond(Wf) > 1e10:  # dependent rows: the least compliance that helps
+                Wf = Wf + shift * np.eye(len(Wf))
+            z[free] = np.linalg.solve(Wf, -b[free])
             if np.all(z[free] > 0.0):
                 lam = z
                 break
@@ -250,5 +273,10 @@ def impulses(W: np.ndarray, b: np.ndarray) -> np.ndarray:
             free[down[np.argmin(ratios)]] = False  # the first to reach zero, exactly
             free &= lam > 0.0
             lam[~free] = 0.0
-    raise ModelError("the impact's impulses were not found (its contacts' rows are "
-                     "degenerate); give the contacts compliant laws")
+    w = W @ lam + b
+    if np.all(w >= -1e-9 * max(float(np.max(np.abs(b), initial=0.0)), float(np.max(
+            np.abs(W @ lam), initial=0.0)))):
+        return lam
+    raise ModelError("the impact's impulses were not found (its contacts' rows depend on "
+                     "each other with different restitutions); give the contacts compliant "
+                     "laws, or one restitution")
