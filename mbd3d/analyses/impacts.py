@@ -209,8 +209,11 @@ class RigidContacts:
         gdd = self._states(q, qdd)[1].copy()
         if s > 0.0:
             gdd += (self._states(q + s * qd, qd)[1] - self._states(q - s * qd, qd)[1]) / (2 * s)
+        # the accelerations' scale [1/s^2]: gravity's, the free motion's, the turning's (a
+        # bead flung along a turning rod moves in a straight line: the rod's turn presses it)
         gravity = float(np.linalg.norm(model.gravity)) / model.length_scale
-        scale = max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0))
+        scale = max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0),
+                    speed * speed)
         pressed = [k for k in slow if gdd[k] < -PRESSED * scale * self.scale[k]]
         if pressed:
             self._stop_at_rest(pressed[0], t, max(rate[pressed[0]], 0.0))
