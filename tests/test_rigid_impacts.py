@@ -103,6 +103,18 @@ def test_impacts_are_recorded_on_the_time_line(tmp_path):
     assert len(times) == len(impacts) and np.allclose(points[:, 0], 0.0, atol=1e-6)
 
 
+def test_generalized_alpha_bounces_the_ball_at_the_same_times():
+    """The touches are located on its interpolant (exact on a free flight's parabola), the
+    impacts are the same driver's: 1 ms steps give the closed-form times."""
+    e = 0.8
+    res = mb.forward_dynamics(falling_ball(3, e), np.linspace(0.0, 2.0, 201),
+                              method="generalized-alpha", step=1e-3)
+    times = [i["time"] for i in res.stats["impacts"]]
+    expected = bounce_times(e, 10)
+    np.testing.assert_allclose(times, expected[expected < 2.0], rtol=0, atol=1e-9)
+    assert len(times) == 3 and res.status == "complete"
+
+
 def test_an_elastic_ball_keeps_its_energy_over_many_bounces():
     t = np.linspace(0.0, 30.0, 3001)
     model = falling_ball(2, 1.0)

@@ -57,7 +57,9 @@ class Contact(ForceElement):
         alone.
     law : ContactLaw
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact` or
-        :class:`~mbd3d.HuntCrossley`. Laws calibrated to a restitution use the pair's effective
+        :class:`~mbd3d.HuntCrossley`; or :class:`~mbd3d.RigidImpact`, which makes the contact
+        rigid: no force, every touch an impact (forward dynamics, without friction). Laws
+        calibrated to a restitution use the pair's effective
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
         free bodies, not the inertia the pair has through joints (give ``effective_mass``).
         Hertz's stiffness from the material uses the radii ``r_i r_j / (r_i + r_j)`` (a
@@ -460,7 +462,8 @@ class ContactStates:
     gap_rate : ndarray (k,)
         [m/s or rad/s], positive while they separate.
     normal_force : ndarray (k,)
-        [N], >= 0; a hinge's or a cone's stop: a torque [N m].
+        [N], >= 0; a hinge's or a cone's stop: a torque [N m]. A rigid contact's is 0: its
+        impacts are impulses, listed in ``results.stats["impacts"]``.
     friction_force : ndarray (k, 3)
         On the second shape [N], global axes (the opposite acts on the first).
     point : ndarray (k, 3)
