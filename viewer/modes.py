@@ -23,7 +23,7 @@ import numpy as np
 from mbd3d.analyses.modes import ModesAlong
 from mbd3d.errors import ModelError
 from mbd3d.viewer.recorder import Recorder, write_recording
-from mbd3d.viewer.scene import SIM_TIME, _rerun
+from mbd3d.viewer.scene import _rerun, sim_time_column
 
 __all__ = ["record_modes"]
 
@@ -80,9 +80,7 @@ def _log_frequencies(stream, modes: ModesAlong, x: np.ndarray, x_label: str) -> 
     colors = _MODE_COLORS[np.arange(count) % len(_MODE_COLORS)]
     stream.log("plots/modes/frequency", rr.SeriesLines(colors=colors, names=names, widths=2.0),
                static=True)
-    nanoseconds = np.round(modes.t * 1e9).astype(np.int64).astype("timedelta64[ns]")
-    stream.send_columns("plots/modes/frequency",
-                        indexes=[rr.TimeColumn(SIM_TIME, duration=nanoseconds)],
+    stream.send_columns("plots/modes/frequency", indexes=[sim_time_column(modes.t)],
                         columns=rr.Scalars.columns(scalars=frequencies))
 
     # the plot against position: both axes scaled to a square, y up

@@ -81,6 +81,13 @@ class _Block:
         return _lift(history.position + np.einsum("kab,b->ka", history.rotation, u))
 
 
+
+def sim_time_column(t: np.ndarray):
+    """The simulated times ``t`` [s] as a column of the ``sim_time`` timeline (whole
+    nanoseconds)."""
+    nanoseconds = np.round(np.asarray(t) * 1e9).astype(np.int64).astype("timedelta64[ns]")
+    return _rerun().TimeColumn(SIM_TIME, duration=nanoseconds)
+
 class Scene:
     """The content of a recording of ``model`` (see :mod:`viewer.recorder` for the entities).
 
@@ -381,8 +388,7 @@ class Scene:
             return
         rr = _rerun()
         t = np.array([i["time"] for i in impacts])
-        nanoseconds = np.round(t * 1e9).astype(np.int64).astype("timedelta64[ns]")
-        times = [rr.TimeColumn(SIM_TIME, duration=nanoseconds)]
+        times = [sim_time_column(t)]
         points = np.array([i["point"] for i in impacts])
         stream.send_columns("world/impacts", indexes=times, columns=rr.Points3D.columns(
             positions=points, radii=np.full(len(t), 0.03 * self.size),
@@ -398,8 +404,7 @@ class Scene:
         """Send the time points of ``block`` (the ``first_step``-th and on) as columns."""
         rr = _rerun()
         k = len(block)
-        nanoseconds = np.round(block.t * 1e9).astype(np.int64).astype("timedelta64[ns]")
-        times = [rr.TimeColumn(SIM_TIME, duration=nanoseconds),
+        times = [sim_time_column(block.t),
                  rr.TimeColumn(STEP, sequence=np.arange(first_step, first_step + k))]
         send = stream.send_columns
         view = _Block(block)
