@@ -4,14 +4,13 @@ flat face tangent to the cam."""
 from __future__ import annotations
 
 import math
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from mbd3d.errors import ModelError
-from mbd3d.model.arguments import RecordsArguments
 from mbd3d.model.body import Body
+from mbd3d.model.cam_profile import CamProfile
 from mbd3d.model.builder import BuildContext
 from mbd3d.model.element import ConstraintElement, PrimitiveSpec
 
@@ -19,65 +18,6 @@ from mbd3d.model.element import ConstraintElement, PrimitiveSpec
 #: position analysis at the start closes small gaps (a profile interpolated between samples
 #: of the law the drawing was made from), not a forgotten roller radius
 _ON_CURVE = 1e-3
-
-
-class CamProfile(RecordsArguments):
-    """A closed curve about a cam's centre, in polar form: ``r(phi)`` [m] for ``phi`` [rad] in
-    the cam's frame, one turn, as a periodic cubic spline through the given points (so the
-    radius, slope and curvature are continuous all round).
-
-    For a point or roller follower it is the pitch curve (the path of the roller's centre on
-    the cam: the cam's surface offset by the roller radius); for a flat-faced follower, the
-    cam's support function (the distance from the centre to the tangent whose outward normal
-    points at ``phi``), which for a follower translating along its face's normal is the base
-    radius plus the lift.
-
-    Parameters
-    ----------
-    angles : array_like
-        Strictly increasing, within one turn (the last less than the first plus 2 pi) [rad].
-    radii : array_like
-        Positive [m], one per angle.
-    """
-
-    def __init__(self, angles: Any, radii: Any):
-        self.angles = angles
-        self.radii = radii
-        try:
-            phi = np.asarray(angles, dtype=float)
-            r = np.asarray(radii, dtype=float)
-        except (TypeError, ValueError):
-            raise ModelError(f"cam profile: angles and radii must be numbers, got {angles!r} "
-                             f"and {radii!r}") from None
-        if phi.ndim != 1 or r.shape != phi.shape or len(phi) < 4:
-            raise ModelError(f"cam profile: give at least 4 angles and as many radii, got "
-                             f"shapes {phi.shape} and {r.shape}")
-        if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(r))):
-            raise ModelError("cam profile: angles and radii must be finite")
-        if not (np.all(np.diff(phi) > 0) and phi[-1] < phi[0] + 2 * math.pi):
-            raise ModelError("cam profile: angles must increase strictly and span less than one "
-                             "turn (the curve closes itself)")
-        if not np.all(r > 0):
-            raise ModelError(f"cam profile: radii must be positive, the smallest is {r.min()!r}")
-        self._spline = CubicSpline(np.append(phi, phi[0] + 2 * math.pi), np.append(r, r[0]),
-                                   bc_type="periodic")
-
-    @classmethod
-    def sampled(cls, function: Callable[[np.ndarray], np.ndarray], points: int = 720
-                ) -> "CamProfile":
-        """The profile through ``points`` samples, evenly spaced over a turn from 0, of
-        ``function(phi)`` [m] (vectorised over an array of angles)."""
-        phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
-        return cls(phi, np.asarray(function(phi), dtype=float))
-
-    def __call__(self, phi: Any, derivative: int = 0) -> np.ndarray:
-        """``r`` [m] (or its ``derivative``-th derivative) at the angles ``phi`` [rad]."""
-        return self._spline(np.asarray(phi, dtype=float), derivative, extrapolate="periodic")
-
-    def table(self) -> np.ndarray:
-        """The curve as the compiled rows read it (:mod:`mbd3d.numerics.compiled.curves`):
-        the knots, then the coefficients of each interval in ascending powers."""
-        return np.concatenate([self._spline.x, self._spline.c[::-1].T.ravel()])
 
 
 #: angles at which a profile's curvature is checked

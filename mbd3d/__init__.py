@@ -30,7 +30,7 @@ from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDErr
                           AccuracyWarning, ContactWarning, LiftOffWarning, StiffnessWarning)
 from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.model.friction import JointFriction
-from mbd3d.model.contacts import (Box, Capsule, Contact, ContactStates, Hole, JointLimit,
+from mbd3d.model.contacts import (Box, Cam, Capsule, Contact, ContactStates, Hole, JointLimit,
                                   Plane, Sphere, contact_states)
 from mbd3d.model.contact_laws import HertzContact, HuntCrossley, LinearContact, RigidImpact
 from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
@@ -60,7 +60,7 @@ __all__ = [
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "JointFriction",
     "ContactWarning", "Contact", "JointLimit", "Sphere", "Plane",
-    "Capsule", "Box", "Hole", "LinearContact", "HertzContact", "HuntCrossley",
+    "Capsule", "Box", "Hole", "Cam", "LinearContact", "HertzContact", "HuntCrossley",
     "RigidImpact",
     "contact_states", "ContactStates",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",

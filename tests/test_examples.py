@@ -177,6 +177,20 @@ def test_rigid_impacts_example(capsys, tmp_path):
     assert recorded_steps(rrd, "rod") == len(res.t)
 
 
+def test_cam_jump_example(capsys, tmp_path):
+    rrd = tmp_path / "jump.rrd"
+    res = load("cam_jump").main(n_points=81, rrd=str(rrd))
+    out = capsys.readouterr().out
+    leaves, by_hand, lands, flight = (float(x) for x in re.search(
+        r"leaves the cam at (\S+) deg \(by hand (\S+)\) and lands at (\S+) deg \(its free "
+        r"flight by hand: (\S+)\)", out).groups())
+    # the contact's damper holds the last of the force for c/K = 30 us (0.08 deg) more
+    assert 0.0 < leaves - by_hand < 0.15
+    assert lands == pytest.approx(flight, abs=0.01)
+    assert int(re.search(r"lands (\d+) times", out).group(1)) >= 2
+    assert res.status == "complete" and recorded_steps(rrd, "follower") == 81
+
+
 def test_rolling_disc_example(capsys, tmp_path):
     rrd = tmp_path / "disc.rrd"
     res = load("rolling_disc").main(n_points=5, rrd=str(rrd))

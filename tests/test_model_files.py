@@ -12,6 +12,7 @@ import importlib.util
 import math
 import pathlib
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -81,6 +82,8 @@ EXAMPLES = {
                                                      "t": steps(0.0, 0.024, 6e-5),
                                                      "method": "DOP853", "rtol": 1e-8,
                                                      "atol": 1e-10}),
+    "cam_jump": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.27, 0.001),
+                                       "method": "DOP853", "rtol": 1e-9, "atol": 1e-11}),
     "newtons_cradle": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.35, 5e-4),
                                              "method": "DOP853", "rtol": 1e-10,
                                              "atol": 1e-12}),
@@ -116,7 +119,9 @@ def test_every_example_has_a_model_file():
 def test_example_model_file_is_the_example_model(name):
     make, analysis = EXAMPLES[name]
     python_model = make(example(name))
-    loaded = read(MODELS / f"{name}.yaml")
+    with warnings.catch_warnings():  # cam_jump's roller starts pressed into its cam
+        warnings.simplefilter("ignore" if name == "cam_jump" else "default", mb.ContactWarning)
+        loaded = read(MODELS / f"{name}.yaml")
     model = loaded.model
     assert [b.name for b in model.bodies] == [b.name for b in python_model.bodies]
     assert [e.name for e in model.joints] == [e.name for e in python_model.joints]

@@ -114,11 +114,7 @@ def cam_outlines(model: Model) -> dict[str, list[np.ndarray]]:
     across = np.column_stack([-e[:, 1], e[:, 0]])
     for element in model.joints:
         if isinstance(element, CamFollower):
-            r, slope = element.profile(angle), element.profile(angle, 1)
-            # the outward normal of the pitch curve r(phi) e(phi): r e_perp... normalised
-            normal = r[:, None] * e - slope[:, None] * across
-            normal /= np.linalg.norm(normal, axis=1)[:, None]
-            surface = r[:, None] * e - float(element.roller_radius) * normal
+            surface = element.profile.offset(angle, -float(element.roller_radius))
         elif isinstance(element, FlatFaceFollower):
             surface = (element.profile(angle)[:, None] * e
                        + element.profile(angle, 1)[:, None] * across)
@@ -317,7 +313,8 @@ def body_shape(model: Model, body: Body, joined: list[tuple[str, np.ndarray]],
 
 def contact_parts(model: Model, body: Body, size: float) -> list[trimesh.Trimesh]:
     """The shapes of the contacts fixed to ``body`` (or the ground), body frame [m]: planes
-    as squares (planar: strips) ``2 size`` wide, holes as rings, planar shapes as plates."""
+    as squares (planar: strips) ``2 size`` wide, holes as rings, planar shapes and cams as
+    plates."""
     group = contact_group(model, required=False)
     if group is None:
         return []
@@ -333,6 +330,8 @@ def _contact_part(shape: Outline, size: float) -> trimesh.Trimesh:
         return trimesh.creation.icosphere(subdivisions=2, radius=r).apply_translation(p[0])
     if shape.kind == "Capsule":
         return _capsule(p[0], p[1], r)
+    if shape.kind == "Cam":
+        return _plate(np.array(p))
     if shape.kind == "Box":
         extents = 2.0 * (p[1] + r)
         if planar:

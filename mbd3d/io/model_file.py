@@ -36,7 +36,7 @@ Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd
 (``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``
 and ``JointLimit``, whose ``joint`` names a joint, ``Contact``); their fields are
 their constructors' keyword arguments, as documented there. A contact's shapes and law are
-``{type: Sphere | Plane | Capsule | Box | Hole, body: ...}`` and ``{type: LinearContact |
+``{type: Sphere | Plane | Capsule | Box | Hole | Cam, body: ...}`` and ``{type: LinearContact |
 HertzContact | HuntCrossley | RigidImpact, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
@@ -222,7 +222,7 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
                                                    motion.SmoothStep, joints.CamProfile,
                                                    contacts.Sphere, contacts.Plane,
                                                    contacts.Capsule, contacts.Box,
-                                                   contacts.Hole,
+                                                   contacts.Hole, contacts.Cam,
                                                    contact_laws.LinearContact,
                                                    contact_laws.HertzContact,
                                                    contact_laws.HuntCrossley,
@@ -450,6 +450,9 @@ class _Reader:
                                                     f"{', '.join(named)})"
                                                     f"{did_you_mean(arguments['body'], named)}")
             arguments["body"] = named[arguments["body"]]
+        for key, part in arguments.items():  # a cam's profile
+            if isinstance(part, dict) and "type" in part:
+                arguments[key] = self._motion(part, where + (key,), motion_types, named)
         with self._at(where, value):
             return motion_types[kind](**arguments)
 

@@ -149,9 +149,9 @@ def _is_default(value: Any, default: Any) -> bool:
 def _is_contact_part(value: Any) -> bool:
     """A contact's shape or law (frozen dataclasses, written field by field)."""
     from mbd3d.model.contact_laws import ContactLaw  # noqa: PLC0415
-    from mbd3d.model.shapes import Box, Capsule, Hole, Plane, Sphere  # noqa: PLC0415
+    from mbd3d.model.shapes import Box, Cam, Capsule, Hole, Plane, Sphere  # noqa: PLC0415
 
-    return (isinstance(value, (Sphere, Plane, Capsule, Box, Hole, ContactLaw))
+    return (isinstance(value, (Sphere, Plane, Capsule, Box, Hole, Cam, ContactLaw))
             and dataclasses.is_dataclass(value))
 
 

@@ -1,7 +1,7 @@
-"""Compliant contacts between shapes attached to bodies (:mod:`mbd3d.model.shapes`: spheres,
-capsules, boxes and planes; circles, stadiums, rectangles and lines in the plane), pushed apart
-by a normal force law (:mod:`mbd3d.model.contact_laws`) and dragged by regularised Coulomb
-friction; and joint stops, by the same laws.
+"""Contacts between shapes attached to bodies (:mod:`mbd3d.model.shapes`: spheres, capsules,
+boxes, planes and holes; circles, stadiums, rectangles, lines, holes and disc cams in the
+plane), pushed apart by a normal force law (:mod:`mbd3d.model.contact_laws`) and dragged by
+regularised Coulomb friction; and joint stops, by the same laws.
 
 A contact is a force element: it acts only while the shapes overlap, and the compiled core
 evaluates all contacts of a model in one loop (:mod:`mbd3d.numerics.compiled.contacts`), in
@@ -22,7 +22,7 @@ from mbd3d.errors import ContactWarning, ModelError, user_stacklevel
 from mbd3d.model.body import Body
 from mbd3d.model.contact_laws import ContactLaw
 from mbd3d.model.forces import ForceElement, _CompiledForces
-from mbd3d.model.shapes import (Box, Capsule, Hole, Plane, Sphere, outline, pair_order,
+from mbd3d.model.shapes import (Box, Cam, Capsule, Hole, Plane, Sphere, outline, pair_order,
                                 pair_rows)
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import contacts as kernel
@@ -30,16 +30,15 @@ from mbd3d.numerics.compiled import contacts as kernel
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext, Model
 
-__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Contact", "JointLimit",
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "Contact", "JointLimit",
            "ContactStates", "contact_states"]
 
 
 class Contact(ForceElement):
-    #: contacts and joint limits are one group of the compiled core
-    group_key = "contacts"
     """A compliant contact between shapes on two bodies: a sphere, a capsule or a box against
     a plane; a sphere or a capsule against a sphere or a capsule, or inside a hole (a pin with
-    clearance); a box against a sphere; in either order.
+    clearance); a box against a sphere; a sphere (a roller) on a planar disc cam; in either
+    order.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
     friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
@@ -49,7 +48,7 @@ class Contact(ForceElement):
     Parameters
     ----------
     name : str
-    first, second : Sphere, Capsule, Box, Plane or Hole
+    first, second : Sphere, Capsule, Box, Plane, Hole or Cam
         The shapes (see :mod:`mbd3d.model.shapes`). A capsule touches a plane or a hole's
         wall at its two ends and a box touches a plane at its corners, each end or corner a
         contact of its own (a row of :func:`contact_states`, named ``"name[end a]"``,
@@ -81,13 +80,16 @@ class Contact(ForceElement):
     ...                      law=mb.HertzContact(stiffness=1e7, restitution=0.8)))
     """
 
+    #: contacts and joint limits are one group of the compiled core
+    group_key = "contacts"
+
     def __init__(self, name: str, first: Any, second: Any, *, law: ContactLaw,
                  friction: float = 0.0, slip_velocity: float = 1e-3,
                  effective_mass: float | None = None):
-        shapes = (Sphere, Capsule, Box, Plane, Hole)
+        shapes = (Sphere, Capsule, Box, Plane, Hole, Cam)
         if not isinstance(first, shapes) or not isinstance(second, shapes):
-            raise ModelError(f"contact '{name}': give two shapes (Sphere, Capsule, Box, Plane "
-                             f"or Hole), got {type(first).__name__} and "
+            raise ModelError(f"contact '{name}': give two shapes (Sphere, Capsule, Box, Plane, "
+                             f"Hole or Cam), got {type(first).__name__} and "
                              f"{type(second).__name__}")
         pair_order(first, second, f"contact '{name}'")
         if not isinstance(law, ContactLaw):
@@ -106,10 +108,11 @@ class Contact(ForceElement):
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
         return _Contacts(elements, ctx)
 
-    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool, float]:
-        """``(points (r, 4, dim), values (r, 9), labels, swapped, effective mass)``: the rows
-        of the compiled core (see :mod:`mbd3d.numerics.compiled.contacts` and
-        :func:`shapes.pair_rows`), checked, and the mass the law is calibrated with."""
+    def arrays(self, ctx: "BuildContext") -> tuple:
+        """``(points (r, 4, dim), values (r, 9), labels, swapped, effective mass, curve)``:
+        the rows of the compiled core (see :mod:`mbd3d.numerics.compiled.contacts` and
+        :func:`shapes.pair_rows`), checked, the mass the law is calibrated with, and a cam's
+        curve table (else None)."""
         what = f"contact '{self.name}'"
         rows = pair_rows(ctx, self.first, self.second, what)
         mu = finite_scalar(self.friction, f"{what}: friction")
@@ -124,7 +127,7 @@ class Contact(ForceElement):
         K, n, D, p = self.law.constants(mass, rows.radius, what)
         values = np.array([[kind, r_i, r_j, K, n, D, p, mu, slip]
                            for kind, r_i, r_j in rows.kinds], dtype=float)
-        return rows.points, values, rows.labels, rows.swapped, mass
+        return rows.points, values, rows.labels, rows.swapped, mass, rows.curve
 
     def _effective_mass(self, what: str) -> float:
         if self.effective_mass is not None:
@@ -226,9 +229,9 @@ class JointLimit(ForceElement):
     def compile(cls, elements: list, ctx: "BuildContext") -> "_CompiledForces":
         return _Contacts(elements, ctx)
 
-    def arrays(self, ctx: "BuildContext") -> tuple[np.ndarray, np.ndarray, list, bool, float]:
-        """``(points (1, 4, dim), values (1, 9), labels, swapped, effective mass)`` of the
-        compiled core, checked (see :meth:`Contact.arrays`)."""
+    def arrays(self, ctx: "BuildContext") -> tuple:
+        """``(points (1, 4, dim), values (1, 9), labels, swapped, effective mass, None)`` of
+        the compiled core, checked (see :meth:`Contact.arrays`)."""
         what = self.what
         lower, upper = self._ends(ctx)
         u_i, u_j, axes = self.joint.reaction_frame(ctx)
@@ -252,7 +255,7 @@ class JointLimit(ForceElement):
         mass = self._effective_mass(ctx, u_i, u_j, spin, what)
         K, n, D, p = self.law.constants(mass, math.inf, what)
         return (points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False,
-                mass)
+                mass, None)
 
     def _ends(self, ctx) -> tuple[float, float]:
         what = self.what
@@ -301,6 +304,19 @@ def _moment(ctx, body, u, h) -> float:
     return float(axis @ np.asarray(body.inertia) @ axis) + body.mass * float(arm @ arm)
 
 
+def _curve_table(points: np.ndarray, curves: list) -> np.ndarray:
+    """The cams' curves one after another (:mod:`mbd3d.numerics.compiled.curves`), each row's
+    offset and interval count written into its ``points[r, 2]`` (see
+    :mod:`mbd3d.numerics.compiled.contacts`)."""
+    tables, offset = [], 0
+    for r, curve in enumerate(curves):
+        if curve is not None:
+            points[r, 2, :2] = offset, (len(curve) - 1) // 5  # count + 1 knots, 4 count
+            tables.append(curve)
+            offset += len(curve)
+    return np.ascontiguousarray(np.concatenate(tables) if tables else np.zeros(0))
+
+
 def _pair_mass(masses: list) -> float:
     """``1 / sum(1 / m)`` of the moving bodies' masses or moments (inf: none moves)."""
     inverse = sum(1.0 / m for m in masses)
@@ -316,6 +332,7 @@ class _Contacts(_CompiledForces):
         self.elements = elements
         arrays = [e.arrays(ctx) for e in elements]
         self._points = np.ascontiguousarray(np.concatenate([a[0] for a in arrays]))
+        self._curves = _curve_table(self._points, [a[5] for a in arrays for _ in a[2]])
         self._values = np.ascontiguousarray(np.concatenate([a[1] for a in arrays]))
         self.owners = [e for e, a in zip(elements, arrays) for _ in a[2]]
         self.names = [f"{e.name}[{label}]" if label else e.name
@@ -373,7 +390,8 @@ class _Contacts(_CompiledForces):
         report = np.zeros((k * r, kernel.REPORT_COLUMNS))
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
                                             np.tile(self._points, (k, 1, 1)),
-                                            np.tile(self._values, (k, 1)), out, report)
+                                            np.tile(self._values, (k, 1)), self._curves, out,
+                                            report)
         if failed >= 0:
             raise ModelError(f"{self.owners[failed % r].what}: the shapes' cores meet; the "
                              "contact normal is undefined")
@@ -391,7 +409,8 @@ class _Contacts(_CompiledForces):
     def apply(self, model, t, fr, Q):
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd,
                                             self._bodies(model), self._points, self._values,
-                                            Q, np.zeros((0, kernel.REPORT_COLUMNS)))
+                                            self._curves, Q,
+                                            np.zeros((0, kernel.REPORT_COLUMNS)))
         if failed >= 0:
             raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet at t = {t:g} "
                              "s; the contact normal is undefined")
@@ -405,7 +424,8 @@ class _Contacts(_CompiledForces):
         bodies, nc = self._bodies(model), model.n_coords_per_body
         blocks = np.empty((len(bodies), 2 * nc, 2 * nc))
         kernel.contact_tangents_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
-                                     self._points, self._values, velocity_weight, blocks)
+                                     self._points, self._values, self._curves, velocity_weight,
+                                     blocks)
         index = (bodies[:, :, None] * nc + np.arange(nc)).reshape(len(bodies), 2 * nc)
         rows = np.broadcast_to(index[:, :, None], blocks.shape)
         cols = np.broadcast_to(index[:, None, :], blocks.shape)
@@ -416,7 +436,7 @@ class _Contacts(_CompiledForces):
         pushes (see :func:`~mbd3d.numerics.compiled.contacts.switches_into`)."""
         out = np.empty(len(self.owners))
         kernel.switches_into(fr.A, fr.omega3, fr.Q, fr.Qd, self._bodies(model), self._points,
-                             self._values, out)
+                             self._values, self._curves, out)
         return out
 
     def impact_periods(self, gap: np.ndarray, gap_rate: np.ndarray) -> np.ndarray:
@@ -435,7 +455,7 @@ class _Contacts(_CompiledForces):
 
     def table(self, model):
         return {"contact_bodies": self._bodies(model), "contact_points": self._points,
-                "contact_values": self._values}
+                "contact_values": self._values, "contact_curves": self._curves}
 
     def potential(self, model, fr) -> float:
         return float(np.sum(self._report(fr, self._bodies(model))[:, kernel.POTENTIAL]))

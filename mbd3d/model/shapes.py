@@ -1,7 +1,8 @@
 """The shapes a contact is made of, fixed to bodies: a sphere (planar: a circle), a capsule (a
 segment with a radius; planar: a stadium), a box along its body's axes (optionally rounded),
-a plane (planar: a line) bounding a half-space and a round hole a pin moves in; and how a
-pair of them becomes the rows of the compiled core (:mod:`mbd3d.numerics.compiled.contacts`).
+a plane (planar: a line) bounding a half-space, a round hole a pin moves in and a planar disc
+cam; and how a pair of them becomes the rows of the compiled core
+(:mod:`mbd3d.numerics.compiled.contacts`).
 
 A pair is one row, or several where a shape touches at several points at once: a capsule
 against a plane at its two ends, a box against a plane at its corners (4 in the plane, 8 in
@@ -19,6 +20,7 @@ import numpy as np
 
 from mbd3d.errors import ModelError
 from mbd3d.model.body import Body
+from mbd3d.model.cam_profile import CamProfile
 from mbd3d.model.forces import resolve_point
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import contacts as kernel
@@ -26,8 +28,8 @@ from mbd3d.numerics.compiled import contacts as kernel
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext
 
-__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "PairRows", "Outline", "pair_order",
-           "pair_rows", "outline"]
+__all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "PairRows", "Outline",
+           "pair_order", "pair_rows", "outline"]
 
 
 @dataclass(frozen=True)
@@ -99,22 +101,40 @@ class Hole:
 
 
 @dataclass(frozen=True)
+class Cam:
+    """A disc cam fixed to ``body`` (planar models): the region inside the closed curve
+    ``profile`` (a :class:`~mbd3d.joints.CamProfile`, polar about the cam's centre in the
+    body's axes), centred at ``point`` (body frame) or ``at`` (drawing), default the body's
+    reference point. The curve is the cam's surface; from the pitch curve of a roller of
+    radius ``d``, ``pitch.surface(d)``. A sphere (circle) touches it from outside: a roller
+    follower that may leave the cam and land on it again (a knife edge: a small radius)."""
+
+    body: Body
+    profile: Any
+    point: Any = None
+    at: Any = None
+
+
+@dataclass(frozen=True)
 class PairRows:
     """A pair of shapes as rows of the compiled core: the body points ``points (r, 4, dim)``
     and ``(kind, r_i, r_j)`` per row, with the shapes' radius of curvature at the touch (for
     Hertz's law), a label per row, and ``swapped`` where the core's body i is the second
-    shape's (the pair was given the other way round)."""
+    shape's (the pair was given the other way round); a cam's curve as the core reads it
+    (:mod:`mbd3d.numerics.compiled.curves`), else None."""
 
     points: np.ndarray
     kinds: list
     radius: float
     labels: list
     swapped: bool
+    curve: np.ndarray | None = None
 
 
 #: the pairs the core evaluates, first shape (its body i) then second
 _PAIRS = {(Sphere, Plane), (Sphere, Sphere), (Capsule, Plane), (Capsule, Sphere),
-          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Sphere, Hole), (Capsule, Hole)}
+          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Sphere, Hole), (Capsule, Hole),
+          (Cam, Sphere)}
 
 
 def pair_order(first: Any, second: Any, what: str) -> bool:
@@ -143,6 +163,8 @@ def pair_rows(ctx: "BuildContext", first: Any, second: Any, what: str) -> PairRo
 def _rows(ctx, first, second, what, swapped) -> PairRows:
     if first.body is second.body:
         raise ModelError(f"{what}: both shapes are on body '{first.body.name}'")
+    if isinstance(first, Cam):
+        return _on_cam(ctx, first, second, what, swapped)
     r_i, core_i = _core(ctx, first, what)
     if isinstance(second, Plane):
         P = resolve_point(ctx, second.body, second.point, second.at, f"{what}: plane point")
@@ -182,12 +204,37 @@ def _in_hole(ctx, pin, hole: Hole, r_i: float, core_i: np.ndarray, what: str,
                     labels, swapped)
 
 
+def _on_cam(ctx, cam: Cam, sphere: Sphere, what: str, swapped: bool) -> PairRows:
+    """A sphere (a roller, a knife edge) on a cam: one row, the curve's offset and interval
+    count filled in by the contacts' table (:class:`mbd3d.model.contacts._Contacts`)."""
+    centre, profile = _cam(ctx, cam, what)
+    r_j, core_j = _core(ctx, sphere, what)
+    points = np.zeros((1, kernel.POINTS, ctx.dim))
+    points[0, 0], points[0, 1] = centre, core_j[0]
+    # Hertz's radius with the cam's base circle (its smallest radius), where a roller rests
+    base = float(np.min(profile(np.linspace(0.0, 2 * np.pi, 720, endpoint=False))))
+    return PairRows(points, [(kernel.CAM_SPHERE, 0.0, r_j)], r_j * base / (r_j + base), [""],
+                    swapped, profile.table())
+
+
+def _cam(ctx, cam: Cam, what: str) -> tuple[np.ndarray, CamProfile]:
+    """A cam's centre in its body frame and its profile, checked."""
+    if ctx.dim != 2:
+        raise ModelError(f"{what}: cams are available for planar models only (dim=2) so far")
+    if not isinstance(cam.profile, CamProfile):
+        raise ModelError(f"{what}: the cam's profile must be a CamProfile (angles and radii, "
+                         f"or CamProfile.sampled(function)), got a "
+                         f"{type(cam.profile).__name__}")
+    return resolve_point(ctx, cam.body, cam.point, cam.at, f"{what}: cam centre"), cam.profile
+
+
 @dataclass(frozen=True)
 class Outline:
     """A shape resolved in its body's frame, for drawing: ``kind`` its class name; ``radius``
-    [m] (a sphere's, capsule's, hole's or a box's rounding; 0 for a plane); ``points`` (p,
-    dim) [m]: a sphere's centre, a capsule's two ends, a box's centre and half sizes, a
-    plane's point and unit normal, a hole's centre and unit axis (planar: zero)."""
+    [m] (a sphere's, capsule's, hole's or a box's rounding; 0 for a plane or a cam);
+    ``points`` (p, dim) [m]: a sphere's centre, a capsule's two ends, a box's centre and half
+    sizes, a plane's point and unit normal, a hole's centre and unit axis (planar: zero), a
+    cam's surface (closed: the last point is the first)."""
 
     body: Body
     kind: str
@@ -207,6 +254,10 @@ def outline(ctx: "BuildContext", shape: Any, what: str) -> Outline:
     if isinstance(shape, Box):
         radius, centre, half = _box(ctx, shape, what)
         return Outline(shape.body, kind, radius, np.stack([centre, half]))
+    if isinstance(shape, Cam):
+        centre, profile = _cam(ctx, shape, what)
+        phi = np.linspace(0.0, 2 * np.pi, 361)
+        return Outline(shape.body, kind, 0.0, centre + profile.offset(phi, 0.0))
     radius, core = _core(ctx, shape, what)
     return Outline(shape.body, kind, radius, core)
 

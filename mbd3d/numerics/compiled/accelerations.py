@@ -110,7 +110,7 @@ def forces_into(forces, work, t: float, rhs) -> bool:
     torques_into(A, axes, forces.torque_bodies, forces.torque_values, forces.torque_body_frame,
                  out)
     if contact_forces_into(A, axes, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
-                           forces.contact_values, out,
+                           forces.contact_values, forces.contact_curves, out,
                            np.empty((0, REPORT_COLUMNS))) >= 0:
         return False
     nc = out.shape[1]

@@ -20,16 +20,23 @@ and its body points ``points[k]`` (body frames):
   ``points[k, 1]`` along the unit ``points[k, 2]`` (planar: the circle about ``points[k, 1]``,
   the axis zero): ``g = r_j - r_i - |e|`` with ``e`` the pin centre's offset from the axis,
   square to it; the normal ``e / |e|`` pushes the hole outwards and the pin back (none while
-  the pin is centred, where ``g`` is the clearance).
+  the pin is centred, where ``g`` is the clearance);
+- ``CAM_SPHERE``: a planar disc cam of ``i`` whose surface is the periodic curve ``r(phi)``
+  (:mod:`.curves`, stored in ``curves`` at offset ``points[k, 2, 0]`` with ``points[k, 2, 1]``
+  intervals) polar about ``points[k, 0]`` in ``i``'s axes, against the circle of radius
+  ``r_j`` at ``points[k, 1]`` of ``j``: ``g = N . (c_j - X) - r_j`` at the surface's point
+  ``X`` closest to the circle's centre ``c_j`` (Newton's method on ``phi`` from ``c_j``'s
+  polar angle), ``N`` the surface's outward normal there.
 
 Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
 closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
 nearest face).
 
 With ``n`` the unit normal from ``i`` to ``j`` (``-m`` against a plane, ``(c_j - c_i) / |c_j -
-c_i|`` between cores, the face's normal inside a box), both bodies are pushed apart at the
-point ``x = c_i + (r_i + g / 2) n`` midway between the two surfaces (in a hole, midway between
-the pin's surface and the hole's wall), each at its own material point there, so that the pair
+c_i|`` between cores, the face's normal inside a box, the cam's outward normal ``N``), both
+bodies are pushed apart at the point ``x = c_i + (r_i + g / 2) n`` midway between the two
+surfaces (in a hole, midway between the pin's surface and the hole's wall; on a cam, ``c_i =
+X`` and ``r_i = 0``), each at its own material point there, so that the pair
 exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
 normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip)``::
@@ -67,14 +74,15 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.curves import periodic_curve
 from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
 from mbd3d.numerics.compiled.shapes import (box_to_point, closest_between_segments,
                                             closest_on_segment)
 
 #: the kinds of shape pairs, then of joint stops (from ``HINGE_STOP`` on)
 SPHERE_PLANE, SPHERE_SPHERE, SEGMENT_SPHERE, SEGMENT_SEGMENT, BOX_SPHERE = 0, 1, 2, 3, 4
-PIN_IN_HOLE = 5
-HINGE_STOP, SLIDE_STOP, CONE_STOP = 6, 7, 8
+PIN_IN_HOLE, CAM_SPHERE = 5, 6
+HINGE_STOP, SLIDE_STOP, CONE_STOP = 7, 8, 9
 #: body points per contact (``points[k]``)
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
@@ -102,7 +110,7 @@ def _velocity(Qd, omega, dim, b, s, out):
 
 
 @jit
-def _normal_and_gap(A, Q, k, kind, i, j, points, values, x_k, n, work) -> float:
+def _normal_and_gap(A, Q, k, kind, i, j, points, values, curves, x_k, n, work) -> float:
     """The unit normal ``n`` from body ``i`` to body ``j``, the contact point ``x_k`` midway
     between the two surfaces and the gap of contact ``k`` (NaN where two cores meet: the
     normal is undefined). ``work`` (6, 3) is scratch."""
@@ -118,6 +126,8 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, x_k, n, work) -> float:
         return _midway(c_i, n, values[k, 1], gap - values[k, 1], x_k)
     if kind == PIN_IN_HOLE:
         return _pin_in_hole(A, Q, k, i, j, points, values, x_k, n, work)
+    if kind == CAM_SPHERE:
+        return _cam_sphere(A, Q, k, i, j, points, values, curves, x_k, n, work)
     if kind == BOX_SPHERE:
         _point(A, Q, i, points[k, 0], work[0])
         _point(A, Q, j, points[k, 2], c_j)
@@ -179,14 +189,56 @@ def _pin_in_hole(A, Q, k, i, j, points, values, x_k, n, work) -> float:
 
 
 @jit
-def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point, n, s_i, s_j, v_i,
-                        v_j, work) -> tuple:
+def _cam_sphere(A, Q, k, i, j, points, values, curves, x_k, n, work) -> float:
+    """The gap of the circle of ``j`` on the cam of ``i`` (see the module doc), the cam's
+    outward normal ``n`` at the surface's point ``X`` closest to the circle's centre, and the
+    point ``x_k`` midway between the surfaces."""
+    centre, c_j = work[0], work[5]
+    _point(A, Q, i, points[k, 0], centre)
+    _point(A, Q, j, points[k, 1], c_j)
+    # the circle's centre d about the cam's centre in the cam's axes (A[i] transposed)
+    dx = A[i, 0, 0] * (c_j[0] - centre[0]) + A[i, 1, 0] * (c_j[1] - centre[1])
+    dy = A[i, 0, 1] * (c_j[0] - centre[0]) + A[i, 1, 1] * (c_j[1] - centre[1])
+    offset, count = int(points[k, 2, 0]), int(points[k, 2, 1])
+    phi = math.atan2(dy, dx)
+    for _ in range(60):
+        # rho = r e, rho' = r' e + r e_perp, rho'' = (r'' - r) e + 2 r' e_perp; Newton on
+        # f = (rho - d) . rho' = 0 (the squared distance's slope), Gauss-Newton where the
+        # point lies beyond the centre of curvature (f' <= 0: a maximum of the distance)
+        r, r1, r2 = periodic_curve(curves, offset, count, phi)
+        c, s = math.cos(phi), math.sin(phi)
+        wx, wy = r * c - dx, r * s - dy
+        tx, ty = r1 * c - r * s, r1 * s + r * c
+        ux, uy = (r2 - r) * c - 2.0 * r1 * s, (r2 - r) * s + 2.0 * r1 * c
+        tangent = tx * tx + ty * ty
+        slope = tangent + wx * ux + wy * uy
+        step = -(wx * tx + wy * ty) / (slope if slope > 0.25 * tangent else tangent)
+        step = max(-0.5, min(0.5, step))
+        phi += step
+        if abs(step) <= 1e-15:
+            break
+    r, r1, _ = periodic_curve(curves, offset, count, phi)
+    c, s = math.cos(phi), math.sin(phi)
+    size = math.sqrt(r * r + r1 * r1)
+    nx, ny = (r * c + r1 * s) / size, (r * s - r1 * c) / size  # (r e - r' e_perp) / |.|
+    gap = nx * (dx - r * c) + ny * (dy - r * s) - values[k, 2]
+    for x in range(2):
+        n[x] = A[i, x, 0] * nx + A[i, x, 1] * ny
+        work[4, x] = centre[x] + A[i, x, 0] * r * c + A[i, x, 1] * r * s  # X
+    n[2], work[4, 2] = 0.0, 0.0
+    return _midway(work[4], n, 0.0, gap, x_k)
+
+
+@jit
+def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves, point, n, s_i, s_j,
+                        v_i, v_j, work) -> tuple:
     """``(gap, gap rate)`` of contact ``k`` (a NaN gap: its normal is undefined), with the
     normal ``n``, the ``point`` midway between the surfaces and its offsets ``s_i``, ``s_j``
     from the bodies' reference points, and ``v_j`` the velocity of body j's material point
     there relative to body i's. ``work`` (6, 3) is scratch."""
     dim = points.shape[2]
-    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, point, n, work)
+    gap = _normal_and_gap(A, Q, k, int(values[k, 0]), i, j, points, values, curves, point, n,
+                          work)
     for x in range(3):
         s_i[x] = point[x] - (Q[i, x] if x < dim else 0.0)
         s_j[x] = point[x] - (Q[j, x] if x < dim else 0.0)
@@ -234,7 +286,8 @@ def _law(values, k, delta: float, delta_rate: float) -> float:
 
 
 @jit
-def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, report) -> int:
+def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, curves, out,
+                        report) -> int:
     """Add the generalized forces of the contacts into ``out`` (bodies + ground, n_coords),
     and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``). Returns -1,
     or the first contact whose normal is undefined."""
@@ -247,8 +300,8 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, out, repo
         if values[k, 0] >= HINGE_STOP:
             _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report)
             continue
-        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point, n,
-                                        s_i, s_j, v_i, v_j, work)
+        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
+                                        point, n, s_i, s_j, v_i, v_j, work)
         if gap != gap:
             return k
         force = normal_force(values, k, -gap, -rate)
@@ -379,7 +432,7 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> N
 
 
 @jit
-def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
+def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
     """``out[k]``: a continuous function of the state that is positive exactly while contact
     (or stop) ``k``'s law pushes, ``min(delta, F_n / K)`` with the unclipped force, else
     ``delta`` (<= 0): the integrators end a step where it changes sign, so that no step
@@ -393,8 +446,8 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, out) -> None:
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
         else:
-            gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point,
-                                            n, s_i, s_j, v_i, v_j, work)
+            gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
+                                            point, n, s_i, s_j, v_i, v_j, work)
         delta, delta_rate = -gap, -rate
         if values[k, 3] == 0.0:
             out[k] = -1.0  # a rigid row (no law): it never pushes, its impacts are events
@@ -475,7 +528,7 @@ def _law_slopes(values, k, delta: float, delta_rate: float) -> tuple:
 
 
 @jit
-def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, weight,
+def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, curves, weight,
                           blocks) -> None:
     """``blocks[k]`` (2 nc, 2 nc), over the coordinates of bodies i and j of contact ``k``:
     ``-dQ/dq - weight dQ/dqd`` of its law, ``G^T H G`` with ``G`` the pair's velocity
@@ -489,8 +542,8 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, weight,
     the law's spring and damper along the normal, the friction's slope in the slip and the
     friction's change with the normal force; between two centres (spheres, capsules, a pin
     in its hole) also the normal's turning as they move (:func:`_turning_normal`). Left
-    out, as for the spring-dampers: the normal's turning with a plane or a box and with a
-    hole's axis, and the change of the contact point and of the Jacobians with the positions
+    out, as for the spring-dampers: the normal's turning with a plane, a box or a cam and
+    with a hole's axis, and the change of the contact point and of the Jacobians with the positions
     (terms of the size of the force over the shapes' sizes, which change how fast the
     iteration converges, not where)."""
     point, n = np.zeros(3), np.zeros(3)
@@ -512,8 +565,8 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, weight,
             row = h @ G  # the coordinate's rate per coordinate rate
             blocks[k] = (k_n + weight * c_n) * np.outer(row, row)
             continue
-        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, point, n,
-                                        s_i, s_j, v_i, v_j, work)
+        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
+                                        point, n, s_i, s_j, v_i, v_j, work)
         force = normal_force(values, k, -gap, -rate)
         if force == 0.0:
             continue

@@ -166,7 +166,7 @@ def switch_count(forces) -> int:
 @jit
 def _contact_switches(forces, A, omega, Q, Qd, out) -> None:
     switches_into(A, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
-                  forces.contact_values, out)
+                  forces.contact_values, forces.contact_curves, out)
 
 
 @jit

@@ -114,7 +114,7 @@ FORCE_FIELDS = (
     "torque_bodies", "torque_values", "torque_body_frame",
     "spring_first", "spring_kinds", "spring_starts", "spring_params",
     "rotary_first", "rotary_kinds", "rotary_starts", "rotary_params",
-    "contact_bodies", "contact_points", "contact_values",
+    "contact_bodies", "contact_points", "contact_values", "contact_curves",
 )
 
 #: the model the scratch arrays are sized for (so that a call from Python passes one record,
