@@ -36,11 +36,14 @@ def surface() -> CamProfile:
         lambda phi: ECC * np.cos(phi) + np.sqrt(R ** 2 - (ECC * np.sin(phi)) ** 2), 1440)
 
 
-def lift(theta: float, derivative: int = 0) -> float:
+def lift(theta: float, derivative: int = 0, face: bool = False) -> float:
     """The height [m] of the roller's centre on the cam turned by ``theta`` (the follower on
     the vertical through the shaft), ``y = e sin + sqrt(a^2 - e^2 cos^2)`` with ``a = R +
-    roller``, or its first or second derivative in ``theta``."""
+    roller``, or its first or second derivative in ``theta``; of a flat face below the
+    follower (``face``), the cam's top, ``e sin + R``."""
     c, s = math.cos(theta), math.sin(theta)
+    if face:
+        return (ECC * s + R, ECC * c, -ECC * s)[derivative]
     root = math.sqrt((R + ROLLER) ** 2 - (ECC * c) ** 2)
     return (ECC * s + root, ECC * c + ECC ** 2 * c * s / root,
             -ECC * s + ECC ** 2 * (c * c - s * s) / root
@@ -52,28 +55,33 @@ def free_acceleration(y: float) -> float:
     return STIFFNESS * (PLATE - FREE_LENGTH - y) / MASS - G
 
 
-def lift_off_angle() -> float:
+def lift_off_angle(face: bool = False) -> float:
     """The cam angle at which the cam's lift decelerates faster than spring and weight can
     follow (the contact would have to pull), on the way up to the top."""
-    pressing = lambda th: SPEED ** 2 * lift(th, 2) - free_acceleration(lift(th))  # noqa: E731
+    def pressing(th):
+        return SPEED ** 2 * lift(th, 2, face) - free_acceleration(lift(th, 0, face))
     return brentq(pressing, 0.0, math.pi / 2, xtol=1e-15)
 
 
-def build(theta0: float, law: mb.ContactLaw | None) -> mb.Model:
+def build(theta0: float, law: mb.ContactLaw | None, face: bool = False) -> mb.Model:
     """The cam turned to ``theta0`` at ``t = 0`` and driven at ``SPEED``, the follower
-    touching it there with the cam's lift rate: a contact of ``law``, or with ``None`` the
-    bilateral ``CamFollower`` on the pitch circle."""
+    touching it there with the cam's lift rate: a contact of ``law`` with its roller or its
+    flat face (``face``), or with ``None`` the bilateral ``CamFollower`` on the pitch
+    circle."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -G), name="eccentric cam, roller on a spring")
     cam = b.add_body("cam", mass=2.0, inertia=2e-3, position=(0.0, 0.0), angle=theta0)
-    follower = b.add_body("follower", mass=MASS, inertia=1e-4, position=(0.0, lift(theta0)),
-                          velocity=(0.0, SPEED * lift(theta0, 1)))
+    y0 = lift(theta0, 0, face)
+    follower = b.add_body("follower", mass=MASS, inertia=1e-4, position=(0.0, y0),
+                          velocity=(0.0, SPEED * lift(theta0, 1, face)))
     shaft = b.add(Revolute("shaft", b.ground, cam, at=(0.0, 0.0)))
     b.add(Prismatic("guide", b.ground, follower, axis=(0.0, 1.0)))
     b.add(RotationDriver("motor", shaft, motion=mb.Ramp(theta0, SPEED)))
-    b.add(mb.SpringDamper("spring", b.ground, follower, at_i=(0.0, PLATE),
-                          at_j=(0.0, lift(theta0)), stiffness=STIFFNESS,
-                          free_length=FREE_LENGTH))
-    if law is None:
+    b.add(mb.SpringDamper("spring", b.ground, follower, at_i=(0.0, PLATE), at_j=(0.0, y0),
+                          stiffness=STIFFNESS, free_length=FREE_LENGTH))
+    if face:
+        b.add(mb.Contact("face", mb.Cam(cam, surface()),
+                         mb.Plane(follower, normal=(0.0, -1.0)), law=law))
+    elif law is None:
         pitch = CamProfile.sampled(lambda phi: ECC * np.cos(phi) + np.sqrt(
             (R + ROLLER) ** 2 - (ECC * np.sin(phi)) ** 2), 1440)
         b.add(CamFollower("roller", cam, follower, profile=pitch, roller_radius=ROLLER))
@@ -85,20 +93,21 @@ def build(theta0: float, law: mb.ContactLaw | None) -> mb.Model:
         return b.build()
 
 
-def landing(t0: float, theta0: float, y0: float, v0: float) -> tuple[float, float, float]:
+def landing(t0: float, theta0: float, y0: float, v0: float,
+            face: bool = False) -> tuple[float, float, float]:
     """``(time, follower's speed, cam's lift rate)`` where the follower, flying freely from
     height ``y0`` at speed ``v0`` at ``t0`` (the cam then at ``theta0``), meets the cam."""
     def above(t):
         tau = t - t0
         y = HANG + (y0 - HANG) * math.cos(OMEGA * tau) + v0 / OMEGA * math.sin(OMEGA * tau)
-        return y - lift(theta0 + SPEED * tau)
-    grid = t0 + np.linspace(1e-6, 0.5, 200001)
+        return y - lift(theta0 + SPEED * tau, 0, face)
+    grid = t0 + np.linspace(1e-6, 0.5, 100001)
     heights = np.array([above(t) for t in grid])
     k = int(np.flatnonzero(heights < 0.0)[0])
     t = brentq(above, grid[k - 1], grid[k], xtol=1e-15)
     tau = t - t0
     v = -(y0 - HANG) * OMEGA * math.sin(OMEGA * tau) + v0 * math.cos(OMEGA * tau)
-    return t, v, SPEED * lift(theta0 + SPEED * tau, 1)
+    return t, v, SPEED * lift(theta0 + SPEED * tau, 1, face)
 
 
 def test_the_gap_is_the_distance_to_an_off_centre_circle():
@@ -134,28 +143,62 @@ def test_the_gap_is_the_distance_to_an_off_centre_circle():
         assert state.gap_rate[0] == pytest.approx((ahead - behind) / (2 * h), abs=1e-7)
 
 
-def test_a_roller_leaves_the_cam_and_lands_by_the_law_of_restitution():
-    """Set on the cam just past the angle where it would have to be pulled, the follower
-    flies free (a harmonic motion on its spring) and strikes the cam where that flight meets
-    the lift; it leaves the strike at ``-e`` times its speed relative to the cam's lift,
-    and so on for every landing."""
+@pytest.mark.parametrize("face", [False, True])
+def test_a_follower_leaves_the_cam_and_lands_by_the_law_of_restitution(face):
+    """Set on the cam just past the angle where it would have to be pulled, the follower (a
+    roller, or a flat face) flies free (a harmonic motion on its spring) and strikes the cam
+    where that flight meets the lift; it leaves the strike at ``-e`` times its speed
+    relative to the cam's lift, and so on for every landing."""
     e = 0.5
-    theta0 = lift_off_angle() + 0.02
-    res = mb.forward_dynamics(build(theta0, mb.RigidImpact(restitution=e)),
-                              np.linspace(0.0, 0.3, 301), **TIGHT)
+    theta0 = lift_off_angle(face) + 0.02
+    res = mb.forward_dynamics(build(theta0, mb.RigidImpact(restitution=e), face),
+                              np.linspace(0.0, 0.6, 301), **TIGHT)
     impacts = res.stats["impacts"]
     assert len(impacts) >= 3
-    t, y, v = 0.0, lift(theta0), SPEED * lift(theta0, 1)
+    t, y, v = 0.0, lift(theta0, 0, face), SPEED * lift(theta0, 1, face)
     for impact in impacts[:3]:
-        t_hit, v_hit, v_cam = landing(t, theta0 + SPEED * t, y, v)
+        t_hit, v_hit, v_cam = landing(t, theta0 + SPEED * t, y, v, face)
         assert impact["time"] == pytest.approx(t_hit, abs=1e-9)
-        t, y, v = t_hit, lift(theta0 + SPEED * t_hit), v_cam - e * (v_hit - v_cam)
+        t, y, v = t_hit, lift(theta0 + SPEED * t_hit, 0, face), v_cam - e * (v_hit - v_cam)
         assert impact["rate_after"] == pytest.approx(-e * impact["rate_before"], rel=1e-9)
-        after = mb.forward_dynamics(build(theta0, mb.RigidImpact(restitution=e)),
+        after = mb.forward_dynamics(build(theta0, mb.RigidImpact(restitution=e), face),
                                     [0.0, t_hit + 1e-7], **TIGHT)
         rates = after.body("follower").velocity[-1, 1]
         # 0.1 us after the strike: the flight's acceleration moves the speed 1e-6 m/s
         assert rates == pytest.approx(v, abs=5e-6)
+
+
+def test_a_flat_face_touches_the_cam_at_its_support_point():
+    """A line against the eccentric circle, turned anyhow: the gap is the circle centre's
+    height above the line less the radius, the normal the line's, and the surface from the
+    circle's support function ``e cos + R`` is the circle again."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    cam = b.add_body("cam", mass=1.0, inertia=1e-3, position=(0.0, 0.0))
+    plate = b.add_body("plate", mass=0.5, inertia=1e-4, position=(0.0, 0.2))
+    normal = np.array([0.6, -0.8])
+    b.add(mb.Contact("c", mb.Cam(cam, surface()),
+                     mb.Plane(plate, normal=normal, point=(0.01, -0.003)),
+                     law=mb.LinearContact(stiffness=1e6, damping=10.0)))
+    model = b.build()
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        q = np.concatenate([rng.normal(0.0, 0.01, 2), rng.uniform(-4, 4, 1),
+                            rng.uniform(-0.09, 0.09, 2), rng.uniform(-4, 4, 1)])
+        qd = rng.normal(0.0, 1.0, 6)
+        turn = lambda a: np.array([[math.cos(a), -math.sin(a)],  # noqa: E731
+                                   [math.sin(a), math.cos(a)]])
+        centre = q[:2] + turn(q[2]) @ np.array([ECC, 0.0])
+        point, m = q[3:5] + turn(q[5]) @ np.array([0.01, -0.003]), turn(q[5]) @ normal
+        state = mb.contact_states(model, q, qd)
+        assert state.gap[0] == pytest.approx(m @ (centre - point) - R, abs=1e-11)
+        np.testing.assert_allclose(state.normal[0, :2], -m, atol=1e-15)
+        h = 1e-7
+        ahead = mb.contact_states(model, q + h * qd).gap[0]
+        behind = mb.contact_states(model, q - h * qd).gap[0]
+        assert state.gap_rate[0] == pytest.approx((ahead - behind) / (2 * h), abs=1e-7)
+    support = CamProfile.sampled(lambda psi: ECC * np.cos(psi) + R, 1440)
+    phi = np.linspace(0.0, 2 * math.pi, 1001)
+    np.testing.assert_allclose(support.envelope(1440)(phi), surface()(phi), rtol=0, atol=1e-10)
 
 
 def test_a_stiff_compliant_cam_contact_leaves_where_the_bilateral_cam_would_pull():
@@ -186,8 +229,8 @@ def test_cams_are_checked():
         b.add(mb.Contact("c", mb.Cam(cam, [1.0, 2.0]), mb.Sphere(roller, ROLLER),
                          law=mb.RigidImpact(0.5)))
         b.build()
-    with pytest.raises(ModelError, match="no contact between a Cam and a Plane"):
-        mb.Contact("d", mb.Cam(cam, surface()), mb.Plane(roller, normal=(0.0, 1.0)),
+    with pytest.raises(ModelError, match="no contact between a Cam and a Capsule"):
+        mb.Contact("d", mb.Cam(cam, surface()), mb.Capsule(roller, 0.01, ends=[(0, 0), (1, 0)]),
                    law=mb.RigidImpact(0.5))
     s = mb.ModelBuilder(dim=3)
     body = s.add_body("cam", mass=1.0, inertia=np.eye(3), position=(0.0, 0.0, 0.0))

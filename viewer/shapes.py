@@ -110,14 +110,11 @@ def cam_outlines(model: Model) -> dict[str, list[np.ndarray]]:
     outlines: dict[str, list] = {b.name: [] for b in model.bodies}
     outlines["ground"] = []
     angle = np.linspace(0.0, 2 * np.pi, 361)
-    e = np.column_stack([np.cos(angle), np.sin(angle)])
-    across = np.column_stack([-e[:, 1], e[:, 0]])
     for element in model.joints:
         if isinstance(element, CamFollower):
             surface = element.profile.offset(angle, -float(element.roller_radius))
         elif isinstance(element, FlatFaceFollower):
-            surface = (element.profile(angle)[:, None] * e
-                       + element.profile(angle, 1)[:, None] * across)
+            surface = element.profile.envelope_points(angle)
         else:
             continue
         centre = model.reaction_frame(element.name)[0]

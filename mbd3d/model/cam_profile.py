@@ -97,12 +97,33 @@ class CamProfile(RecordsArguments):
         if not (math.isfinite(rho) and rho >= 0.0):
             raise ModelError(f"cam profile: roller_radius must be finite and >= 0, got "
                              f"{roller_radius!r}")
-        xy = self.offset(np.linspace(0.0, 2 * math.pi, int(points), endpoint=False), -rho)
-        angles = np.unwrap(np.arctan2(xy[:, 1], xy[:, 0]))
-        radii = np.hypot(xy[:, 0], xy[:, 1])
-        if not (np.all(np.diff(angles) > 0) and angles[-1] < angles[0] + 2 * math.pi
-                and np.all(radii > 0)):
-            raise ModelError(f"cam profile: a roller of {rho:g} m on this pitch curve leaves a "
-                             "surface that is not a polar curve about the centre (undercut, or "
-                             "the roller larger than the cam); use a smaller roller")
-        return CamProfile(angles, radii)
+        phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
+        return _polar(self.offset(phi, -rho), f"a roller of {rho:g} m on this pitch curve")
+
+    def envelope(self, points: int = 720) -> "CamProfile":
+        """The cam's surface whose support function this is (a flat-faced follower's
+        profile): the envelope ``h e + h' e_perp`` of the tangent lines, sampled at ``points``
+        angles evenly spaced from 0 and interpolated again in polar form."""
+        phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
+        return _polar(self.envelope_points(phi), "this support function's envelope")
+
+    def envelope_points(self, phi: Any) -> np.ndarray:
+        """The points ``(m, 2)`` [m] where the tangent lines with outward normals at the
+        angles ``phi`` [rad] touch the cam whose support function ``h`` this is: ``h e + h'
+        e_perp``."""
+        phi = np.asarray(phi, dtype=float)
+        e = np.column_stack([np.cos(phi), np.sin(phi)])
+        across = np.column_stack([-e[:, 1], e[:, 0]])
+        return self(phi)[:, None] * e + self(phi, 1)[:, None] * across
+
+
+def _polar(xy: np.ndarray, what: str) -> CamProfile:
+    """The closed curve through the points ``xy`` (m, 2), in order round the centre, as a
+    profile in polar form; refused where it is not one (undercut)."""
+    angles = np.unwrap(np.arctan2(xy[:, 1], xy[:, 0]))
+    radii = np.hypot(xy[:, 0], xy[:, 1])
+    if not (np.all(np.diff(angles) > 0) and angles[-1] < angles[0] + 2 * math.pi
+            and np.all(radii > 0)):
+        raise ModelError(f"cam profile: {what} is not a curve in polar form about the "
+                         "centre (an undercut cam, or a roller larger than the cam)")
+    return CamProfile(angles, radii)

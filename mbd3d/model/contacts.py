@@ -306,12 +306,12 @@ def _moment(ctx, body, u, h) -> float:
 
 def _curve_table(points: np.ndarray, curves: list) -> np.ndarray:
     """The cams' curves one after another (:mod:`mbd3d.numerics.compiled.curves`), each row's
-    offset and interval count written into its ``points[r, 2]`` (see
+    offset and interval count written into its ``points[r, 3]`` (see
     :mod:`mbd3d.numerics.compiled.contacts`)."""
     tables, offset = [], 0
     for r, curve in enumerate(curves):
         if curve is not None:
-            points[r, 2, :2] = offset, (len(curve) - 1) // 5  # count + 1 knots, 4 count
+            points[r, 3, :2] = offset, (len(curve) - 1) // 5  # count + 1 knots, 4 count
             tables.append(curve)
             offset += len(curve)
     return np.ascontiguousarray(np.concatenate(tables) if tables else np.zeros(0))

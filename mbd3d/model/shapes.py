@@ -106,8 +106,11 @@ class Cam:
     ``profile`` (a :class:`~mbd3d.joints.CamProfile`, polar about the cam's centre in the
     body's axes), centred at ``point`` (body frame) or ``at`` (drawing), default the body's
     reference point. The curve is the cam's surface; from the pitch curve of a roller of
-    radius ``d``, ``pitch.surface(d)``. A sphere (circle) touches it from outside: a roller
-    follower that may leave the cam and land on it again (a knife edge: a small radius)."""
+    radius ``d``, ``pitch.surface(d)``, from a flat-faced follower's support function ``h``,
+    ``h.envelope()``. A sphere (circle) touches it from outside, a roller follower (a knife
+    edge: a small radius), or a plane (line), a flat face, whose gap is measured to the cam's
+    point farthest towards it (a convex cam's support point); either may leave the cam and
+    land on it again."""
 
     body: Body
     profile: Any
@@ -134,7 +137,7 @@ class PairRows:
 #: the pairs the core evaluates, first shape (its body i) then second
 _PAIRS = {(Sphere, Plane), (Sphere, Sphere), (Capsule, Plane), (Capsule, Sphere),
           (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Sphere, Hole), (Capsule, Hole),
-          (Cam, Sphere)}
+          (Cam, Sphere), (Cam, Plane)}
 
 
 def pair_order(first: Any, second: Any, what: str) -> bool:
@@ -204,15 +207,23 @@ def _in_hole(ctx, pin, hole: Hole, r_i: float, core_i: np.ndarray, what: str,
                     labels, swapped)
 
 
-def _on_cam(ctx, cam: Cam, sphere: Sphere, what: str, swapped: bool) -> PairRows:
-    """A sphere (a roller, a knife edge) on a cam: one row, the curve's offset and interval
-    count filled in by the contacts' table (:class:`mbd3d.model.contacts._Contacts`)."""
+def _on_cam(ctx, cam: Cam, other: Any, what: str, swapped: bool) -> PairRows:
+    """A sphere (a roller, a knife edge) or a plane (a flat face) on a cam: one row, the
+    curve's offset and interval count filled in by the contacts' table
+    (:class:`mbd3d.model.contacts._Contacts`)."""
     centre, profile = _cam(ctx, cam, what)
-    r_j, core_j = _core(ctx, sphere, what)
     points = np.zeros((1, kernel.POINTS, ctx.dim))
-    points[0, 0], points[0, 1] = centre, core_j[0]
-    # Hertz's radius with the cam's base circle (its smallest radius), where a roller rests
+    points[0, 0] = centre
+    # Hertz's radius with the cam's base circle (its smallest radius), where a follower rests
     base = float(np.min(profile(np.linspace(0.0, 2 * np.pi, 720, endpoint=False))))
+    if isinstance(other, Plane):
+        points[0, 1] = resolve_point(ctx, other.body, other.point, other.at,
+                                     f"{what}: plane point")
+        points[0, 2] = _plane_normal(ctx, other, what)
+        return PairRows(points, [(kernel.CAM_PLANE, 0.0, 0.0)], base, [""], swapped,
+                        profile.table())
+    r_j, core_j = _core(ctx, other, what)
+    points[0, 1] = core_j[0]
     return PairRows(points, [(kernel.CAM_SPHERE, 0.0, r_j)], r_j * base / (r_j + base), [""],
                     swapped, profile.table())
 

@@ -22,11 +22,16 @@ and its body points ``points[k]`` (body frames):
   square to it; the normal ``e / |e|`` pushes the hole outwards and the pin back (none while
   the pin is centred, where ``g`` is the clearance);
 - ``CAM_SPHERE``: a planar disc cam of ``i`` whose surface is the periodic curve ``r(phi)``
-  (:mod:`.curves`, stored in ``curves`` at offset ``points[k, 2, 0]`` with ``points[k, 2, 1]``
+  (:mod:`.curves`, stored in ``curves`` at offset ``points[k, 3, 0]`` with ``points[k, 3, 1]``
   intervals) polar about ``points[k, 0]`` in ``i``'s axes, against the circle of radius
   ``r_j`` at ``points[k, 1]`` of ``j``: ``g = N . (c_j - X) - r_j`` at the surface's point
   ``X`` closest to the circle's centre ``c_j`` (Newton's method on ``phi`` from ``c_j``'s
-  polar angle), ``N`` the surface's outward normal there.
+  polar angle), ``N`` the surface's outward normal there;
+- ``CAM_PLANE``: the cam (as above) against the half-plane of ``j`` bounded by the line
+  through ``points[k, 1]`` with outward unit normal ``m = points[k, 2]`` (a flat-faced
+  follower): ``g = m . (X - P)`` at the surface's point ``X`` farthest along ``-m`` (its
+  support point: Newton's method on ``phi`` from the polar angle of ``-m``), the normal
+  ``-m`` as against a plane.
 
 Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
 closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
@@ -74,15 +79,14 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
-from mbd3d.numerics.compiled.curves import periodic_curve
 from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
-from mbd3d.numerics.compiled.shapes import (box_to_point, closest_between_segments,
-                                            closest_on_segment)
+from mbd3d.numerics.compiled.shapes import (box_to_point, cam_to_line, cam_to_point,
+                                            closest_between_segments, closest_on_segment)
 
 #: the kinds of shape pairs, then of joint stops (from ``HINGE_STOP`` on)
 SPHERE_PLANE, SPHERE_SPHERE, SEGMENT_SPHERE, SEGMENT_SEGMENT, BOX_SPHERE = 0, 1, 2, 3, 4
-PIN_IN_HOLE, CAM_SPHERE = 5, 6
-HINGE_STOP, SLIDE_STOP, CONE_STOP = 7, 8, 9
+PIN_IN_HOLE, CAM_SPHERE, CAM_PLANE = 5, 6, 7
+HINGE_STOP, SLIDE_STOP, CONE_STOP = 8, 9, 10
 #: body points per contact (``points[k]``)
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
@@ -126,8 +130,17 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, curves, x_k, n, work) -
         return _midway(c_i, n, values[k, 1], gap - values[k, 1], x_k)
     if kind == PIN_IN_HOLE:
         return _pin_in_hole(A, Q, k, i, j, points, values, x_k, n, work)
-    if kind == CAM_SPHERE:
-        return _cam_sphere(A, Q, k, i, j, points, values, curves, x_k, n, work)
+    if kind == CAM_SPHERE or kind == CAM_PLANE:
+        # X = c_i on the cam's surface (rounded by nothing): its closest or support point
+        _point(A, Q, i, points[k, 0], work[0])
+        _point(A, Q, j, points[k, 1], c_j)
+        curve = (curves, int(points[k, 3, 0]), int(points[k, 3, 1]))
+        if kind == CAM_SPHERE:
+            gap = cam_to_point(A, i, work[0], curve, c_j, c_i, n) - values[k, 2]
+        else:
+            _turn(A, j, points[k, 2], work[1])
+            gap = cam_to_line(A, i, work[0], curve, c_j, work[1], c_i, n)
+        return _midway(c_i, n, 0.0, gap, x_k)
     if kind == BOX_SPHERE:
         _point(A, Q, i, points[k, 0], work[0])
         _point(A, Q, j, points[k, 2], c_j)
@@ -186,47 +199,6 @@ def _pin_in_hole(A, Q, k, i, j, points, values, x_k, n, work) -> float:
         n[x] = n[x] / offset if offset > 0.0 else 0.0
         x_k[x] = centre[x] + 0.5 * (values[k, 1] + values[k, 2] + offset) * n[x]
     return values[k, 2] - values[k, 1] - offset
-
-
-@jit
-def _cam_sphere(A, Q, k, i, j, points, values, curves, x_k, n, work) -> float:
-    """The gap of the circle of ``j`` on the cam of ``i`` (see the module doc), the cam's
-    outward normal ``n`` at the surface's point ``X`` closest to the circle's centre, and the
-    point ``x_k`` midway between the surfaces."""
-    centre, c_j = work[0], work[5]
-    _point(A, Q, i, points[k, 0], centre)
-    _point(A, Q, j, points[k, 1], c_j)
-    # the circle's centre d about the cam's centre in the cam's axes (A[i] transposed)
-    dx = A[i, 0, 0] * (c_j[0] - centre[0]) + A[i, 1, 0] * (c_j[1] - centre[1])
-    dy = A[i, 0, 1] * (c_j[0] - centre[0]) + A[i, 1, 1] * (c_j[1] - centre[1])
-    offset, count = int(points[k, 2, 0]), int(points[k, 2, 1])
-    phi = math.atan2(dy, dx)
-    for _ in range(60):
-        # rho = r e, rho' = r' e + r e_perp, rho'' = (r'' - r) e + 2 r' e_perp; Newton on
-        # f = (rho - d) . rho' = 0 (the squared distance's slope), Gauss-Newton where the
-        # point lies beyond the centre of curvature (f' <= 0: a maximum of the distance)
-        r, r1, r2 = periodic_curve(curves, offset, count, phi)
-        c, s = math.cos(phi), math.sin(phi)
-        wx, wy = r * c - dx, r * s - dy
-        tx, ty = r1 * c - r * s, r1 * s + r * c
-        ux, uy = (r2 - r) * c - 2.0 * r1 * s, (r2 - r) * s + 2.0 * r1 * c
-        tangent = tx * tx + ty * ty
-        slope = tangent + wx * ux + wy * uy
-        step = -(wx * tx + wy * ty) / (slope if slope > 0.25 * tangent else tangent)
-        step = max(-0.5, min(0.5, step))
-        phi += step
-        if abs(step) <= 1e-15:
-            break
-    r, r1, _ = periodic_curve(curves, offset, count, phi)
-    c, s = math.cos(phi), math.sin(phi)
-    size = math.sqrt(r * r + r1 * r1)
-    nx, ny = (r * c + r1 * s) / size, (r * s - r1 * c) / size  # (r e - r' e_perp) / |.|
-    gap = nx * (dx - r * c) + ny * (dy - r * s) - values[k, 2]
-    for x in range(2):
-        n[x] = A[i, x, 0] * nx + A[i, x, 1] * ny
-        work[4, x] = centre[x] + A[i, x, 0] * r * c + A[i, x, 1] * r * s  # X
-    n[2], work[4, 2] = 0.0, 0.0
-    return _midway(work[4], n, 0.0, gap, x_k)
 
 
 @jit

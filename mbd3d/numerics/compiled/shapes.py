@@ -1,6 +1,8 @@
 """Closest points between the core shapes of contacts, compiled: a point, a segment (the core
 of a capsule) and a box, in global coordinates embedded in 3D (a planar model's third
-components are zero).
+components are zero); and on a cam's surface, a periodic curve ``rho(phi) = r(phi) e(phi)``
+polar about its centre (:mod:`.curves`), in the cam's frame: the point closest to a point,
+and the support point farthest along a direction.
 
 A contact between two shapes with radii ``r_i`` and ``r_j`` around their cores (a sphere is a
 point with a radius, a capsule a segment with one, a box a box with a rounding radius) has the
@@ -17,6 +19,7 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.curves import periodic_curve
 
 #: below this fraction of the product of their squared lengths (sin^2 of their angle), two
 #: segments count as parallel: about where rounding leaves the general solution's denominator
@@ -121,3 +124,94 @@ def box_to_point(A, b, centre, half, p, c_i, n) -> float:
     for y in range(3):
         n[y] /= distance
     return distance
+
+
+@jit
+def closest_on_curve(curves, offset: int, count: int, dx: float, dy: float) -> float:
+    """The angle ``phi`` [rad] of the point of the curve stored at ``offset`` (``count``
+    intervals) closest to ``d = (dx, dy)``: Newton's method on the squared distance's slope
+    ``(rho - d) . rho' = 0`` from ``d``'s polar angle, with ``rho' = r' e + r e_perp`` and
+    ``rho'' = (r'' - r) e + 2 r' e_perp``; Gauss-Newton where ``d`` lies beyond the centre of
+    curvature (the slope's derivative is not clearly positive: a distance's maximum)."""
+    phi = math.atan2(dy, dx)
+    for _ in range(60):
+        r, r1, r2 = periodic_curve(curves, offset, count, phi)
+        c, s = math.cos(phi), math.sin(phi)
+        wx, wy = r * c - dx, r * s - dy
+        tx, ty = r1 * c - r * s, r1 * s + r * c
+        ux, uy = (r2 - r) * c - 2.0 * r1 * s, (r2 - r) * s + 2.0 * r1 * c
+        tangent = tx * tx + ty * ty
+        slope = tangent + wx * ux + wy * uy
+        step = -(wx * tx + wy * ty) / (slope if slope > 0.25 * tangent else tangent)
+        step = max(-0.5, min(0.5, step))
+        phi += step
+        if abs(step) <= 1e-15:
+            break
+    return phi
+
+
+@jit
+def support_on_curve(curves, offset: int, count: int, ux: float, uy: float) -> float:
+    """The angle ``phi`` [rad] of the curve's point farthest along the unit ``(ux, uy)``:
+    Newton's method on ``u . rho' = 0`` from ``u``'s polar angle, uphill along the slope
+    where ``u . rho''`` is not clearly negative (a flat or hollow stretch)."""
+    phi = math.atan2(uy, ux)
+    for _ in range(60):
+        r, r1, r2 = periodic_curve(curves, offset, count, phi)
+        c, s = math.cos(phi), math.sin(phi)
+        slope = ux * (r1 * c - r * s) + uy * (r1 * s + r * c)
+        bend = ux * ((r2 - r) * c - 2.0 * r1 * s) + uy * ((r2 - r) * s + 2.0 * r1 * c)
+        step = -slope / bend if bend < -0.25 * r else slope / r
+        step = max(-0.5, min(0.5, step))
+        phi += step
+        if abs(step) <= 1e-15:
+            break
+    return phi
+
+
+@jit
+def _cam_point(A, b, centre, curve, phi: float, out) -> tuple:
+    """``out`` = the global point of cam ``b``'s surface at ``phi`` (``curve = (curves, offset,
+    count)``); returns ``(r, r')`` there."""
+    r, r1, _ = periodic_curve(curve[0], curve[1], curve[2], phi)
+    c, s = math.cos(phi), math.sin(phi)
+    for x in range(2):
+        out[x] = centre[x] + A[b, x, 0] * r * c + A[b, x, 1] * r * s
+    out[2] = 0.0
+    return r, r1
+
+
+@jit
+def cam_to_point(A, b, centre, curve, p, c_i, n) -> float:
+    """The signed distance from the global point ``p`` to the surface of planar cam ``b``
+    centred at ``centre`` (``curve = (curves, offset, count)``), positive outside: ``c_i`` its
+    closest point, ``n`` the surface's outward normal there, ``(r e - r' e_perp) / sqrt(r^2 +
+    r'^2)``."""
+    dx = A[b, 0, 0] * (p[0] - centre[0]) + A[b, 1, 0] * (p[1] - centre[1])  # A^T (p - c)
+    dy = A[b, 0, 1] * (p[0] - centre[0]) + A[b, 1, 1] * (p[1] - centre[1])
+    phi = closest_on_curve(curve[0], curve[1], curve[2], dx, dy)
+    r, r1 = _cam_point(A, b, centre, curve, phi, c_i)
+    c, s = math.cos(phi), math.sin(phi)
+    size = math.sqrt(r * r + r1 * r1)
+    nx, ny = (r * c + r1 * s) / size, (r * s - r1 * c) / size
+    distance = nx * (dx - r * c) + ny * (dy - r * s)
+    for x in range(2):
+        n[x] = A[b, x, 0] * nx + A[b, x, 1] * ny
+    n[2] = 0.0
+    return distance
+
+
+@jit
+def cam_to_line(A, b, centre, curve, P, m, c_i, n) -> float:
+    """The gap ``m . (X - P)`` from the line through ``P`` with unit normal ``m`` (global,
+    pointing at the cam) to planar cam ``b``'s support point ``X = c_i`` along ``-m``, and
+    ``n = -m`` (from the cam to the line)."""
+    ux = -(A[b, 0, 0] * m[0] + A[b, 1, 0] * m[1])  # -m in the cam's axes
+    uy = -(A[b, 0, 1] * m[0] + A[b, 1, 1] * m[1])
+    _cam_point(A, b, centre, curve, support_on_curve(curve[0], curve[1], curve[2], ux, uy),
+               c_i)
+    gap = 0.0
+    for x in range(3):
+        gap += m[x] * (c_i[x] - P[x])
+        n[x] = -m[x]
+    return gap
