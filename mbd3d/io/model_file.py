@@ -174,11 +174,27 @@ def read(path: str | os.PathLike, changes: dict[str, Any] | None = None) -> Mode
 
 
 def _apply_change(reader, data: dict, key: str, value: Any) -> None:
-    """Set the value at a dotted field path; names pick list entries by their ``name``."""
-    parts = key.split(".")
+    """Set the value at a dotted field path; names pick list entries by their ``name``, and
+    ``[k]`` an entry of a list value (``joints.A.point_i[0]``, as
+    :func:`mbd3d.io.parameters.parameters` names it)."""
+    parts = []
+    for part in key.split("."):
+        field, *indices = part.split("[")
+        if not field or not all(i[-1:] == "]" and i[:-1].isdigit() for i in indices):
+            raise reader.error((), f"change '{key}': '{part}' is not a field name or a "
+                                   "field with [index]")
+        parts += [field] + [int(i[:-1]) for i in indices]
     target: Any = data
     for depth, part in enumerate(parts):
         last = depth == len(parts) - 1
+        if isinstance(part, int):
+            if not isinstance(target, list) or part >= len(target):
+                raise reader.error((), f"change '{key}': no entry [{part}] in a value of "
+                                       f"{len(target) if isinstance(target, list) else 1}")
+            if last:
+                target[part] = value
+            target = target[part]
+            continue
         if isinstance(target, list):
             chosen = next((item for item in target if isinstance(item, dict)
                            and item.get("name") == part), None)

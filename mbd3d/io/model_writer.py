@@ -9,14 +9,14 @@ import dataclasses
 import hashlib
 import os
 import pathlib
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from mbd3d.io import files
 from mbd3d.io.model_file import FORMAT_VERSION, AnalysisSpec, ModelFileError
 
-__all__ = ["save"]
+__all__ = ["save", "model_data"]
 
 
 def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | dict] = (),
@@ -49,6 +49,26 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
             files.check_output_path(mesh_path, overwrite, "the mesh file")
     except files.OutputError as exc:
         raise ModelFileError(str(exc)) from None
+    data = model_data(model, lambda body, shape: _shape_file(
+        shape, body.name, meshes.get(body.name), folder, overwrite))
+    if analyses:
+        data["analyses"] = [_analysis_entry(a) for a in analyses]
+    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+    return files.atomic_write(target, lambda f: f.write(text), text=True, overwrite=overwrite,
+                              what="the model file")
+
+
+def model_data(model, shape: Callable[[Any, Any], Any] | None = None) -> dict[str, Any]:
+    """The plain data of ``model``'s file (see :mod:`mbd3d.io.model_file`): each body with the
+    arguments of ``add_body`` that made it, each joint, driver and force element with those
+    of its constructor; a body's shape as ``shape(body, value)`` gives it (default: as given,
+    a path or a mesh object).
+
+    Raises
+    ------
+    ModelFileError
+        An element made with a Python function, which plain data cannot hold.
+    """
     data: dict[str, Any] = {"mbd3d": FORMAT_VERSION, "name": model.name, "dim": model.dim,
                             "gravity": _plain(model.gravity, "gravity")}
     bodies = []
@@ -56,8 +76,7 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
         entry: dict[str, Any] = {"name": body.name}
         for key, value in body.arguments.items():
             if key == "shape":
-                entry[key] = _shape_file(value, body.name, meshes.get(body.name), folder,
-                                         overwrite)
+                entry[key] = value if shape is None else shape(body, value)
             else:
                 entry[key] = _plain(value, f"body '{body.name}': {key}")
         bodies.append(entry)
@@ -66,11 +85,7 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
     data["forces"] = [_element_entry(f) for f in model.forces]
     if not data["forces"]:
         del data["forces"]
-    if analyses:
-        data["analyses"] = [_analysis_entry(a) for a in analyses]
-    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
-    return files.atomic_write(target, lambda f: f.write(text), text=True, overwrite=overwrite,
-                              what="the model file")
+    return data
 
 
 def _element_entry(element) -> dict:

@@ -1,0 +1,100 @@
+"""Parameters by name: every number a model was built with, named by the path of its field in
+the model's file (:mod:`mbd3d.io.model_file`): ``bodies.crank.mass``,
+``joints.A.point_i[0]``, ``forces.spring.stiffness``, ``joints.motor.motion.rate``,
+``gravity[1]``. A model built in Python has the same names as one read from a file, since
+the file is the list of constructor calls that built the model
+(:func:`mbd3d.io.model_writer.model_data`); the names are those ``mbd3d run --set`` and
+:func:`mbd3d.io.model_file.read`'s ``changes`` take.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+from mbd3d.errors import ModelError, did_you_mean
+from mbd3d.io.model_file import _Reader
+from mbd3d.io.model_writer import model_data
+
+__all__ = ["parameters", "with_parameters"]
+
+#: the parts of a model's data that hold its parameters (not its format, name or analyses)
+_SECTIONS = ("gravity", "bodies", "joints", "forces")
+
+
+def parameters(model) -> dict[str, float]:
+    """Every number ``model`` was built with, by name (see the module doc), in the order of
+    the model's file: bodies, then joints and drivers, then force elements.
+
+    Examples
+    --------
+    >>> import mbd3d as mb
+    >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    >>> bob = b.add_body("bob", mass=2.0, inertia=0.01, position=(1.0, 0.0))
+    >>> mb.parameters(b.build())["bodies.bob.mass"]
+    2.0
+    """
+    return {name: float(container[key])
+            for name, (container, key) in _fields(model_data(model)).items()}
+
+
+def with_parameters(model, values: Mapping[str, float]):
+    """A new model, ``model`` built again with the parameters ``values`` (by name, see
+    :func:`parameters`) changed; ``model`` itself is left as it is.
+
+    Raises
+    ------
+    ModelError
+        A name that is not a parameter of the model (with the nearest ones), a value that is
+        not a finite number (or not a whole one where the field is), or a model that the
+        changed value makes invalid (named as a model file's field would be).
+    """
+    data = model_data(model)
+    fields = _fields(data)
+    for name, value in values.items():
+        if name not in fields:
+            raise ModelError(f"model '{model.name}': no parameter '{name}'"
+                             f"{did_you_mean(name, fields)}; mb.parameters(model) lists them")
+        container, key = fields[name]
+        container[key] = _number(value, container[key], f"parameter '{name}'")
+    return _Reader(f"<model '{model.name}'>", {}).build(data).model
+
+
+def _fields(data: dict) -> dict[str, tuple[Any, Any]]:
+    """The numeric leaves of a model's data: name -> (the list or mapping holding it, its
+    index or key)."""
+    found: dict[str, tuple[Any, Any]] = {}
+    for section in _SECTIONS:
+        if section in data:
+            _collect(data, section, section, found)
+    return found
+
+
+def _collect(container: Any, key: Any, name: str, found: dict) -> None:
+    value = container[key]
+    if isinstance(value, bool) or value is None:
+        return
+    if isinstance(value, (int, float)):
+        found[name] = (container, key)
+    elif isinstance(value, dict):
+        for field in value:
+            if field not in ("name", "type"):
+                _collect(value, field, f"{name}.{field}", found)
+    elif isinstance(value, list):
+        # a list of named entries (bodies, joints) by name, any other by index
+        named = bool(value) and all(isinstance(v, dict) and "name" in v for v in value)
+        for index, item in enumerate(value):
+            _collect(value, index, f"{name}.{item['name']}" if named else f"{name}[{index}]",
+                     found)
+
+
+def _number(value: Any, old: Any, what: str) -> float | int:
+    """``value`` as the field's kind of number: a finite real, whole where ``old`` is."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
+            value):
+        raise ModelError(f"{what}: give a finite number, got {value!r}")
+    if isinstance(old, int):
+        if value != int(value):
+            raise ModelError(f"{what}: give a whole number (the field counts), got {value!r}")
+        return int(value)
+    return float(value)
