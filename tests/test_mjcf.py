@@ -282,6 +282,60 @@ def test_a_connect_closes_a_four_bar_that_moves_as_its_closed_form(tmp_path):
     assert named == ["O2", "A", "O4", "A_connect"]
 
 
+def _welded(block_pose: str | None = None, key: str = "") -> str:
+    """A pendulum on a skew hinge carrying a tilted block: nested in the pendulum's body
+    without a joint (one rigid body to MuJoCo and mbd3d), or free at ``block_pose`` (``pos``
+    and ``quat``) and held by a ``weld``."""
+    block = """<geom type="box" size="0.05 0.1 0.02" mass="0.7"/>"""
+    nested = f'<body name="block" pos="0.1 0.2 -0.5" euler="30 0 60">{block}</body>'
+    free = f'<body name="block" {block_pose}><freejoint/>{block}</body>'
+    return f"""<mujoco model="welded"><compiler angle="degree"/>
+  <worldbody><body name="bar" pos="0 0 1" euler="10 -20 5">
+    <joint name="swing" type="hinge" axis="1 0.2 0.1"/>
+    <geom type="capsule" fromto="0 0 0 0 0.1 -0.5" size="0.02" mass="1.5"/>
+    {nested if block_pose is None else ""}</body>
+  {"" if block_pose is None else free}</worldbody>
+  {"" if block_pose is None else '<equality><weld name="glue" body1="bar" body2="block"/>'
+   '</equality>'}{key}</mujoco>"""
+
+
+def test_a_weld_holds_a_free_body_as_if_it_were_part_of_its_body(tmp_path):
+    """A free block held to a pendulum by a ``weld`` swings as the same block nested in the
+    pendulum's body (which both MuJoCo and mbd3d read as one rigid body): the hinge's angle to
+    1e-9 rad over a second, and the weld is a ``Fixed`` joint named as the equality. A
+    keyframe that moves the block off the weld's pose is refused, naming the weld."""
+    import mbd3d.joints as joints
+
+    # where the nested block is, at rest and released: the free block's pose and keyframe
+    m = mujoco.MjModel.from_xml_string(_welded())
+    d = mujoco.MjData(m)
+    poses = []
+    for angle in (0.0, np.radians(70.0)):
+        d.qpos[0] = angle
+        mujoco.mj_forward(m, d)
+        poses.append(np.concatenate([d.xpos[2], d.xquat[2]]))
+    at_rest = 'pos="{} {} {}" quat="{} {} {} {}"'.format(*poses[0])
+    qpos = " ".join(map(str, [np.radians(70.0), *poses[1]]))
+    released = f'<keyframe><key name="swung" qpos="{qpos}"/></keyframe>'
+    runs = []
+    for text, options in ((_welded(), {"joint_positions": {"swing": np.radians(70.0)}}),
+                          (_welded(at_rest, released), {"keyframe": "swung"})):
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            model = mb.load_mjcf(_file(tmp_path, text, f"w{len(runs)}.xml"), **options)
+        assert not [w for w in said if "equality" in str(w.message)]  # the weld is modelled
+        runs.append(mb.forward_dynamics(model, np.linspace(0.0, 1.0, 11), method="DOP853",
+                                        rtol=1e-11, atol=1e-12))
+    glue = runs[1].model.joint("glue")
+    assert isinstance(glue, joints.Fixed) and glue.body_j.name == "block"
+    np.testing.assert_allclose(runs[1].joint("swing").angle, runs[0].joint("swing").angle,
+                               rtol=0, atol=1e-9)
+    assert np.ptp(runs[0].joint("swing").angle) > 1.0  # it swings
+    moved = released.replace(f'qpos="{np.radians(70.0)} ', 'qpos="0.2 ')
+    with pytest.raises(mb.ModelError, match="weld 'glue' holds body2 at .* the drawing"):
+        mb.load_mjcf(_file(tmp_path, _welded(at_rest, moved), "moved.xml"), keyframe="swung")
+
+
 def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
     """A pendulum on a skew hinge with a reference angle, released at rest beside its range
     [-30, 40] degrees: it swings into the upper end and rebounds; at the deepest point of the
@@ -329,7 +383,8 @@ def test_what_mjcf_import_leaves_out_is_said(tmp_path):
     with pytest.warns(mb.MjcfWarning) as caught:
         model = mb.load_mjcf(_file(tmp_path, text))
     message = str(caught[0].message)
-    for part in ("1 actuators", "1 tendons", "1 equality constraints (other than connect)",
+    for part in ("1 actuators", "1 tendons",
+                 "1 equality constraints (other than connect and weld)",
                  "joint stiffness (j2)",
                  "joint damping (j2)", "joint armature (j1)", "joint frictionloss (j1)",
                  "the range of ball joint 'j2'", "contacts between geoms",

@@ -29,10 +29,12 @@ other bodies with more than one joint are refused, naming them.
 A hinge's ``stiffness`` and ``damping`` (a body's only joint) are a
 :class:`~mbd3d.RotationalSpringDamper` named ``"<joint>_spring"``, at rest at the joint's
 ``springref``; an active ``connect`` equality is a :class:`~mbd3d.joints.Spherical` joint
-between its two points (closing a loop exactly, where MuJoCo's is soft). What the file holds
-that the model leaves out is said in a :class:`MjcfWarning`: actuators, tendons, other
-equality constraints, the springs and damping of other joints, armature and dry friction,
-fluid forces, gravity compensation, contacts between geoms, a ball joint's range.
+between its two points (closing a loop exactly, where MuJoCo's is soft), and an active
+``weld`` a :class:`~mbd3d.joints.Fixed` joint at its anchor, holding the bodies as drawn (a
+drawing off the weld's relative pose is refused). What the file holds that the model leaves
+out is said in a :class:`MjcfWarning`: actuators, tendons, other equality constraints, the
+springs and damping of other joints, armature and dry friction, fluid forces, gravity
+compensation, contacts between geoms, a ball joint's range.
 """
 
 from __future__ import annotations
@@ -131,6 +133,7 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     # everything that can be refused is checked before the builder (maybe the caller's) is
     # touched, so that a refusal leaves no part of the mechanism in it
     law = limit_law(joint_limits, what)
+    _check_welds(mujoco, m, d, what)
     sets = _joint_sets(mujoco, m)
     for label, (_, js) in sets.items():
         for hinge in sorted(set(label.split("+")) & set(drive) if len(js) > 1 else ()):
@@ -143,15 +146,19 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     owner, bodies = _add_bodies(mujoco, m, d, b, what)
     taken = {body.name for body in bodies.values()} | {b.ground.name}
     joining = _Joints(mujoco, m, d, b, drive, law, what)
-    connects = {}  # by a name apart from the joints' (MuJoCo keeps the two apart)
-    for label, k in _connects(mujoco, m).items():
-        while label in sets or label in connects:
-            label += "_connect"
-        connects[label] = k
-    for label, name in joint_names(list(sets) + list(connects), taken, what,
+    equalities = {}  # by a name apart from the joints' (MuJoCo keeps the two apart)
+    for (kind, label), k in _equalities(mujoco, m).items():
+        while label in sets or label in equalities:
+            label += f"_{kind}"
+        equalities[label] = kind, k
+    for label, name in joint_names(list(sets) + list(equalities), taken, what,
                                    MjcfWarning).items():
-        if label in connects:
-            joining.connect(name, connects[label], bodies, owner)
+        if label in equalities:
+            kind, k = equalities[label]
+            if kind == "connect":
+                joining.connect(name, k, bodies, owner)
+            elif owner[int(m.eq_obj1id[k])] != owner[int(m.eq_obj2id[k])]:  # else one body
+                joining.weld(name, k, bodies, owner)
             continue
         body, js = sets[label]
         parent, child = bodies[owner[int(m.body_parentid[body])]], bodies[body]
@@ -159,7 +166,7 @@ def mjcf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
             joining.several(label, name, parent, child, js)
         else:
             joining.one(label, name, parent, child, js[0])
-    left_out = (_not_modelled(mujoco, m, owner, joining.sprung, len(connects))
+    left_out = (_not_modelled(mujoco, m, owner, joining.sprung, len(equalities))
                 + joining.left_out)
     if left_out:
         warnings.warn(f"{what}: not modelled: {'; '.join(left_out)}", MjcfWarning,
@@ -219,6 +226,16 @@ class _Joints:
         (b_i, p_i), (b_j, p_j) = [(bodies[owner[b]], p) for b, p in ends]
         self.b.add(Spherical(name, b_i, b_j, point_i=_local(b_i, p_i),
                              point_j=_local(b_j, p_j)))
+
+    def weld(self, name: str, k: int, bodies: dict, owner: dict) -> None:
+        """Equality constraint ``k``, a ``weld``: a :class:`~mbd3d.joints.Fixed` joint at its
+        anchor, holding the bodies as drawn (which :func:`_check_welds` found to be the weld's
+        relative pose)."""
+        from mbd3d.joints import Fixed  # noqa: PLC0415
+
+        one, two = int(self.m.eq_obj1id[k]), int(self.m.eq_obj2id[k])
+        anchor = self.d.xpos[one] + self.d.xmat[one].reshape(3, 3) @ self.m.eq_data[k, :3]
+        self.b.add(Fixed(name, bodies[owner[one]], bodies[owner[two]], at=anchor))
 
     def several(self, label: str, name: str, parent, child, js: list) -> None:
         """The joints ``js`` of one body as one joint of mbd3d's (not driven: refused
@@ -464,11 +481,42 @@ def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis:
     return b.add(joint(name, parent, child, at=anchor, axis=axis))
 
 
-def _connects(mujoco, m) -> dict[str, int]:
-    """The active ``connect`` equality constraints by name (``"connect<k>"`` unnamed)."""
-    return {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, k) or f"connect{k}": k
-            for k in range(m.neq)
-            if m.eq_type[k] == mujoco.mjtEq.mjEQ_CONNECT and m.eq_active0[k]}
+def _equalities(mujoco, m) -> dict[tuple[str, str], int]:
+    """The active ``connect`` and ``weld`` equality constraints, by kind and name
+    (``"connect<k>"``, ``"weld<k>"`` unnamed)."""
+    kinds = {int(mujoco.mjtEq.mjEQ_CONNECT): "connect", int(mujoco.mjtEq.mjEQ_WELD): "weld"}
+    found = {}
+    for k in range(m.neq):
+        kind = kinds.get(int(m.eq_type[k]))
+        if kind is not None and m.eq_active0[k]:
+            found[kind, mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, k) or f"{kind}{k}"] = k
+    return found
+
+
+def _check_welds(mujoco, m, d, what: str) -> None:
+    """Refuse a weld whose relative pose (``relpose``, by default the one at ``qpos0``) is
+    not the drawing's: mbd3d welds the bodies as drawn."""
+    for (kind, label), k in _equalities(mujoco, m).items():
+        if kind != "weld":
+            continue
+        one, two = int(m.eq_obj1id[k]), int(m.eq_obj2id[k])
+        R1, R2 = d.xmat[one].reshape(3, 3), d.xmat[two].reshape(3, 3)
+        drawn = np.concatenate([R1.T @ (d.xpos[two] - d.xpos[one]), np.zeros(4)])
+        mujoco.mju_mat2Quat(drawn[3:], (R1.T @ R2).ravel())
+        held = np.array(m.eq_data[k, 3:10], dtype=float)
+        if held[3:] @ drawn[3:] < 0.0:  # q and -q are one turn
+            held[3:] *= -1.0
+        scale = 1.0 + float(np.max(np.abs(d.xpos)))
+        if np.max(np.abs(drawn - held) * ([1.0 / scale] * 3 + [1.0] * 4)) > 1e-9:
+            raise ModelError(f"{what}: weld '{label}' holds body2 at {_pose(held)} in body1's "
+                             f"frame, the drawing (qpos0, the keyframe or joint_positions) at "
+                             f"{_pose(drawn)}; mbd3d welds the bodies as drawn: draw them "
+                             "at the weld's pose")
+
+
+def _pose(pose: np.ndarray) -> str:
+    return (f"position {np.array2string(pose[:3], precision=6)} m, quaternion "
+            f"{np.array2string(pose[3:], precision=6)}")
 
 
 def _local(body, p: np.ndarray) -> np.ndarray:
@@ -481,12 +529,14 @@ def _local(body, p: np.ndarray) -> np.ndarray:
     return R.T @ (np.asarray(p, dtype=float) - body.q0[:3])
 
 
-def _not_modelled(mujoco, m, owner: dict, sprung: set, connects: int) -> list[str]:
+def _not_modelled(mujoco, m, owner: dict, sprung: set, equalities: int) -> list[str]:
     """What of the file the model leaves out, each said once (the stiffness and damping of
-    the joints ``sprung`` and ``connects`` active connect constraints are modelled)."""
+    the joints ``sprung`` and ``equalities`` active connect and weld constraints are
+    modelled)."""
     out = []
     for count, label in ((m.nu, "actuators"), (m.ntendon, "tendons"),
-                         (m.neq - connects, "equality constraints (other than connect)")):
+                         (m.neq - equalities, "equality constraints (other than connect and "
+                                              "weld)")):
         if count:
             out.append(f"{count} {label}")
     dof = {"damping": m.dof_damping, "armature": m.dof_armature,
