@@ -127,41 +127,30 @@ def box_to_point(A, b, centre, half, p, c_i, n) -> float:
 
 
 @jit
-def closest_on_curve(curves, offset: int, count: int, dx: float, dy: float) -> float:
-    """The angle ``phi`` [rad] of the point of the curve stored at ``offset`` (``count``
-    intervals) closest to ``d = (dx, dy)``: Newton's method on the squared distance's slope
-    ``(rho - d) . rho' = 0`` from ``d``'s polar angle, with ``rho' = r' e + r e_perp`` and
-    ``rho'' = (r'' - r) e + 2 r' e_perp``; Gauss-Newton where ``d`` lies beyond the centre of
-    curvature (the slope's derivative is not clearly positive: a distance's maximum)."""
-    phi = math.atan2(dy, dx)
+def _angle_on_curve(curves, offset: int, count: int, x: float, y: float,
+                    closest: bool) -> float:
+    """The angle ``phi`` [rad] of a point of the curve stored at ``offset`` (``count``
+    intervals), by Newton's method on ``phi`` from the polar angle of ``(x, y)``: with
+    ``closest``, the point closest to ``d = (x, y)``, where the squared distance's slope
+    ``(rho - d) . rho'`` vanishes; else the support point farthest along the unit ``u = (x,
+    y)``, where ``-u . rho'`` does. ``rho' = r' e + r e_perp``, ``rho'' = (r'' - r) e + 2 r'
+    e_perp``. Where the slope's derivative is not clearly positive (``d`` beyond the centre
+    of curvature; a flat or hollow stretch) the step is the slope over ``|rho'|^2`` (closest)
+    or ``r`` (support) instead: downhill all the same."""
+    phi = math.atan2(y, x)
     for _ in range(60):
         r, r1, r2 = periodic_curve(curves, offset, count, phi)
         c, s = math.cos(phi), math.sin(phi)
-        wx, wy = r * c - dx, r * s - dy
         tx, ty = r1 * c - r * s, r1 * s + r * c
-        ux, uy = (r2 - r) * c - 2.0 * r1 * s, (r2 - r) * s + 2.0 * r1 * c
-        tangent = tx * tx + ty * ty
-        slope = tangent + wx * ux + wy * uy
-        step = -(wx * tx + wy * ty) / (slope if slope > 0.25 * tangent else tangent)
-        step = max(-0.5, min(0.5, step))
-        phi += step
-        if abs(step) <= 1e-15:
-            break
-    return phi
-
-
-@jit
-def support_on_curve(curves, offset: int, count: int, ux: float, uy: float) -> float:
-    """The angle ``phi`` [rad] of the curve's point farthest along the unit ``(ux, uy)``:
-    Newton's method on ``u . rho' = 0`` from ``u``'s polar angle, uphill along the slope
-    where ``u . rho''`` is not clearly negative (a flat or hollow stretch)."""
-    phi = math.atan2(uy, ux)
-    for _ in range(60):
-        r, r1, r2 = periodic_curve(curves, offset, count, phi)
-        c, s = math.cos(phi), math.sin(phi)
-        slope = ux * (r1 * c - r * s) + uy * (r1 * s + r * c)
-        bend = ux * ((r2 - r) * c - 2.0 * r1 * s) + uy * ((r2 - r) * s + 2.0 * r1 * c)
-        step = -slope / bend if bend < -0.25 * r else slope / r
+        vx, vy = (r2 - r) * c - 2.0 * r1 * s, (r2 - r) * s + 2.0 * r1 * c
+        if closest:
+            wx, wy = r * c - x, r * s - y
+            scale = tx * tx + ty * ty
+            slope, bend = wx * tx + wy * ty, scale + wx * vx + wy * vy
+        else:
+            scale = r
+            slope, bend = -(x * tx + y * ty), -(x * vx + y * vy)
+        step = -slope / (bend if bend > 0.25 * scale else scale)
         step = max(-0.5, min(0.5, step))
         phi += step
         if abs(step) <= 1e-15:
@@ -189,7 +178,7 @@ def cam_to_point(A, b, centre, curve, p, c_i, n) -> float:
     r'^2)``."""
     dx = A[b, 0, 0] * (p[0] - centre[0]) + A[b, 1, 0] * (p[1] - centre[1])  # A^T (p - c)
     dy = A[b, 0, 1] * (p[0] - centre[0]) + A[b, 1, 1] * (p[1] - centre[1])
-    phi = closest_on_curve(curve[0], curve[1], curve[2], dx, dy)
+    phi = _angle_on_curve(curve[0], curve[1], curve[2], dx, dy, True)
     r, r1 = _cam_point(A, b, centre, curve, phi, c_i)
     c, s = math.cos(phi), math.sin(phi)
     size = math.sqrt(r * r + r1 * r1)
@@ -208,8 +197,8 @@ def cam_to_line(A, b, centre, curve, P, m, c_i, n) -> float:
     ``n = -m`` (from the cam to the line)."""
     ux = -(A[b, 0, 0] * m[0] + A[b, 1, 0] * m[1])  # -m in the cam's axes
     uy = -(A[b, 0, 1] * m[0] + A[b, 1, 1] * m[1])
-    _cam_point(A, b, centre, curve, support_on_curve(curve[0], curve[1], curve[2], ux, uy),
-               c_i)
+    phi = _angle_on_curve(curve[0], curve[1], curve[2], ux, uy, False)
+    _cam_point(A, b, centre, curve, phi, c_i)
     gap = 0.0
     for x in range(3):
         gap += m[x] * (c_i[x] - P[x])
