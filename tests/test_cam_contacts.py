@@ -241,6 +241,8 @@ def test_cams_are_checked():
         s.build()
     with pytest.raises(ModelError, match="undercut"):
         CamProfile.sampled(lambda phi: 0.05 + 0.02 * np.cos(5 * phi)).surface(0.03)
+    with pytest.raises(ModelError, match="not the support function of a convex cam"):
+        CamProfile.sampled(lambda phi: 0.05 + 0.02 * np.cos(5 * phi)).envelope()
 
 
 def test_the_viewer_draws_the_cam_as_its_surface():

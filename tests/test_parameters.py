@@ -113,3 +113,9 @@ def test_bad_parameters_are_named():
     b.add_body("bob", mass=1.0, inertia=0.1, position=(1.0, 0.0))
     with pytest.raises(ModelError, match="no parameter 'bodies.bob.angle'"):
         mb.with_parameters(b.build(), {"bodies.bob.angle": 0.5})  # not given: no parameter
+    b = mb.ModelBuilder(dim=2)
+    bob = b.add_body("bob", mass=1.0, inertia=0.1, position=(1.0, 0.0))
+    b.add(mb.Torque("push", bob, lambda t: math.sin(t)))
+    with pytest.raises(ModelError, match="model 'model': parameters are named by the fields "
+                                         "of the model's file.*Python function"):
+        mb.parameters(b.build())

@@ -13,7 +13,7 @@ import math
 from typing import Any, Mapping
 
 from mbd3d.errors import ModelError, did_you_mean
-from mbd3d.io.model_file import _Reader
+from mbd3d.io.model_file import ModelFileError, _Reader
 from mbd3d.io.model_writer import model_data
 
 __all__ = ["parameters", "with_parameters"]
@@ -35,7 +35,7 @@ def parameters(model) -> dict[str, float]:
     2.0
     """
     return {name: float(container[key])
-            for name, (container, key) in _fields(model_data(model)).items()}
+            for name, (container, key) in _fields(_data(model)).items()}
 
 
 def with_parameters(model, values: Mapping[str, float]):
@@ -49,7 +49,7 @@ def with_parameters(model, values: Mapping[str, float]):
         not a finite number (or not a whole one where the field is), or a model that the
         changed value makes invalid (named as a model file's field would be).
     """
-    data = model_data(model)
+    data = _data(model)
     fields = _fields(data)
     for name, value in values.items():
         if name not in fields:
@@ -58,6 +58,15 @@ def with_parameters(model, values: Mapping[str, float]):
         container, key = fields[name]
         container[key] = _number(value, container[key], f"parameter '{name}'")
     return _Reader(f"<model '{model.name}'>", {}).build(data).model
+
+
+def _data(model) -> dict:
+    """The model's file as plain data, or why a file cannot hold it (a Python function)."""
+    try:
+        return model_data(model)
+    except ModelFileError as exc:
+        raise ModelError(f"model '{model.name}': parameters are named by the fields of the "
+                         f"model's file, which cannot hold it: {exc}") from None
 
 
 def _fields(data: dict) -> dict[str, tuple[Any, Any]]:

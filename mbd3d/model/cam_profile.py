@@ -105,6 +105,13 @@ class CamProfile(RecordsArguments):
         profile): the envelope ``h e + h' e_perp`` of the tangent lines, sampled at ``points``
         angles evenly spaced from 0 and interpolated again in polar form."""
         phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
+        # only a convex cam has a support function: its radius of curvature h + h'' > 0
+        curvature_radius = self(phi) + self(phi, 2)
+        if curvature_radius.min() <= 0.0:
+            k = int(np.argmin(curvature_radius))
+            raise ModelError(f"cam profile: h + h'' = {curvature_radius[k]:.4g} m at "
+                             f"{math.degrees(phi[k]):.4g} deg: not the support function of a "
+                             "convex cam, whose envelope a flat face touches")
         return _polar(self.envelope_points(phi), "this support function's envelope")
 
     def envelope_points(self, phi: Any) -> np.ndarray:

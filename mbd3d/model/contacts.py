@@ -37,8 +37,8 @@ __all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "Contact", "Joint
 class Contact(ForceElement):
     """A compliant contact between shapes on two bodies: a sphere, a capsule or a box against
     a plane; a sphere or a capsule against a sphere or a capsule, or inside a hole (a pin with
-    clearance); a box against a sphere; a sphere (a roller) on a planar disc cam; in either
-    order.
+    clearance); a box against a sphere; a sphere (a roller) or a plane (a flat face) on a
+    planar disc cam; in either order.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
     friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
@@ -62,7 +62,8 @@ class Contact(ForceElement):
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
         free bodies, not the inertia the pair has through joints (give ``effective_mass``).
         Hertz's stiffness from the material uses the radii ``r_i r_j / (r_i + r_j)`` (a
-        sphere's or a capsule's, a box's rounding, a plane's infinite; a hole's negative).
+        sphere's or a capsule's, a box's rounding, a plane's infinite; a hole's negative; a
+        cam's smallest radius, its base circle, where a follower dwells).
     friction : float
         Coulomb coefficient ``mu`` >= 0.
     slip_velocity : float
