@@ -49,7 +49,7 @@ from mbd3d.analyses.states import (driven_coordinates, forward_dynamics_at,
 from mbd3d.io.results import Results, format_table
 from mbd3d.io.model_file import load
 from mbd3d.io.model_writer import save
-from mbd3d.io.parameters import parameters, with_parameters
+from mbd3d.io.parameters import ModelVariants, parameters, with_parameters
 from mbd3d.io.urdf import UrdfWarning, load_urdf, urdf_builder
 from mbd3d.io.mjcf import MjcfWarning, load_mjcf, mjcf_builder
 
@@ -73,6 +73,7 @@ __all__ = [
     "forward_accelerations",
     "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "load", "save", "parameters", "with_parameters",
+    "ModelVariants",
     "load_urdf", "urdf_builder",
     "UrdfWarning", "load_mjcf", "mjcf_builder", "MjcfWarning",
     "format_table", "kinetic_energy", "potential_energy",

@@ -119,3 +119,33 @@ def test_bad_parameters_are_named():
     with pytest.raises(ModelError, match="model 'model': parameters are named by the fields "
                                          "of the model's file.*Python function"):
         mb.parameters(b.build())
+
+
+def peak_torque(results) -> float:
+    return float(np.max(np.abs(results.driver("motor").effort)))
+
+
+def test_a_sweep_over_named_parameters_runs_the_models_built_with_them(tmp_path):
+    """``ModelVariants(model)`` as a sweep's factory: each row's metric is that of the model
+    built in Python with the point's values; it travels by pickle (as to Dask's workers); the
+    same sweep again runs nothing; a changed model is a new sweep."""
+    import pickle
+
+    from mbd3d.sweeps import Analysis, grid, sweep
+
+    variants = pickle.loads(pickle.dumps(mb.ModelVariants(slider_crank())))
+    points = grid(**{"forces.spring.stiffness": [10.0, 40.0], "bodies.rod.mass": [1.0, 3.0]})
+    analysis = Analysis("inverse dynamics", np.linspace(0.0, 0.5, 11))
+    table = sweep(variants, points, analysis, {"peak torque": peak_torque}, tmp_path / "a",
+                  backend="serial", progress=False)
+    for row in table:
+        built = slider_crank(stiffness=row["forces.spring.stiffness"],
+                             rod_mass=row["bodies.rod.mass"])
+        assert row["peak torque"] == peak_torque(mb.inverse_dynamics(built, analysis.t))
+    assert len(set(table.column("peak torque"))) == 4
+    again = sweep(mb.ModelVariants(slider_crank()), points, analysis,
+                  {"peak torque": peak_torque}, tmp_path / "a", backend="serial",
+                  progress=False)
+    assert again.summary["skipped"] == len(points)  # stored: none run again
+    assert (mb.ModelVariants(slider_crank(pin=0.4)).sweep_identity()
+            != variants.sweep_identity())

@@ -4,19 +4,25 @@ the model's file (:mod:`mbd3d.io.model_file`): ``bodies.crank.mass``,
 ``gravity[1]``. A model built in Python has the same names as one read from a file, since
 the file is the list of constructor calls that built the model
 (:func:`mbd3d.io.model_writer.model_data`); the names are those ``mbd3d run --set`` and
-:func:`mbd3d.io.model_file.read`'s ``changes`` take.
+:func:`mbd3d.io.model_file.read`'s ``changes`` take, and :class:`ModelVariants` makes a
+sweep's factory of them.
 """
 
 from __future__ import annotations
 
+import copy
+import hashlib
+import json
 import math
 from typing import Any, Mapping
+
+import numpy as np
 
 from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io.model_file import ModelFileError, _Reader
 from mbd3d.io.model_writer import model_data
 
-__all__ = ["parameters", "with_parameters"]
+__all__ = ["parameters", "with_parameters", "ModelVariants"]
 
 #: the parts of a model's data that hold its parameters (not its format, name or analyses)
 _SECTIONS = ("gravity", "bodies", "joints", "forces")
@@ -49,15 +55,61 @@ def with_parameters(model, values: Mapping[str, float]):
         not a finite number (or not a whole one where the field is), or a model that the
         changed value makes invalid (named as a model file's field would be).
     """
-    data = _data(model)
+    return _changed(_data(model), values)
+
+
+class ModelVariants:
+    """A parameter sweep's factory (:func:`mbd3d.sweep`): ``ModelVariants(model)(**values)``
+    is ``with_parameters(model, values)``, the points' keys being parameter names (e.g.
+    ``mb.grid(**{"forces.spring.stiffness": [10.0, 20.0]})``). It holds the model as its
+    file's plain data, which Dask ships to its workers, and names itself to the sweep's store
+    by a digest of that data, so that a changed model is a new sweep.
+
+    Examples
+    --------
+    >>> import mbd3d as mb
+    >>> b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    >>> bob = b.add_body("bob", mass=2.0, inertia=0.01, position=(1.0, 0.0))
+    >>> heavier = mb.ModelVariants(b.build())(**{"bodies.bob.mass": 3.0})
+    >>> mb.parameters(heavier)["bodies.bob.mass"]
+    3.0
+    """
+
+    def __init__(self, model):
+        self.data = _data(model)
+        text = json.dumps(self.data, default=_mesh_digest, separators=(",", ":"))
+        self.digest = hashlib.sha1(text.encode()).hexdigest()
+
+    def sweep_identity(self) -> str:
+        return f"model {self.data.get('name')!r} {self.digest}"
+
+    def __call__(self, **values: float):
+        return _changed(copy.deepcopy(self.data), values)
+
+
+def _mesh_digest(value: Any) -> str:
+    """A body's shape given as a mesh object, as text that is the same in every session."""
+    digest = hashlib.sha1()
+    for part in (getattr(value, "vertices", None), getattr(value, "faces", None)):
+        if part is None:
+            raise ModelError(f"a model's shape must be a mesh, a path or a primitive, got a "
+                             f"{type(value).__name__}")
+        digest.update(np.ascontiguousarray(part).tobytes())
+    return digest.hexdigest()
+
+
+def _changed(data: dict, values: Mapping[str, float]):
+    """The model of ``data`` (a model's file as plain data, changed in place) with the
+    parameters ``values`` set, checked."""
     fields = _fields(data)
-    for name, value in values.items():
-        if name not in fields:
-            raise ModelError(f"model '{model.name}': no parameter '{name}'"
-                             f"{did_you_mean(name, fields)}; mb.parameters(model) lists them")
-        container, key = fields[name]
-        container[key] = _number(value, container[key], f"parameter '{name}'")
-    return _Reader(f"<model '{model.name}'>", {}).build(data).model
+    name = data.get("name")
+    for key, value in values.items():
+        if key not in fields:
+            raise ModelError(f"model '{name}': no parameter '{key}'"
+                             f"{did_you_mean(key, fields)}; mb.parameters(model) lists them")
+        container, field = fields[key]
+        container[field] = _number(value, container[field], f"parameter '{key}'")
+    return _Reader(f"<model '{name}'>", {}).build(data).model
 
 
 def _data(model) -> dict:
