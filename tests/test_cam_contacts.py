@@ -110,6 +110,30 @@ def landing(t0: float, theta0: float, y0: float, v0: float,
     return t, v, SPEED * lift(theta0 + SPEED * tau, 1, face)
 
 
+def turn(angle: float) -> np.ndarray:
+    """The planar rotation by ``angle`` [rad]."""
+    return np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+
+
+def random_states(seed: int, count: int = 300):
+    """``count`` random ``(q, qd)`` of a cam near the origin, turned anyhow, and another
+    body anywhere within 0.09 m of it."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        yield (np.concatenate([rng.normal(0.0, 0.01, 2), rng.uniform(-4, 4, 1),
+                               rng.uniform(-0.09, 0.09, 2), rng.uniform(-4, 4, 1)]),
+               rng.normal(0.0, 1.0, 6))
+
+
+def assert_rate_is_the_gaps_derivative(model: mb.Model, q: np.ndarray, qd: np.ndarray):
+    """The reported gap rate against central differences of the gap along the motion."""
+    h = 1e-7
+    ahead = mb.contact_states(model, q + h * qd).gap[0]
+    behind = mb.contact_states(model, q - h * qd).gap[0]
+    assert mb.contact_states(model, q, qd).gap_rate[0] == pytest.approx(
+        (ahead - behind) / (2 * h), abs=1e-7)
+
+
 def test_the_gap_is_the_distance_to_an_off_centre_circle():
     """The surface is a spline through the circle's polar equation; the gap of a roller
     anywhere about it, turned anyhow, is its distance to the circle less the radii."""
@@ -120,13 +144,7 @@ def test_the_gap_is_the_distance_to_an_off_centre_circle():
                      mb.Sphere(roller, ROLLER, point=(0.003, 0.0)),
                      law=mb.LinearContact(stiffness=1e6, damping=10.0)))
     model = b.build()
-    rng = np.random.default_rng(7)
-    for _ in range(300):
-        q = np.concatenate([rng.normal(0.0, 0.01, 2), rng.uniform(-4, 4, 1),
-                            rng.uniform(-0.09, 0.09, 2), rng.uniform(-4, 4, 1)])
-        qd = rng.normal(0.0, 1.0, 6)
-        turn = lambda a: np.array([[math.cos(a), -math.sin(a)],  # noqa: E731
-                                   [math.sin(a), math.cos(a)]])
+    for q, qd in random_states(7):
         centre = q[:2] + turn(q[2]) @ np.array([0.001 + ECC, -0.002])
         pin = q[3:5] + turn(q[5]) @ np.array([0.003, 0.0])
         if np.linalg.norm(pin - centre) < 0.6 * R:  # deep inside: no closest point of use
@@ -136,11 +154,7 @@ def test_the_gap_is_the_distance_to_an_off_centre_circle():
         assert state.gap[0] == pytest.approx(expected, abs=1e-11)
         normal = (pin - centre) / np.linalg.norm(pin - centre)
         np.testing.assert_allclose(state.normal[0, :2], normal, atol=1e-9)
-        # the gap's rate is the gap's derivative along the motion
-        h = 1e-7
-        ahead = mb.contact_states(model, q + h * qd).gap[0]
-        behind = mb.contact_states(model, q - h * qd).gap[0]
-        assert state.gap_rate[0] == pytest.approx((ahead - behind) / (2 * h), abs=1e-7)
+        assert_rate_is_the_gaps_derivative(model, q, qd)
 
 
 @pytest.mark.parametrize("face", [False, True])
@@ -180,22 +194,13 @@ def test_a_flat_face_touches_the_cam_at_its_support_point():
                      mb.Plane(plate, normal=normal, point=(0.01, -0.003)),
                      law=mb.LinearContact(stiffness=1e6, damping=10.0)))
     model = b.build()
-    rng = np.random.default_rng(5)
-    for _ in range(300):
-        q = np.concatenate([rng.normal(0.0, 0.01, 2), rng.uniform(-4, 4, 1),
-                            rng.uniform(-0.09, 0.09, 2), rng.uniform(-4, 4, 1)])
-        qd = rng.normal(0.0, 1.0, 6)
-        turn = lambda a: np.array([[math.cos(a), -math.sin(a)],  # noqa: E731
-                                   [math.sin(a), math.cos(a)]])
+    for q, qd in random_states(5):
         centre = q[:2] + turn(q[2]) @ np.array([ECC, 0.0])
         point, m = q[3:5] + turn(q[5]) @ np.array([0.01, -0.003]), turn(q[5]) @ normal
         state = mb.contact_states(model, q, qd)
         assert state.gap[0] == pytest.approx(m @ (centre - point) - R, abs=1e-11)
         np.testing.assert_allclose(state.normal[0, :2], -m, atol=1e-15)
-        h = 1e-7
-        ahead = mb.contact_states(model, q + h * qd).gap[0]
-        behind = mb.contact_states(model, q - h * qd).gap[0]
-        assert state.gap_rate[0] == pytest.approx((ahead - behind) / (2 * h), abs=1e-7)
+        assert_rate_is_the_gaps_derivative(model, q, qd)
     support = CamProfile.sampled(lambda psi: ECC * np.cos(psi) + R, 1440)
     phi = np.linspace(0.0, 2 * math.pi, 1001)
     np.testing.assert_allclose(support.envelope(1440)(phi), surface()(phi), rtol=0, atol=1e-10)
