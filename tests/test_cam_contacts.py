@@ -154,6 +154,9 @@ def test_the_gap_is_the_distance_to_an_off_centre_circle():
         assert state.gap[0] == pytest.approx(expected, abs=1e-11)
         normal = (pin - centre) / np.linalg.norm(pin - centre)
         np.testing.assert_allclose(state.normal[0, :2], normal, atol=1e-9)
+        # the point midway between the circle's surface and the roller's
+        middle = (centre + R * normal + pin - ROLLER * normal) / 2
+        np.testing.assert_allclose(state.point[0, :2], middle, atol=1e-11)
         assert_rate_is_the_gaps_derivative(model, q, qd)
 
 
@@ -200,6 +203,10 @@ def test_a_flat_face_touches_the_cam_at_its_support_point():
         state = mb.contact_states(model, q, qd)
         assert state.gap[0] == pytest.approx(m @ (centre - point) - R, abs=1e-11)
         np.testing.assert_allclose(state.normal[0, :2], -m, atol=1e-15)
+        # midway between the circle's point nearest the line and the line
+        lowest = centre - R * m
+        np.testing.assert_allclose(state.point[0, :2], lowest - state.gap[0] / 2 * m,
+                                   atol=1e-11)
         assert_rate_is_the_gaps_derivative(model, q, qd)
     support = CamProfile.sampled(lambda psi: ECC * np.cos(psi) + R, 1440)
     phi = np.linspace(0.0, 2 * math.pi, 1001)
