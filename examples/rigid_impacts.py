@@ -5,9 +5,10 @@ restitution of 0.5; a small circle at each end is its contact (mb.RigidImpact). 
 an impact solved by Newton's law on the whole rod at once: the end's closing speed turns
 into half of it opening, and the impulse P follows from the rod's mass and inertia alone,
 P = (1 + e) v / (1/m + (a cos(angle))^2 / I) for an end at lever a cos(angle) from the centre.
-The rod rocks from end to end, ever lower, until an end opens slower than its rest speed while
-gravity presses it down: the run stops there and says so (a rigid contact at rest is not
-modelled yet). Recorded to rigid_impacts.rrd: rerun rigid_impacts.rrd
+The rod rocks from end to end, ever lower. Where an end opens slower than its rest speed while
+gravity presses it down, it has come to rest: it is held on the floor (the rod pivots about it)
+until the other end's impact lifts it again. At last both ends rest, each carrying half the
+rod's weight. Recorded to rigid_impacts.rrd: rerun rigid_impacts.rrd
 
 Run: python examples/rigid_impacts.py [--rrd FILE] [--show]
 """
@@ -53,7 +54,12 @@ def main(n_points: int = 401, rrd: str | None = None, show: bool = False) -> mb.
     lever = HALF * math.cos(TILT)  # the right end is higher: it tilts back at the first touch
     closed_form = (1 + RESTITUTION) * -first["rate_before"] / (1 / MASS + lever ** 2 / INERTIA)
     print(f"\nfirst impulse {first['impulse']:.9f} N s, closed form {closed_form:.9f} N s")
-    print(f"{res.status}: {res.message}")
+    events = {"rest": "comes to rest", "release": "lets go"}
+    for rest in res.stats["rests"]:
+        print(f"{rest['time']:.6f} s: {', '.join(rest['contacts'])} {events[rest['event']]}")
+    forces = res.contacts().normal_force[-1]
+    print(f"at {res.t[-1]:g} s the ends carry {forces[0]:.9f} N and {forces[1]:.9f} N, "
+          f"half the weight {MASS * G / 2:.9f} N")
     if rrd is not None:
         record(res, rrd, overwrite=True, show=show)
     return res

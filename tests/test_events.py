@@ -148,6 +148,12 @@ def test_bad_events_are_refused_by_name():
         mb.Event("e", lambda t, q, qd: q[k], direction=2)
     with pytest.raises(mb.ModelError, match="action"):
         mb.Event("e", lambda t, q, qd: q[k], action="bounce")
+    with pytest.raises(mb.ModelError, match="event 'e': rate must be callable"):
+        mb.Event("e", lambda t, q, qd: q[k], rate=1.0)
+    wild = mb.Event("wild", lambda t, q, qd: q[k], rate=lambda t, q, qd: None)
+    with pytest.raises(mb.ModelError, match=r"event 'wild': rate\(t, q, qd\) must return a "
+                                            "finite number, returned None"):
+        mb.forward_dynamics(model, [0.0, 0.1], events=[wild])
     with pytest.raises(mb.ModelError, match="events must be mbd3d.Event"):
         mb.forward_dynamics(model, [0.0, 0.1], events=[lambda t, q, qd: q[k]])
     nan = mb.Event("broken", lambda t, q, qd: float("nan"))
@@ -157,3 +163,28 @@ def test_bad_events_are_refused_by_name():
     with pytest.raises(mb.ModelError, match=r"event 'bottom' at t = 0.48333\d* s: its action "
                                             r"must return \(q, qd\), two arrays of 3 finite"):
         mb.forward_dynamics(model, [0.0, 1.0], events=[careless])
+
+
+@pytest.mark.parametrize("with_rate", [True, False])
+def test_a_crossing_and_return_between_samples_is_found_from_the_rate(with_rate):
+    """Thrown up at 5 m/s, the ball stays above 99.99 % of its apex height for only 10 ms
+    around the apex: the long exact steps of its flight sample it too sparsely, and miss it.
+    Given its rate, the event is evaluated where that turns (the apex) too, and the passage
+    up is found at the root of y = 0.9999 h, h = v^2 / (2 g)."""
+    v = 5.0
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    b.add_body("ball", mass=0.2, inertia=1e-4, position=(0.0, 0.0), velocity=(0.0, v))
+    model = b.build()
+    k = model.coordinate_index("ball.y")
+    h = v * v / (2 * G)
+    near = mb.Event("near the apex", lambda t, q, qd: q[k] - 0.9999 * h, direction=1,
+                    rate=(lambda t, q, qd: qd[k]) if with_rate else None)
+    res = mb.forward_dynamics(model, [0.0, 2.5], method="DOP853", events=[near],
+                              rtol=1e-11, atol=1e-12)
+    times = [e["time"] for e in res.stats["events"]]
+    if not with_rate:  # the steps are as long as the test says: the crossing is unseen
+        assert times == []
+        return
+    up = (v - math.sqrt(v * v - 2 * G * 0.9999 * h)) / G
+    assert len(times) == 1
+    np.testing.assert_allclose(times[0], up, rtol=0, atol=1e-9)

@@ -173,7 +173,10 @@ def test_rigid_impacts_example(capsys, tmp_path):
     assert len(rows) == len(res.stats["impacts"]) > 4
     for _, closing, opening in rows:  # Newton's law at every touch, e = 0.5
         assert float(opening) == pytest.approx(0.5 * float(closing), rel=1e-5)
-    assert res.status == "stopped" and "came to rest" in out
+    left, right, half = (float(x) for x in re.search(
+        r"the ends carry (\S+) N and (\S+) N, half the weight (\S+) N", out).groups())
+    assert left == pytest.approx(half, rel=1e-9) and right == pytest.approx(half, rel=1e-9)
+    assert res.status == "complete" and "left end comes to rest" in out and "right end comes to rest" in out
     assert recorded_steps(rrd, "rod") == len(res.t)
 
 

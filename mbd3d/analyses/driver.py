@@ -35,6 +35,7 @@ from mbd3d.analyses.impacts import RigidContacts, RunStopped
 from mbd3d.analyses.initial import consistent_initial_state
 from mbd3d.analyses.kinematics import check_times, project_state
 from mbd3d.analyses.lift_off import warn_lift_off
+from mbd3d.analyses.resting import HeldRows
 
 __all__ = ["DynamicsRequest", "Event", "Integrator", "Segment", "drive"]
 
@@ -68,12 +69,19 @@ class Event:
         before it are kept, ``status == "stopped"``); a callable ``action(t, q, qd) -> (q, qd)``
         gives the state to go on from (an impact map: new velocities), which is projected onto
         the constraints before the integrator restarts there.
+    rate : callable, optional
+        ``rate(t, q, qd) -> float``: the function's rate of change along the motion [its unit
+        per s]. Given, a crossing and return between two samples is still found: where the
+        rate changes sign between them, the function is evaluated at that turn too (a ball
+        dropped through a ball within one long step: the gap between their surfaces goes
+        below zero and back).
     """
 
     name: str
     function: Callable[[float, np.ndarray, np.ndarray], float]
     direction: int = 0
     action: Any = "record"
+    rate: Callable[[float, np.ndarray, np.ndarray], float] | None = None
 
     def __post_init__(self):
         if not callable(self.function):
@@ -85,11 +93,15 @@ class Event:
         if not (self.action in ("record", "stop") or callable(self.action)):
             raise ModelError(f"event '{self.name}': action must be 'record', 'stop' or a "
                              f"callable (t, q, qd) -> (q, qd), got {self.action!r}")
+        if self.rate is not None and not callable(self.rate):
+            raise ModelError(f"event '{self.name}': rate must be callable as "
+                             f"rate(t, q, qd) -> float, got {self.rate!r}")
 
-    def value(self, t: float, q: np.ndarray, qd: np.ndarray) -> float:
-        g = self.function(t, q, qd)
+    def value(self, t: float, q: np.ndarray, qd: np.ndarray, part: str = "function") -> float:
+        """The event's function (``part="rate"``: its rate) at ``(t, q, qd)``, checked."""
+        g = (self.function if part == "function" else self.rate)(t, q, qd)
         if not (_is_number(g) and np.isfinite(g)):
-            raise ModelError(f"event '{self.name}': function(t, q, qd) must return a finite "
+            raise ModelError(f"event '{self.name}': {part}(t, q, qd) must return a finite "
                              f"number, returned {g!r} at t = {t:.6g} s")
         return float(g)
 
@@ -172,6 +184,10 @@ class Integrator:
 
     stats: dict
     redundant: bool = False
+    #: whether the method holds rigid contacts at rest (:mod:`mbd3d.analyses.resting`): its
+    #: accelerations then take ``held``'s forces, its steps project the held rows
+    holds_contacts: bool = False
+    held: Any = None
 
     def rows_dependent(self, q: np.ndarray) -> bool:
         """Whether the constraint rows depend on each other at the initial positions ``q``."""
@@ -257,15 +273,23 @@ class _Events:
         times = [a + (b - a) * j / _SAMPLES for j in range(1, _SAMPLES)] + [b]
         states = [segment.state_at(t) for t in times]
         crossings, g_end = [], []
+        start = segment.state_at(a)
         for k, event in enumerate(self.events):
             values = [event.value(t, *state) for t, state in zip(times, states)]
+            rates = None if event.rate is None else [
+                event.value(t, *state, "rate") for t, state in zip([a] + times, [start] + states)]
             t_prev, g_prev = a, self.g[k]
-            for t, g in zip(times, values):
+            for j, (t, g) in enumerate(zip(times, values)):
+                t_cross = t
+                if g_prev is not None and rates is not None and not event.crosses(g_prev, g):
+                    t_cross = self._turn(event, segment, t_prev, t, rates[j], rates[j + 1])
+                    g = g if t_cross is None else event.value(t_cross, *segment.state_at(
+                        t_cross))
                 if g_prev is not None and event.crosses(g_prev, g):
-                    crossings.append((self._root(event, segment, t_prev, t), k))
+                    crossings.append((self._root(event, segment, t_prev, t_cross), k))
                     if event.action != "record":
                         break  # it acts at its first crossing: nothing after it happens
-                t_prev, g_prev = t, g
+                t_prev, g_prev = t, values[j]
             g_end.append(values[-1])
         self.g = g_end
         for te, k in sorted(crossings):
@@ -274,6 +298,16 @@ class _Events:
                 return te, event
             self.found.append({"name": event.name, "time": te})
         return None
+
+    @staticmethod
+    def _turn(event: Event, segment: Segment, a: float, b: float, rate_a: float,
+              rate_b: float) -> float | None:
+        """Where the event's function turns between ``a`` and ``b`` [s] (its rate changes sign
+        there), or None."""
+        if not rate_a * rate_b < 0.0:
+            return None
+        return float(brentq(lambda t: event.value(t, *segment.state_at(t), "rate"), a, b,
+                            xtol=4 * np.finfo(float).eps * max(abs(a), abs(b))))
 
     @staticmethod
     def _root(event: Event, segment: Segment, a: float, b: float) -> float:
@@ -312,11 +346,25 @@ def _new_state(event: Event, t: float, given: Any, n: int) -> tuple[np.ndarray, 
 
 
 def _impact_events(rigid: RigidContacts) -> tuple[Event, ...]:
-    """An event per rigid contact row: its gap closing, acted on by the impact."""
+    """An event per rigid contact row: its gap closing, acted on by the impact; and where the
+    rows are held at rest, its force letting go, acted on by the release."""
     def gap(index: int) -> Callable:
         return lambda t, q, qd: rigid.gap(index, t, q, qd)
-    return tuple(Event(name, gap(k), direction=-1, action=rigid.act)
-                 for k, name in enumerate(rigid.names)) if len(rigid) else ()
+
+    def rate(index: int) -> Callable:
+        return lambda t, q, qd: rigid.gap_rate(index, t, q, qd)
+
+    def pressing(index: int) -> Callable:
+        return lambda t, q, qd: rigid.holding.release_value(index, t, q, qd)
+    if not len(rigid):
+        return ()
+    events = tuple(Event(name, gap(k), direction=-1, action=rigid.act, rate=rate(k))
+                   for k, name in enumerate(rigid.names))
+    if rigid.holding is not None:
+        events += tuple(Event(f"{name} lets go", pressing(k), direction=-1,
+                              action=rigid.holding.release)
+                        for k, name in enumerate(rigid.names))
+    return events
 
 
 def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
@@ -326,16 +374,23 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
     stats = integrator.stats
     out = ResultsBuffer(model, "forward dynamics", t, stats)
     rigid = RigidContacts(model, integrator.chart, lambda: integrator.redundant, stats)
+    if len(rigid) and integrator.holds_contacts and model.friction is None:
+        rigid.holding = integrator.held = HeldRows(rigid, request.constraint_tol, stats)
     events = _Events(request.events + _impact_events(rigid), stats, len(request.events))
 
     def store(q, qd, qdd, lam) -> None:
-        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns())
+        forces = None  # the normal forces of the rigid rows held at rest, every contact row's
+        if rigid.holding is not None:
+            forces = np.zeros(len(rigid.group.names))
+            forces[rigid.rows] = rigid.holding.forces(float(t[out.done]), q, qd)
+        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns(), forces)
 
     def loop() -> tuple[str, str] | None:
         q, qd, redundant = initial_state(request, integrator, integrator.rows_dependent)
-        store(q, qd, *integrator.start(float(t[0]), q, qd, redundant))
         if len(rigid):
-            rigid.start(float(t[0]), q, qd)
+            integrator.redundant = redundant  # the impacts' response needs it from the start
+            q, qd = rigid.start(float(t[0]), q, qd)
+        store(q, qd, *integrator.start(float(t[0]), q, qd, redundant))
         events.start(float(t[0]), q, qd)
         watch.tick(t[0], 0)
         while out.done < len(t):

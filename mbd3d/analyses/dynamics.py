@@ -146,8 +146,12 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         ``impacts``: one dict per contact row and impact, its ``time`` [s], ``contact``,
         ``impulse`` [N s; a turning stop's N m s], ``rate_before`` and ``rate_after`` (the
         gap's, [m/s or rad/s]), ``energy_lost`` [J] and ``point`` (global [m]: midway
-        between the shapes; a stop's, its joint's point on body j). ``status`` is "stopped" when an
-        event stopped the run, or a rigid contact came to rest (the message names it).
+        between the shapes; a stop's, its joint's point on body j); and where the explicit
+        methods hold rigid contacts at rest (:mod:`mbd3d.analyses.resting`), ``rests``: one
+        dict per rest or release, its ``time`` [s], ``event`` ("rest" or "release"),
+        ``contacts`` (names) and ``energy_lost`` [J] (the bounces no longer made). ``status``
+        is "stopped" when an event stopped the run, or a rigid contact came to rest that the
+        method does not hold (the message names it).
 
     Raises
     ------

@@ -43,6 +43,8 @@ class ExplicitRungeKutta(Integrator):
     """A compiled explicit pair (``request.method``, one of
     :data:`mbd3d.numerics.compiled.runge_kutta.TABLEAUS`) as the driver runs it."""
 
+    holds_contacts = True
+
     def __init__(self, request: DynamicsRequest):
         model = self.model = request.model
         if request.step is not None:
@@ -60,7 +62,7 @@ class ExplicitRungeKutta(Integrator):
         # the charts as quaternions, their signs carried along every step (continuous output)
         self._turns = to_quaternion(self.charts) if self.spatial else np.zeros((0, 4))
         self.redundant = False  # set at the start: the constraint rows depend on each other
-        self.key = None
+        self.key = self.arrays = self._python = None
 
     def chart(self) -> np.ndarray | None:
         return self.charts.copy() if self.spatial else None
@@ -81,19 +83,35 @@ class ExplicitRungeKutta(Integrator):
             yield
 
     def _python_accelerations(self, tt, q, qd, charts_now):
-        # redundant constraints (the augmented Lagrangian) or joint friction (consistent
-        # with its reactions): solved in Python
+        # redundant constraints (the augmented Lagrangian), joint friction (consistent with
+        # its reactions) or rigid contacts held at rest: solved in Python
         charts_now = charts_now if self.spatial else None
         qdd, lam, _ = consistent_accelerations(self.model, tt, q, qd, charts_now,
                                                redundant=self.redundant, fallback=False)
-        return qdd, lam
+        return self._held_accelerations(tt, q, qd, qdd, lam)
 
     def _accelerations(self, tt: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         qdd, lam, _ = consistent_accelerations(self.model, tt, q, qd, self.chart(),
                                                fallback=self.redundant, redundant=self.redundant)
         if self.redundant:
             self.stats["singular_outputs"].append(float(tt))
-        return qdd, lam
+        return self._held_accelerations(tt, q, qd, qdd, lam)
+
+    def _held_accelerations(self, tt, q, qd, qdd, lam) -> tuple:
+        """``(qdd, lam)`` with the forces of the rigid contacts held at rest."""
+        if self.held is None or not self.held.any():
+            return qdd, lam
+        return self.held.accelerations(tt, q, qd, qdd, lam)
+
+    def _set_arrays(self) -> None:
+        """The model's compiled arrays: the right-hand side in Python where the compiled one
+        does not cover the model's state (see :meth:`_python_accelerations`)."""
+        held = self.held is not None and self.held.any()
+        python = self.redundant or self.model.friction is not None or held
+        if self.arrays is None or python != self._python:
+            self._python = python
+            self.arrays = self.model._core.arrays(python_accelerations=python)
+            self.work = workspace(self.spatial, self.arrays)
 
     # the integrated state is y = (q, v): positions and the velocities of BodyType.velocities
     # (angular velocities in body axes for spatial bodies), not (q, qd)
@@ -112,9 +130,7 @@ class ExplicitRungeKutta(Integrator):
         self.redundant = redundant
         first = self._accelerations(t0, q, qd)
         model, n, r = self.model, self.n, self.request
-        self.arrays = model._core.arrays(
-            python_accelerations=redundant or model.friction is not None)
-        self.work = workspace(self.spatial, self.arrays)
+        self._set_arrays()
         # atol in the model's units: positions in units of its length, angles in radians,
         # rates per second, so that a micrometre mechanism is integrated as accurately
         self.atol_y = r.atol * np.tile(model.coordinate_scale, 2)
@@ -189,24 +205,35 @@ class ExplicitRungeKutta(Integrator):
             self.recent[:] = 0.0
 
     def output(self, t: float, segment: Segment) -> tuple:
-        q, qd = project_state(self.model, t, *segment.state_at(t), self.request.projection_tol,
-                              self.chart(), self.redundant)
+        tol = self.request.projection_tol
+        q, qd = project_state(self.model, t, *segment.state_at(t), tol, self.chart(),
+                              self.redundant)
+        if self.held is not None and self.held.any():
+            q, qd = self.held.settle(t, q, qd, tol=tol) or (q, qd)  # rows held at rest too
         return (q, qd) + self._accelerations(t, q, qd)
 
     def after_step(self, segment: Segment) -> None:
-        if not segment.flags & stepping.DRIFTED:
+        held = self.held is not None and self.held.any()
+        if not (segment.flags & stepping.DRIFTED or held):
             return
         q, qd = self._split(self.y)
         tol, t_now = self.request.projection_tol, self.t_now
-        projected = None if self.redundant else _project_with_one_factorization(
-            self.model, t_now, q, qd, tol, self.chart())
-        q, qd = projected or project_state(self.model, t_now, q, qd, tol, self.chart(),
-                                           self.redundant)
+        changed = bool(segment.flags & stepping.DRIFTED)
+        if changed:
+            projected = None if self.redundant else _project_with_one_factorization(
+                self.model, t_now, q, qd, tol, self.chart())
+            q, qd = projected or project_state(self.model, t_now, q, qd, tol, self.chart(),
+                                               self.redundant)
+        if held and (settled := self.held.settle(t_now, q, qd)) is not None:
+            q, qd, changed = *settled, True  # the rows held at rest drifted (resting.py)
+        if not changed:
+            return
         self.stats["projections"] += 1
         self.restart(t_now, q, qd)
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         # the method goes on from the new state: only its first stage is evaluated again
+        self._set_arrays()  # rows held at rest or let go change how it is evaluated
         self.y[:] = self._join(q, qd)
         self.t_now = t
         self._first_stage(t)

@@ -21,8 +21,9 @@ Newton's cradle, whose struck ball alone leaves).
 Each row's energy lost, ``-(1 - e) lam v- / 2`` (>= 0), adds up to the kinetic energy lost
 where no driver moves. A row that is left touching, opening slower than its ``rest_speed``
 while the free motion presses it closed, would bounce ever shorter (infinitely many impacts
-in a finite time): it has come to rest, which is not modelled yet, and the run stops there
-(:class:`RunStopped`), naming it.
+in a finite time): it has come to rest. The explicit integrators then hold it closed until it
+lets go (:mod:`mbd3d.analyses.resting`); generalized-alpha does not yet, and the run stops
+there (:class:`RunStopped`), naming it.
 """
 
 from __future__ import annotations
@@ -64,7 +65,10 @@ class RigidContacts:
     the impacts are recorded in ``stats["impacts"]``."""
 
     def __init__(self, model, chart: Callable, redundant: Callable[[], bool], stats: dict):
-        self.model, self._chart, self._redundant = model, chart, redundant
+        self.model, self.chart, self.redundant = model, chart, redundant
+        #: the rows held at rest (:class:`mbd3d.analyses.resting.HeldRows`), where the
+        #: integrator holds them; else a row at rest stops the run
+        self.holding = None
         self.group = contact_group(model, required=False)
         rigid = self.group.rigid if self.group is not None else np.zeros(0, dtype=bool)
         self.rows = np.flatnonzero(rigid)
@@ -84,13 +88,21 @@ class RigidContacts:
 
     def gap(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
         """The event function of rigid row ``index``: its gap [m or rad] beyond the depth
-        at which it fires."""
-        return float(self._states(q, qd)[0][index] - self.floor[index])
+        at which it fires (1 while it is held at rest)."""
+        if self.holding is not None and self.holding.mask[index]:
+            return 1.0
+        return float(self.states(q, qd)[0][index] - self.floor[index])
 
-    def _states(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def gap_rate(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        """The rate [m/s or rad/s] of :meth:`gap` (0 while it is held at rest)."""
+        if self.holding is not None and self.holding.mask[index]:
+            return 0.0
+        return float(self.states(q, qd)[1][index])
+
+    def states(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(gap, rate)`` of the rigid rows at ``(q, qd)`` in the current charts; the last
         state's are kept, since every row's event asks at the same states."""
-        chart = self._chart()
+        chart = self.chart()
         key = (q.tobytes(), qd.tobytes(), None if chart is None else chart.tobytes())
         if key != self._key:
             states = contact_history(self.model, q[None], qd[None],
@@ -100,9 +112,11 @@ class RigidContacts:
             self._points = states.point[0, self.rows]
         return self._report
 
-    def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        """Refuse rows inside each other at the run's start ``t``; set where rows fire."""
-        gap, _ = self._states(q, qd)
+    def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Refuse rows inside each other at the run's start ``t``; hold the rows that rest
+        there (where the integrator holds rows) and set where rows fire; the state to start
+        from."""
+        gap, rate = self.states(q, qd)
         inside = np.flatnonzero(gap < -CLOSED * self.scale)
         if len(inside):
             k = inside[0]
@@ -110,22 +124,33 @@ class RigidContacts:
                 f"rigid contact '{self.names[k]}' starts {-gap[k]:.6g} {self.units[k]} inside "
                 f"at t = {t:.9g} s: rigid shapes (and stops) must start apart or touching; "
                 "move the bodies (or give q0) so that they do not overlap")
-        self._set_floors(q, qd)
+        resting = (gap <= CLOSED * self.scale) & (np.abs(rate) < self.rest_speed)
+        if self.holding is not None and np.any(resting):
+            q, qd = self.holding.hold(t, q, qd, resting)
+        self.watch(q, qd)
+        return q, qd
 
     def act(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The state after the impact at ``(q, qd)`` at ``t`` (positions unchanged)."""
-        gap, rate = self._states(q, qd)
+        """The state after the impact at ``(q, qd)`` at ``t`` (positions unchanged, unless
+        rows come to rest and are held)."""
+        gap, rate = self.states(q, qd)
         # a row left touching that sank to where it fires, closing slower than its rest speed,
         # is resting (its bodies press together) whatever the check after its impact said
         sunk = gap <= self.floor + 0.5 * PAST * self.scale
-        back = np.flatnonzero(self.idle & sunk & (rate > -self.rest_speed))
-        if len(back):
-            self._stop_at_rest(back[0], t, 0.0)
+        back = self.idle & sunk & (rate > -self.rest_speed)
+        if np.any(back):
+            if self.holding is None:
+                self._stop_at_rest(np.flatnonzero(back)[0], t, 0.0)
+            q, qd = self.holding.hold(t, q, qd, back)
         for _ in range(ROUNDS):
-            gap, rate = self._states(q, qd)
+            gap, rate = self.states(q, qd)
             active = (gap <= CLOSED * self.scale) & (rate < -CLOSING * self.rest_speed)
             if not np.any(active):
                 break
+            if self.holding is not None:
+                # rows at rest take part in the impact at once (at zero rate): their bodies
+                # press together, so an impulse passes through them as through a joint
+                active |= self.holding.mask
             qd = self._impact(t, q, qd, active, rate[active])
         else:
             closing = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
@@ -133,29 +158,30 @@ class RigidContacts:
                              f"{t:.9g} s do not end after {ROUNDS} rounds ({closing} still "
                              "closing); give the contacts a restitution below 1 or compliant "
                              "laws")
-        self._check_rest(t, q, qd)
-        self._set_floors(q, qd)
+        q, qd = self._check_rest(t, q, qd)
+        self.watch(q, qd)
         return q, qd
 
     def _impact(self, t, q, qd, active: np.ndarray, before: np.ndarray) -> np.ndarray:
         """One round: Newton's law on the ``active`` rows closing at ``before``; recorded."""
-        G = self._gap_rows(q, active)
-        X = self._response(t, q, G)
+        G = self.gap_rows(q, active)
+        X = self.response(t, q, G)[:self.model.n_coordinates]
         e = self.e[active]
         lam = impulses(G @ X, (1.0 + e) * before)
         qd = qd + X @ lam
         after = G @ qd
-        self._states(q, qd)
+        self.states(q, qd)
         for a, k in enumerate(np.flatnonzero(active)):
             if lam[a] > 0.0:
                 self.records.append({
                     "time": t, "contact": self.names[k], "impulse": float(lam[a]),
                     "rate_before": float(before[a]), "rate_after": float(after[a]),
-                    "energy_lost": float(-0.5 * (1.0 - e[a]) * lam[a] * before[a]),
+                    # >= 0 (a row at rest enters at zero rate, to rounding)
+                    "energy_lost": max(float(-0.5 * (1.0 - e[a]) * lam[a] * before[a]), 0.0),
                     "point": self._points[k].tolist()})
         return qd
 
-    def _gap_rows(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
+    def gap_rows(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
         """``G`` (a, n) of the ``active`` rows: the rate of a gap is linear in the
         velocities, so column ``c`` is the rates at the unit velocity of coordinate ``c``
         (only the coordinates of the rows' bodies, the others' columns are zero)."""
@@ -166,57 +192,86 @@ class RigidContacts:
         columns = (moving[:, None] * nc + np.arange(nc)).ravel()
         unit = np.zeros((len(columns), model.n_coordinates))
         unit[np.arange(len(columns)), columns] = 1.0
-        chart = self._chart()
+        chart = self.chart()
         charts = None if chart is None else np.broadcast_to(chart, (len(columns),) + chart.shape)
         rates = contact_history(model, np.broadcast_to(q, unit.shape), unit, charts).gap_rate
         G = np.zeros((len(rows), model.n_coordinates))
         G[:, columns] = rates[:, rows].T
         return G
 
-    def _response(self, t: float, q: np.ndarray, G: np.ndarray) -> np.ndarray:
-        """``S G^T`` (n, a): the velocities a unit impulse on each row gives, the joints
-        holding (module doc)."""
+    def response(self, t: float, q: np.ndarray, G: np.ndarray) -> np.ndarray:
+        """``[S G^T; Y]`` (n + m, a): the velocities a unit impulse on each row gives, the
+        joints holding (module doc), over the joints' multipliers it adds (``Y``, per unit
+        force on each row when the rows act as forces)."""
         model = self.model
-        n, m = model.n_coordinates, model.n_constraints
-        fr = constraints.frames(model, q, charts=self._chart())
+        m = model.n_constraints
+        if not len(G):
+            return np.zeros((model.n_coordinates + m, 0))
+        fr = constraints.frames(model, q, charts=self.chart())
         blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
         jac_data = constraints.evaluate(model, t, fr, value=False)[1]
-        if not self._redundant():
+        if not self.redundant():
             try:
                 factors = factor_model_augmented(model, blocks, jac_data)
-                return np.column_stack([factors.solve(np.concatenate([g, np.zeros(m)]))[:n]
+                return np.column_stack([factors.solve(np.concatenate([g, np.zeros(m)]))
                                         for g in G])
             except SingularMatrix:
                 pass  # dependent rows found here: the augmented Lagrangian copes with them
         M, Cq = mass_matrix(model, fr), constraints.jacobian_matrix(model, jac_data)
         scaling = augmented_scaling(model)
-        return np.column_stack([solve_augmented_lagrangian(M, Cq, g, np.zeros(m),
-                                                           scaling=scaling)[0] for g in G])
+        columns = [solve_augmented_lagrangian(M, Cq, g, np.zeros(m), scaling=scaling)[:2]
+                   for g in G]
+        return np.column_stack([np.concatenate(c) for c in columns])
 
-    def _check_rest(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        """Stop the run (:class:`RunStopped`) at a row left touching, opening slower than its
-        rest speed while the free motion presses it closed."""
-        gap, rate = self._states(q, qd)
-        slow = np.flatnonzero((gap <= CLOSED * self.scale) & (rate < self.rest_speed))
-        if not len(slow):
-            return
+    def _check_rest(self, t: float, q: np.ndarray, qd: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """The rows left touching, opening slower than their rest speed while the free motion
+        presses them closed, are held (:mod:`mbd3d.analyses.resting`), or stop the run
+        (:class:`RunStopped`) where the integrator does not hold rows."""
+        gap, rate = self.states(q, qd)
+        slow = (gap <= CLOSED * self.scale) & (rate < self.rest_speed)
+        if self.holding is not None:
+            # a held row that the impact leaves opening faster than its rest speed flies off
+            self.holding.let_go(t, (rate >= self.rest_speed) & self.holding.mask)
+            return self.holding.hold(t, q, qd, slow) if np.any(slow) else (q, qd)
+        if not np.any(slow):
+            return q, qd
         model = self.model
-        qdd = augmented_accelerations(model, t, q, qd, self._chart())[:model.n_coordinates]
-        # g'' = G qdd + (dG/dq qd) qd: the first by the rates' linearity, the second by a
-        # central difference along qd over a step that moves nothing by more than 1e-6
-        speed = np.max(np.abs(qd) / model.coordinate_scale, initial=0.0)
-        s = 1e-6 / speed if speed > 0.0 else 0.0
-        gdd = self._states(q, qdd)[1].copy()
-        if s > 0.0:
-            gdd += (self._states(q + s * qd, qd)[1] - self._states(q - s * qd, qd)[1]) / (2 * s)
-        # the accelerations' scale [1/s^2]: gravity's, the free motion's, the turning's (a
-        # bead flung along a turning rod moves in a straight line: the rod's turn presses it)
-        gravity = float(np.linalg.norm(model.gravity)) / model.length_scale
-        scale = max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0),
-                    speed * speed)
-        pressed = [k for k in slow if gdd[k] < -PRESSED * scale * self.scale[k]]
+        qdd = augmented_accelerations(model, t, q, qd, self.chart())[:model.n_coordinates]
+        # g'' = G qdd + (dG/dq qd) qd, the first by the rates' linearity
+        gdd = self.states(q, qdd)[1] + self.convective(q, qd)
+        scale = self.acceleration_scale(t, q, qd, qdd)
+        pressed = [k for k in np.flatnonzero(slow)
+                   if gdd[k] < -PRESSED * scale * self.scale[k]]
         if pressed:
             self._stop_at_rest(pressed[0], t, max(rate[pressed[0]], 0.0))
+        return q, qd
+
+    def convective(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``(dG/dq qd) qd`` of every row [m/s^2 or rad/s^2]: the part of the gaps'
+        accelerations that the accelerations do not make, by a central difference of the
+        gap rates along ``qd`` over a step that moves nothing by more than 1e-6 of the
+        model's size (about 1e-10 relative)."""
+        speed = np.max(np.abs(qd) / self.model.coordinate_scale, initial=0.0)
+        if speed == 0.0:
+            return np.zeros(len(self))
+        s = 1e-6 / speed
+        ahead, behind = self.states(q + s * qd, qd)[1], self.states(q - s * qd, qd)[1]
+        return (ahead - behind) / (2 * s)
+
+    def acceleration_scale(self, t: float, q: np.ndarray, qd: np.ndarray,
+                           qdd: np.ndarray | None = None) -> float:
+        """The size of the model's accelerations at ``(q, qd)`` [1/s^2, of its length scale]:
+        gravity's, the free motion's (``qdd``, default the joints' accelerations), the
+        turning's (a bead flung along a turning rod moves in a straight line: the rod's turn
+        presses it)."""
+        model = self.model
+        if qdd is None:
+            qdd = augmented_accelerations(model, t, q, qd, self.chart())[:model.n_coordinates]
+        speed = np.max(np.abs(qd) / model.coordinate_scale, initial=0.0)
+        gravity = float(np.linalg.norm(model.gravity)) / model.length_scale
+        return max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0),
+                   speed * speed)
 
     def _stop_at_rest(self, k: int, t: float, opening: float) -> None:
         """End the run: rigid row ``k`` has come to rest at ``t``, opening at ``opening``."""
@@ -225,15 +280,19 @@ class RigidContacts:
         raise RunStopped(
             f"rigid contact '{self.names[k]}' came to rest at t = {t:.9g} s after {count} "
             f"impacts: it opens at {opening:.3g} {unit}, below its rest speed "
-            f"{self.rest_speed[k]:g} {unit}, while its bodies press together. A rigid contact "
-            "at rest is not modelled yet: the results end here; give it a compliant law "
-            "(mb.HertzContact, mb.LinearContact) to go on")
+            f"{self.rest_speed[k]:g} {unit}, while its bodies press together. " + (
+                "A rigid contact at rest is not held with joint friction yet (the friction "
+                "would not see its force): the results end here; give it a compliant law "
+                "(mb.HertzContact, mb.LinearContact)" if self.model.friction is not None else
+                "Generalized-alpha does not hold a rigid contact at rest yet: the results end "
+                "here; use an explicit method (method='DOP853'), which holds it closed until "
+                "it lets go, or give it a compliant law (mb.HertzContact, mb.LinearContact)"))
 
-    def _set_floors(self, q: np.ndarray, qd: np.ndarray) -> None:
+    def watch(self, q: np.ndarray, qd: np.ndarray) -> None:
         """Where each row fires from now on, below its gap now: an event's function is then
         positive where an impact leaves it, and the driver watches it from there on
         (:data:`CLOSED`, :data:`PAST`, :data:`LEAVING`)."""
-        gap, rate = self._states(q, qd)
+        gap, rate = self.states(q, qd)
         touching = gap <= CLOSED * self.scale
         #: rows left touching without opening (an idle row that fires again closes slowly)
         self.idle = touching & (rate <= CLOSING * self.rest_speed)

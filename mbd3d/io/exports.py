@@ -136,6 +136,8 @@ def to_npz(results: Results, path: str | os.PathLike | BinaryIO,
         arrays["charts"] = results.charts
     if results.turns is not None:
         arrays["chart_quaternions"] = results.turns
+    if results.contact_forces is not None:
+        arrays["contact_forces"] = results.contact_forces
 
     def write(f):
         np.savez_compressed(f, **arrays)

@@ -65,7 +65,7 @@ class Results:
                  qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
                  message: str = "", stats: dict | None = None, charts: np.ndarray | None = None,
                  turns: np.ndarray | None = None,
-                 model_t: np.ndarray | None = None):
+                 model_t: np.ndarray | None = None, contact_forces: np.ndarray | None = None):
         self.model = model
         self.analysis = analysis
         self.t = np.asarray(t, dtype=float)
@@ -79,6 +79,9 @@ class Results:
         #: spatial models: the charts as quaternions with signs that follow the motion, (k,
         #: n_bodies + 1, 4), where the analysis tracked them (else None)
         self.turns = turns
+        #: the normal forces [N; a turning stop's: N m] of the contact rows held closed as
+        #: constraints (rigid contacts at rest), (k, contact rows), where a run held any
+        self.contact_forces = contact_forces
         self._residuals: tuple[np.ndarray, np.ndarray] | None = None
         self._energies: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -98,7 +101,9 @@ class Results:
                        status=self.status, message=self.message, stats=self.stats,
                        charts=None if self.charts is None else self.charts[sl],
                        turns=None if self.turns is None else self.turns[sl],
-                       model_t=self.model_t[sl])
+                       model_t=self.model_t[sl],
+                       contact_forces=None if self.contact_forces is None
+                       else self.contact_forces[sl])
 
     # -- named access ----------------------------------------------------------------------------
     def _require_lam(self) -> np.ndarray:
@@ -242,8 +247,12 @@ class Results:
         """Every contact and joint stop at every time point: gap, gap rate, normal and
         friction force, point and normal, one column per contact row (a capsule's end, a
         box's corner), each array with a leading time axis (k, r, ...); see
-        :class:`mbd3d.ContactStates`. A model without contacts is refused."""
-        return history.contact_history(self.model, self.q, self.qd, self.charts)
+        :class:`mbd3d.ContactStates`. A model without contacts is refused. A rigid contact
+        held at rest carries the force that holds it."""
+        states = history.contact_history(self.model, self.q, self.qd, self.charts)
+        if self.contact_forces is not None:
+            states.normal_force[...] += self.contact_forces
+        return states
 
     def _reaction(self, name: str, on: Any, frame: str) -> Reaction:
         model = self.model
@@ -390,7 +399,7 @@ class Results:
     def to_npz(self, path: str | os.PathLike | BinaryIO,
                overwrite: bool = True) -> str | None:
         """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``,
-        ``chart_quaternions``) and their labels to a compressed NumPy ``.npz`` file: a path
+        ``chart_quaternions``, ``contact_forces``) and their labels to a compressed NumPy ``.npz`` file: a path
         (checked, then written atomically; its absolute path is returned) or an open binary
         file."""
         return exports.to_npz(self, path, overwrite)

@@ -30,12 +30,13 @@ class ResultsBuffer:
         self.q, self.qd, self.qdd = (np.empty((k, n)) for _ in range(3))
         self.lam = np.empty((k, model.n_constraints)) if with_lam else None
         self.charts = None if model.charts0 is None else np.empty((k,) + model.charts0.shape)
-        self.turns = None
+        self.turns = self.contact_forces = None
         self.done = 0
 
-    def store(self, q, qd, qdd, lam=None, chart=None, turns=None) -> None:
+    def store(self, q, qd, qdd, lam=None, chart=None, turns=None, contact_forces=None) -> None:
         """The next time point's state (``chart``: its reference rotations, spatial models;
-        ``turns``: the charts' quaternions whose signs follow the motion, where tracked)."""
+        ``turns``: the charts' quaternions whose signs follow the motion, where tracked;
+        ``contact_forces``: the normal forces of the contact rows held as constraints)."""
         k = self.done
         self.q[k], self.qd[k], self.qdd[k] = q, qd, qdd
         if self.lam is not None:
@@ -46,6 +47,10 @@ class ResultsBuffer:
             if self.turns is None:
                 self.turns = np.empty((len(self.t),) + np.shape(turns))
             self.turns[k] = turns
+        if contact_forces is not None:
+            if self.contact_forces is None:
+                self.contact_forces = np.zeros((len(self.t),) + np.shape(contact_forces))
+            self.contact_forces[k] = contact_forces
         self.done = k + 1
 
     def partial(self, status: str, message: str) -> Results:
@@ -55,7 +60,9 @@ class ResultsBuffer:
                        self.qdd[:k], None if self.lam is None else self.lam[:k], status=status,
                        message=message, stats=self.stats,
                        charts=None if self.charts is None else self.charts[:k],
-                       turns=None if self.turns is None else self.turns[:k])
+                       turns=None if self.turns is None else self.turns[:k],
+                       contact_forces=None if self.contact_forces is None
+                       else self.contact_forces[:k])
 
 
 def run_keeping_results(loop: Callable[[], tuple[str, str] | None],

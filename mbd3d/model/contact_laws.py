@@ -169,8 +169,10 @@ class RigidImpact(ContactLaw):
     rest_speed : float
         [m/s; a stop of a turning coordinate: rad/s] > 0. A contact whose gap opens slower than
         this after an impact while its bodies still press together would bounce ever shorter
-        (an infinity of impacts in a finite time): it has come to rest. A contact at rest is
-        not modelled yet: the run stops there, naming it, with the results up to that time.
+        (an infinity of impacts in a finite time): it has come to rest. The explicit
+        integrators then hold it closed until its force would pull
+        (:mod:`mbd3d.analyses.resting`); generalized-alpha stops the run there, naming it,
+        with the results up to that time.
     """
 
     restitution: float

@@ -140,7 +140,8 @@ class _Core:
 
     def arrays(self, python_accelerations: bool = False) -> "structures.ModelArrays":
         """The model as the compiled functions take it; ``python_accelerations``: the
-        accelerations come from Python's augmented-Lagrangian solve (redundant rows)."""
+        accelerations come from Python (redundant rows, joint friction, rigid contacts held at
+        rest: :meth:`mbd3d.analyses.explicit.ExplicitRungeKutta._python_accelerations`)."""
         key = bool(python_accelerations)
         if key not in self._records:
             forces, range_space = self._forces, self._range_space
