@@ -2,17 +2,19 @@
 held closed by the force it needs, through the joints, until that force would pull; then it lets
 go. Checked against closed forms derived here from Newton's second law alone: a ball on a table
 shaken up and down (the table's push, where it lets go and where it lands again), a ball
-resting under a ball dropped on it, and a stack that settles; and generalized-alpha's stop."""
+resting under a ball dropped on it, a box settling flat on its four corners, a rod resting on
+its hinge's stop; and the stops of generalized-alpha and joint friction."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+import pytest
 from scipy.optimize import brentq
 
 import mbd3d as mb
-from mbd3d.joints import Prismatic, TranslationDriver
+from mbd3d.joints import Prismatic, Revolute, TranslationDriver
 
 G = 9.81
 TIGHT = dict(method="DOP853", rtol=1e-11, atol=1e-12)
@@ -145,3 +147,55 @@ def test_a_block_sliding_onto_a_rigid_stop_with_joint_friction_stops_the_run_the
     a = G * (math.sin(0.5) - 0.2 * math.cos(0.5))
     slid = (math.sqrt(0.25 + 2 * a * 0.1) - 0.5) / a
     np.testing.assert_allclose(res.stats["impacts"][0]["time"], slid, rtol=1e-6)
+
+
+def test_a_tumbling_box_settles_flat_its_weight_shared_by_the_four_corners():
+    """A box dropped tilted rocks from corner to corner until it lies flat. Its four lower
+    corners then depend on each other (a rigid body leaves their shares open): the least-norm
+    share, a quarter of the weight each, holds all four, and it rests at half its height."""
+    from scipy.spatial.transform import Rotation
+
+    size, m = np.array([0.4, 0.2, 0.3]), 3.0
+    inertia = m / 12 * np.diag([size[1] ** 2 + size[2] ** 2, size[0] ** 2 + size[2] ** 2,
+                                size[0] ** 2 + size[1] ** 2])
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, -G, 0.0))
+    box = b.add_body("box", mass=m, inertia=inertia, position=(0.0, 0.35, 0.0),
+                     orientation=Rotation.from_euler("xz", [0.15, 0.25]).as_matrix())
+    b.add(mb.Contact("floor", mb.Box(box, size), mb.Plane(b.ground, normal=(0.0, 1.0, 0.0)),
+                     law=mb.RigidImpact(restitution=0.3, rest_speed=0.05)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.5, 151), method="DOP853",
+                              rtol=1e-10, atol=1e-12)
+    assert res.status == "complete"
+    contacts = res.contacts()
+    # "floor[corner x y z]" by the signs of the corner's coordinates: y = -size / 2 below
+    lower = [k for k, name in enumerate(contacts.names) if name[-3] == "-"]
+    assert len(lower) == 4
+    np.testing.assert_allclose(contacts.normal_force[-1, lower], m * G / 4, rtol=1e-9)
+    assert np.all(np.delete(contacts.normal_force[-1], lower) == 0.0)
+    np.testing.assert_allclose(res.body("box").position[-1], [0.0, size[1] / 2, 0.0],
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.body("box").velocity[-1], 0.0, rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_rod_falls_onto_its_hinge_stop_and_rests_there_held_by_gravitys_moment(dim):
+    """Pinned at one end and released level, the rod swings down onto a stop at -60 degrees
+    and bounces to rest on it. Resting, the stop takes gravity's moment about the pin,
+    m g (L/2) cos 60, and the pin the whole weight (the multipliers with the stop's force),
+    planar and spatial alike."""
+    L, m = 0.8, 2.0
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) + (0.0,) * (dim - 2))
+    inertia = m * L * L / 12 if dim == 2 else np.diag([1e-3, m * L * L / 12, m * L * L / 12])
+    rod = b.add_body("rod", mass=m, inertia=inertia, position=(L / 2, 0.0) + (0.0,) * (dim - 2))
+    pin = b.add(Revolute("pin", b.ground, rod, at=(0.0,) * dim,
+                         **({} if dim == 2 else {"axis": (0.0, 0.0, 1.0)})))
+    b.add(mb.JointLimit("stop", pin, lower=-math.radians(60.0),
+                        law=mb.RigidImpact(restitution=0.5, rest_speed=0.05)))
+    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 3.0, 301), **TIGHT)
+    assert res.status == "complete" and res.stats["rests"][-1]["contacts"] == ["stop"]
+    after = res.t > res.stats["rests"][-1]["time"]
+    np.testing.assert_allclose(res.contacts().normal_force[after, 0],
+                               m * G * L / 2 * math.cos(math.radians(60.0)), rtol=1e-9)
+    force = res.joint("pin").reaction().force[after]
+    np.testing.assert_allclose(force[:, 1], m * G, rtol=1e-9)
+    np.testing.assert_allclose(np.delete(force, 1, axis=1), 0.0, rtol=0, atol=1e-9 * m * G)

@@ -84,11 +84,16 @@ class ExplicitRungeKutta(Integrator):
 
     def _python_accelerations(self, tt, q, qd, charts_now):
         # redundant constraints (the augmented Lagrangian), joint friction (consistent with
-        # its reactions) or rigid contacts held at rest: solved in Python
+        # its reactions) or rigid contacts held at rest: solved in Python. A stage that
+        # cannot be solved is reported to the loop as the compiled solve reports it (None:
+        # singular), which retries the step shorter and names the failure if it persists.
         charts_now = charts_now if self.spatial else None
-        qdd, lam, _ = consistent_accelerations(self.model, tt, q, qd, charts_now,
-                                               redundant=self.redundant, fallback=False)
-        return self._held_accelerations(tt, q, qd, qdd, lam)
+        try:
+            qdd, lam, _ = consistent_accelerations(self.model, tt, q, qd, charts_now,
+                                                   redundant=self.redundant, fallback=False)
+            return self._held_accelerations(tt, q, qd, qdd, lam)
+        except (SingularJacobianError, IntegrationError):
+            return None
 
     def _accelerations(self, tt: float, q: np.ndarray, qd: np.ndarray) -> tuple:
         qdd, lam, _ = consistent_accelerations(self.model, tt, q, qd, self.chart(),

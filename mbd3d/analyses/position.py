@@ -66,6 +66,12 @@ def singular_error(model, Cq, t: float, what: str, results=None) -> SingularJaco
             "analysis or mb.mobility on a smaller version of it. Forward dynamics passes "
             "singular positions with method='generalized-alpha'.", joints=[], time=t,
             results=results)
+    if Cq.shape[0] == 0:  # no rows: what is singular is the mass matrix of the coordinates
+        return SingularJacobianError(
+            f"{what}: the equations are singular at t = {t:.6g} s, and the model has no "
+            "constraints: its mass matrix is (a body's orientation coordinates far from their "
+            "chart, where the state diverged, or a body without mass or inertia)", joints=[],
+            time=t, results=results)
     scaling = jacobian_scaling(model) if Cq.shape[0] == model.n_constraints else None
     rank, groups = dependent_rows(Cq, scaling=scaling)
     rows = ranked_rows(groups, model.n_constraints)

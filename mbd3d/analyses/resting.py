@@ -31,7 +31,7 @@ import numpy as np
 from mbd3d.model import constraints
 from mbd3d.model.equations import mass_matrix
 from mbd3d.analyses.accelerations import consistent_accelerations
-from mbd3d.analyses.impacts import PRESSED, RigidContacts, impulses
+from mbd3d.analyses.impacts import CLOSING, PRESSED, RigidContacts, impulses
 from mbd3d.analyses.kinematics import project_state
 
 __all__ = ["HeldRows"]
@@ -94,9 +94,10 @@ class HeldRows:
         rows = candidates | self.mask
         rigid = self.rigid
         _, rate = rigid.states(q, qd)
-        settled = q, qd + self._correction(t, q, rows, -rate[rows])
-        _, _, f, _, diag = self._solve(t, *settled, rows)
-        held = self._pressing(t, *settled, f, diag) & rows
+        # pressed at the state as it is: the slow rates' part of the gaps' accelerations is
+        # below what the threshold tells apart
+        _, _, f, _, diag = self._solve(t, q, qd, rows)
+        held = self._pressing(t, q, qd, f, diag) & rows
         if not np.any(held):
             self.let_go(t, self.mask)
             return q, qd
@@ -104,8 +105,10 @@ class HeldRows:
         q, qd = self.settle(t, q, qd, held, force=True)
         # what the settling takes (>= 0 but for rounding, where nothing moved)
         lost, new = max(before - self._kinetic(q, qd), 0.0), held & ~self.mask
-        if np.any(new) or lost > 0.0:  # the rows held already may have had a slow bounce
-            self._record(t, "rest", new if np.any(new) else held, lost)
+        # rows held already that an impact left opening slowly: their bounce is taken too
+        bounced = held & self.mask & (np.abs(rate) > CLOSING * rigid.rest_speed)
+        if np.any(new) or np.any(bounced):
+            self._record(t, "rest", new | bounced, lost)
         self.let_go(t, self.mask & ~held)
         self.mask = held
         return q, qd
@@ -181,7 +184,7 @@ class HeldRows:
             XY = rigid.response(t, q, G)
             W = G @ XY[:n]
             b = G @ qdd0 + rigid.convective(q, qd)[rows]
-            f[rows] = impulses(W, b)
+            f[rows] = _spread(W, b, impulses(W, b))
             w[rows] = W @ f[rows] + b
             diag[rows] = np.diag(W)
             qdd, lam = qdd0 + XY[:n] @ f[rows], lam0 + XY[n:] @ f[rows]
@@ -192,3 +195,25 @@ class HeldRows:
         """The kinetic energy [J] at ``(q, qd)``."""
         M = mass_matrix(self.model, constraints.frames(self.model, q, charts=self.rigid.chart()))
         return 0.5 * float(qd @ (M @ qd))
+
+
+def _spread(W: np.ndarray, b: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """The forces ``f`` of the complementarity problem ``0 <= f _|_ W f + b >= 0`` spread
+    over every row that touches without opening (``W f + b`` zero to rounding), where rows
+    depend on each other (a face's corners on a floor): the least-norm forces holding those
+    rows, if none of them pulls, else ``f``. The active set gives a basic solution (two
+    diagonal corners of four carrying a box), which a rigid body leaves as valid as any;
+    the least-norm one is the even share, and keeps every corner of the face held."""
+    w = W @ f + b
+    size = max(float(np.max(np.abs(b), initial=0.0)), np.finfo(float).tiny)
+    touching = (f > 0.0) | (np.abs(w) <= 1e-9 * size)
+    if np.all(touching == (f > 0.0)):
+        return f
+    rows = np.flatnonzero(touching)
+    spread = np.linalg.lstsq(W[np.ix_(rows, rows)], -b[rows], rcond=1e-10)[0]
+    if np.any(spread < 0.0) or np.max(np.abs(W[np.ix_(rows, rows)] @ spread + b[rows]),
+                                        initial=0.0) > 1e-9 * size:
+        return f
+    out = np.zeros_like(f)
+    out[rows] = spread
+    return out

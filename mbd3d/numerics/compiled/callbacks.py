@@ -91,8 +91,12 @@ def factor_penalty_and_solve(key: int, values: np.ndarray, r: np.ndarray):
 
 
 def accelerations(key: int, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray):
-    """``(x, status)``: ``(qdd, lam)`` from the run's own solve (redundant constraints)."""
-    from mbd3d.numerics.compiled.accelerations import SOLVED
+    """``(x, status)``: ``(qdd, lam)`` from the run's own solve (redundant constraints, joint
+    friction, rigid contacts at rest); status singular where the run's solve returns None
+    (a stage it cannot evaluate: the loop retries the step shorter)."""
+    from mbd3d.numerics.compiled.accelerations import SINGULAR, SOLVED
 
-    qdd, lam = _runs[key].accelerations(t, q, qd, charts)
-    return np.ascontiguousarray(np.concatenate([qdd, lam])), SOLVED
+    solved = _runs[key].accelerations(t, q, qd, charts)
+    if solved is None:
+        return np.zeros(len(q)), SINGULAR
+    return np.ascontiguousarray(np.concatenate(solved)), SOLVED
