@@ -199,3 +199,18 @@ def test_a_rod_falls_onto_its_hinge_stop_and_rests_there_held_by_gravitys_moment
     force = res.joint("pin").reaction().force[after]
     np.testing.assert_allclose(force[:, 1], m * G, rtol=1e-9)
     np.testing.assert_allclose(np.delete(force, 1, axis=1), 0.0, rtol=0, atol=1e-9 * m * G)
+
+
+def test_rests_and_releases_are_recorded_on_the_time_line(tmp_path):
+    from mbd3d.viewer import read_component, record
+
+    res = mb.forward_dynamics(shaken_table(0.5), np.linspace(0.0, 0.2, 41), **TIGHT)
+    path = tmp_path / "table.rrd"
+    record(res, path)
+    times, text = read_component(path, "/impacts/rests", "TextLog:text", timeline="sim_time")
+    rests = res.stats["rests"]
+    np.testing.assert_allclose(times.astype(np.int64) * 1e-9, [r["time"] for r in rests],
+                               atol=1e-9)
+    assert [str(row[0]).split(" ")[1] for row in text] == [
+        {"rest": "comes", "release": "lets"}[r["event"]] for r in rests]
+    assert str(text[0][0]) == "top comes to rest (its bounces took 0 J)"

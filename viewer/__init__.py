@@ -24,7 +24,7 @@ from mbd3d.viewer.readback import entity_paths, read_component
 from mbd3d.viewer.recorder import (VIEWER_BIND, VIEWER_PORT, Recorder, RecordingError,
                                    check_destination, record,
                                    require_display, rerun_executable, show, spawn_viewer)
-from mbd3d.viewer.scene import SIM_TIME, STEP
+from mbd3d.viewer.timeline import SIM_TIME, STEP
 from mbd3d.viewer.script import check_recording_first, run_script
 
 __all__ = ["Recorder", "RecordingError", "record", "record_modes", "show", "rerun_executable", "entity_paths",

@@ -23,7 +23,7 @@ import numpy as np
 from mbd3d.analyses.modes import ModesAlong
 from mbd3d.errors import ModelError
 from mbd3d.viewer.recorder import Recorder, write_recording
-from mbd3d.viewer.scene import _rerun, sim_time_column
+from mbd3d.viewer.timeline import _rerun, sim_time_column
 
 __all__ = ["record_modes"]
 

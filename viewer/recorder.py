@@ -19,7 +19,8 @@ What is recorded (entity paths):
   joint reactions, energies and constraint residuals;
 - ``info``: the model, the analysis, its status and the arrow scales;
 - ``world/impacts`` and ``impacts``: where and when rigid contacts struck, with the impulse
-  and the energy lost (text), on ``sim_time``.
+  and the energy lost (text), and ``impacts/rests`` when they came to rest and let go, on
+  ``sim_time``.
 """
 
 from __future__ import annotations
@@ -41,7 +42,8 @@ from mbd3d.io import files
 from mbd3d.errors import ModelError
 from mbd3d.io.observers import Observer
 from mbd3d.io.results import Results
-from mbd3d.viewer.scene import Scene, _rerun
+from mbd3d.viewer.scene import Scene
+from mbd3d.viewer.timeline import _rerun
 
 __all__ = ["Recorder", "RecordingError", "record", "show", "rerun_executable",
            "check_destination", "require_display", "spawn_viewer", "VIEWER_PORT",

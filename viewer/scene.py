@@ -21,15 +21,15 @@ from mbd3d.model.forces import SpringDamper
 from mbd3d.io.results import Results
 from mbd3d.model.contacts import Contact, contact_group
 from mbd3d.model.mass_properties import load_mesh
+from mbd3d.viewer.contact_events import log_contact_events
+from mbd3d.viewer.timeline import SIM_TIME, STEP, _rerun, sim_time_column
 from mbd3d.viewer.joint_plots import JointPlots
 from mbd3d.viewer.shapes import (GROUND_COLOR, attachment_points, body_shape, color_of,
                                  cam_outlines, contact_parts, curve_polyline, pitch_curves,
                                  initial_points, model_size)
 
-__all__ = ["Scene", "SIM_TIME", "STEP"]
+__all__ = ["Scene"]
 
-#: the timelines: simulated time (duration, ns) and the index of the output time point
-SIM_TIME, STEP = "sim_time", "step"
 #: default detail limits: above these, plots and reaction arrows only for what is asked
 #: (above 6 bodies and 8 joints a time plot of every one holds 20 lines and more, whose
 #: legend covers the curves: a robot's joint coordinates are the readable plot)
@@ -39,14 +39,6 @@ ARROW_FRACTION = 0.3
 
 FORCE_COLOR, TORQUE_COLOR = [255, 90, 60, 255], [255, 210, 40, 255]
 JOINT_COLOR, SPRING_COLOR = [235, 235, 235, 255], [120, 220, 160, 255]
-
-
-def _rerun():
-    # imported on first use: rerun takes over a second to import, and analyses without a
-    # viewer should not pay for it
-    import rerun as rr  # noqa: PLC0415
-
-    return rr
 
 
 def _part(name: str) -> str:
@@ -81,12 +73,6 @@ class _Block:
         return _lift(history.position + np.einsum("kab,b->ka", history.rotation, u))
 
 
-
-def sim_time_column(t: np.ndarray):
-    """The simulated times ``t`` [s] as a column of the ``sim_time`` timeline (whole
-    nanoseconds)."""
-    nanoseconds = np.round(np.asarray(t) * 1e9).astype(np.int64).astype("timedelta64[ns]")
-    return _rerun().TimeColumn(SIM_TIME, duration=nanoseconds)
 
 class Scene:
     """The content of a recording of ``model`` (see :mod:`viewer.recorder` for the entities).
@@ -215,7 +201,7 @@ class Scene:
                   rrb.TimeSeriesView(name="Constraint residuals", origin="/plots/residuals"),
                   rrb.TextDocumentView(name="Run", origin="/info")]
         if self.rigid:
-            checks.append(rrb.TextLogView(name="Impacts", origin="/impacts"))
+            checks.append(rrb.TextLogView(name="Impacts and rests", origin="/impacts"))
         panels.append(rrb.Tabs(*checks, name="Checks"))
         return rrb.Blueprint(rrb.Horizontal(space, rrb.Vertical(*panels), column_shares=[3, 2]),
                              rrb.TimePanel(timeline=SIM_TIME), collapse_panels=True)
@@ -380,24 +366,9 @@ class Scene:
                    static=True)
 
     def log_impacts(self, stream, results: Results) -> None:
-        """The rigid contacts' impacts (``results.stats["impacts"]``) as events on the
-        simulated time line: the point struck (until the next impact) and a line of text
-        under "Impacts" with the contact, its gap's rates, the impulse and the energy lost."""
-        impacts = results.stats.get("impacts") or []
-        if not impacts:
-            return
-        rr = _rerun()
-        t = np.array([i["time"] for i in impacts])
-        times = [sim_time_column(t)]
-        points = np.array([i["point"] for i in impacts])
-        stream.send_columns("world/impacts", indexes=times, columns=rr.Points3D.columns(
-            positions=points, radii=np.full(len(t), 0.03 * self.size),
-            labels=[i["contact"] for i in impacts]))
-        text = [f"impact at {i['contact']}: closing at {-i['rate_before']:.6g}, opening at "
-                f"{i['rate_after']:.6g}, impulse {i['impulse']:.6g}, energy lost "
-                f"{i['energy_lost']:.6g} J" for i in impacts]
-        stream.send_columns("impacts", indexes=times, columns=rr.TextLog.columns(
-            text=text, level=["INFO"] * len(t)))
+        """The rigid contacts' impacts, rests and releases as events on the simulated time
+        line (:func:`viewer.contact_events.log_contact_events`)."""
+        log_contact_events(stream, results, self.size)
 
     # -- time series -----------------------------------------------------------------------------
     def log_block(self, stream, block: Results, first_step: int) -> None:
