@@ -92,3 +92,10 @@ def test_contacts_benchmark_runs(capsys, monkeypatch):
     assert len(rows) == 4 and all(r["count"] > 0 for r in rows)
     assert "the contact costs" in capsys.readouterr().out
 
+
+
+def test_kinematics_benchmark_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    rows = _load("kinematics").main(repeat=1, links=(2,), points=5)
+    assert [r["n"] for r in rows] == [36, 6] and all(r["dense"] > 0 for r in rows)
+    assert "factors densely up to" in capsys.readouterr().out

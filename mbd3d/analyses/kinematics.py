@@ -337,7 +337,7 @@ class _PointSolver:
             qd, qdd, lam = _redundant_rates(model, tk, q, chart, forces, self.analysis)
             return q, qd, qdd, lam, chart
         fr = constraints.frames(model, q, charts=chart)
-        Cq = constraints.jacobian(model, tk, q, fr)
+        Cq = constraints.jacobian(model, tk, q, fr, sparse=constraints.kinematic_sparse(model))
         try:
             lu = Factorization(Cq, scaling=jacobian_scaling(model))
         except SingularMatrix:

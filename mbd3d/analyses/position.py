@@ -206,7 +206,7 @@ class _PositionEquations:
     def jacobian(self, qq: np.ndarray):
         model, t, held, n = self.model, self.t, self.held, self.n
         fr = constraints.frames(model, qq, charts=self.charts)
-        Cq = constraints.jacobian(model, t, qq, fr)
+        Cq = constraints.jacobian(model, t, qq, fr, sparse=constraints.kinematic_sparse(model))
         if self.rotating:
             far = self.far_at.get(qq.tobytes())
             if far is None:

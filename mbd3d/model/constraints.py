@@ -14,7 +14,7 @@ import scipy.sparse as sp
 from mbd3d.model.body import Frames
 from mbd3d.errors import ModelError
 from mbd3d.model.primitives import evaluate_rows
-from mbd3d.numerics.compiled import rows as rows_kernel
+from mbd3d.numerics.compiled import motions as motions_kernel, rows as rows_kernel
 
 __all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
            "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs",
@@ -49,7 +49,27 @@ def driver_values(model, t: float) -> np.ndarray:
     ModelError
         If a driver's motion returns a non-finite value (names the driver and the time).
     """
-    return _motion_values(model.driver_motions, model.driver_names, t).T
+    values = _compiled_motions(model, "driver", len(model.driver_motions), t)
+    if values is None:
+        values = _motion_values(model.driver_motions, model.driver_names, t)
+    return values.T
+
+
+def _compiled_motions(model, table: str, count: int, t: float) -> np.ndarray | None:
+    """``(f, f', f'')`` (count, 3) of the drivers' (``table="driver"``) or rotation drivers'
+    (``"rotation"``) motions from the compiled core's tables in one call; None where a
+    motion is a Python function, a copy of the model has motions of its own, or a value is
+    not finite (the caller's evaluation then names the driver)."""
+    core = model._core
+    if core.python_parts or not (core.motions[0] is model.driver_motions
+                                 and core.motions[1] is model.rotation_motions):
+        return None
+    fields = core._fields
+    out = np.empty((count, 3))
+    motions_kernel.motion_values_into(fields[f"{table}_first"], fields[f"{table}_kinds"],
+                                      fields[f"{table}_starts"], fields[f"{table}_params"],
+                                      float(t), out)
+    return out if np.all(np.isfinite(out)) else None
 
 
 def _motion_values(motions, names, t: float) -> np.ndarray:
@@ -71,7 +91,10 @@ def motion_phases(model, t: float) -> np.ndarray:
     (spatial rotation drivers), (k, 3)."""
     if not model.rotation_motions:
         return _NO_MOTIONS
-    return _motion_values(model.rotation_motions, model.rotation_motion_names, t)
+    values = _compiled_motions(model, "rotation", len(model.rotation_motions), t)
+    if values is None:
+        values = _motion_values(model.rotation_motions, model.rotation_motion_names, t)
+    return values
 
 
 _NO_MOTIONS = np.zeros((0, 3))
@@ -210,6 +233,18 @@ def jacobian_transpose_times(model, data: np.ndarray, y: np.ndarray) -> np.ndarr
 def residual(model, t: float, q: np.ndarray, fr: Frames | None = None) -> np.ndarray:
     """Constraint residual ``C(q, t)``, shape (m,) [m or rad per row]."""
     return evaluate(model, t, frames(model, q) if fr is None else fr, True, False)[0]
+
+
+#: kinematic analyses factor ``Cq`` (n x n) densely up to this many coordinates: LAPACK's LU
+#: of a 36 x 36 Jacobian (a six-joint robot) takes microseconds where SciPy's sparse matrices
+#: and SuperLU cost a millisecond in overheads alone (benchmarks/kinematics.py)
+KINEMATIC_DENSE_LIMIT = 100
+
+
+def kinematic_sparse(model) -> bool:
+    """Whether the position, velocity and acceleration analyses of ``model`` factor its
+    Jacobian as a sparse matrix (:data:`KINEMATIC_DENSE_LIMIT`)."""
+    return model.sparse and model.n_coordinates > KINEMATIC_DENSE_LIMIT
 
 
 def jacobian(model, t: float, q: np.ndarray, fr: Frames | None = None,

@@ -90,6 +90,9 @@ class _Core:
             inertia = inertia_tensors(inertia)
         self.driver_rows = np.array(model.driver_rows, dtype=np.int64)
         terms = [m.terms() for m in model.driver_motions + model.rotation_motions]
+        #: the motions the tables below were made of (a copy of the model with other motions
+        #: shares this core, and evaluates its own in Python: see constraints.driver_values)
+        self.motions = (model.driver_motions, model.rotation_motions)
         force_tables = [group.table(model) for group in model.force_groups]
         #: parts only Python can evaluate: force elements or motions given as functions, and
         #: joint friction (it needs the multipliers)

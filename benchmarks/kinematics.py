@@ -1,0 +1,89 @@
+"""What a time point of inverse dynamics costs (positions by Newton-Raphson from the last point,
+velocities, accelerations, multipliers), and where factoring the Jacobian densely stops paying.
+
+Models: the PUMA 560 of tests/data driven by a harmonic motion at each joint (36 coordinates),
+and planar chains driven at every pin (60 to 600 coordinates). Each is run with the Jacobian
+factored densely (LAPACK) and as a sparse matrix (SuperLU), medians of a few runs of 201 points
+in one process; mbd3d.model.constraints.KINEMATIC_DENSE_LIMIT is where the library switches.
+
+Run: python benchmarks/kinematics.py [--repeat N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import pathlib
+import warnings
+
+import numpy as np
+
+import mbd3d as mb
+from mbd3d.joints import Revolute, RotationDriver
+from mbd3d.model import constraints
+from measure import machine, median_time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def puma() -> mb.Model:
+    """The PUMA 560, each joint on a harmonic motion about its odd pose."""
+    amplitude = [0.8, 0.6, -0.7, 1.2, 0.9, -1.5]
+    rate = [1.3, 2.1, 1.7, 3.0, 2.6, 3.4]
+    start = [0.3, -0.7, 1.1, 0.4, -0.9, 0.6]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.UrdfWarning)
+        return mb.load_urdf(ROOT / "tests" / "data" / "puma560.urdf", drive={
+            f"joint{i + 1}": mb.Harmonic(amplitude[i], rate[i], 0.0, start[i]) for i in range(6)})
+
+
+def driven_chain(n_links: int) -> mb.Model:
+    """A hanging planar chain of 1 m, 1 kg bars with every pin driven at its own rate."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name=f"driven {n_links}-link chain")
+    previous = b.ground
+    for k in range(n_links):
+        body = b.add_body(f"link{k + 1}", mass=1.0, inertia=1.0 / 12,
+                          position=(0.0, -(k + 0.5)), angle=-math.pi / 2)
+        pin = b.add(Revolute(f"pin{k + 1}", previous, body, at=(0.0, -float(k))))
+        b.add(RotationDriver(f"drive{k + 1}", pin, motion=mb.Harmonic(0.2, 1.0 + 0.1 * k)))
+        previous = body
+    return b.build()
+
+
+def per_point(model: mb.Model, dense: bool, repeat: int, points: int = 201) -> float:
+    """Median cost of one time point [s] with the Jacobian factored densely or not."""
+    limit = constraints.KINEMATIC_DENSE_LIMIT
+    constraints.KINEMATIC_DENSE_LIMIT = 10 ** 9 if dense else -1
+    try:
+        t = np.linspace(0.0, 1.0, points)
+        mb.inverse_dynamics(model, t[:3])  # compiles
+        return median_time(lambda: mb.inverse_dynamics(model, t), repeat) / points
+    finally:
+        constraints.KINEMATIC_DENSE_LIMIT = limit
+
+
+def main(repeat: int = 3, links: tuple = (20, 33, 50, 100, 200), points: int = 201
+         ) -> list[dict]:
+    print(machine())
+    rows = []
+    for label, build in [("PUMA 560", puma)] + [
+            (f"{n}-link chain", lambda n=n: driven_chain(n)) for n in links]:
+        model = build()
+        dense, sparse = (per_point(model, d, repeat, points) for d in (True, False))
+        rows.append({"model": label, "n": model.n_coordinates, "dense": dense,
+                     "sparse": sparse})
+    print(mb.format_table({
+        "model": [r["model"] for r in rows],
+        "coordinates": [r["n"] for r in rows],
+        "dense [us/point]": [r["dense"] * 1e6 for r in rows],
+        "sparse [us/point]": [r["sparse"] * 1e6 for r in rows],
+        "sparse / dense": [r["sparse"] / r["dense"] for r in rows],
+    }, precision=4))
+    print(f"the library factors densely up to {constraints.KINEMATIC_DENSE_LIMIT} coordinates")
+    return rows
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    main(repeat=parser.parse_args().repeat)
