@@ -189,6 +189,11 @@ class Integrator:
     holds_contacts: bool = False
     held: Any = None
 
+    @property
+    def holding(self) -> bool:
+        """Whether any rigid contact row is held at rest now."""
+        return self.held is not None and bool(self.held.any())
+
     def rows_dependent(self, q: np.ndarray) -> bool:
         """Whether the constraint rows depend on each other at the initial positions ``q``."""
         raise NotImplementedError

@@ -104,15 +104,14 @@ class ExplicitRungeKutta(Integrator):
 
     def _held_accelerations(self, tt, q, qd, qdd, lam) -> tuple:
         """``(qdd, lam)`` with the forces of the rigid contacts held at rest."""
-        if self.held is None or not self.held.any():
+        if not self.holding:
             return qdd, lam
         return self.held.accelerations(tt, q, qd, qdd, lam)
 
     def _set_arrays(self) -> None:
         """The model's compiled arrays: the right-hand side in Python where the compiled one
         does not cover the model's state (see :meth:`_python_accelerations`)."""
-        held = self.held is not None and self.held.any()
-        python = self.redundant or self.model.friction is not None or held
+        python = self.redundant or self.model.friction is not None or self.holding
         if self.arrays is None or python != self._python:
             self._python = python
             self.arrays = self.model._core.arrays(python_accelerations=python)
@@ -213,12 +212,12 @@ class ExplicitRungeKutta(Integrator):
         tol = self.request.projection_tol
         q, qd = project_state(self.model, t, *segment.state_at(t), tol, self.chart(),
                               self.redundant)
-        if self.held is not None and self.held.any():
+        if self.holding:
             q, qd = self.held.settle(t, q, qd, tol=tol) or (q, qd)  # rows held at rest too
         return (q, qd) + self._accelerations(t, q, qd)
 
     def after_step(self, segment: Segment) -> None:
-        held = self.held is not None and self.held.any()
+        held = self.holding
         if not (segment.flags & stepping.DRIFTED or held):
             return
         q, qd = self._split(self.y)

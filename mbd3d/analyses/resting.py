@@ -28,11 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from mbd3d.model import constraints
-from mbd3d.model.equations import mass_matrix
 from mbd3d.analyses.accelerations import consistent_accelerations
 from mbd3d.analyses.impacts import CLOSING, PRESSED, RigidContacts, impulses
 from mbd3d.analyses.kinematics import project_state
+from mbd3d.io.history import energies
 
 __all__ = ["HeldRows"]
 
@@ -193,8 +192,9 @@ class HeldRows:
 
     def _kinetic(self, q: np.ndarray, qd: np.ndarray) -> float:
         """The kinetic energy [J] at ``(q, qd)``."""
-        M = mass_matrix(self.model, constraints.frames(self.model, q, charts=self.rigid.chart()))
-        return 0.5 * float(qd @ (M @ qd))
+        chart = self.rigid.chart()
+        return float(energies(self.model, q[None], qd[None],
+                              None if chart is None else chart[None])[0][0])
 
 
 def _spread(W: np.ndarray, b: np.ndarray, f: np.ndarray) -> np.ndarray:
