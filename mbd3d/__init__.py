@@ -32,7 +32,8 @@ from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, S
 from mbd3d.model.friction import JointFriction
 from mbd3d.model.contacts import (Box, Cam, Capsule, Contact, ContactStates, Hole, JointLimit,
                                   Plane, Sphere, contact_states)
-from mbd3d.model.contact_laws import HertzContact, HuntCrossley, LinearContact, RigidImpact
+from mbd3d.model.contact_laws import (HertzContact, HuntCrossley, ImpactFunction, LinearContact,
+                                      RigidImpact)
 from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
                                        solve_velocity)
 from mbd3d.analyses.mobility import MobilityReport, mobility
@@ -62,7 +63,7 @@ __all__ = [
     "JointFriction",
     "ContactWarning", "Contact", "JointLimit", "Sphere", "Plane",
     "Capsule", "Box", "Hole", "Cam", "LinearContact", "HertzContact", "HuntCrossley",
-    "RigidImpact",
+    "ImpactFunction", "RigidImpact",
     "contact_states", "ContactStates",
     "solve_position", "solve_velocity", "solve_acceleration", "kinematic_analysis",
     "inverse_dynamics", "inverse_dynamics_at", "joint_space_dynamics_at", "driven_coordinates",

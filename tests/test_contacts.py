@@ -217,6 +217,54 @@ def test_published_hunt_crossley_calibrations_give_other_restitutions():
     assert slow > 0.6
 
 
+def _adams_step(x, x0, h0, x1, h1):
+    """Adams' STEP function: h0 before x0, h1 after x1, the cubic h0 + (h1 - h0) a^2 (3 - 2 a)
+    with a = (x - x0) / (x1 - x0) between (MSC Adams Solver function reference)."""
+    a = min(max((x - x0) / (x1 - x0), 0.0), 1.0)
+    return h0 + (h1 - h0) * a * a * (3.0 - 2.0 * a)
+
+
+def _adams_impact(x, xd, x1, k, e, cmax, d):
+    """Adams' IMPACT(x, x', x1, k, e, cmax, d) = max(0, k (x1 - x)^e - STEP(x, x1 - d, cmax,
+    x1, 0) x') while x < x1, else 0."""
+    if x >= x1:
+        return 0.0
+    return max(0.0, k * (x1 - x) ** e - _adams_step(x, x1 - d, cmax, x1, 0.0) * xd)
+
+
+@pytest.mark.parametrize("depth", [2e-3, 1e-2])
+def test_the_impact_function_is_adams_impact(depth):
+    # a 1 kg ball touching a floor at 1 m/s, no gravity, against SciPy integrating m x'' =
+    # IMPACT(x, x', r, ...) of its height x: the ramp ends inside the impact (2 mm of 4.4) or
+    # never (10 mm); the height inside the impact and the speed it leaves with
+    K, n, cmax, r, v0 = 1e6, 1.5, 200.0, 0.1, 1.0
+
+    def rhs(_t, y):
+        return [y[1], _adams_impact(y[0], y[1], r, K, n, cmax, depth)]
+
+    def parted(_t, y):
+        return y[0] - r
+    parted.direction = 1.0
+    t_end = 0.02
+    reference = solve_ivp(rhs, (0.0, t_end), [r, -v0], method="DOP853", rtol=1e-12,
+                          atol=1e-15, events=parted, dense_output=True)
+    t_off = reference.t_events[0][0]
+    b = mb.ModelBuilder(dim=2)
+    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, r), velocity=(0.0, -v0))
+    b.add(mb.Contact("floor", mb.Sphere(ball, r), mb.Plane(b.ground, normal=(0.0, 1.0)),
+                     law=mb.ImpactFunction(stiffness=K, damping=cmax, penetration=depth,
+                                           exponent=n)))
+    t = np.concatenate([np.linspace(0.0, t_off, 9)[1:-1], [t_end]])
+    res = mb.forward_dynamics(b.build(), np.concatenate([[0.0], t]), method="DOP853",
+                              rtol=1e-12, atol=1e-15)
+    height = reference.sol(t[:-1])[0]
+    assert (r - height).max() > min(depth, 3e-3)  # deeper than the ramp, or most of it
+    np.testing.assert_allclose(res.q[1:-1, 1], height, rtol=0, atol=1e-12)
+    rebound = reference.y_events[0][0][1]
+    assert 0.2 < rebound < 0.95
+    assert res.qd[-1, 1] == pytest.approx(rebound, rel=1e-9)
+
+
 def _bouncing_ball(stiffness, e=0.8, h0=1.0, dim=2, t=None, rtol=1e-10, law=None,
                    max_step=1e-3):
     b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) if dim == 2 else (0.0, 0.0, -G))
@@ -341,6 +389,8 @@ def test_bad_contacts_are_named():
         (dict(law=mb.LinearContact(stiffness=1.0)), "damping or the restitution"),
         (dict(law=mb.HertzContact(restitution=0.5)), "young_modulus"),
         (dict(law=mb.HuntCrossley(1e6, 0.5, 1.0, calibration="guess")), "calibration must"),
+        (dict(law=mb.ImpactFunction(1e6, 10.0, penetration=0.0)), "penetration must be > 0"),
+        (dict(law=mb.ImpactFunction(1e6, -1.0, penetration=1e-3)), "damping must be >= 0"),
         (dict(friction=-0.1), "friction must be >= 0"),
         (dict(slip_velocity=0.0), "slip_velocity"),
     ]
@@ -470,6 +520,9 @@ def test_contacts_and_limits_round_trip_through_a_model_file(tmp_path):
     slide = b.add(Prismatic("slide", b.ground, slider, axis=(1.0, 0.0)))
     b.add(mb.JointLimit("ends", slide, upper=0.1, law=mb.LinearContact(frequency=50.0,
                                                                        restitution=0.5)))
+    drop = b.add_body("drop", mass=1.0, inertia=0.004, position=(2.0, 0.3))
+    b.add(mb.Contact("pad", mb.Sphere(drop, 0.1), mb.Plane(b.ground, normal=(0.0, 1.0)),
+                     law=mb.ImpactFunction(1e6, 50.0, penetration=1e-3)))
     model = b.build()
     again = mb.load(mb.save(model, tmp_path / "contacts.yaml"))
     t = np.linspace(0.0, 0.6, 7)
@@ -478,6 +531,7 @@ def test_contacts_and_limits_round_trip_through_a_model_file(tmp_path):
     assert first.qd[-1, 3] < 0.0  # the slider came back from its stop
     text = (tmp_path / "contacts.yaml").read_text()
     assert "type: HuntCrossley" in text and "body: ball" in text
+    assert "type: ImpactFunction" in text and first.q[-1, 7] > 0.1  # bounced off the pad
 
 
 def _two_bars(dim, R=np.eye(3)):

@@ -37,7 +37,7 @@ Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd
 and ``JointLimit``, whose ``joint`` names a joint, ``Contact``); their fields are
 their constructors' keyword arguments, as documented there. A contact's shapes and law are
 ``{type: Sphere | Plane | Capsule | Box | Hole | Cam, body: ...}`` and ``{type: LinearContact |
-HertzContact | HuntCrossley | RigidImpact, ...}``. A motion is a number (constant)
+HertzContact | HuntCrossley | ImpactFunction | RigidImpact, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
 arguments, or ``{type: Sum, terms: [...]}``; Python functions cannot be written to a file. A
 cam's profile is ``{type: CamProfile, angles: [...], radii: [...]}``.
@@ -242,6 +242,7 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
                                                    contact_laws.LinearContact,
                                                    contact_laws.HertzContact,
                                                    contact_laws.HuntCrossley,
+                                                   contact_laws.ImpactFunction,
                                                    contact_laws.RigidImpact)}
     return joint_types, force_types, motion_types
 

@@ -7,7 +7,10 @@ and penetration rate ``delta'`` [m/s], evaluated by :mod:`mbd3d.numerics.compile
 - :class:`LinearContact`: ``k delta + c delta'``;
 - :class:`HertzContact`: ``K delta^(3/2) + alpha sqrt(m* K) delta^(1/4) delta'`` (Tsuji's
   damping);
-- :class:`HuntCrossley`: ``K delta^n + K (chi / v0) delta^n delta'``.
+- :class:`HuntCrossley`: ``K delta^n + K (chi / v0) delta^n delta'``;
+- :class:`ImpactFunction`: MSC Adams' IMPACT, ``K delta^n + c_max S(delta / d) delta'``, its
+  damping ramped in by the cubic step ``S(b) = b^2 (3 - 2 b)`` up to the penetration ``d``
+  (``S = 1`` beyond).
 
 :class:`RigidImpact` is no force law: a contact or stop with it is a rigid unilateral
 constraint, whose touches forward dynamics resolves as impacts (:mod:`mbd3d.analyses.impacts`).
@@ -33,8 +36,8 @@ import numpy as np
 from mbd3d.errors import ModelError
 from mbd3d.numerics.checks import finite_scalar
 
-__all__ = ["ContactLaw", "LinearContact", "HertzContact", "HuntCrossley", "RigidImpact",
-           "clipped_restitution", "hertz_stiffness"]
+__all__ = ["ContactLaw", "LinearContact", "HertzContact", "HuntCrossley", "ImpactFunction",
+           "RigidImpact", "clipped_restitution", "hertz_stiffness"]
 
 
 def _restitution(value: float, what: str) -> float:
@@ -65,6 +68,11 @@ class ContactLaw:
         """``(K, n, D, p)`` of the law for a pair of effective mass ``m*`` [kg] (inf: both
         bodies immovable) and effective radius ``R`` [m] (inf: plane on plane)."""
         raise NotImplementedError
+
+    def damping_ramp(self, what: str) -> float:
+        """The penetration ``d`` [m] over which the damping ramps in along a cubic step
+        (:class:`ImpactFunction`), or 0: the damping ``D delta^p`` of :meth:`constants`."""
+        return 0.0
 
 
 @dataclass(frozen=True)
@@ -187,6 +195,46 @@ class RigidImpact(ContactLaw):
                              f"{self.restitution!r}")
         _stiffness(self.rest_speed, f"{what}: rest_speed")
         return 0.0, 1.0, 0.0, 0.0
+
+
+@dataclass(frozen=True)
+class ImpactFunction(ContactLaw):
+    """The IMPACT function of MSC Adams (and of the solvers that share its function library):
+    ``F_n = max(0, K delta^n + c_max S(delta / d) delta')``, where the damping coefficient
+    rises from zero at first touch to ``c_max`` at the penetration ``d`` along the cubic step
+    ``S(b) = b^2 (3 - 2 b)`` (Adams' ``STEP(x, x1 - d, c_max, x1, 0)``; ``S = 1`` beyond
+    ``d``), so that the force does not jump when the shapes touch.
+
+    The restitution it gives depends on the impact speed and the mass; the constants are
+    taken as Adams takes them, not calibrated.
+
+    Parameters
+    ----------
+    stiffness : float
+        ``K`` [N/m^n] > 0.
+    damping : float
+        ``c_max`` [N s/m] >= 0, the damping coefficient at penetrations of ``d`` and more.
+    penetration : float
+        ``d`` [m] > 0, the penetration at which the damping reaches ``c_max``.
+    exponent : float
+        ``n`` > 0 (3/2: Hertz; above 1 the spring stiffens).
+    """
+
+    stiffness: float
+    damping: float
+    penetration: float
+    exponent: float = 1.5
+
+    def constants(self, effective_mass, radius, what):
+        K = _stiffness(self.stiffness, f"{what}: stiffness")
+        n = _stiffness(self.exponent, f"{what}: exponent")
+        c = finite_scalar(self.damping, f"{what}: damping")
+        if c < 0.0:
+            raise ModelError(f"{what}: damping must be >= 0, got {self.damping!r}")
+        return K, n, c, 0.0
+
+    def damping_ramp(self, what):
+        return _stiffness(self.penetration, f"{what}: penetration")
 
 
 #: chi of the published calibrations of the Hunt-Crossley family, from the restitution e

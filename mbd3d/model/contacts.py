@@ -55,8 +55,9 @@ class Contact(ForceElement):
         ``"name[corner -+-]"``); a law's calibration then holds for one of them touching
         alone.
     law : ContactLaw
-        :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact` or
-        :class:`~mbd3d.HuntCrossley`; or :class:`~mbd3d.RigidImpact`, which makes the contact
+        :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact`,
+        :class:`~mbd3d.HuntCrossley` or :class:`~mbd3d.ImpactFunction`; or
+        :class:`~mbd3d.RigidImpact`, which makes the contact
         rigid: no force, every touch an impact (forward dynamics, without friction). Laws
         calibrated to a restitution use the pair's effective
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
@@ -95,7 +96,7 @@ class Contact(ForceElement):
         pair_order(first, second, f"contact '{name}'")
         if not isinstance(law, ContactLaw):
             raise ModelError(f"contact '{name}': law must be a LinearContact, HertzContact, "
-                             f"HuntCrossley or RigidImpact, got {law!r}")
+                             f"HuntCrossley, ImpactFunction or RigidImpact, got {law!r}")
         self.name, self.first, self.second, self.law = name, first, second, law
         self.friction, self.slip_velocity = friction, slip_velocity
         self.effective_mass = effective_mass
@@ -110,7 +111,7 @@ class Contact(ForceElement):
         return _Contacts(elements, ctx)
 
     def arrays(self, ctx: "BuildContext") -> tuple:
-        """``(points (r, 4, dim), values (r, 9), labels, swapped, effective mass, curve)``:
+        """``(points (r, 4, dim), values (r, 10), labels, swapped, effective mass, curve)``:
         the rows of the compiled core (see :mod:`mbd3d.numerics.compiled.contacts` and
         :func:`shapes.pair_rows`), checked, the mass the law is calibrated with, and a cam's
         curve table (else None)."""
@@ -126,7 +127,8 @@ class Contact(ForceElement):
                              "LinearContact) with friction")
         mass = self._effective_mass(what)
         K, n, D, p = self.law.constants(mass, rows.radius, what)
-        values = np.array([[kind, r_i, r_j, K, n, D, p, mu, slip]
+        d = self.law.damping_ramp(what)
+        values = np.array([[kind, r_i, r_j, K, n, D, p, mu, slip, d]
                            for kind, r_i, r_j in rows.kinds], dtype=float)
         return rows.points, values, rows.labels, rows.swapped, mass, rows.curve
 
@@ -214,8 +216,8 @@ class JointLimit(ForceElement):
                                             "axis= is a cone's; a hinge or a slide has the "
                                             "joint's own"))
         if not isinstance(law, ContactLaw):
-            raise ModelError(f"{what}: law must be a LinearContact, HertzContact, HuntCrossley "
-                             f"or RigidImpact, got {law!r}")
+            raise ModelError(f"{what}: law must be a LinearContact, HertzContact, HuntCrossley, "
+                             f"ImpactFunction or RigidImpact, got {law!r}")
         self.name, self.joint, self.law = name, joint, law
         self.lower, self.upper, self.effective_mass = lower, upper, effective_mass
         self.coordinate, self.axis = coordinate, axis
@@ -231,7 +233,7 @@ class JointLimit(ForceElement):
         return _Contacts(elements, ctx)
 
     def arrays(self, ctx: "BuildContext") -> tuple:
-        """``(points (1, 4, dim), values (1, 9), labels, swapped, effective mass, None)`` of
+        """``(points (1, 4, dim), values (1, 10), labels, swapped, effective mass, None)`` of
         the compiled core, checked (see :meth:`Contact.arrays`)."""
         what = self.what
         lower, upper = self._ends(ctx)
@@ -255,8 +257,8 @@ class JointLimit(ForceElement):
             points[:3] = u_i, u_j, axes[:, column]
         mass = self._effective_mass(ctx, u_i, u_j, spin, what)
         K, n, D, p = self.law.constants(mass, math.inf, what)
-        return (points[None], np.array([[kind, lower, upper, K, n, D, p, 0.0, 1.0]]), [""], False,
-                mass, None)
+        values = [kind, lower, upper, K, n, D, p, 0.0, 1.0, self.law.damping_ramp(what)]
+        return points[None], np.array([values]), [""], False, mass, None
 
     def _ends(self, ctx) -> tuple[float, float]:
         what = self.what

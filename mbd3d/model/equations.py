@@ -227,7 +227,7 @@ def _force_fields(model, tables: list[dict]) -> dict:
         "torque_bodies": np.zeros(0, dtype=np.int64), "torque_values": np.zeros((0, 3)),
         "torque_body_frame": np.zeros(0, dtype=np.int64),
         "contact_bodies": np.zeros((0, 2), dtype=np.int64),
-        "contact_points": np.zeros((0, 4, dim)), "contact_values": np.zeros((0, 9)),
+        "contact_points": np.zeros((0, 4, dim)), "contact_values": np.zeros((0, 10)),
         "contact_curves": np.zeros(0)}
     actuators = {"spring": [], "rotary": []}
     for table in tables:

@@ -44,13 +44,16 @@ surfaces (in a hole, midway between the pin's surface and the hole's wall; on a 
 X`` and ``r_i = 0``), each at its own material point there, so that the pair
 exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
-normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip)``::
+normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip, d)``::
 
-    F_n = max(0, K delta^n_K + D delta^n_D delta')       while delta > 0, else 0
+    F_n = max(0, K delta^n_K + c(delta) delta')          while delta > 0, else 0
+    c(delta) = D delta^n_D                  (d = 0)
+             = D S(min(delta / d, 1))       (d > 0; S(b) = b^2 (3 - 2 b))
 
 [N], which is the linear spring-damper (``n_K = 1, n_D = 0``), Hertz with the Tsuji damping
-(``n_K = 3/2, n_D = 1/4``) and the Hunt-Crossley family (``n_D = n_K``) with their constants
-(see :mod:`mbd3d.model.contacts`). The friction force on ``j`` is ``-mu F_n tanh(|v_t| /
+(``n_K = 3/2, n_D = 1/4``), the Hunt-Crossley family (``n_D = n_K``) and Adams' IMPACT
+function (``d > 0``: the damping ramped in over the penetration ``d``) with their constants
+(see :mod:`mbd3d.model.contact_laws`). The friction force on ``j`` is ``-mu F_n tanh(|v_t| /
 v_slip) v_t / |v_t|`` with ``v_t`` the tangential part of ``v_j - v_i`` (the opposite on
 ``i``). The potential of the law's spring part is ``K delta^(n_K + 1) / (n_K + 1)`` [J].
 
@@ -253,8 +256,25 @@ def normal_force(values, k, delta: float, delta_rate: float) -> float:
 
 @jit
 def _law(values, k, delta: float, delta_rate: float) -> float:
-    """``K delta^n_K + D delta^n_D delta'`` of contact ``k`` (``delta > 0``), unclipped."""
-    return values[k, 3] * delta ** values[k, 4] + values[k, 5] * delta ** values[k, 6] * delta_rate
+    """``K delta^n_K + c delta'`` of contact ``k`` (``delta > 0``), unclipped."""
+    return values[k, 3] * delta ** values[k, 4] + _damping(values, k, delta)[0] * delta_rate
+
+
+@jit
+def _damping(values, k, delta: float) -> tuple:
+    """The damping coefficient ``c`` of contact ``k``'s law at penetration ``delta > 0`` and
+    its slope in ``delta``: ``D delta^n_D``, or ``D S(delta / d)`` with the cubic step ``S(b)
+    = b^2 (3 - 2 b)`` (1 beyond ``b = 1``) where the law ramps its damping in over ``d =
+    values[k, 9] > 0``."""
+    D, n_D, d = values[k, 5], values[k, 6], values[k, 9]
+    if d > 0.0:
+        b = delta / d
+        if b >= 1.0:
+            return D, 0.0
+        return D * b * b * (3.0 - 2.0 * b), D * 6.0 * b * (1.0 - b) / d
+    if n_D == 0.0:
+        return D, 0.0
+    return D * delta ** n_D, D * n_D * delta ** (n_D - 1.0)
 
 
 @jit
@@ -492,11 +512,9 @@ def _law_slopes(values, k, delta: float, delta_rate: float) -> tuple:
     """``(dF_n/d delta, dF_n/d delta')`` of contact ``k``'s law, zero where it does not push."""
     if normal_force(values, k, delta, delta_rate) == 0.0:
         return 0.0, 0.0
-    K, n_K, D, n_D = values[k, 3], values[k, 4], values[k, 5], values[k, 6]
-    slope = K * n_K * delta ** (n_K - 1.0)
-    if n_D != 0.0:
-        slope += D * n_D * delta ** (n_D - 1.0) * delta_rate
-    return slope, D * delta ** n_D
+    K, n_K = values[k, 3], values[k, 4]
+    c, c_slope = _damping(values, k, delta)
+    return K * n_K * delta ** (n_K - 1.0) + c_slope * delta_rate, c
 
 
 @jit
