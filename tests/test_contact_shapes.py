@@ -494,8 +494,11 @@ def test_bad_shapes_are_named():
         b.add(mb.Contact("pin", mb.Sphere(one, 0.1), hole(two), law=law))
         with pytest.raises(mb.ModelError, match=f"contact 'pin': .*{words}"):
             b.build()
-    with pytest.raises(mb.ModelError, match="no contact between a Box and a Box"):
-        mb.Contact("boxes", mb.Box(one, (1, 1, 1)), mb.Box(two, (1, 1, 1)), law=law)
+    with pytest.raises(mb.ModelError, match="no contact between a Box and a Capsule.*put "
+                       "Spheres at the box's corners"):
+        mb.Contact("boxes", mb.Box(one, (1, 1, 1)), mb.Capsule(two, 0.1, ends=((0, 0, 0),
+                                                                              (1, 0, 0))),
+                   law=law)
     b = mb.ModelBuilder(dim=3)
     one = b.add_body("one", mass=1.0, inertia=np.eye(3) * 0.1, position=(0, 0, 0))
     b.add(mb.Contact("sharp", mb.Box(one, (1, 1, 1)), mb.Plane(b.ground, normal=(0, 0, 1),

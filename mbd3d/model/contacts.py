@@ -37,8 +37,8 @@ __all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "Contact", "Joint
 class Contact(ForceElement):
     """A compliant contact between shapes on two bodies: a sphere, a capsule or a box against
     a plane; a sphere or a capsule against a sphere or a capsule, or inside a hole (a pin with
-    clearance); a box against a sphere; a sphere (a roller) or a plane (a flat face) on a
-    planar disc cam; in either order.
+    clearance); a box against a sphere or a box; a sphere (a roller) or a plane (a flat
+    face) on a planar disc cam; in either order.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
     friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
@@ -52,8 +52,10 @@ class Contact(ForceElement):
         The shapes (see :mod:`mbd3d.model.shapes`). A capsule touches a plane or a hole's
         wall at its two ends and a box touches a plane at its corners, each end or corner a
         contact of its own (a row of :func:`contact_states`, named ``"name[end a]"``,
-        ``"name[corner -+-]"``); a law's calibration then holds for one of them touching
-        alone.
+        ``"name[corner -+-]"``); of two boxes each corner of either touches the other box
+        (``"name[first corner -+-]"``, ``"name[second corner +--]"``: faces and corners
+        meet, two edges that cross with no corner inside the other box do not). A law's
+        calibration then holds for one of them touching alone.
     law : ContactLaw
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact`,
         :class:`~mbd3d.HuntCrossley` or :class:`~mbd3d.ImpactFunction`; or
@@ -340,7 +342,8 @@ class _Contacts(_CompiledForces):
         self.owners = [e for e, a in zip(elements, arrays) for _ in a[2]]
         self.names = [f"{e.name}[{label}]" if label else e.name
                       for e, a in zip(elements, arrays) for label in a[2]]
-        self._swapped = np.array([a[3] for a in arrays for _ in a[2]], dtype=bool)
+        self._swapped = np.concatenate([np.broadcast_to(np.asarray(a[3], dtype=bool), len(a[2]))
+                                        for a in arrays])
         #: per row, the mass (a stop: the moment of inertia) its law is calibrated with
         self.masses = np.array([a[4] for a in arrays for _ in a[2]], dtype=float)
         #: per row, whether it is rigid (:class:`~mbd3d.RigidImpact`: no force, impacts),

@@ -130,14 +130,14 @@ class PairRows:
     kinds: list
     radius: float
     labels: list
-    swapped: bool
+    swapped: bool | np.ndarray  # or per row
     curve: np.ndarray | None = None
 
 
 #: the pairs the core evaluates, first shape (its body i) then second
 _PAIRS = {(Sphere, Plane), (Sphere, Sphere), (Capsule, Plane), (Capsule, Sphere),
-          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Sphere, Hole), (Capsule, Hole),
-          (Cam, Sphere), (Cam, Plane)}
+          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Box, Box), (Sphere, Hole),
+          (Capsule, Hole), (Cam, Sphere), (Cam, Plane)}
 
 
 def pair_order(first: Any, second: Any, what: str) -> bool:
@@ -151,8 +151,7 @@ def pair_order(first: Any, second: Any, what: str) -> bool:
     names = ", ".join(sorted(f"{a.__name__}-{b.__name__}" for a, b in _PAIRS))
     raise ModelError(f"{what}: no contact between a {kinds[0].__name__} and a "
                      f"{kinds[1].__name__}; the pairs are {names}, in either order (a box "
-                     "against a box or a capsule: put Spheres at one box's corners against the "
-                     "other)")
+                     "against a capsule: put Spheres at the box's corners against the capsule)")
 
 
 def pair_rows(ctx: "BuildContext", first: Any, second: Any, what: str) -> PairRows:
@@ -178,6 +177,8 @@ def _rows(ctx, first, second, what, swapped) -> PairRows:
                         r_i, labels, swapped)
     if isinstance(second, Hole):
         return _in_hole(ctx, first, second, r_i, core_i, what, swapped)
+    if isinstance(second, Box):
+        return _box_on_box(ctx, first, second, what)
     r_j, core_j = _core(ctx, second, what)
     kind = {Sphere: kernel.SPHERE_SPHERE, Capsule: kernel.SEGMENT_SPHERE,
             Box: kernel.BOX_SPHERE}[type(first)]
@@ -190,6 +191,25 @@ def _rows(ctx, first, second, what, swapped) -> PairRows:
     points[0, :len(cores)] = cores
     radius = r_i * r_j / (r_i + r_j) if r_i + r_j > 0 else 0.0
     return PairRows(points, [(kind, r_i, r_j)], radius, [""], swapped)
+
+
+def _box_on_box(ctx, first: Box, second: Box, what: str) -> PairRows:
+    """Two boxes: each corner of either against the other box, a row each (the core's box is
+    body i: the rows of the first box's corners are the pair the other way round). Faces and
+    corners meet this way; two edges that cross with no corner inside the other box do not."""
+    r_a, centre_a, half_a = _box(ctx, first, what)
+    r_b, centre_b, half_b = _box(ctx, second, what)
+    corners_a, corners_b = _core(ctx, first, what)[1], _core(ctx, second, what)[1]
+    zero = np.zeros(ctx.dim)
+    points = ([np.stack([centre_b, half_b, c, zero]) for c in corners_a]
+              + [np.stack([centre_a, half_a, c, zero]) for c in corners_b])
+    kinds = ([(kernel.BOX_SPHERE, r_b, r_a)] * len(corners_a)
+             + [(kernel.BOX_SPHERE, r_a, r_b)] * len(corners_b))
+    labels = ([f"first {label}" for label in _labels(first, ctx.dim)]
+              + [f"second {label}" for label in _labels(second, ctx.dim)])
+    swapped = np.arange(len(points)) < len(corners_a)
+    radius = r_a * r_b / (r_a + r_b) if r_a + r_b > 0 else 0.0
+    return PairRows(np.stack(points), kinds, radius, labels, swapped)
 
 
 def _in_hole(ctx, pin, hole: Hole, r_i: float, core_i: np.ndarray, what: str,
