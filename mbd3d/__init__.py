@@ -47,7 +47,7 @@ from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_m
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.analyses.states import (driven_coordinates, forward_dynamics_at,
                                   inverse_dynamics_at, joint_space_dynamics_at)
-from mbd3d.io.results import Results, format_table
+from mbd3d.io.results import Results, format_table, read_results
 from mbd3d.io.model_file import load
 from mbd3d.io.model_writer import save
 from mbd3d.io.parameters import ModelVariants, parameters, with_parameters
@@ -73,7 +73,7 @@ __all__ = [
     "LinearModel", "forward_dynamics", "Event",
     "forward_accelerations",
     "project_state", "METHODS",
-    "mobility", "MobilityReport", "Results", "load", "save", "parameters", "with_parameters",
+    "mobility", "MobilityReport", "Results", "read_results", "load", "save", "parameters", "with_parameters",
     "ModelVariants",
     "load_urdf", "urdf_builder",
     "UrdfWarning", "load_mjcf", "mjcf_builder", "MjcfWarning",

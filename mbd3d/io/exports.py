@@ -1,4 +1,4 @@
-"""Results as tables and files: named columns with units, CSV, pandas and NPZ, and plain-text
+"""Results as tables and files: named columns with units, CSV, pandas and plain-text
 tables for a terminal. The :class:`~mbd3d.io.results.Results` methods of the same names call
 these; files are written atomically (:mod:`mbd3d.io.files`)."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import csv
 import os
 import time as _time
-from typing import TYPE_CHECKING, BinaryIO, Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from mbd3d.io.observers import Observer
 if TYPE_CHECKING:
     from mbd3d.io.results import Results
 
-__all__ = ["columns", "export_columns", "to_csv", "write_columns", "to_pandas", "to_npz",
+__all__ = ["columns", "export_columns", "to_csv", "write_columns", "to_pandas",
            "import_pandas", "format_table", "CsvWriter"]
 
 
@@ -120,32 +120,6 @@ def to_pandas(results: Results):
     df.attrs["units"] = {label: label[label.rindex("[") + 1:-1] for label in df.columns}
     df.attrs["analysis"], df.attrs["model"] = results.analysis, results.model.name
     return df
-
-
-def to_npz(results: Results, path: str | os.PathLike | BinaryIO,
-           overwrite: bool = True) -> str | None:
-    """Write the raw arrays to an ``.npz`` file (see :meth:`mbd3d.io.results.Results.to_npz`)."""
-    arrays = dict(t=results.t, q=results.q, qd=results.qd, qdd=results.qdd,
-                  coordinate_labels=np.array(results.model.coordinate_labels),
-                  row_labels=np.array(results.model.row_labels),
-                  analysis=np.array(results.analysis), status=np.array(results.status),
-                  message=np.array(results.message), model=np.array(results.model.name))
-    if results.lam is not None:
-        arrays["lam"] = results.lam
-    if results.charts is not None:
-        arrays["charts"] = results.charts
-    if results.turns is not None:
-        arrays["chart_quaternions"] = results.turns
-    if results.contact_forces is not None:
-        arrays["contact_forces"] = results.contact_forces
-
-    def write(f):
-        np.savez_compressed(f, **arrays)
-    if hasattr(path, "write"):
-        write(path)
-        return None
-    return files.atomic_write(path, write, text=False, overwrite=overwrite,
-                              what="the NPZ file")
 
 
 class CsvWriter(Observer):

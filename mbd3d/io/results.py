@@ -19,7 +19,7 @@ from typing import Any, BinaryIO, Sequence
 
 import numpy as np
 
-from mbd3d.io import exports, history
+from mbd3d.io import exports, history, results_file
 from mbd3d.io.body_views import BodyHistory, PointHistory
 from mbd3d.io.exports import format_table
 from mbd3d.io.joint_views import JointHistory, MeshForce, Reaction
@@ -30,8 +30,8 @@ from mbd3d.model.primitives import evaluate_rows
 from mbd3d.errors import MBDError, ModelError
 from mbd3d.numerics.rotations import to_quaternion
 
-__all__ = ["Results", "BodyHistory", "PointHistory", "Reaction", "MeshForce", "JointHistory",
-           "format_table"]
+__all__ = ["Results", "read_results", "BodyHistory", "PointHistory", "Reaction", "MeshForce",
+           "JointHistory", "format_table"]
 
 
 class Results:
@@ -399,7 +399,23 @@ class Results:
     def to_npz(self, path: str | os.PathLike | BinaryIO,
                overwrite: bool = True) -> str | None:
         """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``,
-        ``chart_quaternions``, ``contact_forces``) and their labels to a compressed NumPy ``.npz`` file: a path
-        (checked, then written atomically; its absolute path is returned) or an open binary
-        file."""
-        return exports.to_npz(self, path, overwrite)
+        ``chart_quaternions``, ``contact_forces``), the labels of the coordinates and rows and
+        the run's statistics (JSON) to a compressed NumPy ``.npz`` file: a path (checked, then
+        written atomically; its absolute path is returned) or an open binary file.
+        :func:`mbd3d.read_results` reads it back against the model."""
+        return results_file.to_npz(self, path, overwrite)
+
+
+def read_results(path: str | os.PathLike, model) -> Results:
+    """The :class:`Results` that :meth:`Results.to_npz` wrote to ``path``, against ``model``:
+    the model the run was of, or one with the same coordinates and constraint rows (the
+    file's labels are checked against the model's). Reading is bounded: no pickled objects,
+    and no array larger than the file's time points make it.
+
+    Raises
+    ------
+    MBDError
+        Naming the file: not an NPZ file of results, a missing or malformed array, or a model
+        whose coordinates or rows are not the file's (the first that differs named).
+    """
+    return Results(model, **results_file.read_npz(path, model))
