@@ -33,7 +33,8 @@ def test_a_run_reads_back_as_it_was_written(tmp_path):
     assert res.stats["rests"] and res.contact_forces is not None and res.charts is not None
     path = res.to_npz(tmp_path / "ball.npz")
     again = mb.read_results(path, model)
-    for name in ("t", "q", "qd", "qdd", "lam", "charts", "turns", "contact_forces"):
+    for name in ("t", "q", "qd", "qdd", "lam", "charts", "turns", "contact_forces",
+                 "contact_dissipation"):
         np.testing.assert_array_equal(getattr(again, name), getattr(res, name), err_msg=name)
     assert (again.analysis, again.status, again.message) == (res.analysis, res.status,
                                                             res.message)

@@ -229,6 +229,11 @@ class Integrator:
     def after_step(self, segment: Segment) -> None:
         """Between segments: projections, chart resets."""
 
+    def dissipated(self, t: float, segment: Segment) -> np.ndarray | None:
+        """The energy [J] each contact row has dissipated from the start to ``t`` in
+        ``segment`` (:mod:`mbd3d.analyses.dissipation`), or None where the model has none."""
+        return None
+
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         """Go on from a new consistent state at ``t`` (after an event's action)."""
         raise NotImplementedError
@@ -383,12 +388,15 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
         rigid.holding = integrator.held = HeldRows(rigid, request.constraint_tol, stats)
     events = _Events(request.events + _impact_events(rigid), stats, len(request.events))
 
-    def store(q, qd, qdd, lam) -> None:
+    def store(q, qd, qdd, lam, segment: Segment | None = None) -> None:
+        tk = float(t[out.done])
         forces = None  # the normal forces of the rigid rows held at rest, every contact row's
         if rigid.holding is not None:
             forces = np.zeros(len(rigid.group.names))
-            forces[rigid.rows] = rigid.holding.forces(float(t[out.done]), q, qd)
-        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns(), forces)
+            forces[rigid.rows] = rigid.holding.forces(tk, q, qd)
+        dissipated = (integrator.dissipated(tk, segment) if segment is not None
+                      else integrator.dissipated(tk, Segment(tk, tk, None, info={"step": 0.0})))
+        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns(), forces, dissipated)
 
     def loop() -> tuple[str, str] | None:
         q, qd, redundant = initial_state(request, integrator, integrator.rows_dependent)
@@ -404,7 +412,7 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
             hit = events.locate(segment)
             t_end = segment.t_new if hit is None else hit[0]
             while out.done < len(t) and t[out.done] <= t_end:
-                store(*integrator.output(float(t[out.done]), segment))
+                store(*integrator.output(float(t[out.done]), segment), segment)
             watch.tick(t_end, stats["steps"])
             if hit is not None:
                 ending = _act(hit, segment)

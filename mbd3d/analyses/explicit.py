@@ -32,6 +32,7 @@ from mbd3d.errors import (IntegrationError, ModelError, SingularJacobianError, S
 from mbd3d.numerics.linalg import SingularMatrix, factor_model_augmented, jacobian_scaling
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
+from mbd3d.analyses.dissipation import contact_power, dissipation_controls
 from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.kinematics import project_state
 from mbd3d.analyses.position import LARGEST_DENSE_ANALYSIS, singular_error
@@ -63,6 +64,9 @@ class ExplicitRungeKutta(Integrator):
         self._turns = to_quaternion(self.charts) if self.spatial else np.zeros((0, 4))
         self.redundant = False  # set at the start: the constraint rows depend on each other
         self.key = self.arrays = self._python = None
+        # the contacts' dissipated power and energy, in the workspace (dissipation.py)
+        self._power = self._stage_power = self._energy = self._dense_power = None
+        self.t_last, self.step_last = 0.0, 0.0  # the last step's start and length [s]
 
     def chart(self) -> np.ndarray | None:
         return self.charts.copy() if self.spatial else None
@@ -91,6 +95,8 @@ class ExplicitRungeKutta(Integrator):
         try:
             qdd, lam, _ = consistent_accelerations(self.model, tt, q, qd, charts_now,
                                                    redundant=self.redundant, fallback=False)
+            if len(self._power):  # as the compiled forces report it
+                self._power[:] = contact_power(self.model, q, qd, charts_now)
             return self._held_accelerations(tt, q, qd, qdd, lam)
         except (SingularJacobianError, IntegrationError):
             return None
@@ -116,6 +122,14 @@ class ExplicitRungeKutta(Integrator):
             self._python = python
             self.arrays = self.model._core.arrays(python_accelerations=python)
             self.work = workspace(self.spatial, self.arrays)
+            power, stages, dissipated, dense = stepping.dissipation_arrays(self.work)
+            if self._power is not None:  # the energy the contacts dissipated so far
+                dissipated[:] = self._energy
+                stages[0] = self._stage_power[0]
+            elif dissipated.shape[1]:
+                dissipated[4:] = dissipation_controls(self.model, self.request.atol)
+            self._power, self._stage_power, self._energy = power, stages, dissipated
+            self._dense_power = dense[:self.tableau.dense_rows]
 
     # the integrated state is y = (q, v): positions and the velocities of BodyType.velocities
     # (angular velocities in body axes for spatial bodies), not (q, qd)
@@ -151,13 +165,14 @@ class ExplicitRungeKutta(Integrator):
                                self.charts, r.rtol, self.atol_y,
                                min(r.max_step, r.t[-1] - t0), self.counters, self.work)
         self.stats["initial_step"] = self.h
-        self.t_now = t0
+        self.t_now = self.t_last = t0
         self.check_at = _STIFFNESS_CHECK_STEPS
         return first
 
     def _first_stage(self, tt: float) -> None:
         status = stepping.derivative(self.arrays, self.key, tt, self.y, self.charts, self.f,
                                      self.work)
+        self._stage_power[0] = self._energy[2] = self._power  # the next step's start
         self.counters[stepping.RHS_EVALUATIONS] += 1
         if status != 0:
             raise self._failure(stepping.SINGULAR if status == 1 else stepping.DIVERGED, tt,
@@ -174,6 +189,7 @@ class ExplicitRungeKutta(Integrator):
             self.counters, self.drift, self.K, self.y_old, self.dense,
             0.0 if self.redundant else STEP_COLLAPSE, self.check_at, _STEPS_PER_CALL,
             self.work)
+        self.t_last, self.step_last = t_old, step
         c = self.counters
         self.stats.update(steps=int(c[stepping.STEPS]),
                           rhs_evaluations=int(c[stepping.RHS_EVALUATIONS]),
@@ -235,8 +251,24 @@ class ExplicitRungeKutta(Integrator):
         self.stats["projections"] += 1
         self.restart(t_now, q, qd)
 
+    def dissipated(self, t: float, segment: Segment) -> np.ndarray | None:
+        if not self._energy.shape[1]:
+            return None
+        return self._energy_at(t, segment.t_start, segment.info["step"])
+
+    def _energy_at(self, t: float, t_old: float, step: float) -> np.ndarray:
+        """The contacts' dissipated energies at ``t`` in the last step ``[t_old, t_old +
+        step]``, from its interpolant (computed with its dense output)."""
+        if step == 0.0 or t >= t_old + step:
+            return self._energy[0].copy()
+        return interpolate(self.tableau.dense_kind, self._dense_power, self._energy[1], t_old,
+                           step, t)
+
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        # the method goes on from the new state: only its first stage is evaluated again
+        # the method goes on from the new state: only its first stage is evaluated again,
+        # and the contacts have dissipated what they had at t, inside the last step
+        if self._energy.shape[1]:
+            self._energy[0] = self._energy_at(t, self.t_last, self.step_last)
         self._set_arrays()  # rows held at rest or let go change how it is evaluated
         self.y[:] = self._join(q, qd)
         self.t_now = t

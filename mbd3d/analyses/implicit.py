@@ -51,6 +51,7 @@ from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
 from mbd3d.analyses.contact_steps import ContactSteps
 from mbd3d.analyses.kinematics import project_state
+from mbd3d.analyses.dissipation import TrapezoidalDissipation
 from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.passages import PassageWatch
 
@@ -240,6 +241,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.contacts = ContactSteps(model)
         if self.contacts.group is not None:
             self.stats["contact_retries"] = 0
+        self.dissipation = TrapezoidalDissipation(model)
 
     def chart(self) -> np.ndarray | None:
         return self.charts
@@ -271,6 +273,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.q, self.qd, self.a = q, qd, self.qdd.copy()
         self.tt, self.h = t0, min(self.step, self.request.max_step)
         self.contacts.start(t0, q, qd, self.charts)
+        self.dissipation.restart(t0, q, qd, self.charts)
         return self.qdd, self.lam
 
     def _trial_step(self) -> float:
@@ -348,6 +351,7 @@ class GeneralizedAlphaIntegrator(Integrator):
             a = qdd.copy()
         self.stats["steps"] += 1
         self.stats["smallest_step"] = min(self.stats["smallest_step"], h_try)
+        self.dissipation.step(self.tt, q, qd, self.charts)
         self.q, self.qd, self.qdd, self.a, self.lam, self.S = q, qd, qdd, a, lam, S
         t_step = self.tt  # where passages are noted: the step's end before it is snapped
         self.passages.step(t_step, S.indicator, q, self.charts)
@@ -438,9 +442,13 @@ class GeneralizedAlphaIntegrator(Integrator):
             self.charts = chart
             self.restart(self.tt, q, qd)
 
+    def dissipated(self, t: float, segment: Segment) -> np.ndarray | None:
+        return self.dissipation.at(t)
+
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         self.tt, self.q, self.qd = t, q, qd
         self.contacts.restart(t, q, qd, self.charts)
+        self.dissipation.restart(t, q, qd, self.charts)
         self.qdd, self.lam, _ = consistent_accelerations(self.model, t, q, qd, self.charts,
                                                          self.lam, self.redundant)
         self.a = self.qdd.copy()

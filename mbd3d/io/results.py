@@ -14,6 +14,7 @@ force [N] for a translation driver).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from typing import Any, BinaryIO, Sequence
 
@@ -65,7 +66,8 @@ class Results:
                  qdd: np.ndarray, lam: np.ndarray | None = None, *, status: str = "complete",
                  message: str = "", stats: dict | None = None, charts: np.ndarray | None = None,
                  turns: np.ndarray | None = None,
-                 model_t: np.ndarray | None = None, contact_forces: np.ndarray | None = None):
+                 model_t: np.ndarray | None = None, contact_forces: np.ndarray | None = None,
+                 contact_dissipation: np.ndarray | None = None):
         self.model = model
         self.analysis = analysis
         self.t = np.asarray(t, dtype=float)
@@ -82,6 +84,10 @@ class Results:
         #: the normal forces [N; a turning stop's: N m] of the contact rows held closed as
         #: constraints (rigid contacts at rest), (k, contact rows), where a run held any
         self.contact_forces = contact_forces
+        #: the energy [J] each compliant contact row has dissipated since the start (its
+        #: damper, its friction; :mod:`mbd3d.analyses.dissipation`), (k, contact rows), where
+        #: forward dynamics ran a model with contacts (else None)
+        self.contact_dissipation = contact_dissipation
         self._residuals: tuple[np.ndarray, np.ndarray] | None = None
         self._energies: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -103,7 +109,9 @@ class Results:
                        turns=None if self.turns is None else self.turns[sl],
                        model_t=self.model_t[sl],
                        contact_forces=None if self.contact_forces is None
-                       else self.contact_forces[sl])
+                       else self.contact_forces[sl],
+                       contact_dissipation=None if self.contact_dissipation is None
+                       else self.contact_dissipation[sl])
 
     # -- named access ----------------------------------------------------------------------------
     def _require_lam(self) -> np.ndarray:
@@ -252,6 +260,8 @@ class Results:
         states = history.contact_history(self.model, self.q, self.qd, self.charts)
         if self.contact_forces is not None:
             states.normal_force[...] += self.contact_forces
+        if self.contact_dissipation is not None:
+            states = dataclasses.replace(states, dissipated_energy=self.contact_dissipation)
         return states
 
     def _reaction(self, name: str, on: Any, frame: str) -> Reaction:
@@ -352,6 +362,25 @@ class Results:
     def potential_energy(self) -> np.ndarray:
         """Potential energy of gravity (zero at the global origin) and springs [J]."""
         return self._compute_energies()[1]
+
+    def energy_balance(self) -> dict[str, np.ndarray]:
+        """The mechanical energy [J] at every time point and where the rest went, as named
+        arrays: ``kinetic``; ``potential`` (gravity, springs, the contacts' springs);
+        ``dissipated`` by the compliant contacts and joint stops (their dampers and friction,
+        all rows); ``lost_in_impacts`` at the rigid contacts (``stats["impacts"]``, and the
+        bounces no longer made where they came to rest, ``stats["rests"]``); and ``total``,
+        their sum, which stays at its start where nothing else does work (drivers,
+        actuators, dampers and joint friction are not in it) to the integrator's tolerance.
+        """
+        kinetic, potential = self.kinetic_energy, self.potential_energy
+        dissipated = (np.zeros(len(self.t)) if self.contact_dissipation is None
+                      else self.contact_dissipation.sum(axis=1))
+        losses = [(r["time"], r["energy_lost"]) for kind in ("impacts", "rests")
+                  for r in self.stats.get(kind, [])]
+        # an output at an impact's time holds the state before it
+        lost = np.array([sum(e for te, e in losses if te < tk) for tk in self.t])
+        return {"kinetic": kinetic, "potential": potential, "dissipated": dissipated,
+                "lost_in_impacts": lost, "total": kinetic + potential + dissipated + lost}
 
     # -- tables and files (mbd3d.io.exports) ------------------------------------------------
     def columns(self) -> dict[str, np.ndarray]:

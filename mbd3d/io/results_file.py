@@ -25,7 +25,7 @@ __all__ = ["to_npz", "read_npz"]
 #: the arrays of a file, by name: the Results attribute each holds
 _ARRAYS = {"t": "t", "q": "q", "qd": "qd", "qdd": "qdd", "lam": "lam", "charts": "charts",
            "chart_quaternions": "turns", "contact_forces": "contact_forces",
-           "model_t": "model_t"}
+           "contact_dissipation": "contact_dissipation", "model_t": "model_t"}
 #: the text fields of a file
 _TEXTS = ("coordinate_labels", "row_labels", "analysis", "status", "message", "model", "stats")
 #: the longest time series a file may hold, and the largest text [bytes]
@@ -85,7 +85,8 @@ def read_npz(path: str | os.PathLike, model) -> dict[str, Any]:
     _check_labels(data, model, where)
     k, n, m = len(data["t"]), model.n_coordinates, len(model.row_labels)
     shapes = {"q": (k, n), "qd": (k, n), "qdd": (k, n), "lam": (k, m), "model_t": (k,),
-              "contact_forces": (k, None), "charts": (k, model.n_bodies + 1, 3, 3),
+              "contact_forces": (k, None), "contact_dissipation": (k, None),
+              "charts": (k, model.n_bodies + 1, 3, 3),
               "chart_quaternions": (k, model.n_bodies + 1, 4)}
     for name, shape in shapes.items():
         value = data.get(name)
@@ -101,7 +102,8 @@ def read_npz(path: str | os.PathLike, model) -> dict[str, Any]:
                 qdd=data["qdd"], lam=data.get("lam"), status=str(data["status"]),
                 message=str(data["message"]), stats=stats if isinstance(stats, dict) else {},
                 charts=data.get("charts"), turns=data.get("chart_quaternions"),
-                model_t=data.get("model_t"), contact_forces=data.get("contact_forces"))
+                model_t=data.get("model_t"), contact_forces=data.get("contact_forces"),
+                contact_dissipation=data.get("contact_dissipation"))
 
 
 def _contact_rows(model) -> int:

@@ -30,13 +30,15 @@ class ResultsBuffer:
         self.q, self.qd, self.qdd = (np.empty((k, n)) for _ in range(3))
         self.lam = np.empty((k, model.n_constraints)) if with_lam else None
         self.charts = None if model.charts0 is None else np.empty((k,) + model.charts0.shape)
-        self.turns = self.contact_forces = None
+        self.turns = self.contact_forces = self.contact_dissipation = None
         self.done = 0
 
-    def store(self, q, qd, qdd, lam=None, chart=None, turns=None, contact_forces=None) -> None:
+    def store(self, q, qd, qdd, lam=None, chart=None, turns=None, contact_forces=None,
+              contact_dissipation=None) -> None:
         """The next time point's state (``chart``: its reference rotations, spatial models;
         ``turns``: the charts' quaternions whose signs follow the motion, where tracked;
-        ``contact_forces``: the normal forces of the contact rows held as constraints)."""
+        ``contact_forces``: the normal forces of the contact rows held as constraints;
+        ``contact_dissipation``: the energy each contact row has dissipated)."""
         k = self.done
         self.q[k], self.qd[k], self.qdd[k] = q, qd, qdd
         if self.lam is not None:
@@ -51,6 +53,10 @@ class ResultsBuffer:
             if self.contact_forces is None:
                 self.contact_forces = np.zeros((len(self.t),) + np.shape(contact_forces))
             self.contact_forces[k] = contact_forces
+        if contact_dissipation is not None:
+            if self.contact_dissipation is None:
+                self.contact_dissipation = np.zeros((len(self.t), len(contact_dissipation)))
+            self.contact_dissipation[k] = contact_dissipation
         self.done = k + 1
 
     def partial(self, status: str, message: str) -> Results:
@@ -62,7 +68,9 @@ class ResultsBuffer:
                        charts=None if self.charts is None else self.charts[:k],
                        turns=None if self.turns is None else self.turns[:k],
                        contact_forces=None if self.contact_forces is None
-                       else self.contact_forces[:k])
+                       else self.contact_forces[:k],
+                       contact_dissipation=None if self.contact_dissipation is None
+                       else self.contact_dissipation[:k])
 
 
 def run_keeping_results(loop: Callable[[], tuple[str, str] | None],

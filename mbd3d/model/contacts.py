@@ -397,7 +397,7 @@ class _Contacts(_CompiledForces):
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd, bodies,
                                             np.tile(self._points, (k, 1, 1)),
                                             np.tile(self._values, (k, 1)), self._curves, out,
-                                            report)
+                                            report, np.zeros(0))
         if failed >= 0:
             raise ModelError(f"{self.owners[failed % r].what}: the shapes' cores meet; the "
                              "contact normal is undefined")
@@ -416,7 +416,7 @@ class _Contacts(_CompiledForces):
         failed = kernel.contact_forces_into(fr.A, fr.axes, fr.omega3, fr.Q, fr.Qd,
                                             self._bodies(model), self._points, self._values,
                                             self._curves, Q,
-                                            np.zeros((0, kernel.REPORT_COLUMNS)))
+                                            np.zeros((0, kernel.REPORT_COLUMNS)), np.zeros(0))
         if failed >= 0:
             raise ModelError(f"{self.owners[failed].what}: the shapes' cores meet at t = {t:g} "
                              "s; the contact normal is undefined")
@@ -499,6 +499,9 @@ class ContactStates:
         its force or torque on body j.
     potential_energy : ndarray (k,)
         Of the law's spring part [J].
+    dissipated_energy : ndarray (k,) or None
+        Over a forward dynamics run (:meth:`mbd3d.Results.contacts`): the energy [J] the
+        row's damper and friction have dissipated since the start; else None.
     """
 
     names: list
@@ -509,6 +512,7 @@ class ContactStates:
     point: np.ndarray
     normal: np.ndarray
     potential_energy: np.ndarray
+    dissipated_energy: np.ndarray | None = None
 
 
 def contact_group(model: "Model", required: bool = True) -> _Contacts | None:

@@ -111,7 +111,7 @@ def forces_into(forces, work, t: float, rhs) -> bool:
                  out)
     if contact_forces_into(A, axes, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
                            forces.contact_values, forces.contact_curves, out,
-                           np.empty((0, REPORT_COLUMNS))) >= 0:
+                           np.empty((0, REPORT_COLUMNS)), work.contact_power) >= 0:
         return False
     nc = out.shape[1]
     for b in range(out.shape[0] - 1):

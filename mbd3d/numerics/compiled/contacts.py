@@ -44,18 +44,10 @@ surfaces (in a hole, midway between the pin's surface and the hole's wall; on a 
 X`` and ``r_i = 0``), each at its own material point there, so that the pair
 exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
-normal force, of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip, d)``::
-
-    F_n = max(0, K delta^n_K + c(delta) delta')          while delta > 0, else 0
-    c(delta) = D delta^n_D                  (d = 0)
-             = D S(min(delta / d, 1))       (d > 0; S(b) = b^2 (3 - 2 b))
-
-[N], which is the linear spring-damper (``n_K = 1, n_D = 0``), Hertz with the Tsuji damping
-(``n_K = 3/2, n_D = 1/4``), the Hunt-Crossley family (``n_D = n_K``) and Adams' IMPACT
-function (``d > 0``: the damping ramped in over the penetration ``d``) with their constants
-(see :mod:`mbd3d.model.contact_laws`). The friction force on ``j`` is ``-mu F_n tanh(|v_t| /
+normal force ``F_n`` is that of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu,
+v_slip, d)`` (:mod:`.contact_laws`); the friction force on ``j`` is ``-mu F_n tanh(|v_t| /
 v_slip) v_t / |v_t|`` with ``v_t`` the tangential part of ``v_j - v_i`` (the opposite on
-``i``). The potential of the law's spring part is ``K delta^(n_K + 1) / (n_K + 1)`` [J].
+``i``), which dissipates ``mu F_n tanh(|v_t| / v_slip) |v_t|`` [W].
 
 Joint stops keep a joint coordinate ``x`` in ``[lower, upper] = values[k, 1:3]`` by the same
 law, ``delta = x - upper`` or ``lower - x``, pushing back along the coordinate (no friction;
@@ -82,6 +74,8 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.contact_laws import (dissipated_power, law_force, law_slopes,
+                                                  normal_force)
 from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
 from mbd3d.numerics.compiled.shapes import (box_to_point, cam_to_line, cam_to_point,
                                             closest_between_segments, closest_on_segment)
@@ -93,9 +87,10 @@ HINGE_STOP, SLIDE_STOP, CONE_STOP = 8, 9, 10
 #: body points per contact (``points[k]``)
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
-#: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J]
+#: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J],
+#: dissipated power [W]
 GAP, GAP_RATE, NORMAL_FORCE, FRICTION, POINT, NORMAL, POTENTIAL = 0, 1, 2, 3, 6, 9, 12
-REPORT_COLUMNS = 13
+DISSIPATION, REPORT_COLUMNS = 13, 14
 
 
 @jit
@@ -245,44 +240,12 @@ def _stop_side(x: float, rate: float, lower: float, upper: float) -> tuple:
 
 
 @jit
-def normal_force(values, k, delta: float, delta_rate: float) -> float:
-    """The normal force [N] of contact ``k``'s law at penetration ``delta`` [m] and rate
-    ``delta_rate`` [m/s] (zero when apart, never pulling)."""
-    if not delta > 0.0:
-        return 0.0
-    force = _law(values, k, delta, delta_rate)
-    return force if force > 0.0 else 0.0
-
-
-@jit
-def _law(values, k, delta: float, delta_rate: float) -> float:
-    """``K delta^n_K + c delta'`` of contact ``k`` (``delta > 0``), unclipped."""
-    return values[k, 3] * delta ** values[k, 4] + _damping(values, k, delta)[0] * delta_rate
-
-
-@jit
-def _damping(values, k, delta: float) -> tuple:
-    """The damping coefficient ``c`` of contact ``k``'s law at penetration ``delta > 0`` and
-    its slope in ``delta``: ``D delta^n_D``, or ``D S(delta / d)`` with the cubic step ``S(b)
-    = b^2 (3 - 2 b)`` (1 beyond ``b = 1``) where the law ramps its damping in over ``d =
-    values[k, 9] > 0``."""
-    D, n_D, d = values[k, 5], values[k, 6], values[k, 9]
-    if d > 0.0:
-        b = delta / d
-        if b >= 1.0:
-            return D, 0.0
-        return D * b * b * (3.0 - 2.0 * b), D * 6.0 * b * (1.0 - b) / d
-    if n_D == 0.0:
-        return D, 0.0
-    return D * delta ** n_D, D * n_D * delta ** (n_D - 1.0)
-
-
-@jit
 def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, curves, out,
-                        report) -> int:
+                        report, power) -> int:
     """Add the generalized forces of the contacts into ``out`` (bodies + ground, n_coords),
-    and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``). Returns -1,
-    or the first contact whose normal is undefined."""
+    and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``); where
+    ``power`` has one, the power each dissipates [W] (:func:`dissipated_power`). Returns -1, or
+    the first contact whose normal is undefined."""
     point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
     work = np.zeros((6, 3))
@@ -290,7 +253,7 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, curves, o
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
-            _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report)
+            _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report, power)
             continue
         gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
                                         point, n, s_i, s_j, v_i, v_j, work)
@@ -309,15 +272,19 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, curves, o
         for x in range(3):
             F[x] = force * n[x] + friction * v_j[x]
         _add_pair(axes, i, j, s_i, s_j, F, out)
+        if power.shape[0] > 0:
+            power[k] = dissipated_power(values, k, -gap, -rate, force) - friction * slip * slip
         if report.shape[0] > 0:
             delta = -gap if gap < 0.0 else 0.0
+            report[k, DISSIPATION] = (dissipated_power(values, k, -gap, -rate, force)
+                                      - friction * slip * slip)
             report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, rate, force
             for x in range(3):
                 report[k, FRICTION + x] = friction * v_j[x]
                 report[k, POINT + x] = s_i[x] + (Q[i, x] if x < dim else 0.0)
                 report[k, NORMAL + x] = n[x]
-            power = values[k, 4] + 1.0
-            report[k, POTENTIAL] = values[k, 3] * delta ** power / power
+            exponent = values[k, 4] + 1.0
+            report[k, POTENTIAL] = values[k, 3] * delta ** exponent / exponent
     return -1
 
 
@@ -398,9 +365,10 @@ def _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j) -> t
 
 
 @jit
-def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> None:
+def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report, power) -> None:
     """Stop ``k``: the law's force back into ``[lower, upper]`` along its joint coordinate (a
-    torque about a hinge's or a cone's axis, a force along a slide)."""
+    torque about a hinge's or a cone's axis, a force along a slide), and its report and
+    dissipated power as :func:`contact_forces_into`'s."""
     h, s_i, s_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
     x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
     gap, gap_rate, sign = _stop_side(x, rate, values[k, 1], values[k, 2])
@@ -412,15 +380,18 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report) -> N
         for x_ in range(3):
             F[x_] = sign * force * h[x_]
         _add_pair(axes, i, j, s_i, s_j, F, out)
+    if power.shape[0] > 0:
+        power[k] = dissipated_power(values, k, -gap, -gap_rate, force)
     if report.shape[0] > 0:
         delta = -gap if gap < 0.0 else 0.0
         report[k, :] = 0.0
+        report[k, DISSIPATION] = dissipated_power(values, k, -gap, -gap_rate, force)
         report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, gap_rate, force
         for x_ in range(3):
             report[k, NORMAL + x_] = sign * h[x_]
             report[k, POINT + x_] = s_j[x_] + (Q[j, x_] if x_ < points.shape[2] else 0.0)
-        power = values[k, 4] + 1.0
-        report[k, POTENTIAL] = values[k, 3] * delta ** power / power
+        exponent = values[k, 4] + 1.0
+        report[k, POTENTIAL] = values[k, 3] * delta ** exponent / exponent
 
 
 @jit
@@ -428,11 +399,15 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
     """``out[k]``: a continuous function of the state that is positive exactly while contact
     (or stop) ``k``'s law pushes, ``min(delta, F_n / K)`` with the unclipped force, else
     ``delta`` (<= 0): the integrators end a step where it changes sign, so that no step
-    straddles the kink of a touch or a release. A rigid row (``K = 0``) gives -1."""
+    straddles the kink of a touch or a release. A rigid row (``K = 0``) gives -1. Where
+    ``out`` has two entries per row, ``out[r + k]`` is the penetration ``delta`` itself: it
+    turns negative where a law whose force was clipped at zero stops unloading its spring,
+    the kink of the power it dissipates (:func:`.contact_laws.dissipated_power`)."""
     point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
     work = np.zeros((6, 3))
-    for k in range(bodies.shape[0]):
+    rows = bodies.shape[0]
+    for k in range(rows):
         i, j = bodies[k, 0], bodies[k, 1]
         if values[k, 0] >= HINGE_STOP:
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
@@ -441,13 +416,15 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
             gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
                                             point, n, s_i, s_j, v_i, v_j, work)
         delta, delta_rate = -gap, -rate
+        if out.shape[0] > rows:
+            out[rows + k] = -1.0 if values[k, 3] == 0.0 else delta if delta == delta else 0.0
         if values[k, 3] == 0.0:
             out[k] = -1.0  # a rigid row (no law): it never pushes, its impacts are events
             continue
         if not delta > 0.0:
             out[k] = delta if delta == delta else 0.0
             continue
-        out[k] = min(delta, _law(values, k, delta, delta_rate) / values[k, 3])
+        out[k] = min(delta, law_force(values, k, delta, delta_rate) / values[k, 3])
 
 
 @jit
@@ -508,16 +485,6 @@ def _turning_normal(axes, Q, i, j, hole: bool, force: float, n, work, s_i, s_j, 
 
 
 @jit
-def _law_slopes(values, k, delta: float, delta_rate: float) -> tuple:
-    """``(dF_n/d delta, dF_n/d delta')`` of contact ``k``'s law, zero where it does not push."""
-    if normal_force(values, k, delta, delta_rate) == 0.0:
-        return 0.0, 0.0
-    K, n_K = values[k, 3], values[k, 4]
-    c, c_slope = _damping(values, k, delta)
-    return K * n_K * delta ** (n_K - 1.0) + c_slope * delta_rate, c
-
-
-@jit
 def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, curves, weight,
                           blocks) -> None:
     """``blocks[k]`` (2 nc, 2 nc), over the coordinates of bodies i and j of contact ``k``:
@@ -547,7 +514,7 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, curves,
         if values[k, 0] >= HINGE_STOP:
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, gap_rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
-            k_n, c_n = _law_slopes(values, k, -gap, -gap_rate)
+            k_n, c_n = law_slopes(values, k, -gap, -gap_rate)
             if values[k, 0] == SLIDE_STOP:
                 _pair_jacobian(axes, i, j, s_i, s_j, G)
             else:
@@ -560,7 +527,7 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, curves,
         force = normal_force(values, k, -gap, -rate)
         if force == 0.0:
             continue
-        k_n, c_n = _law_slopes(values, k, -gap, -rate)
+        k_n, c_n = law_slopes(values, k, -gap, -rate)
         slip = 0.0
         for x in range(3):
             v_j[x] -= rate * n[x]

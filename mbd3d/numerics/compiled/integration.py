@@ -159,8 +159,9 @@ def drift(model, key, t, y, charts, work):
 
 @jit
 def switch_count(forces) -> int:
-    """How many contacts and joint stops a model's ``forces`` hold."""
-    return forces.contact_bodies.shape[0]
+    """How many switching functions the contacts and joint stops of a model's ``forces``
+    have: two each (:func:`.contacts.switches_into`)."""
+    return 2 * forces.contact_bodies.shape[0]
 
 
 @jit
@@ -224,6 +225,53 @@ def error_scale(spatial, n, y, y_new, atol, rtol):
 
 
 @jit
+def dissipation_arrays(work) -> tuple:
+    """``(contact_power, stage_power, dissipated, dense_power)`` of ``work``, the arrays
+    themselves, for Python (:mod:`mbd3d.analyses.dissipation`)."""
+    return work.contact_power, work.stage_power, work.dissipated, work.dense_power
+
+
+@jit
+def dissipation_error(work, E, E_low, B, stages: int, step: float, rtol: float,
+                      dense_kind: int, at_switch: bool) -> float:
+    """The step's error in the energy the contacts dissipate, relative to ``atol + rtol
+    |energy|`` (``work.dissipated[4]``: the absolute tolerance [J] per row), by the method's
+    error weights on the stages' powers: the power need not affect the motion (a contact's
+    spring unloading while its force is clipped at zero), so the motion's error alone would
+    not shorten the step where it changes fast. Over a step ended just past a switch
+    (``at_switch``) the rows whose power jumps at a touch (``work.dissipated[5]``: a
+    linear law's damping) are left out: no step would hold their jump within tolerance."""
+    P, z = work.stage_power, work.dissipated
+    scale = np.empty(P.shape[1])
+    for k in range(P.shape[1]):
+        new = z[0, k]
+        for s in range(stages):
+            new += step * B[s] * P[s, k]
+        scale[k] = z[4, k] + rtol * max(abs(z[0, k]), abs(new))
+        if at_switch and z[5, k] != 0.0:
+            scale[k] = np.inf
+    return error_norm(P, E, E_low, scale, step, dense_kind)
+
+
+@jit
+def dissipate(work, B, stages: int, step: float) -> None:
+    """Add the energy [J] each contact dissipated over the step just accepted to
+    ``work.dissipated`` (rows: now, at the step's start, the power now and at the start; the
+    last two, set by Python, are kept: :func:`dissipation_error`), by the method's own weights ``B`` on
+    its stages' powers (``work.stage_power``, the first the power at the step's start): the
+    quadrature the method would make of the energy as a state of its own."""
+    P, z = work.stage_power, work.dissipated
+    if P.shape[1] == 0:
+        return
+    z[1, :] = z[0]
+    z[3, :] = P[0]
+    for s in range(stages):
+        for k in range(P.shape[1]):
+            z[0, k] += step * B[s] * P[s, k]
+    z[2, :] = P[stages]
+
+
+@jit
 def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_step,
             charts, turns, constraint_tol, chart_limit, recent, stats, drift_stats, K, y_old,
             dense, collapse, check_at, budget, work):
@@ -257,6 +305,7 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
     y_new = np.empty(2 * n)
     rates = np.empty(n)
     n_switch = switch_count(model.forces)
+    n_power = work.stage_power.shape[1]
     switch_old, switch_new = np.empty(n_switch), np.empty(n_switch)
     spatial = charts is not None  # a run-time flag, where no spatial-only code depends on it
     while True:
@@ -266,6 +315,8 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
                 spatial_rates_into(y[:n], y[n:], rates)
                 f[:n] = rates
                 stats[CHART_RESETS] += 1
+        if n_power > 0:
+            work.stage_power[0, :] = work.dissipated[2]  # the power at the step's start
         min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
         h_abs = min(h, max_step)
         if h_abs < min_step:
@@ -302,6 +353,7 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
                     failure, t_failure = status, t_stage
                     y_old[:] = state
                     break
+                work.stage_power[s, :] = work.contact_power
             if status != SOLVED:
                 # a trial step too long for the motion can leave the stages so far off that
                 # the matrix is singular or the state not finite there: a rejected step, not
@@ -322,6 +374,12 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
                     rejected = True
                     stats[REJECTED] += 1
                     continue
+            if error < 1.0 and n_power > 0:
+                # the contacts' dissipated energy, as if it were a state, once the step ends
+                # at the first switch (a linear law's power jumps at a touch: past it, no step
+                # would hold the jump within tolerance)
+                error = max(error, dissipation_error(work, E, E_low, B, stages, step, rtol,
+                                                     dense_kind, tries > 0))
             if error < 1.0:
                 factor = step_factor(error, error_order)
                 if rejected:
@@ -338,6 +396,7 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
         f[:] = K[stages]
         t = t_new
         stats[STEPS] += 1
+        dissipate(work, B, stages, step)
         flags = 0
         # a step far shorter than the recent ones: the index-1 accelerations grow without
         # bound at a singular position, and Python checks the Jacobian there
@@ -370,8 +429,16 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
                         y_old[:] = ys
                         return SINGULAR if status != NOT_FINITE else DIVERGED, \
                             t_old + C_extra[r] * step, t_old, step, h
+                    work.stage_power[s, :] = work.contact_power
                 dense[:] = dop853_coefficients(K, D, y_old, y, f_old, f, step)
+                if n_power > 0:  # the dissipated energy's interpolant, of the same stages
+                    z = work.dissipated
+                    work.dense_power[:dense.shape[0], :] = dop853_coefficients(
+                        work.stage_power, D, z[1], z[0], z[3], z[2], step)
             else:
                 dense[:] = polynomial_coefficients(K, P, stages + 1)
+                if n_power > 0:
+                    work.dense_power[:dense.shape[0], :] = polynomial_coefficients(
+                        work.stage_power, P, stages + 1)
         if flags:
             return flags, t, t_old, step, h

@@ -127,7 +127,11 @@ WORKSPACE_FIELDS = (
     "blocks", "rhs", "values", "matrix", "band", "permuted", "x",
     "range_jacobian", "range_band", "range_diagonal", "range_vector", "range_forces",
     "drivers", "phi", "forces", "spring_actuation", "rotary_actuation",
+    "contact_power", "stage_power", "dissipated", "dense_power",
 )
+#: stages of the explicit methods whose contacts' dissipated power a workspace keeps (DOP853's
+#: 12, the next step's first and its interpolant's 3 extra, with room)
+POWER_STAGES = 20
 
 
 if not DISABLED:
@@ -249,6 +253,7 @@ def workspace(spatial: bool, model):
     range_jacobian, range_band, range_rows, range_forces = _range_sizes(
         model, n_rows, n_bodies, nc)
     force_bodies, springs, rotary_springs = _force_sizes(model.forces, b)
+    contacts = model.forces.contact_bodies.shape[0]
     return Workspace(
         model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)),
         np.empty((b, 3, n_rot)),
@@ -262,4 +267,6 @@ def workspace(spatial: bool, model):
         np.empty(size), np.empty(range_jacobian), np.empty(range_band), np.empty(range_rows),
         np.empty(range_rows), np.empty(range_forces), np.empty((model.driver_rows.shape[0], 3)),
         np.empty((model.rotation_first.shape[0] - 1, 3)), np.empty((force_bodies, nc)),
-        np.empty((springs, 3)), np.empty((rotary_springs, 3)))
+        np.empty((springs, 3)), np.empty((rotary_springs, 3)), np.zeros(contacts),
+        np.zeros((POWER_STAGES, contacts)), np.zeros((6, contacts)),
+        np.zeros((8, contacts)))
