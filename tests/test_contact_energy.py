@@ -52,6 +52,8 @@ def test_bounces_with_damping_and_friction_keep_the_balance_to_the_tolerance(dim
     assert balance["dissipated"][-1] > 0.95 * (start - resting)
     np.testing.assert_allclose(balance["total"], start, rtol=0, atol=2e-9 * start)
     assert np.all(np.diff(balance["dissipated"]) >= -2e-9 * start)  # never negative power
+    np.testing.assert_array_equal(res.columns()["floor.dissipated [J]"],
+                                  res.contact_dissipation[:, 0])
 
 
 def test_an_elastic_frictionless_bounce_dissipates_nothing():

@@ -3,13 +3,15 @@ dynamics run, per contact row [J]: the integral of the power each dissipates (it
 its force clipped at zero, its friction's; :func:`mbd3d.numerics.compiled.contact_laws.
 dissipated_power`).
 
-The explicit methods integrate it in their compiled loop by their own weights on the
-stages' powers (:func:`mbd3d.numerics.compiled.integration.dissipate`), as they would the
-energy as a state of its own; between two step ends it is the cubic Hermite interpolant of
-the energies and powers there. Generalized-alpha takes the trapezoidal rule on its steps'
-ends, of its own order. With the kinetic and potential energy (the contacts' springs
-included) and the impacts' losses, the balance :meth:`mbd3d.Results.energy_balance` closes
-to the integrator's tolerance.
+The explicit methods integrate it in their compiled loop as they would the energy as a
+state of its own: by their weights on the stages' powers
+(:func:`mbd3d.numerics.compiled.integration.dissipate`), with their error control on it and
+their dense output between step ends; each row's penetration is a switching function, so
+that a step ends where a law clipped at zero stops unloading its spring (the power's kink).
+Generalized-alpha takes the trapezoidal rule on its steps' ends, of its own order, and the
+cubic Hermite interpolant between them. With the kinetic and potential energy (the
+contacts' springs included) and the impacts' losses, the balance
+:meth:`mbd3d.Results.energy_balance` closes to the integrator's tolerance.
 """
 
 from __future__ import annotations

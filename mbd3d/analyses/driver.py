@@ -229,9 +229,10 @@ class Integrator:
     def after_step(self, segment: Segment) -> None:
         """Between segments: projections, chart resets."""
 
-    def dissipated(self, t: float, segment: Segment) -> np.ndarray | None:
+    def dissipated(self, t: float, segment: Segment | None) -> np.ndarray | None:
         """The energy [J] each contact row has dissipated from the start to ``t`` in
-        ``segment`` (:mod:`mbd3d.analyses.dissipation`), or None where the model has none."""
+        ``segment`` (None: to the current time; :mod:`mbd3d.analyses.dissipation`), or None
+        where the model has no contacts."""
         return None
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
@@ -394,9 +395,8 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
         if rigid.holding is not None:
             forces = np.zeros(len(rigid.group.names))
             forces[rigid.rows] = rigid.holding.forces(tk, q, qd)
-        dissipated = (integrator.dissipated(tk, segment) if segment is not None
-                      else integrator.dissipated(tk, Segment(tk, tk, None, info={"step": 0.0})))
-        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns(), forces, dissipated)
+        out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns(), forces,
+                  integrator.dissipated(tk, segment))
 
     def loop() -> tuple[str, str] | None:
         q, qd, redundant = initial_state(request, integrator, integrator.rows_dependent)

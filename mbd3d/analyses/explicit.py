@@ -251,9 +251,11 @@ class ExplicitRungeKutta(Integrator):
         self.stats["projections"] += 1
         self.restart(t_now, q, qd)
 
-    def dissipated(self, t: float, segment: Segment) -> np.ndarray | None:
+    def dissipated(self, t: float, segment: Segment | None) -> np.ndarray | None:
         if not self._energy.shape[1]:
             return None
+        if segment is None:
+            return self._energy[0].copy()
         return self._energy_at(t, segment.t_start, segment.info["step"])
 
     def _energy_at(self, t: float, t_old: float, step: float) -> np.ndarray:
@@ -267,7 +269,7 @@ class ExplicitRungeKutta(Integrator):
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         # the method goes on from the new state: only its first stage is evaluated again,
         # and the contacts have dissipated what they had at t, inside the last step
-        if self._energy.shape[1]:
+        if self._energy.shape[1] and t < self.t_now:  # an event's time: dense output
             self._energy[0] = self._energy_at(t, self.t_last, self.step_last)
         self._set_arrays()  # rows held at rest or let go change how it is evaluated
         self.y[:] = self._join(q, qd)

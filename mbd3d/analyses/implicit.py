@@ -442,7 +442,7 @@ class GeneralizedAlphaIntegrator(Integrator):
             self.charts = chart
             self.restart(self.tt, q, qd)
 
-    def dissipated(self, t: float, segment: Segment) -> np.ndarray | None:
+    def dissipated(self, t: float, segment: Segment | None) -> np.ndarray | None:
         return self.dissipation.at(t)
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:

@@ -64,7 +64,8 @@ def export_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
 
 
 def _contact_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
-    """Each contact row's gap and normal force, and a contact's friction force's size."""
+    """Each contact row's gap and normal force, a contact's friction force's size, and over a
+    forward dynamics run the energy each row has dissipated."""
     from mbd3d.model.contacts import Contact, contact_group  # noqa: PLC0415
 
     group = contact_group(results.model, required=False)
@@ -78,6 +79,8 @@ def _contact_columns(results: Results) -> list[tuple[str, str, np.ndarray]]:
                 (f"{name}.Fn", force, states.normal_force[:, r])]
         if isinstance(owner, Contact):
             out.append((f"{name}.Ft", "N", np.linalg.norm(states.friction_force[:, r], axis=1)))
+        if states.dissipated_energy is not None:
+            out.append((f"{name}.dissipated", "J", states.dissipated_energy[:, r]))
     return out
 
 

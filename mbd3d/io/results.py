@@ -370,7 +370,9 @@ class Results:
         all rows); ``lost_in_impacts`` at the rigid contacts (``stats["impacts"]``, and the
         bounces no longer made where they came to rest, ``stats["rests"]``); and ``total``,
         their sum, which stays at its start where nothing else does work (drivers,
-        actuators, dampers and joint friction are not in it) to the integrator's tolerance.
+        actuators, dampers and joint friction are not in it): to the tolerance with the
+        explicit methods; with generalized-alpha to its second order, less what its own
+        numerical damping takes (``rho_inf`` < 1).
         """
         kinetic, potential = self.kinetic_energy, self.potential_energy
         dissipated = (np.zeros(len(self.t)) if self.contact_dissipation is None

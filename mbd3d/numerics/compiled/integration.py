@@ -256,10 +256,11 @@ def dissipation_error(work, E, E_low, B, stages: int, step: float, rtol: float,
 @jit
 def dissipate(work, B, stages: int, step: float) -> None:
     """Add the energy [J] each contact dissipated over the step just accepted to
-    ``work.dissipated`` (rows: now, at the step's start, the power now and at the start; the
-    last two, set by Python, are kept: :func:`dissipation_error`), by the method's own weights ``B`` on
-    its stages' powers (``work.stage_power``, the first the power at the step's start): the
-    quadrature the method would make of the energy as a state of its own."""
+    ``work.dissipated`` (rows: the energy now and at the step's start, the power now and at
+    its start; the last two, set by Python, are kept: :func:`dissipation_error`), by the
+    method's own weights ``B`` on its stages' powers (``work.stage_power``, the first the
+    power at the step's start): the quadrature the method would make of the energy as a
+    state of its own."""
     P, z = work.stage_power, work.dissipated
     if P.shape[1] == 0:
         return
