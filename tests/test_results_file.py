@@ -94,6 +94,18 @@ def test_files_that_are_not_results_are_refused_by_name(tmp_path):
         # a bomb: 80 MB of zeros compressed to some 80 kB, for two time points
         "bomb": (_npz(**{**good, "q": np.zeros((10 ** 7,))}), "would expand to 80000128 bytes"),
     }
+    # a header that declares 8 TB for q in a member of a few hundred bytes
+    member = io.BytesIO()
+    np.lib.format.write_array_header_1_0(member, {"descr": "<f8", "fortran_order": False,
+                                                  "shape": (10 ** 6, 10 ** 6)})
+    liar = io.BytesIO()
+    with zipfile.ZipFile(liar, "w") as archive:
+        for key, value in good.items():
+            if key != "q":
+                with archive.open(f"{key}.npy", "w") as f:
+                    np.lib.format.write_array(f, value)
+        archive.writestr("q.npy", member.getvalue() + bytes(64))
+    cases["header"] = (liar.getvalue(), r"'q' declares 8000000000000 bytes in")
     for name, (content, words) in cases.items():
         path = tmp_path / f"{name}.npz"
         path.write_bytes(content)

@@ -147,6 +147,16 @@ def _member(archive: zipfile.ZipFile, name: str, sizes: dict, limit: int, where:
         raise MBDError(f"{where}: its '{name}' would expand to {sizes[name]} bytes, more than "
                        "its time points can hold")
     with archive.open(name + ".npy") as member:
+        # the array's own header, checked before NumPy allocates what it declares: the
+        # zip's sizes are the file's word, and a header may claim far more than they hold
+        fmt = np.lib.format
+        header = (fmt.read_array_header_1_0 if fmt.read_magic(member) == (1, 0)
+                  else fmt.read_array_header_2_0)
+        shape, _, dtype = header(member)  # a bounded header (NumPy's max_header_size)
+        declared = int(np.prod(shape, dtype=object)) * dtype.itemsize
+        if declared > sizes[name]:
+            raise MBDError(f"{where}: its '{name}' declares {declared} bytes in {sizes[name]}")
+        member.seek(0)
         value = np.lib.format.read_array(member, allow_pickle=False)
     if not np.issubdtype(value.dtype, kind) and value.size:  # an empty list: float64
         raise MBDError(f"{where}: '{name}' holds {value.dtype}, not {np.dtype(kind).name}")
