@@ -377,10 +377,12 @@ class Results:
         kinetic, potential = self.kinetic_energy, self.potential_energy
         dissipated = (np.zeros(len(self.t)) if self.contact_dissipation is None
                       else self.contact_dissipation.sum(axis=1))
-        losses = [(r["time"], r["energy_lost"]) for kind in ("impacts", "rests")
-                  for r in self.stats.get(kind, [])]
+        losses = sorted((r["time"], r["energy_lost"]) for kind in ("impacts", "rests")
+                        for r in self.stats.get(kind, []))
+        times = np.array([te for te, _ in losses])
+        total = np.concatenate([[0.0], np.cumsum([e for _, e in losses])])
         # an output at an impact's time holds the state before it
-        lost = np.array([sum(e for te, e in losses if te < tk) for tk in self.t])
+        lost = total[np.searchsorted(times, self.t, side="left")]
         return {"kinetic": kinetic, "potential": potential, "dissipated": dissipated,
                 "lost_in_impacts": lost, "total": kinetic + potential + dissipated + lost}
 
