@@ -647,6 +647,54 @@ def test_the_switch_is_positive_exactly_while_the_law_pushes():
         assert value == pytest.approx(expected, rel=1e-12)
 
 
+@pytest.mark.parametrize("restitution", [1.0, 0.5])
+def test_the_switch_of_a_hertz_contact_has_a_slope_where_it_opens(restitution):
+    """Hertz's law (K = 1e8 N/m^1.5) on a ball of 1 kg over a floor: pressed in by ``delta``
+    and leaving at ``v``, Tsuji's force ``K delta^(3/2) + alpha sqrt(m K) delta^(1/4) delta'``
+    (``alpha`` calibrated for the restitution by SciPy on a free impact). The switching
+    function has the force's sign, and is the dent itself, of slope one in it, where the
+    undamped contact opens: ``F / K = delta^(3/2)`` has no slope at zero, and a secant on it
+    never reaches the release."""
+    from mbd3d.model import constraints
+
+    K, m = 1e8, 1.0
+    b = mb.ModelBuilder(dim=2)
+    ball = b.add_body("ball", mass=m, inertia=1e-3, position=(0.0, 0.2))
+    b.add(mb.Contact("floor", mb.Sphere(ball, radius=0.1), mb.Plane(b.ground, normal=(0, 1)),
+                     law=mb.HertzContact(stiffness=K, restitution=restitution)))
+    model = b.build()
+    group = next(g for g in model.force_groups if hasattr(g, "switches"))
+    alpha = 0.0 if restitution == 1.0 else _tsuji_alpha(restitution)
+    for delta in (1e-9, 1e-6, 1e-4):
+        for speed in (0.0, 0.3, 3.0):  # leaving the floor
+            q, qd = np.array([0.0, 0.1 - delta, 0.0]), np.array([0.0, speed, 0.0])
+            value = group.switches(model, constraints.frames(model, q, qd))[0]
+            force = K * delta ** 1.5 - alpha * math.sqrt(m * K) * delta ** 0.25 * speed
+            assert np.sign(value) == np.sign(force)
+            if alpha == 0.0:
+                assert value == pytest.approx(delta, rel=1e-9)
+
+
+def _tsuji_alpha(e: float) -> float:
+    """The damping factor ``alpha`` of Tsuji's Hertz law for which a free impact of unit mass
+    and stiffness at unit speed rebounds with restitution ``e`` (the law is scale-free)."""
+    def rebound(alpha: float) -> float:
+        def rhs(_, y):
+            d, v = y
+            return [v, -max(0.0, max(d, 0.0) ** 1.5 + alpha * max(d, 0.0) ** 0.25 * v)]
+        out = solve_ivp(rhs, (0.0, 20.0), [0.0, 1.0], rtol=1e-10, atol=1e-12,
+                        events=_leaves, dense_output=False)
+        return -out.y_events[0][0][1] - e
+    return brentq(rebound, 0.0, 5.0)
+
+
+def _leaves(_, y):
+    return y[0] if y[1] < 0 else 1.0
+
+
+_leaves.terminal, _leaves.direction = True, -1
+
+
 def test_the_first_switch_is_where_the_earliest_sign_change_interpolates_to_zero():
     # the explicit loop's secant on the switching functions: the fraction of a step where the
     # first one crosses zero, by linear interpolation between the step's ends

@@ -397,9 +397,13 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report, powe
 @jit
 def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
     """``out[k]``: a continuous function of the state that is positive exactly while contact
-    (or stop) ``k``'s law pushes, ``min(delta, F_n / K)`` with the unclipped force, else
-    ``delta`` (<= 0): the integrators end a step where it changes sign, so that no step
-    straddles the kink of a touch or a release. A rigid row (``K = 0``) gives -1. Where
+    (or stop) ``k``'s law pushes, ``min(delta, F_n / (K delta^(n_K - 1)))`` with the
+    unclipped force, else ``delta`` (<= 0): the integrators end a step where it changes sign,
+    so that no step straddles the kink of a touch or a release. The force is divided by
+    ``K delta^(n_K - 1)`` (positive) so that the function is ``delta`` itself, of nonzero
+    slope, where an undamped Hertz contact opens: ``F_n / K = delta^(3/2)`` has none there,
+    and the secant that places the step's end crept towards the release in ever shorter
+    steps. A rigid row (``K = 0``) gives -1. Where
     ``out`` has two entries per row, ``out[r + k]`` is the penetration ``delta`` itself: it
     turns negative where a law whose force was clipped at zero stops unloading its spring,
     the kink of the power it dissipates (:func:`.contact_laws.dissipated_power`)."""
@@ -424,7 +428,8 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
         if not delta > 0.0:
             out[k] = delta if delta == delta else 0.0
             continue
-        out[k] = min(delta, law_force(values, k, delta, delta_rate) / values[k, 3])
+        spring = values[k, 3] * delta ** (values[k, 4] - 1.0)
+        out[k] = min(delta, law_force(values, k, delta, delta_rate) / spring)
 
 
 @jit
