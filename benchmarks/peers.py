@@ -11,6 +11,13 @@ building excluded, as for mbd3d).
 - MuJoCo (minimal coordinates, a tree of hinge or ball joints): its RK4 integrator, contacts
   off. It has no exact loop closure (equality constraints are soft), so it joins the chain
   benchmarks only.
+
+Newton's cradle (``mbd3d.mechanisms.newtons_cradle``) is the contact scenario: Exudyn's
+``ObjectContactSphereSphere`` with the same Hertz law (``K delta^1.5``, undamped) between
+neighbours, and its generalized-alpha (its explicit solvers refuse the strings' joints).
+MuJoCo has no Hertz law: its soft contact is given the linear law of the same duration of
+impact (its "direct" stiffness ``(pi / T)^2`` per unit of the pair's effective mass, no
+damping, impedance 0.9999), so its answer is its own, compared with its own converged one.
 """
 
 from __future__ import annotations
@@ -20,7 +27,8 @@ import time
 
 import numpy as np
 
-__all__ = ["available", "exudyn_chain", "exudyn_slider_crank", "mujoco_chain"]
+__all__ = ["available", "exudyn_chain", "exudyn_slider_crank", "mujoco_chain",
+           "exudyn_cradle", "mujoco_cradle"]
 
 
 def available(name: str) -> bool:
@@ -175,3 +183,82 @@ def mujoco_chain(n_links: int, step: float, duration: float = 1.0, spatial: bool
     mujoco.mj_kinematics(model, data)
     wall = time.perf_counter() - start
     return data.site_xpos[0][:3 if spatial else 2].copy(), wall
+
+
+def exudyn_cradle(cradle: dict, step: float, duration: float) -> tuple[np.ndarray, float]:
+    """The balls' centres (n, 2) [m] at ``duration`` [s] of ``cradle``'s Newton's cradle in
+    Exudyn at ``step`` [s], and the wall time [s]. ``cradle``: ``n_balls``, ``radius``,
+    ``string_length``, ``gap``, ``release`` as for ``mbd3d.mechanisms.newtons_cradle``, and
+    its derived ``mass`` [kg] and Hertz ``stiffness`` [N/m^1.5]."""
+    import exudyn as exu
+    from exudyn.utilities import (MarkerBodyPosition, MarkerBodyRigid, NodeGenericData,
+                                  ObjectContactSphereSphere, ObjectGround, RevoluteJoint2D,
+                                  RigidBodyInertia, RotationMatrixZ)
+
+    n, r, L, m = cradle["n_balls"], cradle["radius"], cradle["string_length"], cradle["mass"]
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(ObjectGround())
+    inertia = RigidBodyInertia(mass=m, inertiaTensor=np.eye(3) * 0.4 * m * r * r)
+    balls, centres = [], []
+    for k in range(n):
+        pivot = np.array([k * (2 * r + cradle["gap"]), L, 0.0])
+        angle = -cradle["release"] if k == 0 else 0.0
+        centre = pivot + L * np.array([math.sin(angle), -math.cos(angle), 0.0])
+        ball = mbs.CreateRigidBody(inertia=inertia, referencePosition=centre,
+                                   referenceRotationMatrix=RotationMatrixZ(angle),
+                                   gravity=[0, -9.81, 0], create2D=True)
+        on_ground = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ground, localPosition=pivot))
+        # the pin, string_length above the centre along the ball's own (turned) y axis
+        on_ball = mbs.AddMarker(MarkerBodyPosition(bodyNumber=ball, localPosition=[0, L, 0]))
+        mbs.AddObject(RevoluteJoint2D(markerNumbers=[on_ground, on_ball]))
+        balls.append(ball)
+        centres.append(mbs.AddMarker(MarkerBodyRigid(bodyNumber=ball)))
+    for k in range(n - 1):
+        data = mbs.AddNode(NodeGenericData(numberOfDataCoordinates=4, initialCoordinates=[0] * 4))
+        mbs.AddObject(ObjectContactSphereSphere(
+            markerNumbers=[centres[k], centres[k + 1]], nodeNumber=data, spheresRadii=[r, r],
+            contactStiffness=cradle["stiffness"], contactStiffnessExponent=1.5,
+            contactDamping=0.0, impactModel=0))
+    settings = _exudyn_settings(exu, n, step, duration)
+    settings.timeIntegration.minimumStepSize = 1e-12
+    wall = _exudyn_solve(exu, mbs, settings)
+    return np.array([mbs.GetObjectOutputBody(b, exu.OutputVariableType.Position,
+                                             configuration=exu.ConfigurationType.Current)[:2]
+                     for b in balls]), wall
+
+
+def _mujoco_cradle_xml(cradle: dict, stiffness: float, integrator: str) -> str:
+    n, r, L, m = cradle["n_balls"], cradle["radius"], cradle["string_length"], cradle["mass"]
+    inertia = 0.4 * m * r * r
+    bodies = "".join(
+        f'<body pos="{k * (2 * r + cradle["gap"])!r} {L!r} 0">'
+        f'<joint type="hinge" axis="0 0 1"/>'
+        f'<inertial pos="0 {-L!r} 0" mass="{m!r}" diaginertia="{inertia!r} {inertia!r} '
+        f'{inertia!r}"/>'
+        f'<geom type="sphere" size="{r!r}" pos="0 {-L!r} 0" condim="1" '
+        f'solref="{-stiffness!r} 0" solimp="0.9999 0.9999 0.001"/>'
+        f'<site pos="0 {-L!r} 0"/></body>' for k in range(n))
+    return (f'<mujoco><option gravity="0 -9.81 0" integrator="{integrator}"/>'
+            f'<worldbody>{bodies}</worldbody></mujoco>')
+
+
+def mujoco_cradle(cradle: dict, step: float, duration: float, impact_duration: float,
+                  integrator: str = "RK4") -> tuple[np.ndarray, float]:
+    """:func:`exudyn_cradle`'s cradle in MuJoCo, its contacts linear springs that part two
+    balls after ``impact_duration`` [s] (see the module docstring), by ``integrator`` at
+    ``step``: the balls' centres (n, 2) [m] and the wall time [s]."""
+    import mujoco
+
+    stiffness = (math.pi / impact_duration) ** 2
+    model = mujoco.MjModel.from_xml_string(_mujoco_cradle_xml(cradle, stiffness, integrator))
+    model.opt.timestep = step
+    data = mujoco.MjData(model)
+    data.qpos[0] = -cradle["release"]
+    steps = int(round(duration / step))
+    start = time.perf_counter()
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    mujoco.mj_kinematics(model, data)  # the sites of the final state (see mujoco_chain)
+    wall = time.perf_counter() - start
+    return data.site_xpos[:, :2].copy(), wall

@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 import mbd3d as mb
-from mbd3d.joints import Revolute
+from mbd3d.mechanisms import newtons_cradle
 from mbd3d.viewer import check_recording_first, record, run_script
 
 G, BALLS, RADIUS, STRING, GAP, DENSITY = 9.81, 5, 0.015, 0.1, 0.2e-3, 7850.0
@@ -29,23 +29,11 @@ RELEASE = math.radians(30.0)
 
 
 def build() -> mb.Model:
-    """The balls hanging in a row along x, the first turned back by ``RELEASE``."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G), name="Newton's cradle")
-    mass = DENSITY * 4.0 / 3.0 * math.pi * RADIUS ** 3
-    law = mb.HertzContact(young_modulus=210e9, poisson_ratio=0.3, restitution=1.0)
-    balls = []
-    for k in range(BALLS):
-        pivot = np.array([k * (2 * RADIUS + GAP), STRING])
-        angle = -RELEASE if k == 0 else 0.0  # about the pin, from hanging straight down
-        centre = pivot + STRING * np.array([math.sin(angle), -math.cos(angle)])
-        ball = b.add_body(f"ball{k + 1}", mass=mass, inertia=0.4 * mass * RADIUS ** 2,
-                          position=centre, angle=angle)
-        b.add(Revolute(f"pin{k + 1}", b.ground, ball, at=pivot))
-        if balls:
-            b.add(mb.Contact(f"touch{k}", mb.Sphere(balls[-1], RADIUS), mb.Sphere(ball, RADIUS),
-                             law=law))
-        balls.append(ball)
-    return b.build()
+    """The balls hanging in a row along x, the first turned back by ``RELEASE``; see
+    :func:`mbd3d.mechanisms.newtons_cradle` for how the pins and contacts are added."""
+    return newtons_cradle(BALLS, radius=RADIUS, string_length=STRING, gap=GAP,
+                          density=DENSITY, young_modulus=210e9, poisson_ratio=0.3,
+                          restitution=1.0, release=RELEASE, gravity=G)
 
 
 def swing(res: mb.Results, k: int) -> np.ndarray:

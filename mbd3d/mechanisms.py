@@ -17,7 +17,8 @@ from mbd3d.model.motion import Motion, Ramp
 from mbd3d.numerics.rotations import frame_along
 
 __all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions",
-           "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "frame_along"]
+           "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "newtons_cradle",
+           "frame_along"]
 
 
 def slider_crank_positions(crank_angle: float, crank_length: float, rod_length: float
@@ -274,3 +275,43 @@ def spatial_chain(n_links: int, *, link_length: float = 1.0, link_mass: float = 
                               point_j=(-L / 2, 0.0, 0.0)))
         previous = body
     return builder.build(sparse=sparse)
+
+
+def newtons_cradle(n_balls: int = 5, *, radius: float = 0.015, string_length: float = 0.1,
+                   gap: float = 0.2e-3, density: float = 7850.0, young_modulus: float = 210e9,
+                   poisson_ratio: float = 0.3, restitution: float = 1.0,
+                   release: float = math.radians(30.0), gravity: float = 9.81) -> Model:
+    """Newton's cradle in the plane: ``n_balls`` balls of ``radius`` [m] and ``density``
+    [kg/m^3], each hanging from a pin ``string_length`` [m] above its centre (a rigid
+    string), in a row along x with ``gap`` [m] between neighbours at rest; the first is turned
+    back by ``release`` [rad] about its pin. Neighbours touch by Hertz's law from the
+    material (``young_modulus`` [Pa], ``poisson_ratio``), damped to ``restitution``; gravity
+    -y.
+
+    Bodies ``ball1`` ... (mass ``density 4/3 pi r^3``, inertia ``2/5 m r^2``); joints ``pin1``
+    ... (pin k at ``((k - 1)(2 r + gap), string_length)``); contacts ``touch1`` ... between
+    ball k and ball k + 1.
+    """
+    from mbd3d.joints import Revolute
+    from mbd3d.model.contact_laws import HertzContact
+    from mbd3d.model.contacts import Contact, Sphere
+
+    if n_balls < 1:
+        raise ModelError(f"newtons_cradle: n_balls must be at least 1, got {n_balls!r}")
+    mass = density * 4.0 / 3.0 * math.pi * radius ** 3
+    law = HertzContact(young_modulus=young_modulus, poisson_ratio=poisson_ratio,
+                       restitution=restitution)
+    builder = ModelBuilder(dim=2, gravity=(0.0, -gravity), name="Newton's cradle")
+    balls = []
+    for k in range(n_balls):
+        pivot = np.array([k * (2.0 * radius + gap), string_length])
+        angle = -release if k == 0 else 0.0  # about the pin, from hanging straight down
+        centre = pivot + string_length * np.array([math.sin(angle), -math.cos(angle)])
+        ball = builder.add_body(f"ball{k + 1}", mass=mass, inertia=0.4 * mass * radius ** 2,
+                                position=centre, angle=angle)
+        builder.add(Revolute(f"pin{k + 1}", builder.ground, ball, at=pivot))
+        if balls:
+            builder.add(Contact(f"touch{k}", Sphere(balls[-1], radius), Sphere(ball, radius),
+                                law=law))
+        balls.append(ball)
+    return builder.build()

@@ -99,3 +99,21 @@ def test_kinematics_benchmark_runs(capsys, monkeypatch):
     rows = _load("kinematics").main(repeat=1, links=(2,), points=5)
     assert [r["n"] for r in rows] == [36, 6] and all(r["dense"] > 0 for r in rows)
     assert "factors densely up to" in capsys.readouterr().out
+
+
+def test_cradle_benchmark_runs_without_peers(capsys, monkeypatch):
+    """The contact scenario at its smallest (three balls, peers hidden); the impact duration
+    it gives MuJoCo against Hertz's closed form ``2.94 delta_max / v``."""
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    module = _load("cradle")
+    monkeypatch.setattr(sys.modules["peers"], "available", lambda name: False)
+    monkeypatch.setattr(module, "CRADLE", dict(module.CRADLE, n_balls=3))
+    monkeypatch.setattr(module, "DURATION", 0.2)
+    rows = module.compare(210e9, repeat=1)
+    assert [r["engine"] for r in rows] == ["mbd3d DOP853", "mbd3d RK45"]
+    assert all(r["error"] <= module.TOLERANCE for r in rows)
+    assert "no peers installed" in capsys.readouterr().out
+    m, K, v = 0.05, 1e10, 0.7
+    delta_max = (5 * m * v * v / (4 * K)) ** 0.4
+    assert module.hertz_impact_duration(m, K, v) == pytest.approx(2.9432 * delta_max / v,
+                                                                  rel=1e-3)
