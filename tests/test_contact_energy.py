@@ -155,3 +155,24 @@ def test_joint_stops_keep_the_balance(dim, law):
     np.testing.assert_allclose(balance["total"], start, rtol=0, atol=2e-9 * start)
     if isinstance(law, mb.HertzContact):
         assert balance["dissipated"][-1] == pytest.approx(start * (1 - 0.6 ** 6), rel=1e-8)
+
+
+def test_the_energy_between_step_ends_is_the_cubic_through_their_energies_and_powers():
+    """Generalized-alpha's energies between its steps' ends (``dissipation.hermite``): any
+    cubic in time is reproduced exactly from its values and slopes at the ends, of two
+    contacts at once, anywhere inside the step (and held at the ends outside it)."""
+    from mbd3d.analyses.dissipation import hermite
+
+    c = np.array([[0.3, -1.0, 2.0, 0.5], [1.0, 0.25, -0.5, 3.0]])  # two cubics' coefficients
+
+    def energy(t):
+        return c[:, 0] + c[:, 1] * t + c[:, 2] * t ** 2 + c[:, 3] * t ** 3
+
+    def power(t):
+        return c[:, 1] + 2 * c[:, 2] * t + 3 * c[:, 3] * t ** 2
+
+    t_old, step = 1.2, 0.35
+    z = np.array([energy(t_old + step), energy(t_old), power(t_old + step), power(t_old)])
+    for t in np.linspace(t_old, t_old + step, 7):
+        np.testing.assert_allclose(hermite(t, t_old, step, z), energy(t), rtol=1e-13, atol=0)
+    np.testing.assert_allclose(hermite(t_old + 2 * step, t_old, step, z), energy(t_old + step))
