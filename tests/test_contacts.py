@@ -628,9 +628,11 @@ def test_stops_both_on_one_side_of_zero_hold_at_both_ends(lower, upper):
 
 def test_the_switch_is_positive_exactly_while_the_law_pushes():
     """A ball over a floor with a damped linear law (K = 1e5 N/m, c = 50 N s/m): its
-    switching function is minus the gap while apart, the dent while pressed in and pushing,
-    and the force over K (negative) while pressed in but leaving faster than the spring
-    pushes, so that a step ends where the clipped force sets in, before the gap closes."""
+    switching function is minus the gap while apart, the dent while pressed in and going in,
+    and the dent times the force over the spring's and the damper's sizes, ``delta (K delta -
+    c v) / (K delta + c v)`` (negative), while pressed in but leaving at ``v`` faster than the
+    spring pushes, so that a step ends where the clipped force sets in, before the gap
+    closes."""
     from mbd3d.model import constraints
 
     b = mb.ModelBuilder(dim=2)
@@ -641,7 +643,8 @@ def test_the_switch_is_positive_exactly_while_the_law_pushes():
     group = next(g for g in model.force_groups if hasattr(g, "switches"))
     for height, speed, expected in ((0.11, 0.0, -0.01),            # apart by 1 cm
                                     (0.099, -0.1, 1e-3),           # pressed 1 mm, going in
-                                    (0.099, 5.0, 1e-3 - 50 * 5.0 / 1e5)):  # leaving fast
+                                    # leaving fast
+                                    (0.099, 5.0, 1e-3 * (100 - 250) / (100 + 250))):
         q, qd = np.array([0.0, height, 0.0]), np.array([0.0, speed, 0.0])
         value = group.switches(model, constraints.frames(model, q, qd))[0]
         assert value == pytest.approx(expected, rel=1e-12)

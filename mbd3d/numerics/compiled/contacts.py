@@ -74,8 +74,8 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
-from mbd3d.numerics.compiled.contact_laws import (dissipated_power, law_force, law_slopes,
-                                                  normal_force)
+from mbd3d.numerics.compiled.contact_laws import (damping, dissipated_power, law_force,
+                                                  law_slopes, normal_force)
 from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
 from mbd3d.numerics.compiled.shapes import (box_to_point, cam_to_line, cam_to_point,
                                             closest_between_segments, closest_on_segment)
@@ -397,13 +397,14 @@ def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report, powe
 @jit
 def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
     """``out[k]``: a continuous function of the state that is positive exactly while contact
-    (or stop) ``k``'s law pushes, ``min(delta, F_n / (K delta^(n_K - 1)))`` with the
-    unclipped force, else ``delta`` (<= 0): the integrators end a step where it changes sign,
-    so that no step straddles the kink of a touch or a release. The force is divided by
-    ``K delta^(n_K - 1)`` (positive) so that the function is ``delta`` itself, of nonzero
-    slope, where an undamped Hertz contact opens: ``F_n / K = delta^(3/2)`` has none there,
-    and the secant that places the step's end crept towards the release in ever shorter
-    steps. A rigid row (``K = 0``) gives -1. Where
+    (or stop) ``k``'s law pushes, ``delta F_n / (K delta^n_K + |c delta'|)`` with the unclipped
+    force ``F_n = K delta^n_K + c delta'`` while pressed in (``delta > 0``), else ``delta``
+    (<= 0): the integrators end a step where it changes sign, so that no step straddles the
+    kink of a touch or a release. It is ``delta`` itself while the damper pushes too (at a
+    touch) and wherever the law is undamped, so that the secant which places a step's end on
+    it is exact to first order: ``F_n / K``, ``delta^(3/2)`` for Hertz, has no slope where an
+    undamped contact opens, and the secant crept towards the release in ever shorter steps;
+    it has an infinite one where Tsuji's damping ``delta^(1/4) delta'`` sets in at a touch. A rigid row (``K = 0``) gives -1. Where
     ``out`` has two entries per row, ``out[r + k]`` is the penetration ``delta`` itself: it
     turns negative where a law whose force was clipped at zero stops unloading its spring,
     the kink of the power it dissipates (:func:`.contact_laws.dissipated_power`)."""
@@ -428,8 +429,9 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
         if not delta > 0.0:
             out[k] = delta if delta == delta else 0.0
             continue
-        spring = values[k, 3] * delta ** (values[k, 4] - 1.0)
-        out[k] = min(delta, law_force(values, k, delta, delta_rate) / spring)
+        spring = values[k, 3] * delta ** values[k, 4]
+        damper = abs(damping(values, k, delta)[0] * delta_rate)
+        out[k] = delta * law_force(values, k, delta, delta_rate) / (spring + damper)
 
 
 @jit
