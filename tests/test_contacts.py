@@ -708,9 +708,13 @@ def test_the_first_switch_is_where_the_earliest_sign_change_interpolates_to_zero
         crossing = (before > 0) != (after > 0)
         expected = min((brentq(lambda s: b + s * (a - b), 0.0, 1.0)
                         for b, a in zip(before[crossing], after[crossing])), default=None)
-        found = first_switch(before, after)
+        found = first_switch(before, after, 0.0)
         if expected is None:
             assert found > 1.0  # none: past the step's end
         else:
             assert found == pytest.approx(expected, rel=1e-12, abs=1e-15)
-    assert first_switch(np.array([0.5, -1.0]), np.array([0.25, -2.0])) > 1.0
+    assert first_switch(np.array([0.5, -1.0]), np.array([0.25, -2.0]), 0.0) > 1.0
+    # a sign change within the noise is none (a corner skimming the floor: 1e-17 m)
+    assert first_switch(np.array([-4e-18, 0.5]), np.array([1.3e-16, 0.25]), 1e-14) > 1.0
+    assert first_switch(np.array([-4e-18, 0.5]), np.array([1.3e-16, -0.25]), 1e-14) == \
+        pytest.approx(2 / 3)

@@ -99,7 +99,7 @@ class ContactSteps:
         if not np.any(touched) or self.tries >= TRIES:
             return None
         impact_step = np.min(self.period[touched]) / PER_PERIOD
-        past = (1.0 - first_switch(self.before, self.after)) * h  # how long it overlapped
+        past = (1.0 - first_switch(self.before, self.after, 0.0)) * h  # how long it overlapped
         if past <= BAND * impact_step or h <= impact_step:
             return None
         self.tries += 1

@@ -46,6 +46,10 @@ _FAILED_STEP_FACTOR = 0.25
 #: this last fraction of it (at most _SWITCH_TRIES times), so that the kink of the contact
 #: force falls between steps instead of inside one, where no error estimate sees it
 _SWITCH_BAND, _SWITCH_TRIES = 1e-3, 8
+#: a switching function this close to zero at both ends of a step, relative to the largest
+#: coordinate (or 1), is rounding: a box's corner skimming the floor at zero penetration flips
+#: its sign at 1e-17 m, and steps cut at every flip never got past it
+_SWITCH_NOISE = 64.0 * np.finfo(np.float64).eps
 
 
 @jit_calling_python
@@ -192,12 +196,14 @@ def switches(model, y, charts, work, out) -> None:
 
 
 @jit
-def first_switch(before, after) -> float:
+def first_switch(before, after, noise: float) -> float:
     """The fraction of a step at which the first switching function changes sign, by linear
-    interpolation between its values at the step's ends (2: none does)."""
+    interpolation between its values at the step's ends (2: none does); a change between
+    values within ``noise`` of zero is none."""
     earliest = 2.0
     for k in range(before.shape[0]):
-        if (before[k] > 0.0) != (after[k] > 0.0):
+        if ((before[k] > 0.0) != (after[k] > 0.0)
+                and max(abs(before[k]), abs(after[k])) > noise):
             earliest = min(earliest, before[k] / (before[k] - after[k]))
     return earliest
 
@@ -367,7 +373,8 @@ def advance(model, key, tableau, t, y, f, h, t_output, t_bound, rtol, atol, max_
             error = error_norm(K, E, E_low, scale, step, dense_kind)
             if error < 1.0 and n_switch > 0 and tries < _SWITCH_TRIES:
                 switches(model, y_new, charts, work, switch_new)
-                fraction = first_switch(switch_old, switch_new)
+                noise = _SWITCH_NOISE * max(1.0, np.max(np.abs(y[:n])))
+                fraction = first_switch(switch_old, switch_new, noise)
                 if fraction < 1.0 - _SWITCH_BAND and fraction * step > min_step:
                     # end the step just past the switch (secant on the switching function)
                     h_abs = step * fraction * (1.0 + 0.5 * _SWITCH_BAND)
