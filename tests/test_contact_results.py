@@ -142,6 +142,14 @@ def test_a_recording_draws_the_contact_shapes_and_forces(run, tmp_path):
     # the floor's top face lies on the plane
     _, floor = read_component(path, "/world/ground/contacts", "Mesh3D:vertex_positions", None)
     assert np.max(floor[0][:, dim - 1]) == pytest.approx(0.0, abs=1e-7)
+    # the energy plot is the balance: with what the contacts dissipated, its total is level
+    _, energy = read_component(path, "/plots/energy", "Scalars:scalars")
+    balance = run.energy_balance()
+    np.testing.assert_array_equal(energy, np.column_stack([balance[part] for part in (
+        "kinetic", "potential", "dissipated", "lost_in_impacts", "total")]))
+    assert energy[-1, 2] > 0.1 * np.ptp(energy[:, 0] + energy[:, 1])  # a loss plotted
+    np.testing.assert_allclose(energy[:, 4], energy[0, 4], rtol=0,
+                               atol=1e-8 * np.ptp(energy[:, 0] + energy[:, 1]))
     r = states.names.index("drop")
     _, plotted = read_component(path, "/plots/contacts/drop", "Scalars:scalars")
     np.testing.assert_array_equal(plotted[:, 0], states.normal_force[:, r])

@@ -331,9 +331,14 @@ class Scene:
         for name in self._meshes_plotted():
             stream.log(f"plots/meshes/{_part(name)}", rr.SeriesLines(
                 names=[f"{name} tangential", f"{name} tooth"]), static=True)
-        stream.log("plots/energy", rr.SeriesLines(
-            names=["kinetic", "potential", "total"],
-            colors=[[76, 144, 226], [240, 140, 50], [235, 235, 235]]), static=True)
+        energies = [("kinetic", [76, 144, 226]), ("potential", [240, 140, 50]),
+                    ("dissipated", [200, 80, 80]), ("lost in impacts", [150, 110, 200]),
+                    ("total", [235, 235, 235])]
+        if not self.contacts:
+            energies = [energies[0], energies[1], energies[4]]
+        stream.log("plots/energy", rr.SeriesLines(names=[name for name, _ in energies],
+                                                  colors=[color for _, color in energies]),
+                   static=True)
         stream.log("plots/residuals/position", rr.SeriesLines(names="max |C| [m, rad]"),
                    static=True)
         stream.log("plots/residuals/velocity", rr.SeriesLines(
@@ -416,9 +421,13 @@ class Scene:
                                                  radii=np.full(k, 0.008 * self.size)))
         if self.dynamic:
             self._log_forces(stream, view, times)
-        kinetic, potential = block.kinetic_energy, block.potential_energy
+        # with contacts the total is the energy balance's: what they dissipated and what their
+        # impacts took added back, so that it stays level where nothing else does work
+        balance = block.energy_balance()
+        parts = ["kinetic", "potential"] + (["dissipated", "lost_in_impacts"]
+                                            if self.contacts else []) + ["total"]
         send("plots/energy", indexes=times, columns=rr.Scalars.columns(
-            scalars=np.column_stack([kinetic, potential, kinetic + potential])))
+            scalars=np.column_stack([balance[part] for part in parts])))
         send("plots/residuals/position", indexes=times,
              columns=rr.Scalars.columns(scalars=block.position_residual))
         send("plots/residuals/velocity", indexes=times,
