@@ -36,7 +36,7 @@ import mbd3d as mb  # noqa: E402
 import peers  # noqa: E402
 from mbd3d.mechanisms import newtons_cradle  # noqa: E402
 from mbd3d.model.contact_laws import hertz_stiffness  # noqa: E402
-from measure import cheapest, interleaved_medians, machine  # noqa: E402
+from measure import compare_at_equal_accuracy, machine  # noqa: E402
 
 #: the cradle (mbd3d.mechanisms.newtons_cradle's arguments), its duration [s] and the
 #: accuracy of the balls' centres at which the engines are compared [m]
@@ -117,33 +117,14 @@ def compare(young_modulus: float, repeat: int) -> list[dict]:
         engines["MuJoCo RK4"] = ([(f"h {h:.3g}", mujoco(h)) for h in steps], error_from(own))
     if len(engines) == 2:
         print("no peers installed: pip install -e '.[peers]' for Exudyn and MuJoCo")
-    rows, runs = [], []
-    for engine, (settings, err_of) in engines.items():
-        found = cheapest(settings, err_of, TOLERANCE)
-        if found is None:
-            print(f"{engine}: no setting tried reaches {TOLERANCE:g} m")
-            continue
-        label, err, run = found
-        rows.append({"engine": engine, "setting": label, "error": err})
-        runs.append(run)
-    for row, wall in zip(rows, interleaved_medians(runs, repeat)):
-        row["wall"] = wall
-    best = min((r["wall"] for r in rows if r["engine"].startswith("mbd3d")), default=np.nan)
-    print(mb.format_table({
-        "engine": [r["engine"] for r in rows],
-        "cheapest setting": [r["setting"] for r in rows],
-        "centres' error [m]": [r["error"] for r in rows],
-        "wall [s]": [r["wall"] for r in rows],
-        "mbd3d best / this": [best / r["wall"] for r in rows],
-    }, precision=3))
+    rows = compare_at_equal_accuracy(engines, TOLERANCE, "m", "centres'", repeat)
     print(f"({CRADLE['n_balls']} balls, E = {young_modulus:.3g} Pa, impacts of "
           f"{cradle['impact_duration'] * 1e6:.0f} us; centres at t = {DURATION} s to "
           f"{TOLERANCE:g} m; medians of {repeat} rounds in which the engines ran in turn)")
     for r in rows:
         if r["engine"].startswith("Exudyn"):
-            ratio = best / r["wall"]
-            print(f"mbd3d / {r['engine']}: {ratio:.3f} (issue #32's target <= 1: "
-                  f"{'met' if ratio <= 1.0 else 'missed'})")
+            print(f"mbd3d / {r['engine']}: {r['ratio']:.3f} (issue #32's target <= 1: "
+                  f"{'met' if r['ratio'] <= 1.0 else 'missed'})")
     return rows
 
 

@@ -98,3 +98,37 @@ def interleaved_medians(runs: Sequence[Callable[[], tuple[object, float]]], repe
         for k, run in enumerate(runs):
             walls[k].append(run()[1])
     return [float(np.median(w)) for w in walls]
+
+
+def compare_at_equal_accuracy(engines: dict, tolerance: float, unit: str, quantity: str,
+                              repeat: int = 3) -> list[dict]:
+    """Each engine's cheapest setting within ``tolerance``, timed in turn with the others.
+
+    ``engines`` maps a name to ``(settings, error)``: the settings as for :func:`cheapest`
+    (cheapest first), ``error(answer)`` in ``unit``. Prints the table (``quantity`` names the
+    error's column) and returns its rows: ``engine``, ``setting``, ``error``, ``wall`` [s]
+    (:func:`interleaved_medians` of ``repeat`` rounds) and ``ratio``, the best mbd3d engine's
+    wall time over this one's.
+    """
+    rows, runs = [], []
+    for engine, (settings, error) in engines.items():
+        found = cheapest(settings, error, tolerance)
+        if found is None:
+            print(f"{engine}: no setting tried reaches {tolerance:g} {unit}")
+            continue
+        label, err, run = found
+        rows.append({"engine": engine, "setting": label, "error": err})
+        runs.append(run)
+    for row, wall in zip(rows, interleaved_medians(runs, repeat)):
+        row["wall"] = wall
+    best = min((r["wall"] for r in rows if r["engine"].startswith("mbd3d")), default=np.nan)
+    for row in rows:
+        row["ratio"] = best / row["wall"]
+    print(mb.format_table({
+        "engine": [r["engine"] for r in rows],
+        "cheapest setting": [r["setting"] for r in rows],
+        f"{quantity} error [{unit}]": [r["error"] for r in rows],
+        "wall [s]": [r["wall"] for r in rows],
+        "mbd3d best / this": [r["ratio"] for r in rows],
+    }, precision=3))
+    return rows

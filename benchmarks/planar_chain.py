@@ -33,7 +33,7 @@ import mbd3d as mb  # noqa: E402
 import peers  # noqa: E402
 from mbd3d.model import constraints  # noqa: E402
 from mbd3d.mechanisms import pendulum_chain  # noqa: E402
-from measure import (cheapest, fitted_exponent, interleaved_medians, machine, median_time)  # noqa: E402,E501
+from measure import (compare_at_equal_accuracy, fitted_exponent, machine, median_time)  # noqa: E402,E501
 
 #: accuracy of the tip position at which the engines are compared [m]
 TOLERANCE = 1e-6
@@ -152,25 +152,9 @@ def compare_with_peers(n_links: int, factory=pendulum_chain, spatial: bool = Fal
               f"(DOP853, rtol 1e-12) by {check:.1e} m at the tip")
     if len(engines) == 2:
         print("no peers installed: pip install -e '.[peers]' for Exudyn and MuJoCo")
-    rows, runs = [], []
-    for engine, settings in engines.items():
-        found = cheapest(settings, error, TOLERANCE)
-        if found is None:
-            print(f"{engine}: no setting tried reaches {TOLERANCE:g} m")
-            continue
-        label, err, run = found
-        rows.append({"engine": engine, "setting": label, "error": err})
-        runs.append(run)
-    for row, wall in zip(rows, interleaved_medians(runs)):
-        row["wall"] = wall
-    best = min((r["wall"] for r in rows if r["engine"].startswith("mbd3d")), default=np.nan)
-    print(mb.format_table({
-        "engine": [r["engine"] for r in rows],
-        "cheapest setting": [r["setting"] for r in rows],
-        "tip error [m]": [r["error"] for r in rows],
-        "wall [s]": [r["wall"] for r in rows],
-        "mbd3d best / this": [best / r["wall"] for r in rows],
-    }, precision=3))
+    rows = compare_at_equal_accuracy({name: (settings, error)
+                                      for name, settings in engines.items()},
+                                     TOLERANCE, "m", "tip")
     # issue #23's targets: half MuJoCo's time in the plane, 0.3 of it in space, and ahead of
     # Exudyn's generalized-alpha
     targets = {"MuJoCo RK4": 0.3 if spatial else 0.5}
@@ -178,10 +162,9 @@ def compare_with_peers(n_links: int, factory=pendulum_chain, spatial: bool = Fal
           "the engines ran in turn)")
     for r in rows:
         if not r["engine"].startswith("mbd3d"):
-            ratio = best / r["wall"]
             target = targets.get(r["engine"], 1.0)
-            print(f"mbd3d / {r['engine']}: {ratio:.2f} (target <= {target}: "
-                  f"{'met' if ratio <= target else 'missed'})")
+            print(f"mbd3d / {r['engine']}: {r['ratio']:.2f} (target <= {target}: "
+                  f"{'met' if r['ratio'] <= target else 'missed'})")
     return rows
 
 
