@@ -449,3 +449,56 @@ def test_a_torque_in_body_axes_turns_with_the_body_as_euler_s_equations_say():
                       atol=1e-13).y.T
     assert np.ptp(exact, axis=0).min() > 0.1  # every component changes
     np.testing.assert_allclose(res.body("b").angular_velocity_body, exact, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_fixed_forces_and_torques_claim_a_zero_tangent_only_where_it_is_zero(dim):
+    """Generalized-alpha's iteration matrix takes a group's tangent as given where the group
+    says it has one: constant planar torques and constant forces in global axes at the
+    centre of mass do not depend on the state (their central differences over every
+    coordinate and rate vanish), and are not differenced; a force at another point or one
+    given as f(t, state) do depend on it, and so does a spatial torque, in body axes or in
+    global ones (its generalized force on the Rodrigues parameters: this test found that), and
+    they are differenced."""
+    from scipy.spatial.transform import Rotation
+
+    from mbd3d.model import constraints
+
+    def group_of(element):
+        b = mb.ModelBuilder(dim=dim, gravity=None)
+        turned = (dict(angle=0.4) if dim == 2 else
+                  dict(orientation=Rotation.from_rotvec([0.3, -0.2, 0.4]).as_matrix()))
+        body = b.add_body("b", mass=1.0, inertia=0.1 if dim == 2 else (0.1, 0.2, 0.3),
+                          position=(0.3, -0.2) + (0.1,) * (dim - 2),
+                          velocity=(0.5, 0.1) + (0.0,) * (dim - 2), **turned)
+        b.add(element(body))
+        model = b.build()
+        return model, model.force_groups[0]
+
+    vec = (1.0, -2.0) + (0.5,) * (dim - 2)
+    spin = 0.7 if dim == 2 else (0.7, -0.3, 0.2)
+    torques = [lambda body: mb.Torque("t", body, spin)]
+    free = [lambda body: mb.PointForce("f", body, vec)] + (torques if dim == 2 else [])
+    bound = [lambda body: mb.PointForce("f", body, vec, point=(0.2, 0.1) + (0.0,) * (dim - 2)),
+             lambda body: mb.PointForce("f", body, lambda t, state: state.velocity)]
+    if dim == 3:
+        bound += torques + [lambda body: mb.Torque("t", body, spin, frame="body")]
+    for element in free:
+        model, group = group_of(element)
+        assert group.analytic_tangent
+        fr = constraints.frames(model, model.q0, model.qd0, model.charts0)
+        rows, cols, values = group.tangent(model, 0.0, fr, 37.0)
+        assert len(rows) == len(cols) == len(values) == 0
+
+        def Q(q, qd):
+            out = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+            group.apply(model, 0.0, constraints.frames(model, q, qd, model.charts0), out)
+            return out[:model.n_bodies].ravel()
+        for j in range(model.n_coordinates):
+            step = np.zeros(model.n_coordinates)
+            step[j] = 1e-6
+            for dq, dqd in ((step, 0 * step), (0 * step, step)):
+                change = Q(model.q0 + dq, model.qd0 + dqd) - Q(model.q0 - dq, model.qd0 - dqd)
+                np.testing.assert_allclose(change, 0.0, rtol=0, atol=1e-14)
+    for element in bound:
+        assert not group_of(element)[1].analytic_tangent

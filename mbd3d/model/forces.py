@@ -99,6 +99,12 @@ class _CompiledForces(ABC):
         the padded coordinates ``(n_bodies + 1) * n_coords`` (ground block last)."""
         raise NotImplementedError
 
+    def _no_tangent(self, model: "Model", t: float, fr: Any, velocity_weight: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`tangent` of forces that do not depend on the state: none."""
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, np.zeros(0)
+
 
 class _Value:
     """A force value given as a constant, ``f(t)`` or ``f(t, state)``, evaluated uniformly.
@@ -172,6 +178,8 @@ class PointForce(ForceElement):
 
 
 class _PointForces(_CompiledForces):
+    tangent = _CompiledForces._no_tangent  # used where analytic_tangent (state-free forces)
+
     def __init__(self, elements: list[PointForce], ctx: "BuildContext"):
         self.elements = elements
         dim = ctx.dim
@@ -182,6 +190,10 @@ class _PointForces(_CompiledForces):
             self.items.append((e, u, fn))
         self._points = np.array([u for _, u, _ in self.items]).reshape(-1, dim)
         self._body_frame = np.array([e.frame == "body" for e in elements], dtype=np.int64)
+        # fixed forces in global axes at the centres of mass do not depend on the state:
+        # implicit integrators need not difference them
+        self.analytic_tangent = not any(fn.needs_state or e.frame == "body" or np.any(u)
+                                        for e, u, fn in self.items)
 
     def apply(self, model, t, fr, Q):
         bodies = np.array([model.padded_index(e.body) for e, _, _ in self.items], dtype=np.int64)
@@ -233,6 +245,8 @@ class Torque(ForceElement):
 
 
 class _Torques(_CompiledForces):
+    tangent = _CompiledForces._no_tangent  # used where analytic_tangent (planar, state-free)
+
     def __init__(self, elements: list[Torque], ctx: "BuildContext"):
         self.elements = elements
         size = None if ctx.dim == 2 else 3
@@ -241,6 +255,9 @@ class _Torques(_CompiledForces):
         # body axes turn a spatial torque; a planar one is about the normal either way
         self._body_frame = np.array([e.frame == "body" and ctx.dim == 3 for e in elements],
                                     dtype=np.int64)
+        # a fixed planar torque does not depend on the state (see _PointForces); a spatial
+        # one's generalized force on the Rodrigues parameters does, even in global axes
+        self.analytic_tangent = ctx.dim == 2 and not any(fn.needs_state for _, fn in self.items)
 
     def apply(self, model, t, fr, Q):
         bodies = np.array([model.padded_index(e.body) for e, _ in self.items], dtype=np.int64)
