@@ -404,10 +404,11 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
     touch) and wherever the law is undamped, so that the secant which places a step's end on
     it is exact to first order: ``F_n / K``, ``delta^(3/2)`` for Hertz, has no slope where an
     undamped contact opens, and the secant crept towards the release in ever shorter steps;
-    it has an infinite one where Tsuji's damping ``delta^(1/4) delta'`` sets in at a touch. A rigid row (``K = 0``) gives -1. Where
-    ``out`` has two entries per row, ``out[r + k]`` is the penetration ``delta`` itself: it
-    turns negative where a law whose force was clipped at zero stops unloading its spring,
-    the kink of the power it dissipates (:func:`.contact_laws.dissipated_power`)."""
+    it has an infinite one where Tsuji's damping ``delta^(1/4) delta'`` sets in at a touch.
+    A rigid row (``K = 0``) gives -1. Where ``out`` has two entries per row, ``out[r + k]`` is
+    the penetration ``delta`` itself: it turns negative where a law whose force was clipped at
+    zero stops unloading its spring, the kink of the power it dissipates
+    (:func:`.contact_laws.dissipated_power`)."""
     point, n = np.zeros(3), np.zeros(3)
     s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
     work = np.zeros((6, 3))
@@ -431,7 +432,9 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
             continue
         spring = values[k, 3] * delta ** values[k, 4]
         damper = abs(damping(values, k, delta)[0] * delta_rate)
-        out[k] = delta * law_force(values, k, delta, delta_rate) / (spring + damper)
+        # both vanish only where delta^n underflows at rest: the spring pushes, barely
+        size = spring + damper
+        out[k] = delta * law_force(values, k, delta, delta_rate) / size if size > 0.0 else delta
 
 
 @jit
