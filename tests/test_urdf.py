@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
+from mbd3d.errors import ContactWarning
 from mbd3d.io.urdf import UrdfWarning, load_urdf, urdf_builder
 
 DATA = pathlib.Path(__file__).resolve().parent / "data"
@@ -68,9 +69,33 @@ def rnea(q, qd, qdd, gravity=G):
 
 
 def puma(drive):
+    """The PUMA driven by ``drive``, without its stops: Newton-Euler has none (and the pose
+    qn puts joint 3 at pi, past the file's limit of 3.14 rad, where its stop pushes)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UrdfWarning)
-        return load_urdf(PUMA, drive=drive)
+        return load_urdf(PUMA, drive=drive, joint_limits="ignore")
+
+
+@pytest.mark.parametrize("other_way", [False, True])
+@pytest.mark.parametrize("turn", [pi, -pi])
+def test_a_hinge_drawn_at_half_a_turn_keeps_its_stop_whichever_way_it_rounds(
+        turn, other_way, monkeypatch):
+    # joint 3 at +-pi, past the file's limits of +-3.14 rad by 0.0016 rad either way: its
+    # stop is added and pushes, whether the rounding of the axes measures the drawing's
+    # half turn as pi or as -pi (other_way: as the other one, as on another machine)
+    from mbd3d.io import robot_parts
+
+    measured = robot_parts.drive_offset
+
+    def rounded(*args):
+        angle = measured(*args)
+        return angle - math.copysign(2 * pi, angle) if abs(angle) > 3.14 else angle
+
+    if other_way:
+        monkeypatch.setattr(robot_parts, "drive_offset", rounded)
+    with pytest.warns(ContactWarning, match=r"joint3_limit'.* past its limit by 0.00159265"):
+        model = load_urdf(PUMA, drive={"joint3": turn})
+    assert "joint3_limit" in [f.name for f in model.forces]
 
 
 POSES = {"qz": [0, 0, 0, 0, 0, 0], "qr": [0, pi / 2, -pi / 2, 0, 0, 0],

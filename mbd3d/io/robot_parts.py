@@ -4,6 +4,8 @@ driver and stops in the file's joint coordinate."""
 
 from __future__ import annotations
 
+import math
+
 import warnings
 from typing import Any, Iterable
 
@@ -96,7 +98,10 @@ def add_limit(b, slides: bool, name: str, element, axis: np.ndarray, q0: float,
     hinge's ends beyond half a turn of the drawing)."""
     from mbd3d.model.contacts import JointLimit  # noqa: PLC0415
 
-    offset = -q0 if slides else drive_offset(element.body_i, element.body_j, axis) - q0
+    # a hinge's offset is an angle: wrapped to (-pi, pi], so that a drawing at half a turn,
+    # measured as pi or -pi by the rounding of its axes, moves the ends alike
+    offset = (-q0 if slides else
+              math.remainder(drive_offset(element.body_i, element.body_j, axis) - q0, 2 * np.pi))
     ends = [None if end is None else float(end) + offset for end in ends]
     if law is None or (not slides and any(end is not None and not -np.pi < end < np.pi
                                           for end in ends)):
