@@ -112,9 +112,13 @@ def main(n_points: int = 401, rrd: str | None = None, show: bool = False) -> mb.
     speed = 1.3 * critical
     leaves, lands = jump(speed)
     model = build(speed)
-    # the contact's gap as events: the times the roller leaves the cam and lands on it
+    # the contact's gap as events: the times the roller leaves the cam and lands on it. It
+    # leaves where the two move alike, the gap growing with the cube of the time, and dithers
+    # about zero by its rounding (1e-17 m) for a while: a crossing counts once the gap has
+    # been a picometre from zero since the last
     gap = lambda t, q, qd: mb.contact_states(model, q, qd).gap[0]  # noqa: E731
-    events = [mb.Event("leaves", gap, direction=1), mb.Event("lands", gap, direction=-1)]
+    events = [mb.Event("leaves", gap, direction=1, tolerance=1e-12),
+              mb.Event("lands", gap, direction=-1, tolerance=1e-12)]
     res = mb.forward_dynamics(model, np.linspace(0.0, 4 * math.pi / speed, n_points),
                               method="DOP853", rtol=1e-9, atol=1e-11, events=events)
     times = {name: [e["time"] for e in res.stats["events"] if e["name"] == name]

@@ -150,6 +150,8 @@ def test_bad_events_are_refused_by_name():
         mb.Event("e", lambda t, q, qd: q[k], action="bounce")
     with pytest.raises(mb.ModelError, match="event 'e': rate must be callable"):
         mb.Event("e", lambda t, q, qd: q[k], rate=1.0)
+    with pytest.raises(mb.ModelError, match="event 'e': tolerance must be a number >= 0"):
+        mb.Event("e", lambda t, q, qd: q[k], tolerance=-1e-9)
     wild = mb.Event("wild", lambda t, q, qd: q[k], rate=lambda t, q, qd: None)
     with pytest.raises(mb.ModelError, match=r"event 'wild': rate\(t, q, qd\) must return a "
                                             "finite number, returned None"):
@@ -188,3 +190,27 @@ def test_a_crossing_and_return_between_samples_is_found_from_the_rate(with_rate)
     up = (v - math.sqrt(v * v - 2 * G * 0.9999 * h)) / G
     assert len(times) == 1
     np.testing.assert_allclose(times[0], up, rtol=0, atol=1e-9)
+
+
+def test_a_function_dithering_about_zero_crosses_once_within_its_tolerance():
+    """(t - 1)^3 with a ripple of 1e-8 and a period of 20 us: near t = 1 the ripple crosses
+    zero dozens of times before the cube outgrows it. Each of those is a sign change; with a
+    tolerance above the ripple only the first counts, up and down alike."""
+    model, _ = pendulum()
+
+    def dithering(t, q, qd):
+        return (t - 1.0) ** 3 - 1e-8 * math.sin(2 * math.pi * t / 2e-5)
+
+    def times(tolerance):
+        events = [mb.Event(name, dithering, direction=d, tolerance=tolerance)
+                  for name, d in (("up", 1), ("down", -1))]
+        res = mb.forward_dynamics(model, [0.99, 1.01], events=events, max_step=2e-6)
+        return {name: [e["time"] for e in res.stats["events"] if e["name"] == name]
+                for name in ("up", "down")}
+
+    every = times(0.0)
+    assert len(every["up"]) > 10 and len(every["down"]) > 10
+    assert abs(every["up"][0] - 1.0) < 3e-3
+    once = times(1e-7)
+    assert once["up"] == every["up"][:1] and once["down"] == []
+

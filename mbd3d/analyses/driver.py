@@ -75,6 +75,12 @@ class Event:
         rate changes sign between them, the function is evaluated at that turn too (a ball
         dropped through a ball within one long step: the gap between their surfaces goes
         below zero and back).
+    tolerance : float
+        [the function's unit] >= 0: after a crossing, the next counts only once the function
+        has been further than ``tolerance`` from zero, so that a function that leaves zero
+        slowly (a follower lifting off a cam, its gap growing with the cube of the time) and
+        dithers about it by its rounding for a while counts one crossing, not a dozen. 0:
+        every sign change counts.
     """
 
     name: str
@@ -82,6 +88,7 @@ class Event:
     direction: int = 0
     action: Any = "record"
     rate: Callable[[float, np.ndarray, np.ndarray], float] | None = None
+    tolerance: float = 0.0
 
     def __post_init__(self):
         if not callable(self.function):
@@ -96,6 +103,9 @@ class Event:
         if self.rate is not None and not callable(self.rate):
             raise ModelError(f"event '{self.name}': rate must be callable as "
                              f"rate(t, q, qd) -> float, got {self.rate!r}")
+        if not (_is_number(self.tolerance) and 0.0 <= self.tolerance < np.inf):
+            raise ModelError(f"event '{self.name}': tolerance must be a number >= 0, got "
+                             f"{self.tolerance!r}")
 
     def value(self, t: float, q: np.ndarray, qd: np.ndarray, part: str = "function") -> float:
         """The event's function (``part="rate"``: its rate) at ``(t, q, qd)``, checked."""
@@ -105,11 +115,12 @@ class Event:
                              f"number, returned {g!r} at t = {t:.6g} s")
         return float(g)
 
-    def crosses(self, g_old: float, g_new: float) -> bool:
-        """A crossing in the event's direction between two values (from exactly zero, where
-        the run restarted at this event, is none)."""
+    def crosses(self, g_old: float, g_new: float, either: bool = False) -> bool:
+        """A crossing in the event's direction (``either``: in either) between two values
+        (from exactly zero, where the run restarted at this event, is none)."""
         up, down = g_old < 0.0 <= g_new, g_old > 0.0 >= g_new
-        return (up and self.direction >= 0) or (down and self.direction <= 0)
+        return (up and (either or self.direction >= 0)) or (down and (either or
+                                                                     self.direction <= 0))
 
 
 @dataclass(frozen=True)
@@ -271,9 +282,22 @@ class _Events:
         self.events, self.armed = events, len(events) if armed is None else armed
         self.found = stats.setdefault("events", []) if events else []
         self.g: list[float | None] = []
+        #: per event, whether its function has been further than its tolerance from zero
+        #: since its last crossing (see Event.tolerance)
+        self.away = [True] * len(events)
 
     def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         self.g = [event.value(t, q, qd) for event in self.events]
+
+    def _counts(self, k: int, g_prev: float, g: float) -> bool:
+        """Whether event ``k``'s sign change from ``g_prev`` to ``g`` counts (see
+        Event.tolerance), and its function's distance from zero noted."""
+        event = self.events[k]
+        counts = event.crosses(g_prev, g) and (self.away[k] or event.tolerance == 0.0)
+        if event.crosses(g_prev, g, either=True):
+            self.away[k] = False
+        self.away[k] = self.away[k] or abs(g) > event.tolerance
+        return counts
 
     def locate(self, segment: Segment) -> tuple[float, Event] | None:
         """The first crossing that acts (stops or restarts the run) in the segment, as
@@ -296,7 +320,7 @@ class _Events:
                     t_cross = self._turn(event, segment, t_prev, t, rates[j], rates[j + 1])
                     g = g if t_cross is None else event.value(t_cross, *segment.state_at(
                         t_cross))
-                if g_prev is not None and event.crosses(g_prev, g):
+                if g_prev is not None and self._counts(k, g_prev, g):
                     crossings.append((self._root(event, segment, t_prev, t_cross), k))
                     if event.action != "record":
                         break  # it acts at its first crossing: nothing after it happens
