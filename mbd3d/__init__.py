@@ -30,8 +30,8 @@ from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDErr
                           AccuracyWarning, ContactWarning, LiftOffWarning, StiffnessWarning)
 from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
 from mbd3d.model.friction import JointFriction
-from mbd3d.model.contacts import (Box, Cam, Capsule, Contact, ContactStates, Hole, JointLimit,
-                                  Plane, Sphere, contact_states)
+from mbd3d.model.contacts import (Box, Cam, Capsule, Contact, ContactGroup, ContactStates, Hole,
+                                  JointLimit, Plane, Sphere, contact_states)
 from mbd3d.model.contact_laws import (HertzContact, HuntCrossley, ImpactFunction, LinearContact,
                                       RigidImpact)
 from mbd3d.analyses.kinematics import (inverse_dynamics, kinematic_analysis, solve_acceleration,
@@ -61,7 +61,7 @@ __all__ = [
     "Motion", "Constant", "Ramp", "Harmonic", "Polynomial", "SmoothStep", "Function",
     "PointForce", "Torque", "SpringDamper", "RotationalSpringDamper", "ForceState",
     "JointFriction",
-    "ContactWarning", "Contact", "JointLimit", "Sphere", "Plane",
+    "ContactWarning", "Contact", "ContactGroup", "JointLimit", "Sphere", "Plane",
     "Capsule", "Box", "Hole", "Cam", "LinearContact", "HertzContact", "HuntCrossley",
     "ImpactFunction", "RigidImpact",
     "contact_states", "ContactStates",

@@ -17,7 +17,7 @@ from mbd3d.model.motion import Motion, Ramp
 from mbd3d.numerics.rotations import frame_along
 
 __all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions",
-           "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "newtons_cradle",
+           "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "newtons_cradle", "spheres_in_box",
            "frame_along"]
 
 
@@ -314,4 +314,57 @@ def newtons_cradle(n_balls: int = 5, *, radius: float = 0.015, string_length: fl
             builder.add(Contact(f"touch{k}", Sphere(balls[-1], radius), Sphere(ball, radius),
                                 law=law))
         balls.append(ball)
+    return builder.build()
+
+
+def spheres_in_box(n_spheres: int = 1000, *, dim: int = 3, radius: float = 0.01,
+                   spacing: float = 2.5, density: float = 1000.0, young_modulus: float = 1e7,
+                   poisson_ratio: float = 0.3, restitution: float = 0.5, friction: float = 0.3,
+                   speed: float = 0.5, seed: int = 0, gravity: float = 9.81) -> Model:
+    """``n_spheres`` free spheres (``dim=2``: discs) of ``radius`` [m] and ``density``
+    [kg/m^3] on a square (planar: row-by-row) lattice ``spacing`` radii apart, each moved
+    by up to a tenth of a radius and thrown at up to ``speed`` [m/s] in a random direction
+    (``seed``), above the floor of an open box whose walls stand half a spacing outside the
+    lattice; gravity -z (planar: -y). Every two spheres and each sphere and wall touch by
+    Hertz's law from the material (``young_modulus`` [Pa], ``poisson_ratio``), damped to
+    ``restitution``, with Coulomb ``friction``: one :class:`~mbd3d.ContactGroup`, ``pile``.
+
+    Bodies ``sphere0`` ... ; the lattice has ``ceil(n^(1/3))`` (planar: ``ceil(n^(1/2))``)
+    spheres along each horizontal side, filled layer by layer from the floor.
+    """
+    from mbd3d.model.contact_laws import HertzContact
+    from mbd3d.model.contacts import ContactGroup, Plane, Sphere
+
+    if n_spheres < 1 or dim not in (2, 3):
+        raise ModelError(f"spheres_in_box: give n_spheres >= 1 and dim 2 or 3, got "
+                         f"{n_spheres!r} and {dim!r}")
+    rng = np.random.default_rng(seed)
+    side = math.ceil(n_spheres ** (1.0 / dim) - 1e-9)
+    per_layer = side ** (dim - 1)
+    step = spacing * radius
+    mass = density * (4.0 / 3.0 * math.pi * radius ** 3 if dim == 3 else math.pi * radius ** 2)
+    inertia = (0.4 if dim == 3 else 0.5) * mass * radius ** 2
+    builder = ModelBuilder(dim=dim, gravity=(0.0,) * (dim - 1) + (-gravity,),
+                           name=f"{n_spheres} spheres in a box")
+    shapes = []
+    for k in range(n_spheres):
+        layer, place = divmod(k, per_layer)
+        cell = [place % side, place // side][:dim - 1] + [layer]
+        centre = (np.array(cell) + 0.5) * step + rng.uniform(-0.1, 0.1, dim) * radius
+        direction = rng.normal(size=dim)
+        body = builder.add_body(f"sphere{k}", mass=mass,
+                                inertia=inertia if dim == 2 else (inertia,) * 3,
+                                position=centre,
+                                velocity=speed * rng.uniform() * direction
+                                / np.linalg.norm(direction))
+        shapes.append(Sphere(body, radius=radius))
+    width = side * step
+    for axis in range(dim):
+        normal = np.eye(dim)[axis]
+        shapes.append(Plane(builder.ground, normal=normal, at=np.zeros(dim)))
+        if axis < dim - 1:  # the walls; the top is open
+            shapes.append(Plane(builder.ground, normal=-normal, at=normal * width))
+    law = HertzContact(young_modulus=young_modulus, poisson_ratio=poisson_ratio,
+                       restitution=restitution)
+    builder.add(ContactGroup("pile", shapes, law=law, friction=friction))
     return builder.build()

@@ -117,3 +117,13 @@ def test_cradle_benchmark_runs_without_peers(capsys, monkeypatch):
     delta_max = (5 * m * v * v / (4 * K)) ** 0.4
     assert module.hertz_impact_duration(m, K, v) == pytest.approx(2.9432 * delta_max / v,
                                                                   rel=1e-3)
+
+
+def test_spheres_in_box_benchmark_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    module = _load("spheres_in_box")
+    monkeypatch.setattr(module, "DURATION", 2e-4)
+    rows = module.measure([9, 16], repeat=1, dim=2)
+    assert [r["n"] for r in rows] == [9, 16] and all(r["near"] > r["n"] for r in rows)
+    assert "cost per step ~ N^" in capsys.readouterr().out
+

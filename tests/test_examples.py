@@ -381,3 +381,17 @@ def test_newtons_cradle_example(capsys, tmp_path):
     short = module.GAP / module.STRING
     assert 0.0 < module.RELEASE - swings[-1] < 0.05 * short
     assert all(0.5 * short < s < 2 * short for s in swings[1:-1])
+
+
+def test_spheres_in_box_example(capsys, tmp_path):
+    rrd = tmp_path / "sib.rrd"
+    module = load("spheres_in_box")
+    res = module.main(n_points=13, rrd=str(rrd))
+    assert "deepest pair" in capsys.readouterr().out and recorded_steps(rrd, "sphere26") == 13
+    balance = res.energy_balance()
+    # what the balls lose the contacts dissipate, to the integrator's tolerance
+    np.testing.assert_allclose(balance["total"], balance["total"][0], rtol=1e-4)
+    assert balance["dissipated"][-1] > 0.2 * balance["total"][0]
+    # the lowest balls rest on the floor, pressed in by the pile above
+    lowest = res.q[-1].reshape(module.BALLS, -1)[:, 2].min()
+    assert 0.99 * module.RADIUS < lowest < module.RADIUS

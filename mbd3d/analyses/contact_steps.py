@@ -83,8 +83,8 @@ class ContactSteps:
         """Per row, when its gap closes [s] at its rate and the rate's own rate (from the
         last two steps), ``gap + rate s + acc s^2 / 2 = 0`` (inf: it does not close)."""
         gap, rate, acc = np.maximum(self.gap, 0.0), self.rate, self.acc
-        root = rate * rate - 2.0 * acc * gap
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore"):  # a group's gap is inf
+            root = rate * rate - 2.0 * acc * gap
             s = 2.0 * gap / (-rate + np.sqrt(np.maximum(root, 0.0)))
         return np.where((root >= 0.0) & (s >= 0.0) & np.isfinite(s), s, np.inf)
 

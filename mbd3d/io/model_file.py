@@ -34,8 +34,9 @@ The format, version 1 (every field in SI units)::
 
 Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd3d`
 (``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``
-and ``JointLimit``, whose ``joint`` names a joint, ``Contact``); their fields are
-their constructors' keyword arguments, as documented there. A contact's shapes and law are
+and ``JointLimit``, whose ``joint`` names a joint, ``Contact``, ``ContactGroup``); their fields
+are their constructors' keyword arguments, as documented there. A contact's shapes (a group's:
+a list of them) and law are
 ``{type: Sphere | Plane | Capsule | Box | Hole | Cam, body: ...}`` and ``{type: LinearContact |
 HertzContact | HuntCrossley | ImpactFunction | RigidImpact, ...}``. A motion is a number (constant)
 or ``{type: Constant | Ramp | Harmonic | Polynomial | SmoothStep, ...}`` with that class's
@@ -232,7 +233,7 @@ def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
                                                   forces.SpringDamper,
                                                   forces.RotationalSpringDamper,
                                                   friction.JointFriction, contacts.Contact,
-                                                  contacts.JointLimit)}
+                                                  contacts.ContactGroup, contacts.JointLimit)}
     motion_types = {cls.__name__: cls for cls in (motion.Constant, motion.Ramp,
                                                    motion.Harmonic, motion.Polynomial,
                                                    motion.SmoothStep, joints.CamProfile,
@@ -424,6 +425,9 @@ class _Reader:
                 arguments[key] = named[value]
             elif isinstance(value, dict) and "type" in value:
                 arguments[key] = self._motion(value, where + (key,), motion_types, named)
+            elif isinstance(value, list) and any(isinstance(v, dict) for v in value):
+                arguments[key] = [self._motion(v, where + (key, k), motion_types, named)
+                                  if isinstance(v, dict) else v for k, v in enumerate(value)]
         with self._at(where, entry):
             return cls(**arguments)
 

@@ -37,7 +37,7 @@ from mbd3d.errors import ModelError
 from mbd3d.numerics.checks import finite_scalar
 
 __all__ = ["ContactLaw", "LinearContact", "HertzContact", "HuntCrossley", "ImpactFunction",
-           "RigidImpact", "clipped_restitution", "hertz_stiffness"]
+           "RigidImpact", "clipped_restitution", "hertz_stiffness", "pair_mass"]
 
 
 def _restitution(value: float, what: str) -> float:
@@ -360,3 +360,10 @@ def _calibrated(n: float, p: float, e: float) -> float:
             raise ModelError(f"restitution {e} is too small to calibrate; use 0 or more")
     return brentq(lambda alpha: clipped_restitution(n, p, alpha) - e, 0.0, upper,
                   xtol=1e-14, rtol=1e-13)
+
+
+def pair_mass(masses: list) -> float:
+    """The effective mass (or moment of inertia) ``1 / sum(1 / m)`` of a pair's moving bodies'
+    ``masses`` [kg] that a law is calibrated with (inf: none moves)."""
+    inverse = sum(1.0 / m for m in masses)
+    return 1.0 / inverse if inverse > 0.0 else math.inf

@@ -10,6 +10,7 @@ import scipy.sparse as sp
 
 from mbd3d.model.body import Frames, rotate_rows
 from mbd3d.numerics.compiled import accelerations as kernel, structures
+from mbd3d.numerics.compiled.contact_groups import empty_shapes
 from mbd3d.numerics.compiled.motions import table as motion_table
 from mbd3d.model.constraints import _motion_values, driver_values, frames, motion_phases
 from mbd3d.errors import ModelError
@@ -228,7 +229,9 @@ def _force_fields(model, tables: list[dict]) -> dict:
         "torque_body_frame": np.zeros(0, dtype=np.int64),
         "contact_bodies": np.zeros((0, 2), dtype=np.int64),
         "contact_points": np.zeros((0, 4, dim)), "contact_values": np.zeros((0, 10)),
-        "contact_curves": np.zeros(0)}
+        "contact_curves": np.zeros(0),
+        **dict(zip(("contact_shape_bodies", "contact_shape_points", "contact_shape_values",
+                    "contact_pair_laws"), empty_shapes(dim)))}
     actuators = {"spring": [], "rotary": []}
     for table in tables:
         table = dict(table)

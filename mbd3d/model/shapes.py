@@ -13,6 +13,7 @@ or at all its lower corners.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -23,13 +24,13 @@ from mbd3d.model.body import Body
 from mbd3d.model.cam_profile import CamProfile
 from mbd3d.model.forces import resolve_point
 from mbd3d.numerics.checks import finite_scalar
-from mbd3d.numerics.compiled import contacts as kernel
+from mbd3d.numerics.compiled import contact_grid as grid, contacts as kernel
 
 if TYPE_CHECKING:
     from mbd3d.model.builder import BuildContext
 
 __all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "PairRows", "Outline",
-           "pair_order", "pair_rows", "outline"]
+           "pair_order", "pair_rows", "outline", "shape_core"]
 
 
 @dataclass(frozen=True)
@@ -291,6 +292,16 @@ def outline(ctx: "BuildContext", shape: Any, what: str) -> Outline:
         return Outline(shape.body, kind, 0.0, centre + profile.offset(phi, 0.0))
     radius, core = _core(ctx, shape, what)
     return Outline(shape.body, kind, radius, core)
+
+
+def shape_core(ctx: "BuildContext", shape: Any, what: str) -> tuple[int, float, np.ndarray]:
+    """``(kind, radius, points)`` of a sphere, a capsule or a plane of a contact group in its
+    body frame (see :mod:`mbd3d.numerics.compiled.contact_grid`; a plane's radius infinite)."""
+    if isinstance(shape, Plane):
+        P = resolve_point(ctx, shape.body, shape.point, shape.at, f"{what}: plane point")
+        return grid.PLANE, math.inf, np.stack([P, _plane_normal(ctx, shape, what)])
+    radius, core = _core(ctx, shape, what)
+    return (grid.SPHERE if isinstance(shape, Sphere) else grid.CAPSULE), radius, core
 
 
 def _hole_axis(ctx, hole: Hole, what: str) -> tuple[np.ndarray, np.ndarray]:

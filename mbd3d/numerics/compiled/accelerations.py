@@ -30,7 +30,7 @@ from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_int
                                             spatial_mass_blocks_into,
                                             spatial_quadratic_velocity_into)
 from mbd3d.numerics.compiled.dense import solve_banded_pattern_into, solve_pattern_into
-from mbd3d.numerics.compiled.contacts import REPORT_COLUMNS, contact_forces_into
+from mbd3d.numerics.compiled.contact_groups import REPORT_COLUMNS, all_contact_forces_into
 from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_into,
                                             spring_forces_into, torques_into)
 from mbd3d.numerics.compiled.motions import motion_values_into
@@ -109,9 +109,12 @@ def forces_into(forces, work, t: float, rhs) -> bool:
                       forces.point_body_frame, out)
     torques_into(A, axes, forces.torque_bodies, forces.torque_values, forces.torque_body_frame,
                  out)
-    if contact_forces_into(A, axes, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
-                           forces.contact_values, forces.contact_curves, out,
-                           np.empty((0, REPORT_COLUMNS)), work.contact_power) >= 0:
+    shapes = (forces.contact_shape_bodies, forces.contact_shape_points,
+              forces.contact_shape_values, forces.contact_pair_laws)
+    if all_contact_forces_into(A, axes, omega, Q, Qd, forces.contact_bodies,
+                               forces.contact_points, forces.contact_values,
+                               forces.contact_curves, shapes, out,
+                               np.empty((0, REPORT_COLUMNS)), work.contact_power) >= 0:
         return False
     nc = out.shape[1]
     for b in range(out.shape[0] - 1):

@@ -49,6 +49,9 @@ v_slip, d)`` (:mod:`.contact_laws`); the friction force on ``j`` is ``-mu F_n ta
 v_slip) v_t / |v_t|`` with ``v_t`` the tangential part of ``v_j - v_i`` (the opposite on
 ``i``), which dissipates ``mu F_n tanh(|v_t| / v_slip) |v_t|`` [W].
 
+A contact group's row (``GROUP``) stands for the pairs of its many shapes that are near each
+other at the state, each evaluated as one of the rows above (:mod:`.contact_groups`).
+
 Joint stops keep a joint coordinate ``x`` in ``[lower, upper] = values[k, 1:3]`` by the same
 law, ``delta = x - upper`` or ``lower - x``, pushing back along the coordinate (no friction;
 the coordinates are those :mod:`mbd3d.io.joint_coordinates` reports):
@@ -76,40 +79,22 @@ import numpy as np
 from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.contact_laws import (damping, dissipated_power, law_force,
                                                   law_slopes, normal_force)
-from mbd3d.numerics.compiled.forces import _add_force, _add_torque, _turn
+from mbd3d.numerics.compiled.contact_table import (
+    BOX_SPHERE, CAM_PLANE, CAM_SPHERE, CONE_STOP, DISSIPATION, FRICTION, GAP, GAP_RATE, GROUP,
+    HINGE_STOP, NORMAL, NORMAL_FORCE, PIN_IN_HOLE, POINT, POINTS, POTENTIAL, REPORT_COLUMNS,
+    SEGMENT_SEGMENT, SEGMENT_SPHERE, SLIDE_STOP, SPHERE_PLANE, SPHERE_SPHERE, is_stop)
+from mbd3d.numerics.compiled.forces import _add_pair, _point, _turn, _velocity
+from mbd3d.numerics.compiled.joint_stops import _stop_coordinate, _stop_into, _stop_side
 from mbd3d.numerics.compiled.shapes import (box_to_point, cam_to_line, cam_to_point,
                                             closest_between_segments, closest_on_segment)
 
-#: the kinds of shape pairs, then of joint stops (from ``HINGE_STOP`` on)
-SPHERE_PLANE, SPHERE_SPHERE, SEGMENT_SPHERE, SEGMENT_SEGMENT, BOX_SPHERE = 0, 1, 2, 3, 4
-PIN_IN_HOLE, CAM_SPHERE, CAM_PLANE = 5, 6, 7
-HINGE_STOP, SLIDE_STOP, CONE_STOP = 8, 9, 10
-#: body points per contact (``points[k]``)
-POINTS = 4
-#: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
-#: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J],
-#: dissipated power [W]
-GAP, GAP_RATE, NORMAL_FORCE, FRICTION, POINT, NORMAL, POTENTIAL = 0, 1, 2, 3, 6, 9, 12
-DISSIPATION, REPORT_COLUMNS = 13, 14
-
-
-@jit
-def _point(A, Q, b, u, out):
-    """``out`` = the global position of body point ``u`` of body ``b``, embedded in 3D."""
-    _turn(A, b, u, out)
-    for x in range(u.shape[0]):
-        out[x] += Q[b, x]
-
-
-@jit
-def _velocity(Qd, omega, dim, b, s, out):
-    """``out`` = the velocity of the material point at offset ``s`` (3,) from body ``b``'s
-    reference point (``dim`` translation coordinates)."""
-    w = omega[b]
-    for x in range(3):
-        y, z = (x + 1) % 3, (x + 2) % 3
-        out[x] = (Qd[b, x] if x < dim else 0.0) + w[y] * s[z] - w[z] * s[y]
-
+#: the table's layout (:mod:`.contact_table`) and the pairs' and rows' kernels
+__all__ = ["SPHERE_PLANE", "SPHERE_SPHERE", "SEGMENT_SPHERE", "SEGMENT_SEGMENT", "BOX_SPHERE",
+           "PIN_IN_HOLE", "CAM_SPHERE", "CAM_PLANE", "HINGE_STOP", "SLIDE_STOP", "CONE_STOP",
+           "GROUP", "POINTS", "GAP", "GAP_RATE", "NORMAL_FORCE", "FRICTION", "POINT", "NORMAL",
+           "POTENTIAL", "DISSIPATION", "REPORT_COLUMNS", "pair_into", "pair_power",
+           "pair_potential", "report_pair", "contact_forces_into", "switches_into",
+           "contact_tangents_into", "pair_tangent"]
 
 @jit
 def _normal_and_gap(A, Q, k, kind, i, j, points, values, curves, x_k, n, work) -> float:
@@ -222,21 +207,63 @@ def _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves, point,
 
 
 @jit
-def _add_pair(axes, i, j, s_i, s_j, F, out) -> None:
-    """``F`` on body j at offset ``s_j`` and ``-F`` on body i at ``s_i`` (``F`` is negated)."""
-    _add_force(axes, j, s_j, F, out)
+def pair_into(A, axes, omega, Q, Qd, k, i, j, points, values, curves, out, vectors,
+              work) -> tuple:
+    """Add the generalized forces of shape-pair row ``k`` between bodies ``i`` and ``j`` into
+    ``out``; returns ``(gap, gap rate, normal force, friction, slip speed)``, ``friction``
+    the friction force per slip velocity [N s/m] (<= 0: it opposes the slip; a NaN gap: the
+    normal is undefined, nothing added), with the point midway between the surfaces
+    ``vectors[0]``, the normal ``vectors[1]``, the point's offsets from the bodies' reference
+    points ``vectors[2:4]`` and the slip velocity ``vectors[5]``. ``vectors`` (7, 3) and
+    ``work`` (6, 3) are scratch."""
+    point, n, s_i, s_j, v_i, v_j, F = (vectors[0], vectors[1], vectors[2], vectors[3],
+                                       vectors[4], vectors[5], vectors[6])
+    gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
+                                    point, n, s_i, s_j, v_i, v_j, work)
+    if gap != gap:
+        return gap, rate, 0.0, 0.0, 0.0
+    force = normal_force(values, k, -gap, -rate)
+    slip = 0.0
     for x in range(3):
-        F[x] = -F[x]
-    _add_force(axes, i, s_i, F, out)
+        v_j[x] -= rate * n[x]
+        slip += v_j[x] * v_j[x]
+    slip = math.sqrt(slip)
+    # tanh(s / v) / s, which tends to 1 / v as the slip vanishes
+    scale = values[k, 8]
+    weight = math.tanh(slip / scale) / slip if slip > 1e-9 * scale else 1.0 / scale
+    friction = -values[k, 7] * force * weight
+    for x in range(3):
+        F[x] = force * n[x] + friction * v_j[x]
+    _add_pair(axes, i, j, s_i, s_j, F, out)
+    return gap, rate, force, friction, slip
 
 
 @jit
-def _stop_side(x: float, rate: float, lower: float, upper: float) -> tuple:
-    """``(gap, gap rate, sign)`` of a stop's end nearer to being passed, and the direction
-    (+1: up the coordinate) it pushes body j."""
-    if x - lower < upper - x:
-        return x - lower, rate, 1.0
-    return upper - x, -rate, -1.0
+def pair_power(values, k, gap: float, rate: float, force: float, friction: float,
+               slip: float) -> float:
+    """The power [W] pair row ``k``'s damper and friction dissipate (see :func:`pair_into`)."""
+    return dissipated_power(values, k, -gap, -rate, force) - friction * slip * slip
+
+
+@jit
+def pair_potential(values, k, gap: float) -> float:
+    """The energy [J] in pair row ``k``'s spring at ``gap``."""
+    delta = -gap if gap < 0.0 else 0.0
+    exponent = values[k, 4] + 1.0
+    return values[k, 3] * delta ** exponent / exponent
+
+
+@jit
+def report_pair(report, r, values, k, gap, rate, force, friction, slip, Q, i, vectors) -> None:
+    """Report row ``r`` of pair row ``k`` from :func:`pair_into`'s results."""
+    dim = 3 if Q.shape[1] == 6 else 2
+    report[r, DISSIPATION] = pair_power(values, k, gap, rate, force, friction, slip)
+    report[r, GAP], report[r, GAP_RATE], report[r, NORMAL_FORCE] = gap, rate, force
+    for x in range(3):
+        report[r, FRICTION + x] = friction * vectors[5, x]
+        report[r, POINT + x] = vectors[2, x] + (Q[i, x] if x < dim else 0.0)
+        report[r, NORMAL + x] = vectors[1, x]
+    report[r, POTENTIAL] = pair_potential(values, k, gap)
 
 
 @jit
@@ -245,153 +272,25 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, curves, o
     """Add the generalized forces of the contacts into ``out`` (bodies + ground, n_coords),
     and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``); where
     ``power`` has one, the power each dissipates [W] (:func:`dissipated_power`). Returns -1, or
-    the first contact whose normal is undefined."""
-    point, n = np.zeros(3), np.zeros(3)
-    s_i, s_j, v_i, v_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    work = np.zeros((6, 3))
-    dim = points.shape[2]
+    the first contact whose normal is undefined. Group rows are left to
+    :func:`.contact_groups.group_forces_into`."""
+    vectors, work = np.zeros((7, 3)), np.zeros((6, 3))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
-        if values[k, 0] >= HINGE_STOP:
+        if is_stop(values[k, 0]):
             _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report, power)
             continue
-        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
-                                        point, n, s_i, s_j, v_i, v_j, work)
+        if values[k, 0] == GROUP:
+            continue
+        gap, rate, force, friction, slip = pair_into(A, axes, omega, Q, Qd, k, i, j, points,
+                                                     values, curves, out, vectors, work)
         if gap != gap:
             return k
-        force = normal_force(values, k, -gap, -rate)
-        slip = 0.0
-        for x in range(3):
-            v_j[x] -= rate * n[x]
-            slip += v_j[x] * v_j[x]
-        slip = math.sqrt(slip)
-        # tanh(s / v) / s, which tends to 1 / v as the slip vanishes
-        scale = values[k, 8]
-        weight = math.tanh(slip / scale) / slip if slip > 1e-9 * scale else 1.0 / scale
-        friction = -values[k, 7] * force * weight
-        for x in range(3):
-            F[x] = force * n[x] + friction * v_j[x]
-        _add_pair(axes, i, j, s_i, s_j, F, out)
         if power.shape[0] > 0:
-            power[k] = dissipated_power(values, k, -gap, -rate, force) - friction * slip * slip
+            power[k] = pair_power(values, k, gap, rate, force, friction, slip)
         if report.shape[0] > 0:
-            delta = -gap if gap < 0.0 else 0.0
-            report[k, DISSIPATION] = (dissipated_power(values, k, -gap, -rate, force)
-                                      - friction * slip * slip)
-            report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, rate, force
-            for x in range(3):
-                report[k, FRICTION + x] = friction * v_j[x]
-                report[k, POINT + x] = s_i[x] + (Q[i, x] if x < dim else 0.0)
-                report[k, NORMAL + x] = n[x]
-            exponent = values[k, 4] + 1.0
-            report[k, POTENTIAL] = values[k, 3] * delta ** exponent / exponent
+            report_pair(report, k, values, k, gap, rate, force, friction, slip, Q, i, vectors)
     return -1
-
-
-@jit
-def _hinge(A, omega, Q, Qd, k, i, j, points, h) -> tuple:
-    """``(theta, theta')`` of hinge stop ``k`` and its axis ``h`` (global, 3D)."""
-    if points.shape[2] == 2:
-        h[0], h[1], h[2] = 0.0, 0.0, 1.0
-        return Q[j, 2] - Q[i, 2], Qd[j, 2] - Qd[i, 2]
-    f_i, g_i, f_j = np.zeros(3), np.zeros(3), np.zeros(3)
-    _turn(A, i, points[k, 0], f_i)
-    _turn(A, i, points[k, 1], g_i)
-    _turn(A, j, points[k, 2], f_j)
-    along, across, rate = 0.0, 0.0, 0.0
-    for x in range(3):
-        y, z = (x + 1) % 3, (x + 2) % 3
-        h[x] = f_i[y] * g_i[z] - f_i[z] * g_i[y]
-        along += f_j[x] * f_i[x]
-        across += f_j[x] * g_i[x]
-    for x in range(3):
-        rate += h[x] * (omega[j, x] - omega[i, x])
-    return math.atan2(across, along), rate
-
-
-@jit
-def _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j) -> tuple:
-    """``(s, s')`` of slide stop ``k``, its axis ``h`` (global, 3D) and the offsets ``s_i``,
-    ``s_j`` of ``P_j`` from the bodies' reference points."""
-    dim = points.shape[2]
-    p_i, v_i, v_j = np.zeros(3), np.zeros(3), np.zeros(3)
-    _point(A, Q, i, points[k, 0], p_i)
-    _point(A, Q, j, points[k, 1], s_j)
-    _turn(A, i, points[k, 2], h)
-    slide, rate = 0.0, 0.0
-    for x in range(3):
-        d = s_j[x] - p_i[x]
-        slide += h[x] * d
-        s_i[x] = s_j[x] - (Q[i, x] if x < dim else 0.0)
-        s_j[x] -= Q[j, x] if x < dim else 0.0
-    _velocity(Qd, omega, dim, i, s_i, v_i)
-    _velocity(Qd, omega, dim, j, s_j, v_j)
-    for x in range(3):
-        # s' = h . (v_Pj - v_Pi) + (omega_i x h) . d: the velocity of P_j relative to the
-        # material point of body i it passes
-        rate += h[x] * (v_j[x] - v_i[x])
-    return slide, rate
-
-
-@jit
-def _cone(A, omega, k, i, j, points, h) -> tuple:
-    """``(angle, angle')`` of cone stop ``k`` and the axis ``h`` (global, 3D) it turns about
-    (zero where the two axes are aligned)."""
-    a_i, a_j = np.zeros(3), np.zeros(3)
-    _turn(A, i, points[k, 0], a_i)
-    _turn(A, j, points[k, 1], a_j)
-    sine, cosine, rate = 0.0, 0.0, 0.0
-    for x in range(3):
-        y, z = (x + 1) % 3, (x + 2) % 3
-        h[x] = a_i[y] * a_j[z] - a_i[z] * a_j[y]
-        sine += h[x] * h[x]
-        cosine += a_i[x] * a_j[x]
-    sine = math.sqrt(sine)
-    for x in range(3):
-        h[x] = h[x] / sine if sine > 0.0 else 0.0
-        rate += h[x] * (omega[j, x] - omega[i, x])
-    return math.atan2(sine, cosine), rate
-
-
-@jit
-def _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j) -> tuple:
-    """``(x, x')`` of stop ``k`` with its axis ``h`` (and, for a slide, the offsets ``s_i``,
-    ``s_j`` of the point pushed)."""
-    if values[k, 0] == SLIDE_STOP:
-        return _slide(A, omega, Q, Qd, k, i, j, points, h, s_i, s_j)
-    if values[k, 0] == CONE_STOP:
-        return _cone(A, omega, k, i, j, points, h)
-    return _hinge(A, omega, Q, Qd, k, i, j, points, h)
-
-
-@jit
-def _stop_into(A, axes, omega, Q, Qd, k, i, j, points, values, out, report, power) -> None:
-    """Stop ``k``: the law's force back into ``[lower, upper]`` along its joint coordinate (a
-    torque about a hinge's or a cone's axis, a force along a slide), and its report and
-    dissipated power as :func:`contact_forces_into`'s."""
-    h, s_i, s_j, F = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
-    gap, gap_rate, sign = _stop_side(x, rate, values[k, 1], values[k, 2])
-    force = normal_force(values, k, -gap, -gap_rate)
-    if values[k, 0] != SLIDE_STOP:
-        _add_torque(axes, j, h, sign * force, out)
-        _add_torque(axes, i, h, -sign * force, out)
-    else:
-        for x_ in range(3):
-            F[x_] = sign * force * h[x_]
-        _add_pair(axes, i, j, s_i, s_j, F, out)
-    if power.shape[0] > 0:
-        power[k] = dissipated_power(values, k, -gap, -gap_rate, force)
-    if report.shape[0] > 0:
-        delta = -gap if gap < 0.0 else 0.0
-        report[k, :] = 0.0
-        report[k, DISSIPATION] = dissipated_power(values, k, -gap, -gap_rate, force)
-        report[k, GAP], report[k, GAP_RATE], report[k, NORMAL_FORCE] = gap, gap_rate, force
-        for x_ in range(3):
-            report[k, NORMAL + x_] = sign * h[x_]
-            report[k, POINT + x_] = s_j[x_] + (Q[j, x_] if x_ < points.shape[2] else 0.0)
-        exponent = values[k, 4] + 1.0
-        report[k, POTENTIAL] = values[k, 3] * delta ** exponent / exponent
 
 
 @jit
@@ -415,7 +314,12 @@ def switches_into(A, omega, Q, Qd, bodies, points, values, curves, out) -> None:
     rows = bodies.shape[0]
     for k in range(rows):
         i, j = bodies[k, 0], bodies[k, 1]
-        if values[k, 0] >= HINGE_STOP:
+        if values[k, 0] == GROUP:  # a group's touches are not located (see contact_groups)
+            out[k] = -1.0
+            if out.shape[0] > rows:
+                out[rows + k] = -1.0
+            continue
+        if is_stop(values[k, 0]):
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
         else:
@@ -513,15 +417,14 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, curves,
     with a hole's axis, and the change of the contact point and of the Jacobians with the positions
     (terms of the size of the force over the shapes' sizes, which change how fast the
     iteration converges, not where)."""
-    point, n = np.zeros(3), np.zeros(3)
-    s_i, s_j, v_i, v_j, h = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    work = np.zeros((6, 3))
+    vectors, work, h = np.zeros((7, 3)), np.zeros((6, 3)), np.zeros(3)
     G = np.zeros((3, blocks.shape[1]))
     H = np.zeros((3, 3))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         blocks[k] = 0.0
-        if values[k, 0] >= HINGE_STOP:
+        if is_stop(values[k, 0]):
+            s_i, s_j = vectors[2], vectors[3]
             x, rate = _stop_coordinate(A, omega, Q, Qd, k, i, j, points, values, h, s_i, s_j)
             gap, gap_rate, _ = _stop_side(x, rate, values[k, 1], values[k, 2])
             k_n, c_n = law_slopes(values, k, -gap, -gap_rate)
@@ -531,31 +434,43 @@ def contact_tangents_into(A, axes, omega, Q, Qd, bodies, points, values, curves,
                 _turn_jacobian(axes, i, j, G)
             row = h @ G  # the coordinate's rate per coordinate rate
             blocks[k] = (k_n + weight * c_n) * np.outer(row, row)
-            continue
-        gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
-                                        point, n, s_i, s_j, v_i, v_j, work)
-        force = normal_force(values, k, -gap, -rate)
-        if force == 0.0:
-            continue
-        k_n, c_n = law_slopes(values, k, -gap, -rate)
-        slip = 0.0
-        for x in range(3):
-            v_j[x] -= rate * n[x]
-            slip += v_j[x] * v_j[x]
-        slip = math.sqrt(slip)
-        scale, mu = values[k, 8], values[k, 7]
-        w = math.tanh(slip / scale) / slip if slip > 1e-9 * scale else 1.0 / scale
-        w1 = (1.0 - math.tanh(slip / scale) ** 2) / scale
-        for x in range(3):
-            e_x = v_j[x] / slip if slip > 1e-9 * scale else 0.0
-            for y in range(3):
-                e_y = v_j[y] / slip if slip > 1e-9 * scale else 0.0
-                along = (k_n + weight * c_n) * (n[x] * n[y] - mu * w * v_j[x] * n[y])
-                P = (1.0 if x == y else 0.0) - n[x] * n[y]
-                H[x, y] = along + weight * mu * force * (w * (P - e_x * e_y) + w1 * e_x * e_y)
-        _pair_jacobian(axes, i, j, s_i, s_j, G)
-        blocks[k] = G.T @ H @ G
-        if SPHERE_SPHERE <= values[k, 0] <= PIN_IN_HOLE and values[k, 0] != BOX_SPHERE:
-            _turning_normal(axes, Q, i, j, values[k, 0] == PIN_IN_HOLE, force, n, work, s_i,
-                            s_j, G, H)
-            blocks[k] += G.T @ H @ G
+        elif values[k, 0] != GROUP:
+            pair_tangent(A, axes, omega, Q, Qd, k, i, j, points, values, curves, weight,
+                         blocks[k], G, H, vectors, work)
+
+
+@jit
+def pair_tangent(A, axes, omega, Q, Qd, k, i, j, points, values, curves, weight, block, G, H,
+                 vectors, work) -> None:
+    """``block`` (2 nc, 2 nc) of shape-pair row ``k`` (see :func:`contact_tangents_into`),
+    left alone where its law does not push; ``G`` (3, 2 nc), ``H`` (3, 3), ``vectors`` (7,
+    3) and ``work`` (6, 3) are scratch."""
+    point, n, s_i, s_j, v_i, v_j = (vectors[0], vectors[1], vectors[2], vectors[3],
+                                    vectors[4], vectors[5])
+    gap, rate = _contact_kinematics(A, omega, Q, Qd, k, i, j, points, values, curves,
+                                    point, n, s_i, s_j, v_i, v_j, work)
+    force = normal_force(values, k, -gap, -rate)
+    if force == 0.0:
+        return
+    k_n, c_n = law_slopes(values, k, -gap, -rate)
+    slip = 0.0
+    for x in range(3):
+        v_j[x] -= rate * n[x]
+        slip += v_j[x] * v_j[x]
+    slip = math.sqrt(slip)
+    scale, mu = values[k, 8], values[k, 7]
+    w = math.tanh(slip / scale) / slip if slip > 1e-9 * scale else 1.0 / scale
+    w1 = (1.0 - math.tanh(slip / scale) ** 2) / scale
+    for x in range(3):
+        e_x = v_j[x] / slip if slip > 1e-9 * scale else 0.0
+        for y in range(3):
+            e_y = v_j[y] / slip if slip > 1e-9 * scale else 0.0
+            along = (k_n + weight * c_n) * (n[x] * n[y] - mu * w * v_j[x] * n[y])
+            P = (1.0 if x == y else 0.0) - n[x] * n[y]
+            H[x, y] = along + weight * mu * force * (w * (P - e_x * e_y) + w1 * e_x * e_y)
+    _pair_jacobian(axes, i, j, s_i, s_j, G)
+    block += G.T @ H @ G
+    if SPHERE_SPHERE <= values[k, 0] <= PIN_IN_HOLE and values[k, 0] != BOX_SPHERE:
+        _turning_normal(axes, Q, i, j, values[k, 0] == PIN_IN_HOLE, force, n, work, s_i,
+                        s_j, G, H)
+        block += G.T @ H @ G

@@ -53,6 +53,33 @@ def _add_torque(axes, b, n, scale, out):
 
 
 @jit
+def _point(A, Q, b, u, out):
+    """``out`` = the global position of body point ``u`` of body ``b``, embedded in 3D."""
+    _turn(A, b, u, out)
+    for x in range(u.shape[0]):
+        out[x] += Q[b, x]
+
+
+@jit
+def _velocity(Qd, omega, dim, b, s, out):
+    """``out`` = the velocity of the material point at offset ``s`` (3,) from body ``b``'s
+    reference point (``dim`` translation coordinates)."""
+    w = omega[b]
+    for x in range(3):
+        y, z = (x + 1) % 3, (x + 2) % 3
+        out[x] = (Qd[b, x] if x < dim else 0.0) + w[y] * s[z] - w[z] * s[y]
+
+
+@jit
+def _add_pair(axes, i, j, s_i, s_j, F, out) -> None:
+    """``F`` on body j at offset ``s_j`` and ``-F`` on body i at ``s_i`` (``F`` is negated)."""
+    _add_force(axes, j, s_j, F, out)
+    for x in range(3):
+        F[x] = -F[x]
+    _add_force(axes, i, s_i, F, out)
+
+
+@jit
 def spring_forces_into(A, axes, omega, Q, Qd, bodies, points, values, actuation, out) -> int:
     """Translational spring-damper-actuators between point ``points[k, 0]`` of body
     ``bodies[k, 0]`` and ``points[k, 1]`` of ``bodies[k, 1]`` (body frames), ``values[k] =

@@ -105,7 +105,8 @@ PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat",
 #: the force elements of a model as the compiled core evaluates them
 #: (mbd3d.numerics.compiled.forces; filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
 #: rotational ones, point forces and torques, and their actuators' motions, and the compliant
-#: contacts (mbd3d.numerics.compiled.contacts). A model without
+#: contacts (mbd3d.numerics.compiled.contacts) with the contact groups' shapes and laws
+#: (mbd3d.numerics.compiled.contact_groups). A model without
 #: force elements, or with a value given as a Python function (evaluated in Python), has
 #: empty tables
 FORCE_FIELDS = (
@@ -115,6 +116,7 @@ FORCE_FIELDS = (
     "spring_first", "spring_kinds", "spring_starts", "spring_params",
     "rotary_first", "rotary_kinds", "rotary_starts", "rotary_params",
     "contact_bodies", "contact_points", "contact_values", "contact_curves",
+    "contact_shape_bodies", "contact_shape_points", "contact_shape_values", "contact_pair_laws",
 )
 
 #: the model the scratch arrays are sized for (so that a call from Python passes one record,
