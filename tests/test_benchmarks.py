@@ -119,6 +119,7 @@ def test_cradle_benchmark_runs_without_peers(capsys, monkeypatch):
                                                                   rel=1e-3)
 
 
+@pytest.mark.compiled_only  # two piles, hundreds of steps
 def test_spheres_in_box_benchmark_runs(capsys, monkeypatch):
     monkeypatch.syspath_prepend(str(BENCHMARKS))
     module = _load("spheres_in_box")

@@ -150,6 +150,7 @@ def test_a_group_pushes_as_its_pairs_given_one_by_one(dim, law):
     assert touching >= 10  # the states pressed many pairs together
 
 
+@pytest.mark.compiled_only  # 20,000 steps of 27 spheres
 def test_undamped_spheres_in_a_box_keep_their_energy():
     """Hertz's law without damping (restitution 1) and no friction: what the spheres and the
     contacts' springs hold stays the energy they started with over many impacts, to the
@@ -169,6 +170,7 @@ def test_undamped_spheres_in_a_box_keep_their_energy():
     assert drift[1] < 1e-7 and drift[1] < drift[0] / 20
 
 
+@pytest.mark.compiled_only  # thousands of steps of 12 discs
 def test_a_dropped_pile_loses_what_its_contacts_dissipate():
     """Damped contacts with friction: the energy the pairs' dampers and friction dissipate,
     summed over the pairs found at each evaluation, closes the balance."""
@@ -179,6 +181,7 @@ def test_a_dropped_pile_loses_what_its_contacts_dissipate():
     assert balance["dissipated"][-1] > 0.5 * balance["kinetic"][0]
 
 
+@pytest.mark.compiled_only  # a pile of 8 discs for 0.2 s
 def test_a_group_is_one_row_of_the_results_and_the_model_file(tmp_path):
     model = spheres_in_box(8, dim=2, speed=0.0)
     path = tmp_path / "pile.yaml"

@@ -192,6 +192,7 @@ def test_a_crossing_and_return_between_samples_is_found_from_the_rate(with_rate)
     np.testing.assert_allclose(times[0], up, rtol=0, atol=1e-9)
 
 
+@pytest.mark.compiled_only  # 10,000 steps
 def test_a_function_dithering_about_zero_crosses_once_within_its_tolerance():
     """(t - 1)^3 with a ripple of 1e-8 and a period of 20 us: near t = 1 the ripple crosses
     zero dozens of times before the cube outgrows it. Each of those is a sign change; with a

@@ -383,6 +383,7 @@ def test_newtons_cradle_example(capsys, tmp_path):
     assert all(0.5 * short < s < 2 * short for s in swings[1:-1])
 
 
+@pytest.mark.compiled_only  # 27 spheres, thousands of steps
 def test_spheres_in_box_example(capsys, tmp_path):
     rrd = tmp_path / "sib.rrd"
     module = load("spheres_in_box")

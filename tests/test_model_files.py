@@ -117,7 +117,12 @@ def test_every_example_has_a_model_file():
     assert examples == set(EXAMPLES), examples ^ set(EXAMPLES)
 
 
-@pytest.mark.parametrize("name", sorted(EXAMPLES))
+#: examples whose file's short run takes minutes with the compiled core interpreted
+HEAVY = {"spheres_in_box"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.compiled_only)
+                                  if n in HEAVY else n for n in sorted(EXAMPLES)])
 def test_example_model_file_is_the_example_model(name):
     make, analysis = EXAMPLES[name]
     python_model = make(example(name))

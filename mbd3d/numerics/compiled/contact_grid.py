@@ -28,8 +28,9 @@ from mbd3d.numerics.compiled.forces import _point, _turn
 
 #: the kinds of a group's shapes
 SPHERE, CAPSULE, PLANE = 0, 1, 2
-#: cell coordinates are clipped to this magnitude (far-flung shapes share the border cells)
-_FAR = 1 << 40
+#: cell coordinates are clipped to this magnitude (far-flung shapes share the border cells),
+#: so that the hash's products stay within 64 bits
+_FAR = 1 << 20
 
 
 @jit
