@@ -112,11 +112,23 @@ def planar(spring, torque_function=False):
         b.add(mb.Torque("t", bar, lambda t: 0.1 * t))
     return b.build()
 
-def spatial_ball_on_floor():
-    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
-    ball = b.add_body("ball", mass=1.0, inertia=(0.004, 0.004, 0.004), position=(0, 0, 0.2))
-    b.add(mb.Contact("floor", mb.Plane(b.ground, normal=(0, 0, 1)), mb.Sphere(ball, radius=0.1),
+def ball_on_floor(dim):
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0,) * (dim - 1) + (-9.81,))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004 if dim == 2 else (0.004,) * 3,
+                      position=(0.0,) * (dim - 1) + (0.2,))
+    b.add(mb.Contact("floor", mb.Plane(b.ground, normal=(0.0,) * (dim - 1) + (1.0,)),
+                     mb.Sphere(ball, radius=0.1),
                      law=mb.LinearContact(frequency=50.0, restitution=0.5)))
+    return b.build()
+
+def two_balls_in_a_group():
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    balls = [b.add_body(f"ball{k}", mass=1.0, inertia=(0.004,) * 3, position=(0.3 * k, 0, 0.2))
+             for k in range(2)]
+    shapes = [mb.Plane(b.ground, normal=(0, 0, 1))] + [mb.Sphere(ball, radius=0.1)
+                                                        for ball in balls]
+    b.add(mb.ContactGroup("pile", shapes, law=mb.LinearContact(frequency=50.0,
+                                                               restitution=0.5)))
     return b.build()
 
 models = {"planar, no forces": planar(False), "planar, a spring": planar(True),
@@ -124,7 +136,9 @@ models = {"planar, no forces": planar(False), "planar, a spring": planar(True),
           "planar chain, range-space solve": pendulum_chain(40),
           "spatial chain, no forces": spatial_chain(3),
           "spatial chain, range-space solve": spatial_chain(40),
-          "spatial ball on a floor": spatial_ball_on_floor()}
+          "planar ball on a floor": ball_on_floor(2),
+          "spatial ball on a floor": ball_on_floor(3),
+          "spatial balls in a contact group": two_balls_in_a_group()}
 for name, model in models.items():
     mb.forward_accelerations(model, 0.0, model.q0, model.qd0)
     mb.forward_dynamics(model, [0.0, 0.01], method="RK45")
@@ -136,12 +150,13 @@ for kernel in (accelerations.accelerations_with_parts, integration.advance,
 """
 
 
-def test_the_kernels_are_compiled_once_per_body_type_not_per_kind_of_model(tmp_path):
+def test_the_kernels_are_compiled_per_body_type_and_contacts_not_per_kind_of_model(tmp_path):
     """Models with and without force elements, with forces given as Python functions, solved
-    densely or in the range space, planar and spatial, run on kernels of two types only (one
-    planar, one spatial). A record field that is None for some models made each combination a
-    type of its own, and the whole core was compiled once per combination: up to 11 times
-    over the test suite, most of its first run's ten minutes."""
+    densely or in the range space, with contacts or a contact group, planar and spatial, run
+    on kernels of four types only: planar or spatial, with contacts or without (a model
+    without contacts compiles none of their code). A record field that is None for some
+    models made each combination a type of its own, and the whole core was compiled once per
+    combination: up to 11 times over the test suite, most of its first run's ten minutes."""
     # a new process, so that only these models' kernels are loaded; it imports the mbd3d
     # under test, whatever is installed
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -150,6 +165,6 @@ def test_the_kernels_are_compiled_once_per_body_type_not_per_kind_of_model(tmp_p
     run = subprocess.run([sys.executable, "-c", KINDS], capture_output=True, text=True,
                          cwd=tmp_path, env=env, check=True)
     lines = run.stdout.split("\n")
-    assert lines[0] == str(sorted(["dense"] * 5 + ["range"] * 2))
+    assert lines[0] == str(sorted(["dense"] * 7 + ["range"] * 2))
     counts = dict(line.split() for line in lines[1:] if line)
-    assert counts == {"accelerations_with_parts": "2", "advance": "2", "newton_step": "2"}
+    assert counts == {"accelerations_with_parts": "4", "advance": "4", "newton_step": "4"}

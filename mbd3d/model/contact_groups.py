@@ -109,7 +109,7 @@ class ContactGroup(ForceElement):
     def arrays(self, ctx: "BuildContext") -> tuple:
         """As :meth:`mbd3d.Contact.arrays`, the group's one row: ``points[0, 3, :2]`` the
         first and the number of its shapes and ``points[0, 2, :2]`` the offset and number of
-        classes of its law table, both from zero (:class:`~mbd3d.model.contacts._Contacts`
+        classes of its law table, both from zero (:class:`~mbd3d.model.contact_rows._Contacts`
         moves them to the model's tables); the mass is the smallest pair's."""
         shape_points, shape_values, laws, masses = self.tables(ctx)
         points = np.zeros((1, POINTS, ctx.dim))

@@ -35,9 +35,10 @@ def _curve_table(points: np.ndarray, curves: list) -> np.ndarray:
 
 
 class _Contacts(_CompiledForces):
-    """The contacts and joint stops of a model as rows of the compiled core: ``owners[r]``
-    is the element of row ``r``; where a pair was given the other way round (``swapped``)
-    the core's body i is the element's second body, and its reports are turned back."""
+    """The contacts, joint stops and contact groups of a model as rows of the compiled core
+    (a group is one row, its shapes and laws tables of their own): ``owners[r]`` is the
+    element of row ``r``; where a pair was given the other way round (``swapped``) the core's
+    body i is the element's second body, and its reports are turned back."""
 
     def __init__(self, elements: list, ctx: "BuildContext"):
         self.elements = elements

@@ -10,7 +10,6 @@ import scipy.sparse as sp
 
 from mbd3d.model.body import Frames, rotate_rows
 from mbd3d.numerics.compiled import accelerations as kernel, structures
-from mbd3d.numerics.compiled.contact_groups import empty_shapes
 from mbd3d.numerics.compiled.motions import table as motion_table
 from mbd3d.model.constraints import _motion_values, driver_values, frames, motion_phases
 from mbd3d.errors import ModelError
@@ -216,7 +215,7 @@ def _range_space_fields(pattern) -> dict:
 def _force_fields(model, tables: list[dict]) -> dict:
     """The fields of the model's :class:`~mbd3d.numerics.compiled.structures.ForceArrays` from its
     force groups' tables (each kind at most one group, empty for the kinds the model has not,
-    all empty without any)."""
+    all empty without any; the contacts a record of their own, None without any)."""
     dim = model.dim
     fields = {
         "spring_bodies": np.zeros((0, 2), dtype=np.int64),
@@ -226,19 +225,20 @@ def _force_fields(model, tables: list[dict]) -> dict:
         "point_bodies": np.zeros(0, dtype=np.int64), "point_points": np.zeros((0, dim)),
         "point_forces": np.zeros((0, dim)), "point_body_frame": np.zeros(0, dtype=np.int64),
         "torque_bodies": np.zeros(0, dtype=np.int64), "torque_values": np.zeros((0, 3)),
-        "torque_body_frame": np.zeros(0, dtype=np.int64),
-        "contact_bodies": np.zeros((0, 2), dtype=np.int64),
-        "contact_points": np.zeros((0, 4, dim)), "contact_values": np.zeros((0, 10)),
-        "contact_curves": np.zeros(0),
-        **dict(zip(("contact_shape_bodies", "contact_shape_points", "contact_shape_values",
-                    "contact_pair_laws"), empty_shapes(dim)))}
+        "torque_body_frame": np.zeros(0, dtype=np.int64), "contacts": None}
     actuators = {"spring": [], "rotary": []}
     for table in tables:
         table = dict(table)
         terms = table.pop("actuators", None)
         if terms is not None:
             actuators["spring" if "spring_bodies" in table else "rotary"] = terms
-        fields.update({key: np.ascontiguousarray(value) for key, value in table.items()})
+        if "contact_bodies" in table:
+            # a record of their own, None without contacts: see structures.ContactArrays
+            fields["contacts"] = structures.contact_arrays(*(
+                np.ascontiguousarray(table[f"contact_{name}"])
+                for name in structures.CONTACT_FIELDS))
+        else:
+            fields.update({key: np.ascontiguousarray(value) for key, value in table.items()})
     for kind, terms in actuators.items():
         fields.update(zip((f"{kind}_first", f"{kind}_kinds", f"{kind}_starts",
                            f"{kind}_params"), motion_table(terms)))

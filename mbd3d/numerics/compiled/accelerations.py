@@ -36,7 +36,7 @@ from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_int
 from mbd3d.numerics.compiled.motions import motion_values_into
 from mbd3d.numerics.compiled.range_space import range_space_solve_into
 from mbd3d.numerics.compiled.rows import constraint_rows_into
-from mbd3d.numerics.compiled.structures import BANDED, DENSE, RANGE, SPARSE
+from mbd3d.numerics.compiled.structures import BANDED, DENSE, RANGE, SPARSE, contact_count
 
 SOLVED, SINGULAR, NOT_FINITE = 0, 1, 2
 
@@ -80,6 +80,21 @@ def _finite_rows(x: np.ndarray) -> bool:
 
 
 @jit
+def _contacts_into(contacts, A, axes, omega, Q, Qd, out, power) -> bool:
+    """Add the forces of the contacts ``contacts`` (a
+    :class:`~mbd3d.numerics.compiled.structures.ContactArrays`) to ``out``; False where a
+    normal is undefined. None (a model without contacts) is decided as the caller is compiled,
+    so that models without contacts compile none of the contacts' code."""
+    if contacts is None:
+        return True
+    shapes = (contacts.shape_bodies, contacts.shape_points, contacts.shape_values,
+              contacts.pair_laws)
+    return all_contact_forces_into(A, axes, omega, Q, Qd, contacts.bodies, contacts.points,
+                                   contacts.values, contacts.curves, shapes, out,
+                                   np.empty((0, REPORT_COLUMNS)), power) < 0
+
+
+@jit
 def forces_into(forces, work, t: float, rhs) -> bool:
     """Add the generalized forces of the force elements ``forces``
     (:class:`~mbd3d.numerics.compiled.structures.ForceArrays`) at ``t`` to ``rhs`` (n,), from the
@@ -89,7 +104,7 @@ def forces_into(forces, work, t: float, rhs) -> bool:
     kernels are compiled once, not once for models with forces and once for those without."""
     if (forces.spring_bodies.shape[0] == 0 and forces.rotary_bodies.shape[0] == 0
             and forces.point_bodies.shape[0] == 0 and forces.torque_bodies.shape[0] == 0
-            and forces.contact_bodies.shape[0] == 0):
+            and contact_count(forces.contacts) == 0):
         return True
     motion_values_into(forces.spring_first, forces.spring_kinds, forces.spring_starts,
                        forces.spring_params, t, work.spring_actuation)
@@ -109,12 +124,7 @@ def forces_into(forces, work, t: float, rhs) -> bool:
                       forces.point_body_frame, out)
     torques_into(A, axes, forces.torque_bodies, forces.torque_values, forces.torque_body_frame,
                  out)
-    shapes = (forces.contact_shape_bodies, forces.contact_shape_points,
-              forces.contact_shape_values, forces.contact_pair_laws)
-    if all_contact_forces_into(A, axes, omega, Q, Qd, forces.contact_bodies,
-                               forces.contact_points, forces.contact_values,
-                               forces.contact_curves, shapes, out,
-                               np.empty((0, REPORT_COLUMNS)), work.contact_power) >= 0:
+    if not _contacts_into(forces.contacts, A, axes, omega, Q, Qd, out, work.contact_power):
         return False
     nc = out.shape[1]
     for b in range(out.shape[0] - 1):

@@ -29,6 +29,7 @@ from mbd3d.numerics.compiled.rows import constraint_rows_into
 from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, dop853_coefficients,
                                                  error_norm, polynomial_coefficients, stage_state,
                                                  step_factor)
+from mbd3d.numerics.compiled.structures import contact_count
 
 #: why :func:`advance` returned (bit flags, except the failures): a step passed the output
 #: time, the constraints drifted, the step collapsed, the step count to check for stiffness
@@ -165,13 +166,15 @@ def drift(model, key, t, y, charts, work):
 def switch_count(forces) -> int:
     """How many switching functions the contacts and joint stops of a model's ``forces``
     have: two each (:func:`.contacts.switches_into`)."""
-    return 2 * forces.contact_bodies.shape[0]
+    return 2 * contact_count(forces.contacts)
 
 
 @jit
-def _contact_switches(forces, A, omega, Q, Qd, out) -> None:
-    switches_into(A, omega, Q, Qd, forces.contact_bodies, forces.contact_points,
-                  forces.contact_values, forces.contact_curves, out)
+def _contact_switches(contacts, A, omega, Q, Qd, out) -> None:
+    # None (no contacts) is decided as the kernel is compiled: see structures.ContactArrays
+    if contacts is not None:
+        switches_into(A, omega, Q, Qd, contacts.bodies, contacts.points, contacts.values,
+                      contacts.curves, out)
 
 
 @jit
@@ -192,7 +195,7 @@ def switches(model, y, charts, work, out) -> None:
         spatial_frames_into(Q, Qd, charts, yes, A, axes, omega, kappa, work.Gb, work.omega_bar)
     else:
         planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
-    _contact_switches(model.forces, A, omega, Q, Qd, out)
+    _contact_switches(model.forces.contacts, A, omega, Q, Qd, out)
 
 
 @jit

@@ -7,12 +7,15 @@ They are Numba structure references: one pointer per record in every call, with 
 instead of tuples of dozens of arrays whose every member is copied and reference-counted at
 each call (which cost both run time and minutes of compilation).
 
-Every model's records have the same types: a model without force elements has a force record
-of empty tables, one not solved in the range space an empty range-space record. A field that
-is None for some models and a record for others makes each combination a type of its own,
-and every kernel that takes the model was compiled once per combination (up to 11 times over
-the test suite, several minutes of a first run). Only planar and spatial models differ in
-type (their charts), so each kernel is compiled twice at most.
+A model's records have one of four types: planar or spatial (their charts), with contacts or
+without. A model without force elements has a force record of empty tables, one not solved in
+the range space an empty range-space record: a field that is None for some models and a record
+for others makes each combination a type of its own, and every kernel that takes the model was
+compiled once per combination (up to 11 times over the test suite, several minutes of a first
+run). The one exception is the contacts (``ForceArrays.contacts``: a :class:`ContactArrays`,
+or None for a model without contacts, joint stops or contact groups): their code is half of
+the whole core's, and a model that has none compiles none of it (``contacts is None`` is
+decided as the kernel is compiled), so each kernel is compiled at most four times.
 """
 
 from __future__ import annotations
@@ -24,10 +27,11 @@ from numba.experimental import structref
 from mbd3d.numerics.compiled import DISABLED, jit
 from mbd3d.numerics.compiled.rows import row_work_size
 
-__all__ = ["ModelArrays", "Workspace", "ForceArrays", "RangeSpaceArrays", "PenaltyArrays",
-           "model_arrays", "force_arrays", "range_space_arrays", "penalty_arrays", "workspace",
-           "MODEL_FIELDS", "WORKSPACE_FIELDS", "FORCE_FIELDS", "RANGE_FIELDS", "PENALTY_FIELDS",
-           "DENSE", "BANDED", "SPARSE", "RANGE"]
+__all__ = ["ModelArrays", "Workspace", "ForceArrays", "ContactArrays", "RangeSpaceArrays",
+           "PenaltyArrays", "model_arrays", "force_arrays", "contact_arrays", "range_space_arrays",
+           "penalty_arrays", "workspace", "contact_count", "MODEL_FIELDS", "WORKSPACE_FIELDS",
+           "FORCE_FIELDS", "CONTACT_FIELDS", "RANGE_FIELDS", "PENALTY_FIELDS", "DENSE", "BANDED",
+           "SPARSE", "RANGE"]
 
 #: layouts of the augmented matrix (see mbd3d.numerics.linalg): solved in compiled code (RANGE:
 #: through Cq M^-1 Cq^T, mbd3d.numerics.compiled.range_space), or by the caller (SuperLU)
@@ -52,6 +56,11 @@ class WorkspaceType(_Record):
 
 @structref.register
 class ForceArraysType(_Record):
+    pass
+
+
+@structref.register
+class ContactArraysType(_Record):
     pass
 
 
@@ -105,19 +114,22 @@ PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat",
 #: the force elements of a model as the compiled core evaluates them
 #: (mbd3d.numerics.compiled.forces; filled by mbd3d.model.equations._Core from the force groups' tables): spring-damper-actuators,
 #: rotational ones, point forces and torques, and their actuators' motions, and the compliant
-#: contacts (mbd3d.numerics.compiled.contacts) with the contact groups' shapes and laws
-#: (mbd3d.numerics.compiled.contact_groups). A model without
-#: force elements, or with a value given as a Python function (evaluated in Python), has
-#: empty tables
+#: contacts (a ContactArrays, or None). A model without force elements, or with a value given
+#: as a Python function (evaluated in Python), has empty tables
 FORCE_FIELDS = (
     "spring_bodies", "spring_points", "spring_values", "rotary_bodies", "rotary_values",
     "rotary_vectors", "point_bodies", "point_points", "point_forces", "point_body_frame",
     "torque_bodies", "torque_values", "torque_body_frame",
     "spring_first", "spring_kinds", "spring_starts", "spring_params",
     "rotary_first", "rotary_kinds", "rotary_starts", "rotary_params",
-    "contact_bodies", "contact_points", "contact_values", "contact_curves",
-    "contact_shape_bodies", "contact_shape_points", "contact_shape_values", "contact_pair_laws",
+    "contacts",
 )
+
+#: the contacts and joint stops of a model (the contact table of
+#: mbd3d.numerics.compiled.contacts: bodies, points, values, curves) with the contact groups'
+#: shapes and laws (mbd3d.numerics.compiled.contact_groups)
+CONTACT_FIELDS = ("bodies", "points", "values", "curves", "shape_bodies", "shape_points",
+                  "shape_values", "pair_laws")
 
 #: the model the scratch arrays are sized for (so that a call from Python passes one record,
 #: not two: each costs about half a microsecond to hand over), and the scratch arrays of one
@@ -147,6 +159,9 @@ if not DISABLED:
     class ForceArrays(structref.StructRefProxy):
         """A model's compiled force elements (fields :data:`FORCE_FIELDS`)."""
 
+    class ContactArrays(structref.StructRefProxy):
+        """A model's compiled contacts (fields :data:`CONTACT_FIELDS`)."""
+
     class RangeSpaceArrays(structref.StructRefProxy):
         """The structure of a model's range-space solve (fields :data:`RANGE_FIELDS`)."""
 
@@ -156,6 +171,7 @@ if not DISABLED:
     structref.define_proxy(ModelArrays, ModelArraysType, list(MODEL_FIELDS))
     structref.define_proxy(Workspace, WorkspaceType, list(WORKSPACE_FIELDS))
     structref.define_proxy(ForceArrays, ForceArraysType, list(FORCE_FIELDS))
+    structref.define_proxy(ContactArrays, ContactArraysType, list(CONTACT_FIELDS))
     structref.define_proxy(RangeSpaceArrays, RangeSpaceArraysType, list(RANGE_FIELDS))
     structref.define_proxy(PenaltyArrays, PenaltyArraysType, list(PENALTY_FIELDS))
 else:
@@ -182,6 +198,11 @@ else:
 
         fields = FORCE_FIELDS
 
+    class ContactArrays(_Plain):
+        """A model's compiled contacts (fields :data:`CONTACT_FIELDS`)."""
+
+        fields = CONTACT_FIELDS
+
     class RangeSpaceArrays(_Plain):
         """The structure of a model's range-space solve (fields :data:`RANGE_FIELDS`)."""
 
@@ -204,6 +225,21 @@ def model_arrays(*fields):
 def force_arrays(*fields):
     """A :class:`ForceArrays` of ``fields`` in the order of :data:`FORCE_FIELDS`."""
     return ForceArrays(*fields)
+
+
+@jit
+def contact_arrays(*fields):
+    """A :class:`ContactArrays` of ``fields`` in the order of :data:`CONTACT_FIELDS`."""
+    return ContactArrays(*fields)
+
+
+@jit
+def contact_count(contacts) -> int:
+    """The rows of a model's contact table ``contacts`` (:class:`ContactArrays`; None:
+    none)."""
+    if contacts is None:
+        return 0
+    return contacts.bodies.shape[0]
 
 
 @jit
@@ -255,7 +291,7 @@ def workspace(spatial: bool, model):
     range_jacobian, range_band, range_rows, range_forces = _range_sizes(
         model, n_rows, n_bodies, nc)
     force_bodies, springs, rotary_springs = _force_sizes(model.forces, b)
-    contacts = model.forces.contact_bodies.shape[0]
+    contacts = contact_count(model.forces.contacts)
     return Workspace(
         model, np.empty((b, nc)), np.empty((b, nc)), np.empty((b, dim, dim)),
         np.empty((b, 3, n_rot)),
