@@ -8,7 +8,6 @@ import math
 from typing import Any, Callable
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from mbd3d.errors import ModelError
 from mbd3d.model.arguments import RecordsArguments
@@ -55,6 +54,10 @@ class CamProfile(RecordsArguments):
                              "turn (the curve closes itself)")
         if not np.all(r > 0):
             raise ModelError(f"cam profile: radii must be positive, the smallest is {r.min()!r}")
+        # imported here: SciPy's interpolation takes a third of mbd3d's import time, and
+        # only cam profiles use it
+        from scipy.interpolate import CubicSpline
+
         self._spline = CubicSpline(np.append(phi, phi[0] + 2 * math.pi), np.append(r, r[0]),
                                    bc_type="periodic")
 
