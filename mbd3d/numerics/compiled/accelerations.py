@@ -100,8 +100,9 @@ def forces_into(forces, work, t: float, rhs) -> bool:
     (:class:`~mbd3d.numerics.compiled.structures.ForceArrays`) at ``t`` to ``rhs`` (n,), from the
     frames and coordinates in ``work``; False when a spring's points or two contact spheres'
     centres coincide or an actuator is not finite. A model without compiled force elements
-    has a record of empty tables, and returns at once: one type for every model, so that the
-    kernels are compiled once, not once for models with forces and once for those without."""
+    has a record of empty tables, and returns at once: one type for models with forces and
+    without, so that the kernels are not compiled once for each (the contacts, a record or
+    None, are the exception: see :mod:`.structures`)."""
     if (forces.spring_bodies.shape[0] == 0 and forces.rotary_bodies.shape[0] == 0
             and forces.point_bodies.shape[0] == 0 and forces.torque_bodies.shape[0] == 0
             and contact_count(forces.contacts) == 0):
