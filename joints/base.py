@@ -63,11 +63,20 @@ class Joint(ConstraintElement):
         return u_i, u_j, np.eye(ctx.dim)
 
 
+#: how much more aligned with a joint's axis than the least aligned global axis another may be
+#: and still be taken as the start of its triad (a fraction of the unit axis)
+_TIE = 0.01
+
+
 def triad(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Unit vectors ``(f, g, h)``, right-handed and orthonormal, with ``h`` along ``axis``."""
     h = axis / np.linalg.norm(axis)
-    # start from the global axis least aligned with h: well conditioned for any h
-    e = np.eye(3)[int(np.argmin(np.abs(h)))]
+    # start from a global axis little aligned with h: well conditioned for any h. Among those
+    # within _TIE of the least aligned, the first: an axis drawn along a global one has two
+    # least aligned (zero components), and a choice that jumped between them as the axis
+    # changes a little would turn f and g by a right angle (sensitivities difference it)
+    size = np.abs(h)
+    e = np.eye(3)[int(np.flatnonzero(size <= size.min() + _TIE)[0])]
     f = np.cross(e, h)
     f /= np.linalg.norm(f)
     return f, np.cross(h, f), h
