@@ -29,7 +29,7 @@ import numpy as np
 import scipy.linalg as la
 
 from mbd3d.analyses.position import solve_position
-from mbd3d.analyses.statics import _active_rows, _stiffness, static_equilibrium
+from mbd3d.analyses.statics import _stiffness, active_rows, static_equilibrium
 from mbd3d.errors import ModelError
 from mbd3d.io.exports import write_columns
 from mbd3d.io.results import Results
@@ -171,7 +171,7 @@ def vibration_modes_along(model, times: Sequence[float], q_guess: Sequence[float
     ModesAlong
     """
     rest = static_equilibrium(model, times, q_guess, release=release)
-    active = _active_rows(model, release)
+    active = active_rows(model, release)
     found = []
     for k in range(len(rest)):
         chart = None if rest.charts is None else rest.charts[k]
@@ -201,7 +201,7 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
         free) twice, with its two real roots.
     """
     rest = static_equilibrium(model, [t], q_guess, release=release)
-    active = _active_rows(model, release)
+    active = active_rows(model, release)
     frequencies, ratios, shapes = _modes_about(
         model, t, rest.q[0], rest.lam[0][active],
         None if rest.charts is None else rest.charts[0], active)

@@ -41,7 +41,7 @@ from mbd3d.io.store import ResultsBuffer, run_keeping_results
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces
 
-__all__ = ["static_equilibrium"]
+__all__ = ["static_equilibrium", "active_rows", "equilibrium_residual"]
 
 #: relative size of a reduced stiffness eigenvalue below which it counts as zero (a free
 #: motion without stiffness); the stiffness is differenced, to about 1e-7 of its size
@@ -68,9 +68,9 @@ def static_equilibrium(model, times: float | Sequence[float] = 0.0,
         guess, stable or not (an inverted pendulum's upright position); its stability is
         reported. To find where a mechanism comes to rest, start it near there, or let a
         damped forward-dynamics run settle first.
-    release : sequence of str, or True
+    release : sequence of str, or bool
         Drivers whose rows are dropped, so that the mechanism settles with their freedom
-        (``True``: every driver); their efforts are zero.
+        (``True``: every driver, ``False``: none); their efforts are zero.
     tol : float
         Convergence: every constraint row within ``tol`` of its scale (lengths in units of
         the model's length) and either the force balance within ``tol`` of the largest
@@ -89,7 +89,7 @@ def static_equilibrium(model, times: float | Sequence[float] = 0.0,
         efforts) at each time; ``stats["stability"]`` lists "stable", "unstable", "neutral"
         or "fully constrained" per time, and ``stats["stiffness_eigenvalues"]`` the reduced
         stiffness's eigenvalues (in the basis of an orthonormal null space of ``Cq``: their
-        signs are what they mean).
+        signs are what they mean); ``stats["released"]`` names the drivers released.
 
     Raises
     ------
@@ -101,9 +101,12 @@ def static_equilibrium(model, times: float | Sequence[float] = 0.0,
     """
     t = check_times(times)
     what = f"static equilibrium of '{model.name}'"
-    active = _active_rows(model, release)
+    active = active_rows(model, release)
     stats = {"wall_time": 0.0, "newton_iterations": 0, "stability": [],
-             "stiffness_eigenvalues": []}
+             "stiffness_eigenvalues": [],
+             "released": list(dict.fromkeys(
+                 model.joints[model.row_element[r]].name
+                 for r in sorted(set(range(model.n_constraints)) - set(active))))}
     out = ResultsBuffer(model, "static equilibrium", t, stats)
     n, m = model.n_coordinates, model.n_constraints
     zeros = np.zeros(n)
@@ -128,11 +131,13 @@ def static_equilibrium(model, times: float | Sequence[float] = 0.0,
     return run_keeping_results(loop, out.partial, watch)
 
 
-def _active_rows(model, release) -> np.ndarray:
+def active_rows(model, release) -> np.ndarray:
     """The constraint rows kept: all but the released drivers'."""
     drivers = [element.name for element in model.joints if element.is_driver]
     if release is True:
         names = drivers
+    elif release is False or release is None:
+        names = []
     elif isinstance(release, str):
         names = [release]
     else:
@@ -146,7 +151,7 @@ def _active_rows(model, release) -> np.ndarray:
     return np.array([r for r in range(model.n_constraints) if r not in dropped], dtype=int)
 
 
-def _residual(model, t, q, lam, active, chart):
+def equilibrium_residual(model, t, q, lam, active, chart):
     """``(force balance Cq^T lam - Qe (n,), C (active rows), Cq (active rows, dense), Qe)``."""
     zeros = np.zeros(model.n_coordinates)
     fr = constraints.frames(model, q, zeros, chart)
@@ -168,7 +173,7 @@ def _solve(model, t, q, lam, active, chart, tol, max_iterations, stats, what):
     n = model.n_coordinates
     row_scale = model.row_scale[active]
     if lam is None:  # the least-squares multipliers at the guess
-        _, _, Cq, Qe = _residual(model, t, q, np.zeros(len(active)), active, chart)
+        _, _, Cq, Qe = equilibrium_residual(model, t, q, np.zeros(len(active)), active, chart)
         lam = la.lstsq(Cq.T, Qe)[0] if len(active) else np.zeros(0)
 
     def rows(C):
@@ -177,7 +182,7 @@ def _solve(model, t, q, lam, active, chart, tol, max_iterations, stats, what):
     def merit(force, C, unit):
         return max(float(np.max(np.abs(force), initial=0.0)) / unit, rows(C))
 
-    force, C, Cq, Qe = _residual(model, t, q, lam, active, chart)
+    force, C, Cq, Qe = equilibrium_residual(model, t, q, lam, active, chart)
     tiny = model.mass_scale * 1e-12
     size = merit(force, C, max(_largest(Qe), tiny))
     unit = None
@@ -201,7 +206,7 @@ def _solve(model, t, q, lam, active, chart, tol, max_iterations, stats, what):
         fraction = 1.0
         while True:  # backtracking: the first step that lowers the residual
             q_try, lam_try = q + fraction * step[:n], lam + fraction * step[n:]
-            trial = _residual(model, t, q_try, lam_try, active, chart)
+            trial = equilibrium_residual(model, t, q_try, lam_try, active, chart)
             common = max(unit, _largest(Qe), _largest(trial[3]))
             if (merit(trial[0], trial[1], common) < merit(force, C, common)
                     or fraction < 1.0 / 64):
@@ -264,14 +269,14 @@ def _stiffness(model, t, q, lam, active, chart, Cq) -> np.ndarray:
     Newton matrix is that of the equations solved (in Rodrigues parameters too, where the
     applied forces' generalized components turn with ``G``)."""
     n = model.n_coordinates
-    base = _residual(model, t, q, lam, active, chart)[0]
+    base = equilibrium_residual(model, t, q, lam, active, chart)[0]
     stiffness = np.empty((n, n))
     scale = model.coordinate_scale
     for j in range(n):
         h = 1.5e-8 * max(scale[j], abs(q[j]))
         shifted = q.copy()
         shifted[j] += h
-        stiffness[:, j] = (_residual(model, t, shifted, lam, active, chart)[0] - base) / h
+        stiffness[:, j] = (equilibrium_residual(model, t, shifted, lam, active, chart)[0] - base) / h
     return stiffness
 
 
