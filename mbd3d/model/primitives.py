@@ -28,7 +28,7 @@ from mbd3d.numerics.compiled import rows as kernel
 
 __all__ = ["PRIMITIVES", "PointCoincidence", "Dot1", "Dot2", "Distance", "Coordinate",
            "RelativeAngle", "Rotation", "Gear", "GearMesh", "DiscOnPlane", "Rack", "CamPoint", "CamFace", "RowTable",
-           "evaluate_rows"]
+           "evaluate_rows", "rows_along_vectors"]
 
 #: the most body vectors and points one primitive instance reads (a spatial gear mesh's six)
 MAX_VECTORS = 6
@@ -477,3 +477,30 @@ def evaluate_rows(table: RowTable, fr, phi: np.ndarray, value: bool = True,
         data = data.reshape(table.n_rows, 2, nc)
     return (C if value else None, data if jacobian else None, G if gamma else None,
             nu if rate else None)
+
+
+def rows_along_vectors(table: RowTable, fr, phi: np.ndarray, change: np.ndarray) -> np.ndarray:
+    """The change of every row's ``c(q)`` (m,) when the instances' body-frame vectors (the
+    table's ``vector_local``) change by ``change`` (V, dim), to first order, at the frames
+    ``fr``: ``sum over vectors of dc/ds . A dv``, exactly.
+
+    Each row's Jacobian column of a body's (first) rotation coordinate is the chain rule
+    ``dc/dtheta = (explicit) + sum over the body's vectors of dc/ds . ds/dtheta``, linear in
+    the vectors' ``ds/dtheta`` (``J``): evaluated once with ``J`` replaced by the vectors'
+    changes ``ds = A dv`` and once with ``J`` zero, the difference of the two columns (of both
+    bodies, the ground's included) is the rows' change along ``dv``, through the same formulas
+    that give the Jacobian (so none is written twice)."""
+    s, J, v, a = fr.vectors(table.vector_bodies, table.vector_local, False)
+    ds = fr.vectors(table.vector_bodies, change, False)[0]
+    nc, dim = fr.Q.shape[1], s.shape[1]
+    columns = []
+    for along in (ds, np.zeros_like(ds)):
+        J_along = np.zeros_like(J)
+        J_along[:, :, 0] = along
+        nnz = table.n_rows * 2 * nc
+        data = kernel.constraint_rows(
+            table.code, table.bi, table.bj, table.first_row, table.slots, table.coordinate,
+            table.motion, table.real, table.curves, phi, table.n_rows, fr.Q, fr.Q, s, J_along,
+            v, a, np.arange(nnz), nnz, False, True, False, False)[1]
+        columns.append(data.reshape(table.n_rows, 2, nc)[:, :, dim].sum(axis=1))
+    return columns[0] - columns[1]

@@ -1,0 +1,210 @@
+"""Sensitivities: how an analysis' results change with the model's parameters, named as
+:func:`mbd3d.parameters` names them (``joints.B.point_i[0]``, ``bodies.rod.mass``,
+``joints.motor.motion.rate``), at every output time.
+
+``mb.sensitivities(res, parameters)`` differentiates the results ``res`` of a kinematic
+analysis or of inverse dynamics (the formula sheet's 3.1, 3.2 and 4.1), with the Jacobian of
+each time point:
+
+- positions: ``Cq s = -C_p`` (``s = dq/dp``), ``C_p`` from the compiled rows
+  (:class:`mbd3d.model.tangents.ModelTangent`);
+- velocities and accelerations: ``Cq s' = -d(Cq qd + C_t)`` and ``Cq s'' = -d(Cq qdd -
+  gamma)``, the change of the rows along the parameter with the state moving by its
+  sensitivity;
+- inverse dynamics: ``Cq^T mu = -d(M qdd + Cq^T lam - Q)`` with ``lam`` held (``mu =
+  dlam/dp``; a driver's effort changes by ``-mu``);
+
+and those of a static equilibrium (2.2) with its Newton matrix, ``[K Cq^T; Cq 0] [s; mu] =
+-[d(Cq^T lam - Qe); C_p]``. Each ``d(...)`` is the equations' change along the parameter
+(:meth:`mbd3d.model.tangents.ModelTangent.along`).
+
+A parameter the results do not depend on (a mass in kinematics) has zero sensitivities; any
+quantity read from the results (a point's path, a reaction) has its own through
+:meth:`Sensitivities.derivative`.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import scipy.linalg
+
+from mbd3d.analyses.position import singular_error
+from mbd3d.analyses.statics import active_rows, equilibrium_residual
+from mbd3d.errors import ModelError
+from mbd3d.io.parameters import parameter_variants
+from mbd3d.io.results import Results
+from mbd3d.io.sensitivity_results import Sensitivities
+from mbd3d.model import constraints
+from mbd3d.model.equations import generalized_forces, mass_matrix
+from mbd3d.model.tangents import OFFSETS, ModelTangent, slope
+
+__all__ = ["sensitivities"]
+
+_ANALYSES = ("kinematic analysis", "inverse dynamics", "static equilibrium")
+
+
+def sensitivities(results: Results, parameters: Sequence[str]) -> Sensitivities:
+    """The derivatives of ``results`` with respect to each of ``parameters``.
+
+    Parameters
+    ----------
+    results : Results
+        Of :func:`mbd3d.kinematic_analysis`, :func:`mbd3d.inverse_dynamics` or
+        :func:`mbd3d.static_equilibrium`, complete.
+    parameters : sequence of str
+        Parameter names, as :func:`mbd3d.parameters` lists them.
+
+    Returns
+    -------
+    Sensitivities
+        ``sens.sensitivity("slider.x", "joints.B.point_i[0]")`` over time [coordinate units
+        per unit of the parameter], ``of="qd"`` or ``"qdd"`` for rates, ``sens.effort(...)``
+        after inverse dynamics, ``sens.derivative(f)`` of any quantity ``f(results)``.
+
+    Raises
+    ------
+    ModelError
+        Results of another analysis, or not complete; a name that is not a parameter (with
+        the nearest ones); a parameter the model is not valid without changing others too (a
+        universal joint's axis component) or whose change changes the model's rows; a model
+        with rolling (velocity-only) rows or, beyond kinematics, joint friction.
+    SingularJacobianError
+        At a singular position, naming the joints and the time, as the analysis does.
+    """
+    model = results.model
+    what = f"sensitivities of the {results.analysis} of '{model.name}'"
+    _check(model, results, what)
+    tangents = [ModelTangent(model, *parameter_variants(model, name, OFFSETS),
+                             f"{what} to parameter '{name}'") for name in parameters]
+    if results.analysis == "static equilibrium":
+        dq, dlam = _static(results, tangents)
+        return Sensitivities(results, parameters, tangents, dq, np.zeros_like(dq),
+                             np.zeros_like(dq), dlam)
+    return _kinematic(results, parameters, tangents)
+
+
+def _kinematic(results: Results, parameters: Sequence[str], tangents: list) -> Sensitivities:
+    """The sensitivities of a kinematic analysis or inverse dynamics (see the module doc)."""
+    model = results.model
+    forces = results.analysis == "inverse dynamics"
+    shape = (len(results.t), model.n_coordinates, len(tangents))
+    dq, dqd, dqdd = np.zeros(shape), np.zeros(shape), np.zeros(shape)
+    dlam = np.zeros((len(results.t), model.n_constraints, len(tangents))) if forces else None
+    for k, t in enumerate(results.model_t):
+        state = _State(results, k)
+        fr = constraints.frames(model, state.q, charts=state.charts)
+        solve = _solver(model, constraints.jacobian(model, t, state.q, fr, sparse=False), t)
+        for j, tangent in enumerate(tangents):
+            s = solve(-tangent.constraint_rows(t, fr))
+            s_dot = solve(-tangent.along(lambda v, h: _velocity_rows(v, t, state, s, h)))
+            s_ddot = solve(-tangent.along(
+                lambda v, h: _acceleration_rows(v, t, state, s, s_dot, h)))
+            dq[k, :, j], dqd[k, :, j], dqdd[k, :, j] = s, s_dot, s_ddot
+            if forces:
+                dlam[k, :, j] = solve(-tangent.along(lambda v, h: _dynamic_residual(
+                    v, t, state, (s, s_dot, s_ddot), h)), transpose=True)
+    return Sensitivities(results, parameters, tangents, dq, dqd, dqdd, dlam)
+
+
+def _static(results: Results, tangents: list) -> tuple[np.ndarray, np.ndarray]:
+    """``dq/dp`` and ``dlam/dp`` of a static equilibrium (the formula sheet's 2.2): ``[K
+    Cq^T; Cq 0] [s; mu] = -[d(Cq^T lam - Qe); C_p]`` along the parameter at the state
+    held, ``K`` the force balance's derivative in ``q`` (fourth-order central differences),
+    over the rows the analysis kept (its released drivers' dropped). A neutral motion (a free
+    spin without stiffness) leaves the matrix singular; the least-squares solution takes no
+    part of it."""
+    model = results.model
+    active = active_rows(model, results.stats.get("released", []))
+    n = model.n_coordinates
+    dq = np.zeros((len(results.t), n, len(tangents)))
+    dlam = np.zeros((len(results.t), model.n_constraints, len(tangents)))
+    for k, t in enumerate(results.model_t):
+        state = _State(results, k)
+        lam = state.lam[active]
+        balance = lambda v, q: equilibrium_residual(  # noqa: E731
+            v, t, q, lam, active, state.charts)
+        Cq = balance(model, state.q)[2]
+        matrix = np.block([[_stiffness(model, lambda q: balance(model, q)[0], state.q), Cq.T],
+                           [Cq, np.zeros((len(active), len(active)))]])
+        fr = constraints.frames(model, state.q, charts=state.charts)
+        for j, tangent in enumerate(tangents):
+            rhs = np.concatenate([tangent.along(lambda v, h: balance(v, state.q)[0]),
+                                  tangent.constraint_rows(t, fr)[active]])
+            x = scipy.linalg.lstsq(matrix, -rhs)[0]
+            dq[k, :, j], dlam[k, active, j] = x[:n], x[n:]
+    return dq, dlam
+
+
+def _stiffness(model, force, q: np.ndarray) -> np.ndarray:
+    """``d force/dq`` (n, n) by fourth-order central differences, a thousandth of each
+    coordinate's scale."""
+    columns = []
+    for j in range(len(q)):
+        h = 1e-3 * model.coordinate_scale[j]
+        columns.append(slope([force(q + o * h * np.eye(len(q))[j]) for o in OFFSETS], h))
+    return np.column_stack(columns)
+
+
+def _check(model, results: Results, what: str) -> None:
+    if results.analysis not in _ANALYSES:
+        raise ModelError(f"{what}: sensitivities are available for "
+                         f"{', '.join(_ANALYSES[:-1])} and {_ANALYSES[-1]} so far")
+    if results.status != "complete":
+        raise ModelError(f"{what}: the results are {results.status} ({results.message})")
+    if len(model.velocity_rows):
+        raise ModelError(f"{what}: its rolling rows constrain velocities only, so its "
+                         "positions depend on the path taken and have no sensitivities")
+    if results.analysis != "kinematic analysis" and model.friction is not None:
+        raise ModelError(f"{what}: joint friction's sensitivities are not available yet")
+
+
+class _State:
+    """Time point ``k`` of the results: ``q``, ``qd``, ``qdd``, ``lam`` and the charts."""
+
+    def __init__(self, results: Results, k: int):
+        self.q, self.qd, self.qdd = results.q[k], results.qd[k], results.qdd[k]
+        self.lam = None if results.lam is None else results.lam[k]
+        self.charts = None if results.charts is None else results.charts[k]
+
+
+def _velocity_rows(variant, t: float, state: _State, s: np.ndarray, h: float) -> np.ndarray:
+    """``Cq qd + C_t`` of ``variant`` at positions moved by ``h s``, ``qd`` held."""
+    fr = constraints.frames(variant, state.q + h * s, charts=state.charts)
+    _, data, _, nu = constraints.evaluate(variant, t, fr, False, True, False, True)
+    return constraints.jacobian_times(variant, data, state.qd) - nu
+
+
+def _acceleration_rows(variant, t: float, state: _State, s: np.ndarray, s_dot: np.ndarray,
+                       h: float) -> np.ndarray:
+    """``Cq qdd - gamma`` of ``variant`` at the state moved by ``h (s, s')``, ``qdd``
+    held."""
+    fr = constraints.frames(variant, state.q + h * s, state.qd + h * s_dot, state.charts)
+    _, data, gamma = constraints.evaluate(variant, t, fr, False, True, True)
+    return constraints.jacobian_times(variant, data, state.qdd) - gamma
+
+
+def _dynamic_residual(variant, t: float, state: _State, rates: tuple, h: float) -> np.ndarray:
+    """``M qdd + Cq^T lam - Q`` of ``variant`` at the state moved by ``h (s, s', s'')``,
+    ``lam`` held."""
+    s, s_dot, s_ddot = rates
+    fr = constraints.frames(variant, state.q + h * s, state.qd + h * s_dot, state.charts)
+    data = constraints.evaluate(variant, t, fr, False, True)[1]
+    return (mass_matrix(variant, fr, sparse=False) @ (state.qdd + h * s_ddot)
+            + constraints.jacobian_transpose_times(variant, data, state.lam)
+            - generalized_forces(variant, t, fr))
+
+
+def _solver(model, Cq: np.ndarray, t: float):
+    """``x = solve(b, transpose=False)`` of ``Cq x = b`` (``Cq^T x = b``): by LU when square,
+    else (redundant rows) by least squares, the minimum norm of ``Cq^T x = b`` as inverse
+    dynamics reports it; a singular ``Cq`` is named as the analysis names it."""
+    if Cq.shape[0] != Cq.shape[1]:
+        return lambda b, transpose=False: np.linalg.lstsq(Cq.T if transpose else Cq, b,
+                                                          rcond=None)[0]
+    lu = scipy.linalg.lu_factor(Cq, check_finite=False)
+    if not np.min(np.abs(np.diag(lu[0]))) > 1e-13 * np.max(np.abs(lu[0])):
+        raise singular_error(model, Cq, t, "sensitivities")
+    return lambda b, transpose=False: scipy.linalg.lu_solve(lu, b, trans=int(transpose),
+                                                            check_finite=False)

@@ -1,0 +1,130 @@
+"""The sensitivities of an analysis' results to the model's parameters, read like
+:class:`mbd3d.Results`: by coordinate and parameter name, over time, as arrays or in pandas."""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from mbd3d.errors import ModelError, did_you_mean
+from mbd3d.io.results import Results
+
+__all__ = ["Sensitivities"]
+
+
+#: the derivatives of the coordinates a sensitivity may be asked of, and their column suffix
+_OF = {"q": "", "qd": "_dot", "qdd": "_ddot"}
+
+
+class Sensitivities:
+    """Derivatives of an analysis' results with respect to parameters (made by
+    :func:`mbd3d.sensitivities`).
+
+    Attributes
+    ----------
+    results : Results
+        The results differentiated.
+    model : Model
+    analysis : str
+        Their analysis (e.g. "kinematic analysis").
+    t : ndarray (k,)
+        Times [s].
+    parameters : tuple of str
+        The parameters' names (:func:`mbd3d.parameters`), in the order of the last axis.
+    dq, dqd, dqdd : ndarray (k, n, p)
+        ``dq/dp``, ``dqd/dp`` and ``dqdd/dp`` at each time: coordinate units (m, rad; per s,
+        per s^2) per unit of each parameter. A spatial body's orientation coordinates are its
+        Rodrigues parameters relative to the chart of the results at that time
+        (``Results.charts``); its centre's are global.
+    dlam : ndarray (k, m, p) or None
+        ``dlam/dp`` of the multipliers (inverse dynamics).
+    """
+
+    def __init__(self, results, parameters: Sequence[str], tangents: Sequence,
+                 dq: np.ndarray, dqd: np.ndarray, dqdd: np.ndarray,
+                 dlam: np.ndarray | None = None) -> None:
+        self.results, self.model, self.analysis = results, results.model, results.analysis
+        self.t = results.t
+        self.parameters = tuple(parameters)
+        self._tangents = tuple(tangents)
+        self.dq, self.dqd, self.dqdd = dq, dqd, dqdd
+        self.dlam = dlam
+
+    def __repr__(self) -> str:
+        return (f"<Sensitivities of the {self.analysis} of '{self.model.name}': "
+                f"{len(self.t)} times, {len(self.parameters)} parameters>")
+
+    def sensitivity(self, coordinate: str, parameter: str, of: str = "q") -> np.ndarray:
+        """``d(coordinate)/d(parameter)`` over time (k,), e.g.
+        ``sens.sensitivity("slider.x", "joints.B.point_i[0]")`` [m per unit of the
+        parameter]; ``of="qd"`` or ``"qdd"`` for the coordinate's rate or acceleration."""
+        if of not in _OF:
+            raise ModelError(f"sensitivity(of={of!r}): give 'q', 'qd' or 'qdd'")
+        array = {"q": self.dq, "qd": self.dqd, "qdd": self.dqdd}[of]
+        return array[:, self._coordinate(coordinate), self._parameter(parameter)]
+
+    def effort(self, driver: str, parameter: str) -> np.ndarray:
+        """``d(effort)/d(parameter)`` of a driver over time (k,) [N m or N per unit of the
+        parameter] (inverse dynamics)."""
+        if self.dlam is None:
+            raise ModelError(f"sensitivities of the {self.analysis} of '{self.model.name}': "
+                             "efforts have sensitivities after inverse dynamics")
+        drivers = [e.name for e in self.model.joints if e.is_driver]
+        if driver not in drivers:
+            raise ModelError(f"no driver '{driver}' in '{self.model.name}'"
+                             f"{did_you_mean(driver, drivers)}; its drivers are {drivers}")
+        rows = self.model.rows_of(driver)
+        return -self.dlam[:, rows[0], self._parameter(parameter)]
+
+    def derivative(self, quantity: Callable[[Any], Any], parameter: str | None = None
+                   ) -> np.ndarray:
+        """The derivative of ``quantity(results)`` (an array read from results of this
+        model, e.g. ``lambda r: r.joint("O").reaction(on="crank").force``) with respect to
+        ``parameter``, or to each parameter along a last axis: a fourth-order central
+        difference along the parameter, the results' state moving by its sensitivities and
+        the model through its variants (1e-11 relative or better for smooth quantities)."""
+        columns = [j for j, name in enumerate(self.parameters)
+                   if parameter is None or name == parameter]
+        if parameter is not None and not columns:
+            self._parameter(parameter)
+        out = [self._tangents[j].along(lambda variant, h: np.asarray(
+            quantity(self._moved(variant, j, h)), dtype=float)) for j in columns]
+        return out[0] if parameter is not None else np.stack(out, axis=-1)
+
+    def _moved(self, variant, j: int, h: float):
+        """The results with their state moved by ``h`` times parameter ``j``'s
+        sensitivities, read through ``variant``."""
+        res = self.results
+        lam = None if res.lam is None else res.lam + h * self.dlam[:, :, j]
+        return Results(variant, res.analysis, res.t, res.q + h * self.dq[:, :, j],
+                       res.qd + h * self.dqd[:, :, j], res.qdd + h * self.dqdd[:, :, j], lam,
+                       charts=res.charts, model_t=res.model_t)
+
+    def _coordinate(self, name: str) -> int:
+        labels = self.model.coordinate_labels
+        if name not in labels:
+            raise ModelError(f"sensitivities of '{self.model.name}': no coordinate '{name}'"
+                             f"{did_you_mean(name, labels)}; the coordinates are "
+                             "'body.c' (e.g. 'crank.theta')")
+        return labels.index(name)
+
+    def _parameter(self, name: str) -> int:
+        if name not in self.parameters:
+            raise ModelError(f"sensitivities of '{self.model.name}': no parameter '{name}' "
+                             f"among those asked for{did_you_mean(name, self.parameters)}")
+        return self.parameters.index(name)
+
+    def to_pandas(self):
+        """A DataFrame indexed by time with a column ``"d(coordinate)/d(parameter)"`` per
+        coordinate and parameter, and ``"d(coordinate_dot)/d(parameter)"`` and
+        ``"d(coordinate_ddot)/d(parameter)"`` for the rates and accelerations."""
+        import pandas as pd  # noqa: PLC0415
+
+        columns = {}
+        for of, suffix in _OF.items():
+            array = {"q": self.dq, "qd": self.dqd, "qdd": self.dqdd}[of]
+            for j, p in enumerate(self.parameters):
+                for i, c in enumerate(self.model.coordinate_labels):
+                    columns[f"d({c}{suffix})/d({p})"] = array[:, i, j]
+        return pd.DataFrame(columns, index=pd.Index(self.t, name="t"))

@@ -1,0 +1,276 @@
+"""Sensitivities of kinematic analysis and inverse dynamics (``mb.sensitivities``): the
+derivatives of positions, velocities, accelerations, efforts and reactions with respect to
+parameters named as ``mb.parameters`` names them, against the slider-crank's closed forms and
+against differences of analyses of models rebuilt with the parameter changed
+(``mb.with_parameters``), planar and spatial, closed loops included."""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+import pytest
+
+import mbd3d as mb
+from mbd3d import mechanisms
+from mbd3d.io.parameters import parameter_path
+from mbd3d.joints import Prismatic, Revolute, RotationDriver
+from mbd3d.model import constraints
+
+TIMES = np.array([0.0, 0.13, 0.41])
+EXAMPLES = pathlib.Path(__file__).parent.parent / "examples" / "models"
+#: a fourth-order central difference: offsets in steps and weights
+OFFSETS, WEIGHTS = (-2.0, -1.0, 1.0, 2.0), np.array([1.0, -8.0, 8.0, -1.0]) / 12.0
+
+
+def slider_crank(a: float, l: float, theta: float):
+    """Crank ``a`` about the origin, rod ``l``, slider on the x axis, crank at ``theta``."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    crank = b.add_body("crank", mass=1.0, inertia=0.001, position=(0.05, 0.05), angle=theta)
+    rod = b.add_body("rod", mass=2.0, inertia=0.01, position=(0.2, 0.05), angle=-0.3)
+    slider = b.add_body("slider", mass=4.0, inertia=0.02, position=(0.35, 0.0))
+    pin = b.add(Revolute("O", b.ground, crank, point_i=(0.0, 0.0), point_j=(-a / 2, 0.0)))
+    b.add(Revolute("A", crank, rod, point_i=(a / 2, 0.0), point_j=(-l / 2, 0.0)))
+    b.add(Revolute("B", rod, slider, point_i=(l / 2, 0.0), point_j=(0.0, 0.0)))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0), point_i=(0.0, 0.0),
+                    point_j=(0.0, 0.0)))
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(theta, 2.0)))
+    return b.build()
+
+
+def test_slider_crank_closed_form():
+    # x_B = a cos(theta) + r, r = sqrt(l^2 - a^2 sin^2(theta)): lengthening the crank at its
+    # pin A (the pivot O stays) or the rod at its pin B (A stays)
+    a, l, theta = 0.12, 0.30, 1.1
+    r = np.sqrt(l**2 - a**2 * np.sin(theta) ** 2)
+    sens = mb.sensitivities(mb.kinematic_analysis(slider_crank(a, l, theta), [0.0, 0.5]), [
+        "joints.A.point_i[0]", "joints.B.point_i[0]", "joints.motor.motion.rate",
+        "bodies.slider.mass", "gravity[1]"])
+    d_a = sens.sensitivity("slider.x", "joints.A.point_i[0]")
+    d_l = sens.sensitivity("slider.x", "joints.B.point_i[0]")
+    assert d_a[0] == pytest.approx(np.cos(theta) - a * np.sin(theta) ** 2 / r, abs=1e-13)
+    assert d_a[0] == pytest.approx(0.113556, abs=5e-7)  # the formula sheet's figures
+    assert d_l[0] == pytest.approx(l / r, abs=1e-13)
+    assert d_l[0] == pytest.approx(1.070318, abs=5e-7)
+    # the crank's rate moves it by t at time t: dx/drate = dx/dtheta t
+    dx_dtheta = -a * np.sin(theta) - a**2 * np.sin(theta) * np.cos(theta) / r
+    rate = sens.sensitivity("slider.x", "joints.motor.motion.rate")
+    assert rate[0] == 0.0
+    th = theta + 2.0 * 0.5
+    r1 = np.sqrt(l**2 - a**2 * np.sin(th) ** 2)
+    assert rate[1] == pytest.approx(0.5 * (-a * np.sin(th) - a**2 * np.sin(th) * np.cos(th)
+                                           / r1), abs=1e-13)
+    assert dx_dtheta != 0.0
+    # what the positions do not depend on: zeros
+    assert not np.any(sens.sensitivity("slider.x", "bodies.slider.mass"))
+    assert not np.any(sens.dq[:, :, 4])
+    table = sens.to_pandas()
+    assert table["d(slider.x)/d(joints.B.point_i[0])"].to_numpy() == pytest.approx(d_l)
+
+
+def _differenced(model, name: str, measure, analysis=mb.kinematic_analysis) -> np.ndarray:
+    """d measure(results)/d parameter by a fourth-order difference of tight analyses."""
+    _, value, size = parameter_path(model, name)
+    h = 1e-4 * (max(abs(value), size) or model.length_scale)
+    values = np.array([measure(analysis(mb.with_parameters(model, {name: value + o * h}),
+                                        TIMES, tol=1e-14)) for o in OFFSETS])
+    return np.tensordot(WEIGHTS, values, axes=1) / h
+
+
+def _agree(got: np.ndarray, model, name: str, measure, analysis=mb.kinematic_analysis,
+           rtol: float = 1e-8) -> None:
+    """``got`` against :func:`_differenced`, to ``rtol`` of the larger of the derivative and
+    1, plus the difference's own rounding (15 times eps of the values over the step: a tiny
+    parameter's changes are lost in the values' last digits)."""
+    _, value, size = parameter_path(model, name)
+    h = 1e-4 * (max(abs(value), size) or model.length_scale)
+    reference = _differenced(model, name, measure, analysis)
+    scale = np.max(np.abs(measure(analysis(model, TIMES, tol=1e-14))))
+    bound = rtol * max(np.max(np.abs(reference)), 1.0) + 15 * np.finfo(float).eps * scale / h
+    assert np.max(np.abs(got - reference)) <= bound, name
+
+
+def _poses(model, q: np.ndarray, charts) -> np.ndarray:
+    """Every body's position and rotation matrix at each time, flattened (k, ...)."""
+    rows = []
+    for k in range(len(q)):
+        fr = constraints.frames(model, q[k], charts=None if charts is None else charts[k])
+        rows.append(np.concatenate([fr.Q[:-1, :model.dim].ravel(), fr.A[:-1].ravel()]))
+    return np.array(rows)
+
+
+def _parameters(model, section: str = "") -> list[str]:
+    """The model's numbers (of a section), those a file writes as whole numbers left out
+    (``with_parameters`` keeps them whole)."""
+    from mbd3d.io.parameters import _data, _fields
+
+    fields = _fields(_data(model))
+    return [name for name, (container, key) in fields.items()
+            if name.startswith(section) and isinstance(container[key], float)]
+
+
+def test_slider_crank_rates_closed_form():
+    # x_B(theta) at theta = theta0 + w t: x' = x_theta w, x'' = x_thetatheta w^2 (w constant),
+    # with r = sqrt(l^2 - a^2 sin^2): x_theta = -a sin - a^2 sin cos / r and x_thetatheta =
+    # -a cos - a^2 (cos^2 - sin^2) / r - a^4 sin^2 cos^2 / r^3; the rod's length l enters
+    # through r alone, r_l = l / r
+    a, l, theta0, w, t = 0.12, 0.30, 1.1, 2.0, 0.35
+    sens = mb.sensitivities(mb.kinematic_analysis(slider_crank(a, l, theta0), [t]),
+                            ["joints.B.point_i[0]"])
+    th = theta0 + w * t
+    S, C = np.sin(th), np.cos(th)
+    r = np.sqrt(l**2 - a**2 * S**2)
+    r_l = l / r
+    x_t = -a * S - a**2 * S * C / r
+    x_t_l = a**2 * S * C / r**2 * r_l
+    x_tt = -a * C - a**2 * (C**2 - S**2) / r - a**4 * S**2 * C**2 / r**3
+    x_tt_l = a**2 * (C**2 - S**2) / r**2 * r_l + 3.0 * a**4 * S**2 * C**2 / r**4 * r_l
+    assert x_t != 0.0 and x_tt != 0.0
+    name = "joints.B.point_i[0]"
+    assert sens.sensitivity("slider.x", name, of="qd")[0] == pytest.approx(x_t_l * w, abs=1e-11)
+    assert sens.sensitivity("slider.x", name, of="qdd")[0] == pytest.approx(x_tt_l * w**2,
+                                                                            abs=1e-10)
+
+
+@pytest.mark.parametrize("make", [mechanisms.slider_crank, mechanisms.four_bar],
+                         ids=["slider-crank", "four-bar"])
+def test_planar_against_differences(make):
+    model = make()
+    names = _parameters(model)
+    sens = mb.sensitivities(mb.kinematic_analysis(model, TIMES, tol=1e-14), names)
+    for j, name in enumerate(names):
+        for got, of in ((sens.dq, "q"), (sens.dqd, "qd"), (sens.dqdd, "qdd")):
+            _agree(got[:, :, j], model, name, lambda res: getattr(res, of))
+
+
+@pytest.mark.parametrize("make", [mechanisms.spatial_slider_crank, mechanisms.spatial_four_bar],
+                         ids=["spatial slider-crank", "spatial four-bar"])
+def test_spatial_against_differences(make):
+    # orientations as rotation matrices (the results' charts differ from run to run);
+    # the sensitivity's own change of poses by the same difference along dq, in the
+    # results' charts
+    model = make()
+    names = []
+    for name in _parameters(model):
+        try:
+            mb.sensitivities(mb.kinematic_analysis(model, [0.0]), [name])
+        except mb.ModelError as exc:
+            # a universal joint's axes, a rotation matrix: one number alone breaks them
+            assert ("perpendicular" in str(exc) or "rotation matrix" in str(exc)) and (
+                name in str(exc))
+            continue
+        names.append(name)
+    assert len(names) >= 18
+    sens = mb.sensitivities(mb.kinematic_analysis(model, TIMES, tol=1e-14), names)
+    res = sens.results
+    for j, name in enumerate(names):
+        reference = _differenced(model, name, lambda r: _poses(r.model, r.q, r.charts))
+        eps = 1e-3
+        along = np.tensordot(WEIGHTS, np.array([
+            _poses(model, res.q + o * eps * sens.dq[:, :, j], res.charts) for o in OFFSETS]),
+            axes=1) / eps
+        assert np.max(np.abs(along - reference)) <= 1e-8 * max(
+            np.max(np.abs(reference)), 1.0), name
+        # the centres' velocities and accelerations: global coordinates, whatever the chart
+        centres = model.position_coordinates
+        for got, of in ((sens.dqd, "qd"), (sens.dqdd, "qdd")):
+            reference = _differenced(model, name, lambda r: getattr(r, of)[:, centres])
+            assert np.max(np.abs(got[:, centres, j] - reference)) <= 1e-8 * max(
+                np.max(np.abs(reference)), 1.0), (name, of)
+
+
+def test_inverse_dynamics_closed_form():
+    # the slider's mass adds m x_B'' to the force along the rail, which the crank's torque
+    # carries through x_B's lever: dT/dm = x_B'' dx_B/dtheta (the formula sheet's 4.1 check)
+    a, l, theta0, w, t = 0.12, 0.30, 1.1, 2.0, 0.35
+    res = mb.inverse_dynamics(slider_crank(a, l, theta0), [t])
+    sens = mb.sensitivities(res, ["bodies.slider.mass", "bodies.crank.mass"])
+    th = theta0 + w * t
+    S, C = np.sin(th), np.cos(th)
+    r = np.sqrt(l**2 - a**2 * S**2)
+    x_t = -a * S - a**2 * S * C / r
+    x_tt = -a * C - a**2 * (C**2 - S**2) / r - a**4 * S**2 * C**2 / r**3
+    assert sens.effort("motor", "bodies.slider.mass")[0] == pytest.approx(
+        x_tt * w**2 * x_t, abs=1e-12)
+    # the crank turns steadily about its pivot: its mass adds its weight's moment only
+    # (its centre at a / 2 from the pivot)
+    assert sens.effort("motor", "bodies.crank.mass")[0] == pytest.approx(
+        9.81 * a / 2 * C, abs=1e-12)
+    # nothing moves with a mass
+    assert not np.any(sens.dq) and not np.any(sens.dqd) and not np.any(sens.dqdd)
+
+
+@pytest.mark.parametrize("make", [mechanisms.slider_crank, mechanisms.spatial_slider_crank],
+                         ids=["slider-crank", "spatial slider-crank"])
+def test_inverse_dynamics_against_differences(make):
+    # every number of the bodies and joints: efforts, and a pin's reaction through
+    # Sensitivities.derivative
+    model = make()
+    names = [n for n in _parameters(model)
+             if not n.startswith("joints.A.axis") and ".orientation" not in n]
+    res = mb.inverse_dynamics(model, TIMES, tol=1e-14)
+    sens = mb.sensitivities(res, names)
+    driver = next(e.name for e in model.joints if e.is_driver)
+    pin = "B"
+    reaction = lambda r: r.joint(pin).reaction(on="slider").force  # noqa: E731
+    derived = sens.derivative(reaction)
+    for j, name in enumerate(names):
+        _agree(sens.effort(driver, name), model, name, lambda r: r.joint(driver).effort,
+               mb.inverse_dynamics)
+        _agree(derived[..., j], model, name, reaction, mb.inverse_dynamics)
+
+
+def test_bad_input():
+    model = mechanisms.slider_crank()
+    res = mb.kinematic_analysis(model, [0.0])
+    with pytest.raises(mb.ModelError, match="did you mean 'joints.A.point_i"):
+        mb.sensitivities(res, ["joints.A.piont_i[0]"])
+    sens = mb.sensitivities(res, ["joints.A.point_i[0]", "bodies.crank.position[0]"])
+    # the joints' points are given in the bodies' frames: where a body is drawn is only the
+    # analysis' first guess
+    assert not np.any(sens.dq[:, :, 1])
+    with pytest.raises(mb.ModelError, match="did you mean 'slider.x'"):
+        sens.sensitivity("slidr.x", "joints.A.point_i[0]")
+    with pytest.raises(mb.ModelError, match="among those asked for"):
+        sens.sensitivity("slider.x", "joints.B.point_i[0]")
+    with pytest.raises(mb.ModelError, match="after inverse dynamics"):
+        sens.effort("motor", "joints.A.point_i[0]")
+    free = mechanisms.slider_crank(crank_speed=None, crank_torque=1.0)
+    with pytest.raises(mb.ModelError, match="inverse dynamics and static equilibrium so far"):
+        mb.sensitivities(mb.forward_dynamics(free, (0.0, 0.01)), ["bodies.rod.mass"])
+
+
+def test_static_equilibrium_closed_form():
+    # a bar of mass m, its centre c from its pin, on a rotational spring k (free at the
+    # drawing's angle 0) rests where F = k theta + m g c cos(theta) = 0; implicitly
+    # dtheta/dk = -theta / F_theta and dtheta/dm = -g c cos(theta) / F_theta, F_theta = k -
+    # m g c sin(theta); the pin carries the weight: d(pin force)/dm = g
+    model = mb.load(EXAMPLES / "pendulum_spring_equilibrium.yaml")
+    res = mb.static_equilibrium(model, 0.0, release=True)
+    sens = mb.sensitivities(res, ["forces.spring.stiffness", "bodies.bar.mass",
+                                  "bodies.bar.inertia"])
+    k, m, g, c = 10.0, 2.0, 9.81, 0.4
+    theta = res.q[0, model.coordinate_index("bar.theta")]
+    assert k * theta + m * g * c * np.cos(theta) == pytest.approx(0.0, abs=1e-9)
+    F_theta = k - m * g * c * np.sin(theta)
+    assert sens.sensitivity("bar.theta", "forces.spring.stiffness")[0] == pytest.approx(
+        -theta / F_theta, abs=1e-11)
+    assert sens.sensitivity("bar.theta", "bodies.bar.mass")[0] == pytest.approx(
+        -g * c * np.cos(theta) / F_theta, abs=1e-11)
+    assert not np.any(sens.dq[:, :, 2])  # the inertia: nothing at rest
+    pin = sens.derivative(lambda r: r.joint("O").reaction(on="bar").force, "bodies.bar.mass")
+    assert pin[0] == pytest.approx([0.0, g], abs=1e-9)
+
+
+@pytest.mark.parametrize("release", [True, False], ids=["released", "held"])
+def test_static_equilibrium_against_differences(release):
+    model = mb.load(EXAMPLES / "pendulum_spring_equilibrium.yaml")
+    times = [0.0, 0.5]
+    analysis = lambda m, _, tol: mb.static_equilibrium(  # noqa: E731
+        m, times, release=release, tol=1e-13)
+    res = analysis(model, None, None)
+    names = _parameters(model)
+    sens = mb.sensitivities(res, names)
+    for j, name in enumerate(names):
+        _agree(sens.dq[:, :, j], model, name, lambda r: r.q, analysis)
+        _agree(sens.dlam[:, :, j], model, name, lambda r: r.lam, analysis)
