@@ -350,6 +350,30 @@ def test_sweep_slider_crank_example(capsys, tmp_path):
         np.max(np.abs(10.0 * dx_dphi)), rel=1e-9)
 
 
+def test_identify_slider_crank_example(capsys, tmp_path):
+    example = load("identify_slider_crank")
+    out = example.main(n_points=51, rrd=str(tmp_path / "id.rrd"))
+    assert "identified" in capsys.readouterr().out and recorded_steps(tmp_path / "id.rrd",
+                                                                       "slider") == 51
+    fit, errors = out["fit"], out["errors"]
+    assert fit.success and fit.nfev <= 10
+    # within a few standard errors of the truth, each of them a few percent at most
+    assert np.all(np.abs(fit.x - example.TRUE) <= 4 * errors)
+    assert np.all(errors <= 0.05 * np.asarray(example.TRUE))
+    # the Jacobian's damping column: the torque is linear in the damping, so a central
+    # difference of two inverse dynamics runs is exact up to rounding
+    t = np.linspace(0.0, 0.5, 51)
+    model = out["model"]
+    res = mb.inverse_dynamics(model, t)
+    name = "forces.dashpot.damping"
+    column = mb.sensitivities(res, [name]).effort("motor", name)
+    c = mb.parameters(model)[name]
+    efforts = [mb.inverse_dynamics(mb.with_parameters(model, {name: c + d}), t)
+               .joint("motor").effort for d in (-1.0, 1.0)]
+    np.testing.assert_allclose(column, (efforts[1] - efforts[0]) / 2.0, rtol=0, atol=1e-9)
+    assert np.max(np.abs(column)) > 0.01
+
+
 def test_examples_refuse_a_bad_output_path_before_computing(tmp_path, capsys, monkeypatch):
     example = load("slider_crank")
     with pytest.raises(mb.MBDError, match="folder does not exist"):

@@ -92,6 +92,8 @@ EXAMPLES = {
                                             "atol": 1e-12}),
     "sweep_slider_crank": (lambda m: m.build(20.0, 0.3), {"kind": "inverse",
                                                            "t": steps(0.0, 1.0, 0.01)}),
+    "identify_slider_crank": (lambda m: m.build(), {"kind": "inverse",
+                                                    "t": steps(0.0, 0.5, 0.0025)}),
     "spheres_in_box": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.3, 0.005),
                                              "method": "RK45", "rtol": 1e-5, "atol": 1e-8}),
 }
