@@ -49,7 +49,7 @@ from mbd3d.analyses.sensitivities import sensitivities
 from mbd3d.analyses.states import (driven_coordinates, forward_dynamics_at,
                                   inverse_dynamics_at, joint_space_dynamics_at)
 from mbd3d.io.results import Results, format_table, read_results
-from mbd3d.io.sensitivity_results import Sensitivities
+from mbd3d.io.sensitivity_results import ModeSensitivities, Sensitivities
 from mbd3d.io.model_file import load
 from mbd3d.io.model_writer import save
 from mbd3d.io.parameters import ModelVariants, parameters, with_parameters
@@ -76,7 +76,7 @@ __all__ = [
     "forward_accelerations",
     "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "read_results", "load", "save", "parameters", "with_parameters",
-    "sensitivities", "Sensitivities",
+    "sensitivities", "Sensitivities", "ModeSensitivities",
     "ModelVariants",
     "load_urdf", "urdf_builder",
     "UrdfWarning", "load_mjcf", "mjcf_builder", "MjcfWarning",

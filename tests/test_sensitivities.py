@@ -274,3 +274,57 @@ def test_static_equilibrium_against_differences(release):
     for j, name in enumerate(names):
         _agree(sens.dq[:, :, j], model, name, lambda r: r.q, analysis)
         _agree(sens.dlam[:, :, j], model, name, lambda r: r.lam, analysis)
+
+
+def mass_on_rail(slope: float, k_x: float = 40.0, k_y: float = 90.0, m: float = 2.5):
+    """A puck of mass ``m`` on a rail along ``(1, slope)`` through the origin, held there by
+    two springs at their free length, one along x (stiffness ``k_x``), one along y: no
+    gravity. Small motions along the rail at the angle ``alpha = atan(slope)`` see the
+    stiffness ``k_x cos^2 + k_y sin^2``."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
+    puck = b.add_body("puck", mass=m, inertia=0.01, position=(0.0, 0.0))
+    b.add(Prismatic("rail", b.ground, puck, axis=(1.0, slope), point_i=(0.0, 0.0),
+                    point_j=(0.0, 0.0)))
+    b.add(mb.SpringDamper("x", b.ground, puck, point_i=(-1.0, 0.0), point_j=(0.0, 0.0),
+                          stiffness=k_x, free_length=1.0))
+    b.add(mb.SpringDamper("y", b.ground, puck, point_i=(0.0, -1.0), point_j=(0.0, 0.0),
+                          stiffness=k_y, free_length=1.0))
+    return b.build()
+
+
+def test_mode_frequency_closed_form():
+    # w^2 = (k_x cos^2 a + k_y sin^2 a) / m; the rail's slope s = tan(a) turns it, all of
+    # whose effect comes through the constraint (the formula sheet's 5.2 check):
+    # dw^2/ds = (k_y - k_x) sin(2 a) / m / (1 + s^2)
+    s, k_x, k_y, m = 0.4, 40.0, 90.0, 2.5
+    modes = mb.vibration_modes(mass_on_rail(s, k_x, k_y, m))
+    a = np.arctan(s)
+    w2 = (k_x * np.cos(a) ** 2 + k_y * np.sin(a) ** 2) / m
+    assert modes.frequencies[0] == pytest.approx(np.sqrt(w2) / (2 * np.pi), rel=1e-11)
+    sens = mb.sensitivities(modes, ["joints.rail.axis[1]", "forces.x.stiffness",
+                                    "bodies.puck.mass"])
+    hz = lambda dw2: dw2 / (2 * np.sqrt(w2)) / (2 * np.pi)  # noqa: E731
+    assert sens.frequency(0, "joints.rail.axis[1]") == pytest.approx(
+        hz((k_y - k_x) * np.sin(2 * a) / m / (1 + s**2)), rel=1e-9)
+    assert sens.frequency(0, "forces.x.stiffness") == pytest.approx(
+        hz(np.cos(a) ** 2 / m), rel=1e-9)
+    assert sens.frequency(0, "bodies.puck.mass") == pytest.approx(hz(-w2 / m), rel=1e-9)
+    assert sens.damping_ratios[0] == pytest.approx([0.0, 0.0, 0.0], abs=1e-12)
+
+
+def test_modes_along_a_motion_against_differences():
+    # the four-bar on its elastic shaft, its frequency against every number
+    model = mechanisms.four_bar(shaft_stiffness=50.0, gravity=0.0)
+    times = [0.0, 0.3]
+    along = mb.vibration_modes_along(model, times)
+    names = _parameters(model)
+    sens = mb.sensitivities(along, names)
+    for j, name in enumerate(names):
+        _, value, size = parameter_path(model, name)
+        h = 1e-4 * (max(abs(value), size) or model.length_scale)
+        values = np.array([mb.vibration_modes_along(mb.with_parameters(
+            model, {name: value + o * h}), times).frequencies for o in OFFSETS])
+        reference = np.tensordot(WEIGHTS, values, axes=1) / h
+        noise = 15 * np.finfo(float).eps * np.max(np.abs(along.frequencies)) / h
+        assert np.max(np.abs(sens.frequencies[..., j] - reference)) <= 1e-8 * max(
+            np.max(np.abs(reference)), 1.0) + noise, name

@@ -6,7 +6,8 @@ Small motions about an equilibrium ``(q0, lam0)`` stay on the tangent space of t
     Mr z'' + Dr z' + Kr z = 0,   Mr = N^T M N,  Dr = N^T D N,  Kr = N^T (K + H) N
 
 with ``K = -dQe/dq`` and ``H = d(Cq^T lam)/dq`` at ``lam0`` (the stiffness of
-:mod:`mbd3d.analyses.statics`, which includes gravity's through the constraint forces) and
+:mod:`mbd3d.analyses.statics`, which includes gravity's through the constraint forces,
+differenced to fourth order: :func:`mbd3d.analyses.statics.accurate_stiffness`) and
 ``D = -dQe/dqd`` (the dampers; the quadratic velocity forces have no first-order part at
 rest). The eigenvalues ``s`` of the first-order form give each mode's natural frequency
 ``|s| / 2 pi`` [Hz] and damping ratio ``-Re(s) / |s|`` (negative: the equilibrium is unstable
@@ -29,14 +30,14 @@ import numpy as np
 import scipy.linalg as la
 
 from mbd3d.analyses.position import solve_position
-from mbd3d.analyses.statics import _stiffness, active_rows, static_equilibrium
+from mbd3d.analyses.statics import accurate_stiffness, active_rows, static_equilibrium
 from mbd3d.errors import ModelError
 from mbd3d.io.exports import write_columns
 from mbd3d.io.results import Results
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
 
-__all__ = ["Modes", "ModesAlong", "vibration_modes", "vibration_modes_along"]
+__all__ = ["Modes", "ModesAlong", "vibration_modes", "vibration_modes_along", "modes_about"]
 
 
 @dataclass(frozen=True)
@@ -175,7 +176,7 @@ def vibration_modes_along(model, times: Sequence[float], q_guess: Sequence[float
     found = []
     for k in range(len(rest)):
         chart = None if rest.charts is None else rest.charts[k]
-        found.append(_modes_about(model, float(rest.t[k]), rest.q[k], rest.lam[k][active],
+        found.append(modes_about(model, float(rest.t[k]), rest.q[k], rest.lam[k][active],
                                   chart, active))
     width = max((len(f) for f, _, _ in found), default=0)
     n = model.n_coordinates
@@ -202,13 +203,13 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
     """
     rest = static_equilibrium(model, [t], q_guess, release=release)
     active = active_rows(model, release)
-    frequencies, ratios, shapes = _modes_about(
+    frequencies, ratios, shapes = modes_about(
         model, t, rest.q[0], rest.lam[0][active],
         None if rest.charts is None else rest.charts[0], active)
     return Modes(frequencies, ratios, shapes, rest)
 
 
-def _modes_about(model, t: float, q: np.ndarray, lam: np.ndarray, chart, active: np.ndarray
+def modes_about(model, t: float, q: np.ndarray, lam: np.ndarray, chart, active: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Frequencies [Hz], damping ratios and shapes about the equilibrium ``(q, lam)`` (the
     multipliers of the ``active`` rows), lowest frequency first."""
@@ -219,7 +220,7 @@ def _modes_about(model, t: float, q: np.ndarray, lam: np.ndarray, chart, active:
     Cq = constraints.jacobian_matrix(model, data, sparse=False)[active]
     N = la.null_space(Cq) if len(active) else np.eye(n)
     M = mass_matrix(model, fr, sparse=False)
-    stiffness = _stiffness(model, t, q, lam, active, chart, Cq)
+    stiffness = accurate_stiffness(model, t, q, lam, active, chart)
     damping = _damping(model, t, q, chart)
     Mr, Dr, Kr = (N.T @ X @ N for X in (M, damping, stiffness))
     k = N.shape[1]

@@ -15,8 +15,9 @@ each time point:
   dlam/dp``; a driver's effort changes by ``-mu``);
 
 and those of a static equilibrium (2.2) with its Newton matrix, ``[K Cq^T; Cq 0] [s; mu] =
--[d(Cq^T lam - Qe); C_p]``. Each ``d(...)`` is the equations' change along the parameter
-(:meth:`mbd3d.model.tangents.ModelTangent.along`).
+-[d(Cq^T lam - Qe); C_p]``; vibration modes' frequencies and damping ratios (5.1, 5.2) are
+those of the modes about the equilibrium moved along the parameter. Each ``d(...)`` is the
+change along the parameter (:meth:`mbd3d.model.tangents.ModelTangent.along`).
 
 A parameter the results do not depend on (a mass in kinematics) has zero sensitivities; any
 quantity read from the results (a point's path, a reaction) has its own through
@@ -30,38 +31,43 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg
 
+from mbd3d.analyses.modes import Modes, ModesAlong, modes_about
 from mbd3d.analyses.position import singular_error
-from mbd3d.analyses.statics import active_rows, equilibrium_residual
+from mbd3d.analyses.statics import accurate_stiffness, active_rows, equilibrium_residual
 from mbd3d.errors import ModelError
 from mbd3d.io.parameters import parameter_variants
 from mbd3d.io.results import Results
-from mbd3d.io.sensitivity_results import Sensitivities
+from mbd3d.io.sensitivity_results import ModeSensitivities, Sensitivities
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
-from mbd3d.model.tangents import OFFSETS, ModelTangent, slope
+from mbd3d.model.tangents import OFFSETS, ModelTangent
 
 __all__ = ["sensitivities"]
 
 _ANALYSES = ("kinematic analysis", "inverse dynamics", "static equilibrium")
 
 
-def sensitivities(results: Results, parameters: Sequence[str]) -> Sensitivities:
+def sensitivities(results: Results | Modes | ModesAlong, parameters: Sequence[str]
+                  ) -> Sensitivities | ModeSensitivities:
     """The derivatives of ``results`` with respect to each of ``parameters``.
 
     Parameters
     ----------
-    results : Results
+    results : Results, Modes or ModesAlong
         Of :func:`mbd3d.kinematic_analysis`, :func:`mbd3d.inverse_dynamics` or
-        :func:`mbd3d.static_equilibrium`, complete.
+        :func:`mbd3d.static_equilibrium`, complete; or vibration modes
+        (:func:`mbd3d.vibration_modes`, :func:`mbd3d.vibration_modes_along`).
     parameters : sequence of str
         Parameter names, as :func:`mbd3d.parameters` lists them.
 
     Returns
     -------
-    Sensitivities
+    Sensitivities or ModeSensitivities
         ``sens.sensitivity("slider.x", "joints.B.point_i[0]")`` over time [coordinate units
         per unit of the parameter], ``of="qd"`` or ``"qdd"`` for rates, ``sens.effort(...)``
-        after inverse dynamics, ``sens.derivative(f)`` of any quantity ``f(results)``.
+        after inverse dynamics, ``sens.derivative(f)`` of any quantity ``f(results)``; of
+        modes, ``sens.frequency(mode, name)`` [Hz per unit of the parameter] and the damping
+        ratios'.
 
     Raises
     ------
@@ -73,6 +79,8 @@ def sensitivities(results: Results, parameters: Sequence[str]) -> Sensitivities:
     SingularJacobianError
         At a singular position, naming the joints and the time, as the analysis does.
     """
+    if isinstance(results, (Modes, ModesAlong)):
+        return _modes(results, parameters)
     model = results.model
     what = f"sensitivities of the {results.analysis} of '{model.name}'"
     _check(model, results, what)
@@ -126,8 +134,8 @@ def _static(results: Results, tangents: list) -> tuple[np.ndarray, np.ndarray]:
         balance = lambda v, q: equilibrium_residual(  # noqa: E731
             v, t, q, lam, active, state.charts)
         Cq = balance(model, state.q)[2]
-        matrix = np.block([[_stiffness(model, lambda q: balance(model, q)[0], state.q), Cq.T],
-                           [Cq, np.zeros((len(active), len(active)))]])
+        matrix = np.block([[accurate_stiffness(model, t, state.q, lam, active, state.charts),
+                            Cq.T], [Cq, np.zeros((len(active), len(active)))]])
         fr = constraints.frames(model, state.q, charts=state.charts)
         for j, tangent in enumerate(tangents):
             rhs = np.concatenate([tangent.along(lambda v, h: balance(v, state.q)[0]),
@@ -137,14 +145,35 @@ def _static(results: Results, tangents: list) -> tuple[np.ndarray, np.ndarray]:
     return dq, dlam
 
 
-def _stiffness(model, force, q: np.ndarray) -> np.ndarray:
-    """``d force/dq`` (n, n) by fourth-order central differences, a thousandth of each
-    coordinate's scale."""
-    columns = []
-    for j in range(len(q)):
-        h = 1e-3 * model.coordinate_scale[j]
-        columns.append(slope([force(q + o * h * np.eye(len(q))[j]) for o in OFFSETS], h))
-    return np.column_stack(columns)
+def _modes(modes: Modes | ModesAlong, parameters: Sequence[str]) -> ModeSensitivities:
+    """The modes' frequencies and damping ratios along each parameter: the modes about the
+    equilibrium moved by its sensitivities, of the model's variants (the formula sheet's
+    5.1 and 5.2 without the eigenvectors' algebra, whatever the damping)."""
+    eq = modes.equilibrium
+    static = sensitivities(eq, parameters)
+    model = eq.model
+    active = active_rows(model, eq.stats.get("released", []))
+    along = isinstance(modes, ModesAlong)
+    shape = (len(eq.t), modes.frequencies.shape[-1], len(parameters))
+    frequencies, ratios = np.full(shape, np.nan), np.full(shape, np.nan)
+    for k, t in enumerate(eq.model_t):
+        state = _State(eq, k)
+        count = int(np.sum(np.isfinite(np.atleast_2d(modes.frequencies)[k])))
+        for j, tangent in enumerate(static._tangents):
+            def about(variant, h: float) -> np.ndarray:
+                f, zeta, _ = modes_about(variant, t, state.q + h * static.dq[k, :, j],
+                                         (state.lam + h * static.dlam[k, :, j])[active],
+                                         state.charts, active)
+                if len(f) != count:
+                    raise ModelError(f"sensitivities of the modes of '{model.name}' to "
+                                     f"parameter '{parameters[j]}': the number of modes "
+                                     "changes with it")
+                return np.concatenate([f, zeta])
+            change = tangent.along(about)
+            frequencies[k, :count, j], ratios[k, :count, j] = change[:count], change[count:]
+    if not along:
+        frequencies, ratios = frequencies[0], ratios[0]
+    return ModeSensitivities(parameters, frequencies, ratios, static)
 
 
 def _check(model, results: Results, what: str) -> None:

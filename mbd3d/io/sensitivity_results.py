@@ -10,7 +10,7 @@ import numpy as np
 from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io.results import Results
 
-__all__ = ["Sensitivities"]
+__all__ = ["Sensitivities", "ModeSensitivities"]
 
 
 #: the derivatives of the coordinates a sensitivity may be asked of, and their column suffix
@@ -128,3 +128,37 @@ class Sensitivities:
                 for i, c in enumerate(self.model.coordinate_labels):
                     columns[f"d({c}{suffix})/d({p})"] = array[:, i, j]
         return pd.DataFrame(columns, index=pd.Index(self.t, name="t"))
+
+
+class ModeSensitivities:
+    """Derivatives of vibration modes' frequencies and damping ratios with respect to
+    parameters (made by :func:`mbd3d.sensitivities` of :class:`mbd3d.Modes` or
+    :class:`mbd3d.ModesAlong`).
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The parameters' names, in the order of the last axis.
+    frequencies, damping_ratios : ndarray (r, p), or (k, r, p) along a motion
+        ``df/dp`` [Hz per unit of the parameter] and ``dzeta/dp`` of each mode, in the order
+        of the modes' own (lowest frequency first; NaN where a position has fewer modes).
+        Where two frequencies cross, the order switches and the derivatives there are not
+        those of either mode.
+    equilibrium : Sensitivities
+        Those of the equilibrium the modes are about.
+    """
+
+    def __init__(self, parameters: Sequence[str], frequencies: np.ndarray,
+                 damping_ratios: np.ndarray, equilibrium: Sensitivities) -> None:
+        self.parameters = tuple(parameters)
+        self.frequencies, self.damping_ratios = frequencies, damping_ratios
+        self.equilibrium = equilibrium
+
+    def __repr__(self) -> str:
+        return (f"<ModeSensitivities of {self.frequencies.shape[-2]} modes, "
+                f"{len(self.parameters)} parameters>")
+
+    def frequency(self, mode: int, parameter: str) -> np.ndarray:
+        """``d(frequency of mode)/d(parameter)`` [Hz per unit of the parameter]: a number
+        about one equilibrium, an array (k,) along a motion."""
+        return self.frequencies[..., mode, self.equilibrium._parameter(parameter)]
