@@ -89,6 +89,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                      help="change a value first, e.g. bodies.crank.mass=2 (repeatable)")
     run.add_argument("--rows", type=int, default=11, help="rows of the summary table")
+    run.add_argument("--sensitivity", action="append", default=[], metavar="PARAMETER",
+                     help="also the results' derivatives with respect to a parameter, e.g. "
+                          "bodies.rod.mass (repeatable; kinematic, inverse and equilibrium)")
     run.set_defaults(command=_run, name="run")
 
     view = commands.add_parser("view", help="open a recording in the Rerun viewer")
@@ -226,6 +229,7 @@ def _run(args) -> int:
     # are computed, so that a run stopped by any means (even killed) leaves what it did
     rrd, csv_path = _destinations(args, loaded, spec)
     model = loaded.model
+    sensitivity_csv = _check_sensitivities(args, model, spec, csv_path)
     if spec.kind == "modes":
         return _run_modes(args, model, spec, rrd, csv_path)
     if spec.kind == "linearize":
@@ -255,12 +259,55 @@ def _run(args) -> int:
             print(f"{title}:\n{format_table(columns, rows=args.rows)}\n")
     if csv_path is not None:
         print(f"\nCSV written to {os.path.abspath(csv_path)}")
+    if args.sensitivity and failure is None and res.status == "complete":
+        _run_sensitivities(args, res, sensitivity_csv)
     if rrd is not None and args.show and failure is None:
         from mbd3d.viewer import show  # noqa: PLC0415
         show(rrd)
     if failure is not None:
         print(f"mbd3d run: error: {failure}", file=sys.stderr)
     return 0 if res.status == "complete" else 1
+
+
+def _check_sensitivities(args, model, spec, csv_path) -> str | None:
+    """Before computing: the ``--sensitivity`` names are parameters and the analysis has
+    sensitivities; the CSV file they go to (beside the results'), checked."""
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io.files import check_output_path  # noqa: PLC0415
+    from mbd3d.io.parameters import parameter_path  # noqa: PLC0415
+
+    if not args.sensitivity:
+        return None
+    if spec.kind not in ("kinematic", "inverse", "equilibrium"):
+        raise ModelError(f"--sensitivity is for kinematic, inverse and equilibrium analyses, "
+                         f"not {spec.kind}")
+    for name in args.sensitivity:
+        parameter_path(model, name)
+    if csv_path is None:
+        return None
+    return check_output_path(csv_path[:-len(".csv")] + "_sensitivities.csv", args.overwrite,
+                             "the sensitivities' CSV file")
+
+
+def _run_sensitivities(args, res, csv_path: str | None) -> None:
+    """Print the results' sensitivities to each ``--sensitivity`` parameter, a table per
+    parameter (the first coordinates, and the drivers' efforts), and write them all."""
+    import mbd3d as mb  # noqa: PLC0415
+    from mbd3d.io.results import format_table  # noqa: PLC0415
+
+    sens = mb.sensitivities(res, args.sensitivity)
+    columns = sens.columns()
+    for name in args.sensitivity:
+        shown = {"t [s]": columns["t [s]"]}
+        for label in res.model.coordinate_labels[:2 * _SHOWN]:
+            shown[f"d({label})"] = columns[f"d({label})/d({name})"]
+        for key in columns:
+            if key.endswith(f".effort)/d({name})"):
+                shown[key.split("/")[0]] = columns[key]
+        print(f"sensitivities to {name}:\n{format_table(shown, rows=args.rows)}\n")
+    if csv_path is not None:
+        sens.to_csv(csv_path, overwrite=args.overwrite)
+        print(f"sensitivities written to {os.path.abspath(csv_path)}")
 
 
 #: most bodies and joints the summary tables of mbd3d run show (the CSV has them all)

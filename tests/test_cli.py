@@ -174,6 +174,9 @@ def test_a_model_file_can_ask_for_a_linearisation(tmp_path):
     (("run", "{good}", "--set", "bodies.bar.mass=-2"), r"good.yaml:6: bodies\[0\]\.mass: body 'bar'"
                                                        ": mass"),
     (("run", "{good}", "--analysis", "inverse", "--method", "RK45"), "--method is for forward"),
+    (("run", "{good}", "--sensitivity", "bodies.bar.mas"), "did you mean 'bodies.bar.mass'"),
+    (("run", "{good}", "--analysis", "forward", "--sensitivity", "bodies.bar.mass"),
+     "--sensitivity is for kinematic, inverse and equilibrium analyses, not forward"),
     (("check", "{missing}"), "cannot be read"),
     (("view", "{missing}"), "no recording"),
 ])
@@ -187,6 +190,33 @@ def test_mistakes_exit_2_with_the_reason_on_stderr(tmp_path, args, message):
     assert done.stdout == ""
     import re
     assert re.search(message, done.stderr), done.stderr
+
+
+def test_run_prints_and_writes_the_sensitivities_asked_for(tmp_path):
+    names = ("bodies.slider.mass", "joints.B.point_i[0]")
+    done = mbd3d("run", MODELS / "slider_crank.yaml", "--t", "0:0.2:0.05", "--csv", tmp_path,
+                 *[a for name in names for a in ("--sensitivity", name)], cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "sensitivities to bodies.slider.mass:" in done.stdout
+    with open(tmp_path / "slider_crank_inverse_sensitivities.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    # what the library gives for the same analysis
+    res = mb.inverse_dynamics(mb.load(MODELS / "slider_crank.yaml"), np.arange(5) * 0.05)
+    sens = mb.sensitivities(res, names)
+    for name in names:
+        written = [float(row[f"d(motor.effort)/d({name})"]) for row in rows]
+        np.testing.assert_allclose(written, sens.effort("motor", name), rtol=1e-12, atol=0)
+        written = [float(row[f"d(slider.x)/d({name})"]) for row in rows]
+        np.testing.assert_allclose(written, sens.sensitivity("slider.x", name), rtol=1e-12,
+                                   atol=1e-300)
+    # a second run replaces the file only with --overwrite, refused before computing
+    (tmp_path / "slider_crank_inverse.csv").unlink()
+    command = ("run", MODELS / "slider_crank.yaml", "--t", "0:0.2:0.05", "--csv", tmp_path,
+               "--sensitivity", names[0])
+    refused = mbd3d(*command, cwd=tmp_path)
+    assert refused.returncode == 2 and "_sensitivities.csv' already exists" in refused.stderr
+    assert refused.stdout == "" and not (tmp_path / "slider_crank_inverse.csv").exists()
+    assert mbd3d(*command, "--overwrite", cwd=tmp_path).returncode == 0
 
 
 def test_an_unknown_command_is_a_usage_error():

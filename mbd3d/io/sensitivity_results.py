@@ -3,11 +3,13 @@
 
 from __future__ import annotations
 
+import os
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from mbd3d.errors import ModelError, did_you_mean
+from mbd3d.io.exports import write_columns
 from mbd3d.io.results import Results
 
 __all__ = ["Sensitivities", "ModeSensitivities"]
@@ -115,19 +117,35 @@ class Sensitivities:
                              f"among those asked for{did_you_mean(name, self.parameters)}")
         return self.parameters.index(name)
 
-    def to_pandas(self):
-        """A DataFrame indexed by time with a column ``"d(coordinate)/d(parameter)"`` per
-        coordinate and parameter, and ``"d(coordinate_dot)/d(parameter)"`` and
-        ``"d(coordinate_ddot)/d(parameter)"`` for the rates and accelerations."""
-        import pandas as pd  # noqa: PLC0415
-
-        columns = {}
-        for of, suffix in _OF.items():
-            array = {"q": self.dq, "qd": self.dqd, "qdd": self.dqdd}[of]
-            for j, p in enumerate(self.parameters):
+    def columns(self) -> dict[str, np.ndarray]:
+        """The sensitivities as named columns over time: ``t [s]``, then per parameter
+        ``d(coordinate)/d(parameter)``, ``d(coordinate_dot)/d(parameter)`` and
+        ``d(coordinate_ddot)/d(parameter)`` for every coordinate (after inverse dynamics or
+        an equilibrium also ``d(driver.effort)/d(parameter)`` for every driver)."""
+        columns = {"t [s]": self.t}
+        drivers = [e.name for e in self.model.joints if e.is_driver]
+        for j, p in enumerate(self.parameters):
+            for of, suffix in _OF.items():
+                array = {"q": self.dq, "qd": self.dqd, "qdd": self.dqdd}[of]
                 for i, c in enumerate(self.model.coordinate_labels):
                     columns[f"d({c}{suffix})/d({p})"] = array[:, i, j]
-        return pd.DataFrame(columns, index=pd.Index(self.t, name="t"))
+            if self.dlam is not None:
+                for driver in drivers:
+                    columns[f"d({driver}.effort)/d({p})"] = self.effort(driver, p)
+        return columns
+
+    def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
+        """Write :meth:`columns` to a CSV file (atomically; an existing file is replaced only
+        with ``overwrite``); returns its path."""
+        return write_columns(self.columns(), path, overwrite)
+
+    def to_pandas(self):
+        """:meth:`columns` as a DataFrame indexed by time."""
+        import pandas as pd  # noqa: PLC0415
+
+        columns = self.columns()
+        t = columns.pop("t [s]")
+        return pd.DataFrame(columns, index=pd.Index(t, name="t"))
 
 
 class ModeSensitivities:
