@@ -328,3 +328,25 @@ def test_modes_along_a_motion_against_differences():
         noise = 15 * np.finfo(float).eps * np.max(np.abs(along.frequencies)) / h
         assert np.max(np.abs(sens.frequencies[..., j] - reference)) <= 1e-8 * max(
             np.max(np.abs(reference)), 1.0) + noise, name
+
+
+def test_redundant_constraints():
+    # a planar four-bar of four spatial revolutes: 3 redundant rows. Its positions follow a
+    # hinge moved in its plane (against differences), not a hinge's axis tilted out of it
+    # (four hinges whose axes are not parallel lock up); its multipliers are the
+    # minimum-norm ones, whose derivatives are not the model's
+    import math
+
+    from test_spatial_dynamics import spatial_four_bar_in_plane
+
+    planar = mb.inverse_dynamics(mechanisms.four_bar(crank_speed=2 * math.pi), TIMES)
+    model = spatial_four_bar_in_plane(planar, driven=True, revolutes_only=True)
+    res = mb.kinematic_analysis(model, TIMES, tol=1e-14)
+    name = "joints.A.at[0]"
+    sens = mb.sensitivities(res, [name])
+    centres = model.position_coordinates
+    _agree(sens.dq[:, centres, 0], model, name, lambda r: r.q[:, centres])
+    with pytest.raises(mb.ModelError, match="moves its redundant constraints apart"):
+        mb.sensitivities(res, ["joints.A.axis[0]"])
+    with pytest.raises(mb.ModelError, match="minimum-norm"):
+        mb.sensitivities(mb.inverse_dynamics(model, TIMES), [name])

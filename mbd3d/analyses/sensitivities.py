@@ -134,6 +134,10 @@ def _static(results: Results, tangents: list) -> tuple[np.ndarray, np.ndarray]:
         balance = lambda v, q: equilibrium_residual(  # noqa: E731
             v, t, q, lam, active, state.charts)
         Cq = balance(model, state.q)[2]
+        if np.linalg.matrix_rank(Cq) < len(active):
+            raise ModelError(f"sensitivities of the static equilibrium of '{model.name}': its "
+                             f"rows are dependent at t = {t:g} s, so its multipliers are one "
+                             "of many that balance it, whose derivatives are not the model's")
         matrix = np.block([[accurate_stiffness(model, t, state.q, lam, active, state.charts),
                             Cq.T], [Cq, np.zeros((len(active), len(active)))]])
         fr = constraints.frames(model, state.q, charts=state.charts)
@@ -185,6 +189,10 @@ def _check(model, results: Results, what: str) -> None:
     if len(model.velocity_rows):
         raise ModelError(f"{what}: its rolling rows constrain velocities only, so its "
                          "positions depend on the path taken and have no sensitivities")
+    if results.analysis == "inverse dynamics" and not results.reactions_unique:
+        raise ModelError(f"{what}: its multipliers are the minimum-norm ones of dependent "
+                         f"rows (at t = {results.stats['singular_outputs'][0]:g} s), one of "
+                         "many that balance it: their derivatives are not the model's")
     if results.analysis != "kinematic analysis" and model.friction is not None:
         raise ModelError(f"{what}: joint friction's sensitivities are not available yet")
 
@@ -230,10 +238,22 @@ def _solver(model, Cq: np.ndarray, t: float):
     else (redundant rows) by least squares, the minimum norm of ``Cq^T x = b`` as inverse
     dynamics reports it; a singular ``Cq`` is named as the analysis names it."""
     if Cq.shape[0] != Cq.shape[1]:
-        return lambda b, transpose=False: np.linalg.lstsq(Cq.T if transpose else Cq, b,
-                                                          rcond=None)[0]
+        return lambda b, transpose=False: _least_squares(model, Cq.T if transpose else Cq, b,
+                                                         t)
     lu = scipy.linalg.lu_factor(Cq, check_finite=False)
     if not np.min(np.abs(np.diag(lu[0]))) > 1e-13 * np.max(np.abs(lu[0])):
         raise singular_error(model, Cq, t, "sensitivities")
     return lambda b, transpose=False: scipy.linalg.lu_solve(lu, b, trans=int(transpose),
                                                             check_finite=False)
+
+
+def _least_squares(model, A: np.ndarray, b: np.ndarray, t: float) -> np.ndarray:
+    """The solution of ``A x = b`` for dependent rows (redundant constraints), which must
+    agree: a parameter that moves them apart (a redundant joint's point out of the plane
+    its loop closes in) has no derivative, the mechanism would no longer assemble."""
+    x = np.linalg.lstsq(A, b, rcond=None)[0]
+    if np.max(np.abs(A @ x - b), initial=0.0) > 1e-8 * max(np.max(np.abs(b)), 1e-300):
+        raise ModelError(f"sensitivities of '{model.name}' at t = {t:g} s: the parameter "
+                         "moves its redundant constraints apart (the mechanism would lock "
+                         "up): it has no derivative of its own")
+    return x
