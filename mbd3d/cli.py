@@ -274,7 +274,7 @@ def _check_sensitivities(args, model, spec, csv_path) -> str | None:
     sensitivities; the CSV file they go to (beside the results'), checked."""
     from mbd3d.errors import ModelError  # noqa: PLC0415
     from mbd3d.io.files import check_output_path  # noqa: PLC0415
-    from mbd3d.io.parameters import parameter_path  # noqa: PLC0415
+    from mbd3d.io.parameters import parameter_value  # noqa: PLC0415
 
     if not args.sensitivity:
         return None
@@ -282,7 +282,7 @@ def _check_sensitivities(args, model, spec, csv_path) -> str | None:
         raise ModelError(f"--sensitivity is for kinematic, inverse and equilibrium analyses, "
                          f"not {spec.kind}")
     for name in args.sensitivity:
-        parameter_path(model, name)
+        parameter_value(model, name)
     if csv_path is None:
         return None
     return check_output_path(csv_path[:-len(".csv")] + "_sensitivities.csv", args.overwrite,

@@ -13,7 +13,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d import mechanisms
-from mbd3d.io.parameters import parameter_path
+from mbd3d.io.parameters import parameter_value
 from mbd3d.joints import Prismatic, Revolute, RotationDriver
 from mbd3d.model import constraints
 
@@ -70,7 +70,7 @@ def test_slider_crank_closed_form():
 
 def _differenced(model, name: str, measure, analysis=mb.kinematic_analysis) -> np.ndarray:
     """d measure(results)/d parameter by a fourth-order difference of tight analyses."""
-    _, value, size = parameter_path(model, name)
+    value, size = parameter_value(model, name)
     h = 1e-4 * (max(abs(value), size) or model.length_scale)
     values = np.array([measure(analysis(mb.with_parameters(model, {name: value + o * h}),
                                         TIMES, tol=1e-14)) for o in OFFSETS])
@@ -82,7 +82,7 @@ def _agree(got: np.ndarray, model, name: str, measure, analysis=mb.kinematic_ana
     """``got`` against :func:`_differenced`, to ``rtol`` of the larger of the derivative and
     1, plus the difference's own rounding (15 times eps of the values over the step: a tiny
     parameter's changes are lost in the values' last digits)."""
-    _, value, size = parameter_path(model, name)
+    value, size = parameter_value(model, name)
     h = 1e-4 * (max(abs(value), size) or model.length_scale)
     reference = _differenced(model, name, measure, analysis)
     scale = np.max(np.abs(measure(analysis(model, TIMES, tol=1e-14))))
@@ -320,7 +320,7 @@ def test_modes_along_a_motion_against_differences():
     names = _parameters(model)
     sens = mb.sensitivities(along, names)
     for j, name in enumerate(names):
-        _, value, size = parameter_path(model, name)
+        value, size = parameter_value(model, name)
         h = 1e-4 * (max(abs(value), size) or model.length_scale)
         values = np.array([mb.vibration_modes_along(mb.with_parameters(
             model, {name: value + o * h}), times).frequencies for o in OFFSETS])

@@ -22,7 +22,7 @@ from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io.model_file import ModelFileError, _Reader
 from mbd3d.io.model_writer import model_data
 
-__all__ = ["parameters", "with_parameters", "ModelVariants", "parameter_path",
+__all__ = ["parameters", "with_parameters", "ModelVariants", "parameter_value",
            "parameter_variants"]
 
 #: the parts of a model's data that hold its parameters (not its format, name or analyses)
@@ -118,9 +118,9 @@ def _changed(data: dict, values: Mapping[str, float], whole: bool = True):
 def parameter_variants(model, name: str, offsets: Sequence[float]) -> tuple[list, float]:
     """The model built again with parameter ``name`` moved by each of ``offsets`` steps, and
     the step: the power of two nearest a thousandth of the parameter's size (of its vector's
-    length where it is a component, or of the model's length scale where both are zero). A field written as a
-    whole number (a point drawn at ``(0, 0)``) takes the fractions; one that counts refuses
-    them, naming the parameter.
+    length where it is a component, or of the model's length scale where both are zero). A
+    field written as a whole number (a point drawn at ``(0, 0)``) takes the fractions; one
+    that counts refuses them, naming the parameter.
 
     Raises
     ------
@@ -128,7 +128,7 @@ def parameter_variants(model, name: str, offsets: Sequence[float]) -> tuple[list
         A name that is not a parameter of the model (with the nearest ones), or a model the
         changed value makes invalid (a universal joint's axes no longer perpendicular).
     """
-    _, value, size = parameter_path(model, name)
+    value, size = parameter_value(model, name)
     # a power of two: the changed values are then exact, and so are the data that are
     # linear in them (a joint's point is the parameter itself)
     step = 2.0 ** round(math.log2(1e-3 * (max(abs(value), size) or model.length_scale)))
@@ -157,59 +157,50 @@ def _data(model) -> dict:
 def _fields(data: dict) -> dict[str, tuple[Any, Any]]:
     """The numeric leaves of a model's data: name -> (the list or mapping holding it, its
     index or key)."""
-    return {name: (container, key) for name, (container, key, _) in _leaves(data).items()}
-
-
-def _leaves(data: dict) -> dict[str, tuple[Any, Any, tuple]]:
-    """The numeric leaves of a model's data: name -> (the list or mapping holding it, its
-    index or key, its path: the section, the entry's name or index, then fields and
-    indices)."""
-    found: dict[str, tuple[Any, Any, tuple]] = {}
+    found: dict[str, tuple[Any, Any]] = {}
     for section in _SECTIONS:
         if section in data:
-            _collect(data, section, section, (section,), found)
+            _collect(data, section, section, found)
     return found
 
 
-def _collect(container: Any, key: Any, name: str, path: tuple, found: dict) -> None:
+def _collect(container: Any, key: Any, name: str, found: dict) -> None:
     value = container[key]
     if isinstance(value, bool) or value is None:
         return
     if isinstance(value, (int, float)):
-        found[name] = (container, key, path)
+        found[name] = (container, key)
     elif isinstance(value, dict):
         for field in value:
             if field not in ("name", "type"):
-                _collect(value, field, f"{name}.{field}", path + (field,), found)
+                _collect(value, field, f"{name}.{field}", found)
     elif isinstance(value, list):
         # a list of named entries (bodies, joints) by name, any other by index
         named = bool(value) and all(isinstance(v, dict) and "name" in v for v in value)
         for index, item in enumerate(value):
             _collect(value, index, f"{name}.{item['name']}" if named else f"{name}[{index}]",
-                     path + (item["name"] if named else index,), found)
+                     found)
 
 
-def parameter_path(model, name: str) -> tuple[tuple, float, float]:
-    """Where parameter ``name`` (see :func:`parameters`) sits among the arguments that made
-    ``model``: its path (the section, the element's name, then the argument's fields and
-    indices), its value and the length of the vector it belongs to (zero for a lone
-    number).
+def parameter_value(model, name: str) -> tuple[float, float]:
+    """The value of parameter ``name`` (see :func:`parameters`) and the length of the vector
+    it is a component of (zero for a lone number).
 
     Raises
     ------
     ModelError
         A name that is not a parameter of the model, with the nearest ones.
     """
-    leaves = _leaves(_data(model))
-    if name not in leaves:
+    fields = _fields(_data(model))
+    if name not in fields:
         raise ModelError(f"model '{model.name}': no parameter '{name}'"
-                         f"{did_you_mean(name, leaves)}; mb.parameters(model) lists them")
-    container, key, path = leaves[name]
+                         f"{did_you_mean(name, fields)}; mb.parameters(model) lists them")
+    container, key = fields[name]
     size = 0.0
     if isinstance(container, list) and all(
             isinstance(v, (int, float)) and not isinstance(v, bool) for v in container):
         size = float(np.linalg.norm(np.asarray(container, dtype=float)))
-    return path, float(container[key]), size
+    return float(container[key]), size
 
 
 def _number(value: Any, old: Any, what: str) -> float | int:
