@@ -163,7 +163,7 @@ def _modes(modes: Modes | ModesAlong, parameters: Sequence[str]) -> ModeSensitiv
     for k, t in enumerate(eq.model_t):
         state = _State(eq, k)
         count = int(np.sum(np.isfinite(np.atleast_2d(modes.frequencies)[k])))
-        for j, tangent in enumerate(static._tangents):
+        for j, tangent in enumerate(static.tangents):
             def about(variant, h: float) -> np.ndarray:
                 f, zeta, _ = modes_about(variant, t, state.q + h * static.dq[k, :, j],
                                          (state.lam + h * static.dlam[k, :, j])[active],

@@ -40,7 +40,9 @@ class Sensitivities:
         Rodrigues parameters relative to the chart of the results at that time
         (``Results.charts``); its centre's are global.
     dlam : ndarray (k, m, p) or None
-        ``dlam/dp`` of the multipliers (inverse dynamics).
+        ``dlam/dp`` of the multipliers (inverse dynamics, static equilibrium).
+    tangents : tuple of ModelTangent
+        Each parameter's :class:`mbd3d.model.tangents.ModelTangent` (its model variants).
     """
 
     def __init__(self, results, parameters: Sequence[str], tangents: Sequence,
@@ -49,7 +51,7 @@ class Sensitivities:
         self.results, self.model, self.analysis = results, results.model, results.analysis
         self.t = results.t
         self.parameters = tuple(parameters)
-        self._tangents = tuple(tangents)
+        self.tangents = tuple(tangents)
         self.dq, self.dqd, self.dqdd = dq, dqd, dqdd
         self.dlam = dlam
 
@@ -71,7 +73,8 @@ class Sensitivities:
         parameter] (inverse dynamics)."""
         if self.dlam is None:
             raise ModelError(f"sensitivities of the {self.analysis} of '{self.model.name}': "
-                             "efforts have sensitivities after inverse dynamics")
+                             "efforts have sensitivities after inverse dynamics or a "
+                             "static equilibrium")
         drivers = [e.name for e in self.model.joints if e.is_driver]
         if driver not in drivers:
             raise ModelError(f"no driver '{driver}' in '{self.model.name}'"
@@ -90,7 +93,7 @@ class Sensitivities:
                    if parameter is None or name == parameter]
         if parameter is not None and not columns:
             self._parameter(parameter)
-        out = [self._tangents[j].along(lambda variant, h: np.asarray(
+        out = [self.tangents[j].along(lambda variant, h: np.asarray(
             quantity(self._moved(variant, j, h)), dtype=float)) for j in columns]
         return out[0] if parameter is not None else np.stack(out, axis=-1)
 
