@@ -128,3 +128,10 @@ def test_spheres_in_box_benchmark_runs(capsys, monkeypatch):
     assert [r["n"] for r in rows] == [9, 16] and all(r["near"] > r["n"] for r in rows)
     assert "cost per step ~ N^" in capsys.readouterr().out
 
+
+
+def test_sensitivities_benchmark_runs(capsys, monkeypatch):
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    rows = _load("sensitivities").main(points=5, links=2, counts=(1,), repeat=1)
+    assert [r["p"] for r in rows] == [1, 1] and all(r["sensitivities [s]"] > 0 for r in rows)
+    assert "per parameter" in capsys.readouterr().out

@@ -1,0 +1,53 @@
+"""What the sensitivities of an analysis cost against the analysis itself: inverse dynamics of
+the slider-crank and of a hanging planar chain driven at every pin, then ``mb.sensitivities``
+of its results with respect to p of the model's numbers (masses and joint points), medians of
+a few runs in one process.
+
+Each parameter costs its four variants of the model (built once) and, per time point, one
+solve for the positions with the exact rows, and eight evaluations of the rows and four of
+the dynamic equations along the parameter: the ratio per parameter is what to expect of a
+study of p parameters, p times it.
+
+Run: python benchmarks/sensitivities.py [--repeat N]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+import mbd3d as mb
+from mbd3d.mechanisms import slider_crank
+from kinematics import driven_chain
+from measure import machine, median_time
+
+
+def main(points: int = 101, links: int = 10, counts: tuple = (1, 4), repeat: int = 3
+         ) -> list[dict]:
+    """Per model and number of parameters: the analysis' time, the sensitivities' time and
+    their ratio per parameter (printed as a table)."""
+    t = np.linspace(0.0, 1.0, points)
+    rows = []
+    for model in (slider_crank(), driven_chain(links)):
+        names = [n for n in mb.parameters(model)
+                 if n.endswith(".mass") or ".point_" in n or ".at[" in n]
+        mb.sensitivities(mb.inverse_dynamics(model, t[:3]), names[:1])  # compiles
+        plain = median_time(lambda: mb.inverse_dynamics(model, t), repeat)
+        res = mb.inverse_dynamics(model, t)
+        for p in counts:
+            cost = median_time(lambda: mb.sensitivities(res, names[:p]), repeat)
+            rows.append({"model": model.name, "coordinates": model.n_coordinates, "p": p,
+                         "analysis [s]": plain, "sensitivities [s]": cost,
+                         "per parameter [x analysis]": cost / plain / p})
+    print(machine())
+    print(f"inverse dynamics over {points} time points, then mb.sensitivities of its results "
+          f"to p parameters (medians of {repeat})\n")
+    print(mb.format_table({key: [r[key] for r in rows] for key in rows[0]}))
+    return rows
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    main(repeat=parser.parse_args().repeat)
