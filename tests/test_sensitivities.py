@@ -225,6 +225,8 @@ def test_bad_input():
     res = mb.kinematic_analysis(model, [0.0])
     with pytest.raises(mb.ModelError, match="did you mean 'joints.A.point_i"):
         mb.sensitivities(res, ["joints.A.piont_i[0]"])
+    one = mb.sensitivities(res, "joints.A.point_i[0]")  # a name, not its letters
+    assert one.parameters == ("joints.A.point_i[0]",)
     sens = mb.sensitivities(res, ["joints.A.point_i[0]", "bodies.crank.position[0]"])
     # the joints' points are given in the bodies' frames: where a body is drawn is only the
     # analysis' first guess

@@ -57,7 +57,7 @@ def sensitivities(results: Results | Modes | ModesAlong, parameters: Sequence[st
         Of :func:`mbd3d.kinematic_analysis`, :func:`mbd3d.inverse_dynamics` or
         :func:`mbd3d.static_equilibrium`, complete; or vibration modes
         (:func:`mbd3d.vibration_modes`, :func:`mbd3d.vibration_modes_along`).
-    parameters : sequence of str
+    parameters : str or sequence of str
         Parameter names, as :func:`mbd3d.parameters` lists them.
 
     Returns
@@ -79,6 +79,8 @@ def sensitivities(results: Results | Modes | ModesAlong, parameters: Sequence[st
     SingularJacobianError
         At a singular position, naming the joints and the time, as the analysis does.
     """
+    if isinstance(parameters, str):  # one name, not its characters
+        parameters = [parameters]
     if isinstance(results, (Modes, ModesAlong)):
         return _modes(results, parameters)
     model = results.model
