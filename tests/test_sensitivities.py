@@ -352,3 +352,17 @@ def test_redundant_constraints():
         mb.sensitivities(res, ["joints.A.axis[0]"])
     with pytest.raises(mb.ModelError, match="minimum-norm"):
         mb.sensitivities(mb.inverse_dynamics(model, TIMES), [name])
+
+
+def test_rows_whose_own_numbers_change():
+    # a rack's pitch radius is a number of its row itself (not a body vector, a constant or
+    # a motion): its rows are differenced along the model's variants
+    from test_gears import rack_and_pinion
+
+    model = rack_and_pinion()
+    name = "joints.mesh.radius"
+    sens = mb.sensitivities(mb.inverse_dynamics(model, TIMES, tol=1e-14), [name])
+    assert sens.tangents[0]._rows_own
+    for got, of in ((sens.dq, "q"), (sens.dqd, "qd"), (sens.dqdd, "qdd"), (sens.dlam, "lam")):
+        _agree(got[:, :, 0], model, name, lambda r: getattr(r, of), mb.inverse_dynamics)
+    assert np.max(np.abs(sens.dq)) > 0.1
