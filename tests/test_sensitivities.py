@@ -366,3 +366,24 @@ def test_rows_whose_own_numbers_change():
     for got, of in ((sens.dq, "q"), (sens.dqd, "qd"), (sens.dqdd, "qdd"), (sens.dlam, "lam")):
         _agree(got[:, :, 0], model, name, lambda r: getattr(r, of), mb.inverse_dynamics)
     assert np.max(np.abs(sens.dq)) > 0.1
+
+
+def test_a_rows_constant():
+    # the slider-crank with its rod a massless Distance joint from the crank pin to the slider:
+    # the rod's length is the row's constant c0, and x_B = a cos(theta) + r as before, so
+    # dx_B/dl = l / r
+    from mbd3d.joints import Distance
+
+    a, l, theta = 0.12, 0.30, 1.1
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81))
+    crank = b.add_body("crank", mass=1.0, inertia=0.001, position=(0.05, 0.05), angle=theta)
+    slider = b.add_body("slider", mass=4.0, inertia=0.02, position=(0.35, 0.0))
+    pin = b.add(Revolute("O", b.ground, crank, point_i=(0.0, 0.0), point_j=(-a / 2, 0.0)))
+    b.add(Distance("rod", crank, slider, point_i=(a / 2, 0.0), point_j=(0.0, 0.0), length=l))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0), point_i=(0.0, 0.0),
+                    point_j=(0.0, 0.0)))
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(theta, 2.0)))
+    sens = mb.sensitivities(mb.kinematic_analysis(b.build(), [0.0]), "joints.rod.length")
+    r = np.sqrt(l**2 - a**2 * np.sin(theta) ** 2)
+    assert sens.sensitivity("slider.x", "joints.rod.length")[0] == pytest.approx(l / r,
+                                                                                abs=1e-12)
