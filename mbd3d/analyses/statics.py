@@ -289,9 +289,11 @@ def accurate_stiffness(model, t, q, lam, active, chart) -> np.ndarray:
     columns = []
     for j in range(len(q)):
         h = 1e-3 * model.coordinate_scale[j]
-        columns.append(slope([equilibrium_residual(model, t, q + o * h * np.eye(len(q))[j],
-                                                   lam, active, chart)[0] for o in OFFSETS],
-                             h))
+        shifted = [q.copy() for _ in OFFSETS]
+        for o, x in zip(OFFSETS, shifted):
+            x[j] += o * h
+        columns.append(slope([equilibrium_residual(model, t, x, lam, active, chart)[0]
+                              for x in shifted], h))
     return np.column_stack(columns)
 
 
