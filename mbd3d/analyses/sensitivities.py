@@ -40,7 +40,7 @@ from mbd3d.io.results import Results
 from mbd3d.io.sensitivity_results import ModeSensitivities, Sensitivities
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
-from mbd3d.model.tangents import OFFSETS, ModelTangent
+from mbd3d.model.tangents import OFFSETS, ModelTangent, reach, state_scale
 
 __all__ = ["sensitivities"]
 
@@ -104,17 +104,21 @@ def _kinematic(results: Results, parameters: Sequence[str], tangents: list) -> S
     dlam = np.zeros((len(results.t), model.n_constraints, len(tangents))) if forces else None
     for k, t in enumerate(results.model_t):
         state = _State(results, k)
+        scale, n = state_scale(model, state.qd, state.qdd), model.n_coordinates
         fr = constraints.frames(model, state.q, charts=state.charts)
         solve = _solver(model, constraints.jacobian(model, t, state.q, fr, sparse=False), t)
         for j, tangent in enumerate(tangents):
             s = solve(-tangent.constraint_rows(t, fr))
-            s_dot = solve(-tangent.along(lambda v, h: _velocity_rows(v, t, state, s, h)))
+            s_dot = solve(-tangent.along(lambda v, h: _velocity_rows(v, t, state, s, h),
+                                         reach(scale[:n], s)))
             s_ddot = solve(-tangent.along(
-                lambda v, h: _acceleration_rows(v, t, state, s, s_dot, h)))
+                lambda v, h: _acceleration_rows(v, t, state, s, s_dot, h),
+                reach(scale[:2 * n], s, s_dot)))
             dq[k, :, j], dqd[k, :, j], dqdd[k, :, j] = s, s_dot, s_ddot
             if forces:
                 dlam[k, :, j] = solve(-tangent.along(lambda v, h: _dynamic_residual(
-                    v, t, state, (s, s_dot, s_ddot), h)), transpose=True)
+                    v, t, state, (s, s_dot, s_ddot), h), reach(scale, s, s_dot, s_ddot)),
+                    transpose=True)
     return Sensitivities(results, parameters, tangents, dq, dqd, dqdd, dlam)
 
 
@@ -175,7 +179,7 @@ def _modes(modes: Modes | ModesAlong, parameters: Sequence[str]) -> ModeSensitiv
                                      f"parameter '{parameters[j]}': the number of modes "
                                      "changes with it")
                 return np.concatenate([f, zeta])
-            change = tangent.along(about)
+            change = tangent.along(about, reach(state_scale(model), static.dq[k, :, j]))
             frequencies[k, :count, j], ratios[k, :count, j] = change[:count], change[count:]
     if not along:
         frequencies, ratios = frequencies[0], ratios[0]
@@ -183,6 +187,10 @@ def _modes(modes: Modes | ModesAlong, parameters: Sequence[str]) -> ModeSensitiv
 
 
 def _check(model, results: Results, what: str) -> None:
+    if results.analysis == "forward dynamics":
+        raise ModelError(f"{what}: a motion's sensitivities are integrated with it; run "
+                         "mb.forward_sensitivities(model, t, parameters, ...) with the "
+                         "arguments of the forward dynamics")
     if results.analysis not in _ANALYSES:
         raise ModelError(f"{what}: sensitivities are available for "
                          f"{', '.join(_ANALYSES[:-1])} and {_ANALYSES[-1]} so far")

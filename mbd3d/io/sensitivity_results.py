@@ -11,6 +11,7 @@ import numpy as np
 from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io.exports import write_columns
 from mbd3d.io.results import Results
+from mbd3d.model.tangents import reach, state_scale
 
 __all__ = ["Sensitivities", "ModeSensitivities"]
 
@@ -43,17 +44,22 @@ class Sensitivities:
         ``dlam/dp`` of the multipliers (inverse dynamics, static equilibrium).
     tangents : tuple of ModelTangent
         Each parameter's :class:`mbd3d.model.tangents.ModelTangent` (its model variants).
+    integrals : dict
+        Forward dynamics' integrals (:func:`mbd3d.forward_sensitivities`), by name:
+        ``(G (k,), dG/dp (k, p))``; read them with :meth:`integral`.
     """
 
     def __init__(self, results, parameters: Sequence[str], tangents: Sequence,
                  dq: np.ndarray, dqd: np.ndarray, dqdd: np.ndarray,
-                 dlam: np.ndarray | None = None) -> None:
+                 dlam: np.ndarray | None = None,
+                 integrals: dict[str, tuple[np.ndarray, np.ndarray]] | None = None) -> None:
         self.results, self.model, self.analysis = results, results.model, results.analysis
         self.t = results.t
         self.parameters = tuple(parameters)
         self.tangents = tuple(tangents)
         self.dq, self.dqd, self.dqdd = dq, dqd, dqdd
         self.dlam = dlam
+        self.integrals = dict(integrals or {})
 
     def __repr__(self) -> str:
         return (f"<Sensitivities of the {self.analysis} of '{self.model.name}': "
@@ -67,6 +73,16 @@ class Sensitivities:
             raise ModelError(f"sensitivity(of={of!r}): give 'q', 'qd' or 'qdd'")
         array = {"q": self.dq, "qd": self.dqd, "qdd": self.dqdd}[of]
         return array[:, self._coordinate(coordinate), self._parameter(parameter)]
+
+    def integral(self, name: str, parameter: str | None = None) -> np.ndarray:
+        """An integral's value ``G(t) = int_{t0}^{t} g dt`` over time (k,), or its derivative
+        with respect to ``parameter`` (forward sensitivities' ``integrals``)."""
+        if name not in self.integrals:
+            raise ModelError(f"sensitivities of '{self.model.name}': no integral '{name}'"
+                             f"{did_you_mean(name, list(self.integrals))}; the integrals are "
+                             f"{list(self.integrals)} (given to mb.forward_sensitivities)")
+        G, dG = self.integrals[name]
+        return G if parameter is None else dG[:, self._parameter(parameter)]
 
     def effort(self, driver: str, parameter: str) -> np.ndarray:
         """``d(effort)/d(parameter)`` of a driver over time (k,) [N m or N per unit of the
@@ -94,8 +110,17 @@ class Sensitivities:
         if parameter is not None and not columns:
             self._parameter(parameter)
         out = [self.tangents[j].along(lambda variant, h: np.asarray(
-            quantity(self._moved(variant, j, h)), dtype=float)) for j in columns]
+            quantity(self._moved(variant, j, h)), dtype=float), self._reach(j))
+            for j in columns]
         return out[0] if parameter is not None else np.stack(out, axis=-1)
+
+    def _reach(self, j: int) -> float:
+        """How far the results' state moves per unit of parameter ``j``, relative to its
+        scale, at the time it moves furthest (:func:`mbd3d.model.tangents.reach`)."""
+        res = self.results
+        return max((reach(state_scale(self.model, res.qd[k], res.qdd[k]), self.dq[k, :, j],
+                          self.dqd[k, :, j], self.dqdd[k, :, j]) for k in range(len(self.t))),
+                   default=0.0)
 
     def _moved(self, variant, j: int, h: float):
         """The results with their state moved by ``h`` times parameter ``j``'s
@@ -124,7 +149,8 @@ class Sensitivities:
         """The sensitivities as named columns over time: ``t [s]``, then per parameter
         ``d(coordinate)/d(parameter)``, ``d(coordinate_dot)/d(parameter)`` and
         ``d(coordinate_ddot)/d(parameter)`` for every coordinate (after inverse dynamics or
-        an equilibrium also ``d(driver.effort)/d(parameter)`` for every driver)."""
+        an equilibrium also ``d(driver.effort)/d(parameter)`` for every driver; forward
+        dynamics' integrals ``d(name)/d(parameter)`` and their values ``name``)."""
         columns = {"t [s]": self.t}
         drivers = [e.name for e in self.model.joints if e.is_driver]
         for j, p in enumerate(self.parameters):
@@ -135,6 +161,10 @@ class Sensitivities:
             if self.dlam is not None:
                 for driver in drivers:
                     columns[f"d({driver}.effort)/d({p})"] = self.effort(driver, p)
+            for name in self.integrals:
+                columns[f"d({name})/d({p})"] = self.integral(name, p)
+        for name in self.integrals:
+            columns[name] = self.integral(name)
         return columns
 
     def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
