@@ -46,6 +46,7 @@ from mbd3d.analyses.linearization import LinearModel, linearize
 from mbd3d.analyses.modes import Modes, ModesAlong, vibration_modes, vibration_modes_along
 from mbd3d.analyses.statics import static_equilibrium
 from mbd3d.analyses.sensitivities import sensitivities
+from mbd3d.analyses.forward_sensitivities import forward_sensitivities
 from mbd3d.analyses.states import (driven_coordinates, forward_dynamics_at,
                                   inverse_dynamics_at, joint_space_dynamics_at)
 from mbd3d.io.results import Results, format_table, read_results
@@ -76,7 +77,7 @@ __all__ = [
     "forward_accelerations",
     "project_state", "METHODS",
     "mobility", "MobilityReport", "Results", "read_results", "load", "save", "parameters", "with_parameters",
-    "sensitivities", "Sensitivities", "ModeSensitivities",
+    "sensitivities", "forward_sensitivities", "Sensitivities", "ModeSensitivities",
     "ModelVariants",
     "load_urdf", "urdf_builder",
     "UrdfWarning", "load_mjcf", "mjcf_builder", "MjcfWarning",

@@ -1,0 +1,422 @@
+"""Forward sensitivities of forward dynamics: how a motion changes with the model's parameters,
+integrated with the motion by the same compiled Runge-Kutta steps.
+
+``mb.forward_sensitivities(model, t, parameters, integrals=...)`` runs forward dynamics through
+the one driver (:mod:`mbd3d.analyses.driver`) with :class:`SensitiveRungeKutta`, which after
+every accepted step of the state takes the same step of the sensitivities (the formula sheet's
+1.1 and 1.2; SUNDIALS calls this the *staggered direct* method):
+
+- the sensitivities ``S = dy/dp`` of the integrated state ``y = (q, v)`` go through the step's
+  own stages with the method's own weights (the compiled :func:`stage_state`), each stage's
+  derivative being the change of the right-hand side ``f(t, y)`` along the parameter with the
+  stage state moving by its sensitivity, ``d/dh f_{p+h}(t, Y + h S)``: the compiled
+  right-hand side of the model's variants (:class:`mbd3d.model.tangents.ModelTangent`, a
+  fourth-order difference, about 1e-12 of its size). With the step sizes the state's error
+  control chose (not differentiated, so the sensitivities stay out of the error norm), the
+  result is the derivative of the computed solution itself, to that precision;
+- the integrals ``G = int g(t, q, qd) dt`` the user names are carried along as states of
+  their own, with their sensitivities ``int (g_q s + g_qd s' + g_p) dt``;
+- the dense output of the sensitivities is the method's own interpolant of their stages, so
+  output times need no extra steps;
+- where the state is projected onto the constraints (after a drifting step, at every output)
+  its sensitivities are projected as the projection's derivative (sheet 1.4); where a spatial
+  body's chart is reset, its Rodrigues parameters' sensitivities are mapped by the reset's
+  Jacobian ``(I - g*~) / (1 + g*.g*)`` (sheet 1.5);
+- the start is consistent: ``Cq s0 = -C_p`` and its velocity rows, with the least mass-weighted
+  change and the held coordinates held (sheet 1.3), as the initial state is assembled.
+
+Not covered (refused by name): generalized-alpha, events and rigid contacts (sensitivities jump
+at an impact), joint friction, redundant constraints, force elements and motions given as
+Python functions, rolling rows.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg
+
+from mbd3d.errors import IntegrationError, ModelError
+from mbd3d.io.observers import Observer
+from mbd3d.io.parameters import parameter_variants
+from mbd3d.io.sensitivity_results import Sensitivities
+from mbd3d.model import constraints
+from mbd3d.model.contacts import contact_group
+from mbd3d.model.equations import mass_matrix
+from mbd3d.model.tangents import OFFSETS, ModelTangent, reach, slope, state_scale
+from mbd3d.numerics.compiled import integration as stepping
+from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, TABLEAUS,
+                                                 dop853_coefficients, interpolate,
+                                                 polynomial_coefficients, stage_state)
+from mbd3d.numerics.compiled.structures import workspace
+from mbd3d.numerics.linalg import factor_model_augmented
+from mbd3d.analyses.accelerations import consistent_accelerations
+from mbd3d.analyses.driver import DynamicsRequest, Segment, drive
+from mbd3d.analyses.explicit import ExplicitRungeKutta
+from mbd3d.analyses.position import hold_indices
+
+__all__ = ["forward_sensitivities", "SensitiveRungeKutta"]
+
+#: ``g(model, t, q, qd) -> float``: an integrand, evaluated with the model's variants too
+Integrand = Callable[[object, float, np.ndarray, np.ndarray], float]
+
+
+def forward_sensitivities(model, times: Sequence[float], parameters: Sequence[str] | str,
+                          q0: Sequence[float] | None = None, qd0: Sequence[float] | None = None,
+                          *, integrals: Mapping[str, Integrand] | None = None,
+                          method: str = "DOP853", rtol: float = 1e-8, atol: float = 1e-10,
+                          constraint_tol: float = 1e-8, max_step: float = np.inf,
+                          hold: Sequence[str | int] | None = None, strict: bool = False,
+                          observers: Sequence[Observer] | None = None,
+                          progress: bool | None = None) -> Sensitivities:
+    """Forward dynamics and the derivatives of its motion with respect to ``parameters``.
+
+    Parameters
+    ----------
+    model : Model
+    times : (k,) array_like
+        Output times [s], strictly increasing.
+    parameters : str or sequence of str
+        Parameter names, as :func:`mbd3d.parameters` lists them.
+    q0, qd0, method, rtol, atol, constraint_tol, max_step, hold, strict, observers, progress
+        As :func:`mbd3d.forward_dynamics` takes them; ``method`` one of its explicit pairs
+        ("DOP853", "RK45", "RK23"). The steps are those the state's error control chooses;
+        the sensitivities follow them, so tighten ``rtol`` for more digits of both.
+    integrals : mapping of str to callable, optional
+        Integrals to carry along, each ``g(model, t, q, qd) -> float`` (e.g. ``lambda m, t,
+        q, qd: mb.kinetic_energy(m, q, qd)``): ``G(t) = int_{t0}^{t} g dt`` and its
+        sensitivities (``sens.integral(name)``, ``sens.integral(name, parameter)``). ``g`` is
+        called with the model's variants too, so that what it reads from the model (a mass)
+        is differentiated. Spatial models: ``q``'s Rodrigues parameters are relative to the
+        integrator's current charts (as an Event's are): integrate what does not depend on
+        them (energies, positions, rates).
+
+    Returns
+    -------
+    Sensitivities
+        ``sens.results`` the forward dynamics' Results; ``sens.sensitivity("slider.x",
+        name)`` (``of="qd"``, ``"qdd"``), ``sens.effort``, ``sens.derivative(f)`` as for the
+        other analyses (:func:`mbd3d.sensitivities`); ``sens.integral(name, parameter)``.
+        ``sens.results.stats["sensitivity_evaluations"]`` counts the model variants'
+        right-hand sides.
+
+    Raises
+    ------
+    ModelError
+        A parameter that is not one (with the nearest names) or that alone makes the model
+        invalid; what is not covered (see the module doc).
+    IntegrationError, SingularJacobianError
+        As forward dynamics raises them; ``.results`` holds the outputs computed.
+    """
+    if isinstance(parameters, str):
+        parameters = [parameters]
+    if method not in TABLEAUS:
+        raise ModelError(f"forward sensitivities integrate with the explicit pairs "
+                         f"{', '.join(TABLEAUS)}; got method={method!r} (generalized-alpha's "
+                         "are not available yet)")
+    request = DynamicsRequest(model, times, q0, qd0, method, rtol, atol, constraint_tol,
+                              max_step, None, 0.9, hold, None, None, strict, observers,
+                              progress)
+    what = f"forward sensitivities of '{model.name}'"
+    tangents = [ModelTangent(model, *parameter_variants(model, name, OFFSETS),
+                             f"{what} to parameter '{name}'") for name in parameters]
+    integrator = SensitiveRungeKutta(request, tangents, dict(integrals or {}))
+    results = drive(request, integrator)
+    return integrator.sensitivities(results, parameters)
+
+
+class SensitiveRungeKutta(ExplicitRungeKutta):
+    """A compiled explicit pair with the forward sensitivities of its steps (see the module
+    doc): the state is stepped by :class:`ExplicitRungeKutta`, one step per call, and the
+    sensitivities and integrals, ``z``, follow each accepted step.
+
+    ``z`` holds the integrals ``G`` (m), then per parameter ``S`` (2 n, the sensitivities of
+    ``y = (q, v)``) and ``dG/dp`` (m).
+    """
+
+    def __init__(self, request: DynamicsRequest, tangents: Sequence[ModelTangent],
+                 integrals: Mapping[str, Integrand]):
+        super().__init__(request)
+        model = self.model
+        _refuse(model, request)
+        self.tangents, self.integrands = tuple(tangents), dict(integrals)
+        for name, g in self.integrands.items():
+            if not callable(g):
+                raise ModelError(f"forward sensitivities of '{model.name}': integral "
+                                 f"'{name}' must be callable as g(model, t, q, qd) -> float")
+        self.m, self.n2 = len(self.integrands), 2 * self.n
+        self.width = self.n2 + self.m
+        # the compiled right-hand sides of the model and its variants, by the model's id,
+        # each with a workspace of its own (the run's holds its contacts' power)
+        models = [model] + [v for tangent in self.tangents for v in tangent.variants]
+        self.compiled = {id(v): (v._core.arrays(), None) for v in models}
+        self.compiled = {key: (a, workspace(self.spatial, a))
+                         for key, (a, _) in self.compiled.items()}
+        self.z = self.z_old = self.z_dense = self._k0 = None
+        self.outputs: list[tuple] = []  # per output: (dq, dqd, dqdd, dlam, G, dG)
+        self.stats["sensitivity_evaluations"] = 0
+
+    # -- the run ------------------------------------------------------------------------------
+    def start(self, t0: float, q: np.ndarray, qd: np.ndarray, redundant: bool) -> tuple:
+        if redundant:
+            raise ModelError(f"forward sensitivities of '{self.model.name}': its constraint "
+                             "rows depend on each other (redundant constraints), whose "
+                             "multipliers are not the model's own: not covered")
+        first = super().start(t0, q, qd, redundant)
+        held = hold_indices(self.model, self.request.hold)
+        z = np.zeros(self.m + len(self.tangents) * self.width)
+        zero = np.zeros(self.n)
+        for j, tangent in enumerate(self.tangents):
+            s, sd = _projected(self.model, tangent, t0, q, qd, self.chart(), zero, zero, held)
+            z[self._s(j)] = self._state_tangent(q, qd, s, sd)
+        self.z = z
+        self._record(t0, q, qd, *first, z)
+        return first
+
+    def advance(self, t_target: float, every_step: bool) -> Segment:
+        y_start = self.y.copy()
+        charts = self.chart()
+        segment = super().advance(t_target, True)  # one step: the sensitivities follow it
+        if segment.flags in _FAILURES:
+            return segment
+        if self.spatial:
+            moved = np.any(self.charts != charts, axis=(1, 2))
+            if moved.any():
+                self._reset_charts(y_start, moved)
+        self._step(segment)
+        return segment
+
+    def after_step(self, segment: Segment) -> None:
+        projections = self.stats["projections"]
+        y = self.y.copy()
+        super().after_step(segment)
+        if self.stats["projections"] != projections:  # the state was projected
+            q, qd = self._split(self.y)
+            q_from, qd_from = self._split(y)
+            for j, tangent in enumerate(self.tangents):
+                s, sd = self._rate_tangent(q_from, qd_from, self.z[self._s(j)])
+                s, sd = _projected(self.model, tangent, self.t_now, q, qd, self.chart(), s, sd)
+                self.z[self._s(j)] = self._state_tangent(q, qd, s, sd)
+            self._k0 = None
+
+    def output(self, t: float, segment: Segment) -> tuple:
+        q, qd, qdd, lam = super().output(t, segment)
+        t_old, step = segment.t_start, segment.info["step"]
+        kind = self.tableau.dense_kind
+        z = interpolate(kind, self.z_dense, self.z_old, t_old, step, t)
+        q_from, qd_from = segment.state_at(t)  # before the output's projection
+        for j, tangent in enumerate(self.tangents):
+            s, sd = self._rate_tangent(q_from, qd_from, z[self._s(j)])
+            s, sd = _projected(self.model, tangent, t, q, qd, self.chart(), s, sd)
+            z[self._s(j)] = self._state_tangent(q, qd, s, sd)
+        self._record(t, q, qd, qdd, lam, z)
+        return q, qd, qdd, lam
+
+    def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        super().restart(t, q, qd)
+        self._k0 = None  # the first stage is evaluated again
+
+    # -- the sensitivities' step ------------------------------------------------------------
+    def _s(self, j: int) -> slice:
+        """Where parameter ``j``'s sensitivities of ``y`` are in ``z``."""
+        start = self.m + j * self.width
+        return slice(start, start + self.n2)
+
+    def _g(self, j: int) -> slice:
+        """Where parameter ``j``'s sensitivities of the integrals are in ``z``."""
+        start = self.m + j * self.width + self.n2
+        return slice(start, start + self.m)
+
+    def _step(self, segment: Segment) -> None:
+        """``z`` through the step just accepted, with its stages and its dense output."""
+        tab, step, t_old = self.tableau, segment.info["step"], segment.t_start
+        if self._k0 is None:  # after a projection, a chart reset or a restart
+            self._k0 = self._rates(t_old, self.y_old, self.z)
+        stages = len(tab.B)
+        weights = ([(tab.A[i], t_old + tab.C[i] * step) for i in range(1, stages)]
+                   + [(tab.B, segment.t_new)]
+                   + [(a, t_old + c * step) for a, c in zip(tab.A_extra, tab.C_extra)])
+        L = np.zeros((tab.n_stored, self.z.size))
+        L[0] = self._k0
+        ys, zs, z_new = np.empty(self.n2), np.empty(self.z.size), None
+        for i, (a, ti) in enumerate(weights, start=1):
+            # the state's stage exactly as the compiled step formed it, and the same
+            # combination of the sensitivities' stages
+            stage_state(self.y_old, self.K, a, i, step, ys)
+            stage_state(self.z, L, a, i, step, zs)
+            if i == stages:
+                z_new = zs.copy()
+            L[i] = self._rates(ti, ys, zs)
+        if tab.dense_kind == DOP853_INTERPOLANT:
+            self.z_dense = dop853_coefficients(L, tab.D, self.z, z_new, L[0], L[stages], step)
+        else:
+            self.z_dense = polynomial_coefficients(L, tab.P, stages + 1)
+        self.z_old, self.z, self._k0 = self.z, z_new, L[stages].copy()
+
+    def _rates(self, t: float, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """``dz/dt`` at the stage ``(t, y)`` with ``z`` the stage's sensitivities: the
+        integrands, and per parameter the change of ``(f, g)`` along it."""
+        out = np.empty_like(z)
+        if self.m:
+            out[:self.m] = self._integrals(self.model, t, *self._split(y))
+        scale = state_scale(self.model, y[self.n:])
+        for j, tangent in enumerate(self.tangents):
+            S = z[self._s(j)]
+            out[self._s(j).start:self._g(j).stop] = tangent.along(
+                lambda model, h: self._f_and_g(model, t, y + h * S), reach(scale, S))
+        return out
+
+    def _f_and_g(self, model, t: float, y: np.ndarray) -> np.ndarray:
+        """``(f, g)`` of ``model`` (the model or one of its variants) at ``(t, y)``: the
+        compiled right-hand side and the integrands."""
+        arrays, work = self.compiled[id(model)]
+        f = np.empty(self.n2)
+        status = stepping.derivative(arrays, self.key, t, y, self.charts, f, work)
+        self.stats["sensitivity_evaluations"] += 1
+        if status != 0:
+            raise IntegrationError(
+                f"forward sensitivities of '{self.model.name}': the model "
+                f"{'' if model is self.model else 'with a parameter moved '}could not be "
+                f"evaluated at t = {t:.6g} s beside the motion (a singular or non-finite "
+                "state)", time=t)
+        if not self.m:
+            return f
+        return np.concatenate([f, self._integrals(model, t, *self._split(y))])
+
+    def _integrals(self, model, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        out = np.empty(self.m)
+        for k, (name, g) in enumerate(self.integrands.items()):
+            value = g(model, t, q, qd)
+            if not np.isfinite(value) or np.ndim(value):
+                raise ModelError(f"integral '{name}': g(model, t, q, qd) must return a finite "
+                                 f"number, returned {value!r} at t = {t:.6g} s")
+            out[k] = value
+        return out
+
+    def _reset_charts(self, y_start: np.ndarray, moved: np.ndarray) -> None:
+        """Map the Rodrigues parameters' sensitivities through the chart reset at the start
+        of the step just taken (sheet 1.5; the body-axis velocities are unchanged)."""
+        for b in np.flatnonzero(moved):
+            o = 6 * b + 3
+            g = y_start[o:o + 3]
+            J = (np.eye(3) - _tilde(g)) / (1.0 + g @ g)
+            for j in range(len(self.tangents)):
+                start = self._s(j).start
+                self.z[start + o:start + o + 3] = J @ self.z[start + o:start + o + 3]
+        self._k0 = None
+
+    # -- coordinates: the sensitivities of y = (q, v) and of (q, qd) ------------------------
+    def _rate_tangent(self, q: np.ndarray, qd: np.ndarray, S: np.ndarray) -> tuple:
+        """``(s, s')``, the sensitivities of ``(q, qd)``, from ``S`` of ``y = (q, v)``:
+        ``qd = rates(q, v)`` is a polynomial of degree three along any line, which the
+        fourth-order difference (exact to degree four) differentiates exactly."""
+        body = self.model.body_type
+        v = body.velocities(q, qd)
+        s, sv = S[:self.n], S[self.n:]
+        h = 1.0 / max(1.0, float(np.max(np.abs(S), initial=0.0)))
+        return s, slope([body.rates(q + o * h * s, v + o * h * sv) for o in OFFSETS], h)
+
+    def _state_tangent(self, q: np.ndarray, qd: np.ndarray, s: np.ndarray, sd: np.ndarray
+                       ) -> np.ndarray:
+        """``S`` of ``y = (q, v)`` from ``(s, s')``: ``v = velocities(q, qd)`` is linear in
+        ``qd``, so ``S_v = velocities(q, s' - d(rates)/dq s)`` at ``v`` held."""
+        body = self.model.body_type
+        v = body.velocities(q, qd)
+        h = 1.0 / max(1.0, float(np.max(np.abs(s), initial=0.0)))
+        along = slope([body.rates(q + o * h * s, v) for o in OFFSETS], h)
+        return np.concatenate([s, body.velocities(q, sd - along)])
+
+    # -- results --------------------------------------------------------------------------------
+    def _record(self, t: float, q, qd, qdd, lam, z: np.ndarray) -> None:
+        """The sensitivities at an output time, of ``(q, qd)`` from ``z``, of ``(qdd, lam)``
+        as their change along each parameter at that state."""
+        charts, p = self.chart(), len(self.tangents)
+        out = [np.zeros((self.n, p)), np.zeros((self.n, p)), np.zeros((self.n, p)),
+               np.zeros((len(lam), p)), z[:self.m].copy(), np.zeros((self.m, p))]
+        for j, tangent in enumerate(self.tangents):
+            s, sd = self._rate_tangent(q, qd, z[self._s(j)])
+
+            def moved(variant, h):
+                a, multipliers, _ = consistent_accelerations(variant, t, q + h * s, qd + h * sd,
+                                                             charts, fallback=False)
+                return np.concatenate([a, multipliers])
+            change = tangent.along(moved, reach(state_scale(self.model, qd), s, sd))
+            out[0][:, j], out[1][:, j] = s, sd
+            out[2][:, j], out[3][:, j] = change[:self.n], change[self.n:]
+            out[5][:, j] = z[self._g(j)]
+        self.outputs.append(tuple(out))
+
+    def sensitivities(self, results, parameters: Sequence[str]) -> Sensitivities:
+        """The :class:`Sensitivities` of ``results`` (the outputs this run computed)."""
+        k = len(results.t)
+        dq, dqd, dqdd, dlam, G, dG = (np.array([o[i] for o in self.outputs[:k]])
+                                      for i in range(6))
+        integrals = {name: (G[:, i], dG[:, i, :]) for i, name in enumerate(self.integrands)}
+        return Sensitivities(results, parameters, self.tangents, dq, dqd, dqdd, dlam,
+                             integrals=integrals)
+
+
+def _refuse(model, request: DynamicsRequest) -> None:
+    """What forward sensitivities do not cover, named (see the module doc)."""
+    what = f"forward sensitivities of '{model.name}'"
+    reasons = []
+    if model._core.python_parts:
+        reasons.append("force elements or motions given as Python functions, or joint "
+                       "friction (evaluated in Python, not through the model's variants)")
+    if len(model.velocity_rows):
+        reasons.append("rolling rows (velocity-only constraints)")
+    group = contact_group(model, required=False)
+    if group is not None and np.any(group.rigid):
+        reasons.append("rigid contacts (the sensitivities jump at an impact)")
+    if reasons:
+        raise ModelError(f"{what}: not covered for {'; '.join(reasons)}")
+
+
+def _projected(model, tangent: ModelTangent, t: float, q: np.ndarray, qd: np.ndarray, charts,
+               s: np.ndarray, sd: np.ndarray, held: np.ndarray | None = None) -> tuple:
+    """``(s, s')`` projected as the mass-weighted projection of ``(q, qd)`` onto the
+    constraints moves them (sheet 1.4): ``[M Cq^T; Cq 0] [ds; mu] = [0; -(Cq s + C_p)]``, then
+    the same for ``s'`` with the velocity rows' change ``d(Cq qd + C_t)`` along the parameter
+    and the state's sensitivities; ``held`` coordinates (indices) are kept (their rows
+    ``ds_i = 0`` beside the constraints', as the initial state holds them)."""
+    fr = constraints.frames(model, q, qd, charts)
+    data = constraints.evaluate(model, t, fr, False, True)[1]
+    correction = _least_change(model, fr, data, held)
+    s = s + correction(constraints.jacobian_times(model, data, s)
+                       + tangent.constraint_rows(t, fr))
+    velocity = tangent.along(lambda v, h: _velocity_residual(v, t, q + h * s, qd + h * sd,
+                                                             charts),
+                             reach(state_scale(model, qd), s, sd))
+    return s, sd + correction(velocity)
+
+
+def _least_change(model, fr, data: np.ndarray, held: np.ndarray | None):
+    """``dx(r)``: the least mass-weighted change with ``Cq dx = -r`` (``held`` coordinates
+    kept), from the model's own factorization of ``[M Cq^T; Cq 0]`` (dense with ``held``)."""
+    n = model.n_coordinates
+    blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
+    if held is None or not len(held):
+        factors = factor_model_augmented(model, blocks, data)
+        return lambda r: factors.solve(np.concatenate([np.zeros(n), -r]))[:n]
+    rows = np.vstack([constraints.jacobian_matrix(model, data, sparse=False), np.eye(n)[held]])
+    K = np.block([[mass_matrix(model, fr, sparse=False), rows.T],
+                  [rows, np.zeros((len(rows), len(rows)))]])
+    lu = scipy.linalg.lu_factor(K, check_finite=False)
+    return lambda r: scipy.linalg.lu_solve(lu, np.concatenate(
+        [np.zeros(n), -r, np.zeros(len(held))]), check_finite=False)[:n]
+
+
+def _velocity_residual(variant, t: float, q: np.ndarray, qd: np.ndarray, charts) -> np.ndarray:
+    """``Cq qd + C_t`` of ``variant`` at ``(q, qd)``."""
+    fr = constraints.frames(variant, q, charts=charts)
+    _, data, _, nu = constraints.evaluate(variant, t, fr, False, True, False, True)
+    return constraints.jacobian_times(variant, data, qd) - nu
+
+
+def _tilde(g: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -g[2], g[1]], [g[2], 0.0, -g[0]], [-g[1], g[0], 0.0]])
+
+
+#: what the compiled loop returns when it failed
+_FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
