@@ -1,12 +1,20 @@
 """What the sensitivities of an analysis cost against the analysis itself: inverse dynamics of
 the slider-crank and of a hanging planar chain driven at every pin, then ``mb.sensitivities``
-of its results with respect to p of the model's numbers (masses and joint points), medians of
-a few runs in one process.
+of its results with respect to p of the model's numbers (masses and joint points); and
+forward dynamics of the slider-crank turned by a torque and of a falling 100-link chain
+against ``mb.forward_sensitivities`` of the same run with p masses. Medians of a few runs in
+one process.
 
 Each parameter costs its four variants of the model (built once) and, per time point, one
 solve for the positions with the exact rows, and eight evaluations of the rows and four of
 the dynamic equations along the parameter: the ratio per parameter is what to expect of a
 study of p parameters, p times it.
+
+Forward sensitivities take, at every stage of every step, the change of the right-hand side
+along each parameter from four evaluations of the model's variants (eight where the state's
+sensitivities are large: :meth:`mbd3d.model.tangents.ModelTangent.along`), each a compiled
+evaluation called from Python: their cost is about ten analyses per parameter, not the issue's
+target of half of one, which needs the right-hand side's own tangent compiled.
 
 Run: python benchmarks/sensitivities.py [--repeat N]
 """
@@ -18,7 +26,7 @@ import argparse
 import numpy as np
 
 import mbd3d as mb
-from mbd3d.mechanisms import slider_crank
+from mbd3d.mechanisms import pendulum_chain, slider_crank
 from kinematics import driven_chain
 from measure import machine, median_time
 
@@ -47,7 +55,35 @@ def main(points: int = 101, links: int = 10, counts: tuple = (1, 4), repeat: int
     return rows
 
 
+def forward(counts: tuple = (1, 4), repeat: int = 3, links: int = 100, duration: float = 1.0
+            ) -> list[dict]:
+    """Per model and number of parameters: forward dynamics' time, forward sensitivities'
+    time, their ratio and the issue's target ``1 + 0.5 p`` (printed as a table); the chain
+    falls for half of ``duration`` [s]."""
+    rows = []
+    cases = ((slider_crank(crank_angle=1.134, crank_speed=None, crank_torque=2.0), duration),
+             (pendulum_chain(links), duration / 2))
+    for model, duration in cases:
+        t = np.linspace(0.0, duration, 11)
+        names = [n for n in mb.parameters(model) if n.endswith(".mass")]
+        options = dict(method="DOP853", rtol=1e-8, atol=1e-10)
+        mb.forward_sensitivities(model, t[:2] * 0.01, names[:1], **options)  # compiles
+        plain = median_time(lambda: mb.forward_dynamics(model, t, **options), repeat)
+        for p in counts:
+            cost = median_time(lambda: mb.forward_sensitivities(model, t, names[:p],
+                                                                **options), repeat)
+            rows.append({"model": model.name, "coordinates": model.n_coordinates, "p": p,
+                         "forward dynamics [s]": plain, "with sensitivities [s]": cost,
+                         "ratio": cost / plain, "target 1 + 0.5 p": 1 + 0.5 * p})
+    print(f"\nforward dynamics (DOP853, rtol 1e-8) against mb.forward_sensitivities of the "
+          f"same run to p masses (medians of {repeat})\n")
+    print(mb.format_table({key: [r[key] for r in rows] for key in rows[0]}))
+    return rows
+
+
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=3)
-    main(repeat=parser.parse_args().repeat)
+    arguments = parser.parse_args()
+    main(repeat=arguments.repeat)
+    forward(repeat=arguments.repeat)

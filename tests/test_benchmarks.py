@@ -132,6 +132,9 @@ def test_spheres_in_box_benchmark_runs(capsys, monkeypatch):
 
 def test_sensitivities_benchmark_runs(capsys, monkeypatch):
     monkeypatch.syspath_prepend(str(BENCHMARKS))
-    rows = _load("sensitivities").main(points=5, links=2, counts=(1,), repeat=1)
+    module = _load("sensitivities")
+    rows = module.main(points=5, links=2, counts=(1,), repeat=1)
     assert [r["p"] for r in rows] == [1, 1] and all(r["sensitivities [s]"] > 0 for r in rows)
+    rows = module.forward(counts=(1,), repeat=1, links=2, duration=0.02)
+    assert [r["p"] for r in rows] == [1, 1] and all(r["ratio"] > 0 for r in rows)
     assert "per parameter" in capsys.readouterr().out
