@@ -374,6 +374,30 @@ def test_identify_slider_crank_example(capsys, tmp_path):
     assert np.max(np.abs(column)) > 0.01
 
 
+def test_four_bar_synthesis_example(capsys, tmp_path):
+    example = load("four_bar_synthesis")
+    out = example.main(rrd=str(tmp_path / "fbs.rrd"))
+    assert "synthesised" in capsys.readouterr().out and recorded_steps(tmp_path / "fbs.rrd",
+                                                                        "coupler") == 101
+    fit = out["fit"]
+    # a linkage through all eight points exists (it traced them): found to rounding, in a
+    # few iterations of the exact Jacobian
+    assert fit.success and fit.nfev <= 10
+    assert np.max(out["misses"]) < 1e-12
+    np.testing.assert_allclose(fit.x, example.TRACED, rtol=0, atol=1e-10)
+    # the Jacobian at the start against central differences of the coupler point's path
+    start = example.build()
+    values = mb.parameters(start)
+    sens = mb.sensitivities(mb.kinematic_analysis(start, example.TIMES), example.PARAMETERS)
+    got = sens.derivative(lambda r: r.point("coupler", example.COUPLER_POINT).position)
+    for j, name in enumerate(example.PARAMETERS):
+        h = 1e-4
+        moved = [example.path(mb.with_parameters(start, {name: values[name] + d}))[1]
+                 for d in (-2 * h, -h, h, 2 * h)]
+        difference = (8 * (moved[2] - moved[1]) - (moved[3] - moved[0])) / (12 * h)
+        np.testing.assert_allclose(got[..., j], difference, rtol=0, atol=1e-9)
+
+
 def test_examples_refuse_a_bad_output_path_before_computing(tmp_path, capsys, monkeypatch):
     example = load("slider_crank")
     with pytest.raises(mb.MBDError, match="folder does not exist"):

@@ -94,6 +94,8 @@ EXAMPLES = {
                                                            "t": steps(0.0, 1.0, 0.01)}),
     "identify_slider_crank": (lambda m: m.build(), {"kind": "inverse",
                                                     "t": steps(0.0, 0.5, 0.0025)}),
+    "four_bar_synthesis": (lambda m: m.build(), {"kind": "kinematic",
+                                                 "t": steps(0.0, 0.7, 0.1)}),
     "spheres_in_box": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 0.3, 0.005),
                                              "method": "RK45", "rtol": 1e-5, "atol": 1e-8}),
 }
