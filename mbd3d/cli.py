@@ -1,4 +1,4 @@
-"""The ``mbd3d`` command: check, run, view and sweep model files.
+"""The ``mbd3d`` command: check, run, view, sweep and optimize model files.
 
 ::
 
@@ -8,6 +8,8 @@
     mbd3d view FILE.rrd                        # the Rerun viewer of the right version
     mbd3d sweep MODEL.yaml --grid joints.motor.motion.rate=5,10,20 [--folder sweep]
                            [--scheduler tcp://host:8786]
+    mbd3d optimize MODEL.yaml --vary bodies.rod.mass=0.5:5 (--minimize peak:motor.effort |
+                   --fit DATA.csv) [--starts 4] [--out BEST.yaml] [--scheduler ...]
 
 Exit status: 0 done, 1 the analysis failed or the model has a problem, 2 a bad command line or
 model file, 130 interrupted (Ctrl-C; a sweep keeps the runs done). Messages go to stderr;
@@ -118,7 +120,39 @@ def _parser() -> argparse.ArgumentParser:
                             "processes on this machine)")
     sweep.add_argument("--serial", action="store_true", help="run in this process")
     sweep.set_defaults(command=_sweep, name="sweep")
+
+    _optimize_parser(commands)
     return parser
+
+
+def _optimize_parser(commands) -> None:
+    """``mbd3d optimize``'s arguments."""
+    optimize = commands.add_parser("optimize", help="move parameters within bounds to "
+                                   "minimise an objective, from several starts, on Dask")
+    optimize.add_argument("model", help="the model file (.yaml)")
+    optimize.add_argument("--vary", action="append", required=True, metavar="FIELD=LOW:HIGH",
+                          help="a parameter and its bounds, e.g. bodies.rod.mass=0.5:5 "
+                               "(repeatable)")
+    goal = optimize.add_mutually_exclusive_group(required=True)
+    goal.add_argument("--minimize", metavar="STATISTIC:COLUMN",
+                      help="rms, peak, mean or final of a results column, e.g. "
+                           "peak:motor.effort")
+    goal.add_argument("--fit", metavar="DATA.csv",
+                      help="least squares against measured columns: a header 't [s]' and "
+                           "results' column names, a row per time (the analysis' times)")
+    optimize.add_argument("--analysis", choices=_KINDS[:3], help="default: as for run")
+    optimize.add_argument("--t", metavar="START:STOP:STEP", help="output times [s]")
+    optimize.add_argument("--starts", type=int, default=4,
+                          help="starts: the file's values, then spread over the bounds")
+    optimize.add_argument("--seed", type=int, default=0, help="of the spread starts")
+    optimize.add_argument("--out", metavar="FILE.yaml", help="write the best model there")
+    optimize.add_argument("--overwrite", action="store_true", help="replace --out")
+    optimize.add_argument("--folder", help="where the starts are kept (default: "
+                                           "MODEL_optimize); run again there, it resumes")
+    optimize.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler, as for "
+                                                                 "sweep")
+    optimize.add_argument("--serial", action="store_true", help="run in this process")
+    optimize.set_defaults(command=_optimize, name="optimize")
 
 
 # -- helpers -----------------------------------------------------------------------------------
@@ -146,8 +180,9 @@ def _times(text: str):
     return times_from_step(start, stop, step)
 
 
-def _chosen_analysis(args, loaded):
-    """The analysis to run: the command line's choices over the file's."""
+def _chosen_analysis(args, loaded, t=None):
+    """The analysis to run: the command line's choices over the file's (``t``: its times,
+    given)."""
     from mbd3d.errors import ModelError  # noqa: PLC0415
     from mbd3d.io.model_file import AnalysisSpec  # noqa: PLC0415
     import mbd3d as mb  # noqa: PLC0415
@@ -157,7 +192,9 @@ def _chosen_analysis(args, loaded):
     if kind is None:
         kind = "inverse" if mb.mobility(loaded.model).dof == 0 else "forward"
     options = dict(spec.options) if spec is not None and spec.kind == kind else {}
-    if args.t is not None:
+    if t is not None:
+        pass
+    elif args.t is not None:
         t = _times(args.t)
     elif spec is not None:
         t = spec.t
@@ -451,13 +488,8 @@ def _sweep(args) -> int:
     loaded = read(path)  # checks the file, and each field of the grid, before any run
     for key, values in axes.items():
         read(path, {key: values[0]})
-    spec = _chosen_analysis(args, loaded)
-    if spec.kind in ("equilibrium", "modes", "linearize"):
-        raise ModelError("sweep runs kinematic, inverse or forward analyses")
-    kind = {"kinematic": "kinematic", "inverse": "inverse dynamics",
-            "forward": "forward dynamics"}[spec.kind]
-    analysis = sweeps.Analysis(kind, spec.t, spec.options)
-    metrics = _default_metrics(loaded.model)
+    analysis = _study_analysis(args, loaded)
+    metrics = sweeps.default_metrics(loaded.model)
     # by default in the working directory, not beside the model file (which may be in a
     # repository, or someone else's folder)
     folder = args.folder or pathlib.Path(args.model).stem + "_sweep"
@@ -470,6 +502,62 @@ def _sweep(args) -> int:
               "sweep again to finish", file=sys.stderr)
         return 130
     return 1 if table.failed else 0
+
+
+def _study_analysis(args, loaded, t=None):
+    """The :class:`mbd3d.sweeps.Analysis` a sweep or an optimization runs (kinematic,
+    inverse or forward; ``t``: its times, given)."""
+    from mbd3d import sweeps  # noqa: PLC0415
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+
+    spec = _chosen_analysis(args, loaded, t)
+    kind = {"kinematic": "kinematic", "inverse": "inverse dynamics",
+            "forward": "forward dynamics"}.get(spec.kind)
+    if kind is None:
+        raise ModelError(f"{args.name} runs kinematic, inverse or forward analyses")
+    return sweeps.Analysis(kind, spec.t if t is None else t, spec.options)
+
+
+def _optimize(args) -> int:
+    from mbd3d import optimization  # noqa: PLC0415
+    from mbd3d.errors import ModelError  # noqa: PLC0415
+    from mbd3d.io.files import check_output_path  # noqa: PLC0415
+    from mbd3d.io.model_file import read  # noqa: PLC0415
+    import mbd3d as mb  # noqa: PLC0415
+
+    path = str(pathlib.Path(args.model).resolve())
+    loaded, bounds = read(path), optimization.parse_bounds(args.vary)
+    if args.fit is not None:
+        if args.t is not None:
+            raise ModelError("--t: a fit runs at its measurements' times")
+        objective = optimization.read_measurements(args.fit)
+    else:
+        objective = optimization.parse_objective(args.minimize)
+    analysis = _study_analysis(args, loaded, getattr(objective, "t", None))
+    out = args.out and check_output_path(args.out, args.overwrite, "the optimised model file")
+    table = optimization.optimize(
+        loaded.model, analysis, bounds, objective,
+        starts=args.starts, seed=args.seed,
+        folder=args.folder or pathlib.Path(args.model).stem + "_optimize",
+        client=args.scheduler, backend="serial" if args.serial else "auto",
+        factory=_FileFactory(path, {name: name for name in bounds}))
+    print(table)
+    if table.summary.get("interrupted"):
+        print("mbd3d optimize: interrupted; the starts done are kept in the folder",
+              file=sys.stderr)
+        return 130
+    row = optimization.best(table)
+    if row is None:
+        print("mbd3d optimize: no start converged", file=sys.stderr)
+        return 1
+    values = {name: row[f"{name} optimised"] for name in bounds}
+    print(f"\nbest: {objective} = {row['objective']:.6g} (from {row['start objective']:.6g})"
+          + "".join(f"\n  {name} = {value:.9g}" for name, value in values.items()))
+    if out:
+        mb.save(mb.with_parameters(loaded.model, values), out, analyses=loaded.analyses,
+                overwrite=args.overwrite)
+        print(f"optimised model written to {os.path.abspath(out)}")
+    return 0
 
 
 def _parameter(field: str) -> str:
@@ -497,40 +585,6 @@ class _FileFactory:
     def __call__(self, **params):
         from mbd3d.io.model_file import read  # noqa: PLC0415
         return read(self.path, {self.fields[k]: v for k, v in params.items()}).model
-
-
-def _default_metrics(model) -> dict:
-    """Peak |effort| of every driver and the final position of every body (up to 12)."""
-    metrics = {}
-    for element in model.joints:
-        if element.is_driver:
-            metrics[f"peak |{element.name} effort|"] = _PeakEffort(element.name)
-    for body in model.bodies[:12]:
-        for axis, label in enumerate("xyz"[:model.dim]):
-            metrics[f"final {body.name}.{label}"] = _FinalPosition(body.name, axis)
-    return metrics
-
-
-class _PeakEffort:
-    def __init__(self, driver: str):
-        self.driver = driver
-
-    def sweep_identity(self) -> str:
-        return f"peak effort of {self.driver}"
-
-    def __call__(self, results) -> float:
-        return float(np.max(np.abs(results.driver(self.driver).effort)))
-
-
-class _FinalPosition:
-    def __init__(self, body: str, axis: int):
-        self.body, self.axis = body, axis
-
-    def sweep_identity(self) -> str:
-        return f"final position of {self.body} along {self.axis}"
-
-    def __call__(self, results) -> float:
-        return float(results.body(self.body).position[-1, self.axis])
 
 
 if __name__ == "__main__":

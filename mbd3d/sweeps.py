@@ -40,7 +40,7 @@ from mbd3d.io.results import Results
 from mbd3d.sampling import _plain, grid, monte_carlo
 from mbd3d.sweep_table import SweepTable
 
-__all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable"]
+__all__ = ["Analysis", "grid", "monte_carlo", "sweep", "SweepTable", "default_metrics"]
 
 _ANALYSES = ("kinematic", "inverse dynamics", "forward dynamics")
 #: seconds between rewrites of table.csv while a sweep runs (each run's own file is immediate)
@@ -498,3 +498,38 @@ class _Progress:
         print(f"sweep: {state}{summary['ok']} ok, {summary['failed']} failed, "
               f"{summary['skipped']} done earlier, of {summary['runs']} points{timing}",
               file=sys.stderr)
+
+
+def default_metrics(model) -> dict:
+    """A file's sweep's metrics (``mbd3d sweep``): the peak |effort| of every driver and the
+    final position of every body (up to 12)."""
+    metrics = {}
+    for element in model.joints:
+        if element.is_driver:
+            metrics[f"peak |{element.name} effort|"] = _PeakEffort(element.name)
+    for body in model.bodies[:12]:
+        for axis, label in enumerate("xyz"[:model.dim]):
+            metrics[f"final {body.name}.{label}"] = _FinalPosition(body.name, axis)
+    return metrics
+
+
+class _PeakEffort:
+    def __init__(self, driver: str):
+        self.driver = driver
+
+    def sweep_identity(self) -> str:
+        return f"peak effort of {self.driver}"
+
+    def __call__(self, results) -> float:
+        return float(np.max(np.abs(results.driver(self.driver).effort)))
+
+
+class _FinalPosition:
+    def __init__(self, body: str, axis: int):
+        self.body, self.axis = body, axis
+
+    def sweep_identity(self) -> str:
+        return f"final position of {self.body} along {self.axis}"
+
+    def __call__(self, results) -> float:
+        return float(results.body(self.body).position[-1, self.axis])
