@@ -39,7 +39,7 @@ import scipy.linalg
 
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.io.observers import Observer
-from mbd3d.io.parameters import parameter_variants
+from mbd3d.io.parameters import parameter_tangent
 from mbd3d.io.sensitivity_results import Sensitivities
 from mbd3d.model import constraints
 from mbd3d.model.contacts import contact_group
@@ -119,8 +119,7 @@ def forward_sensitivities(model, times: Sequence[float], parameters: Sequence[st
                               max_step, None, 0.9, hold, None, None, strict, observers,
                               progress)
     what = f"forward sensitivities of '{model.name}'"
-    tangents = [ModelTangent(model, *parameter_variants(model, name, OFFSETS),
-                             f"{what} to parameter '{name}'") for name in parameters]
+    tangents = [parameter_tangent(model, name, what) for name in parameters]
     integrator = SensitiveRungeKutta(request, tangents, dict(integrals or {}))
     results = drive(request, integrator)
     return integrator.sensitivities(results, parameters)
@@ -147,12 +146,10 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
                                  f"'{name}' must be callable as g(model, t, q, qd) -> float")
         self.m, self.n2 = len(self.integrands), 2 * self.n
         self.width = self.n2 + self.m
-        # the compiled right-hand sides of the model and its variants, by the model's id,
-        # each with a workspace of its own (the run's holds its contacts' power)
-        models = [model] + [v for tangent in self.tangents for v in tangent.variants]
-        self.compiled = {id(v): (v._core.arrays(), None) for v in models}
-        self.compiled = {key: (a, workspace(self.spatial, a))
-                         for key, (a, _) in self.compiled.items()}
+        # the compiled right-hand sides of the model and its variants, by the model's id
+        # (each kept alive by its tangent), each with a workspace of its own (the run's
+        # holds its contacts' power); made as they are first evaluated
+        self.compiled: dict = {}
         self.z = self.z_old = self.z_dense = self._k0 = None
         self.outputs: list[tuple] = []  # per output: (dq, dqd, dqdd, dlam, G, dG)
         self.stats["sensitivity_evaluations"] = 0
@@ -270,6 +267,9 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
     def _f_and_g(self, model, t: float, y: np.ndarray) -> np.ndarray:
         """``(f, g)`` of ``model`` (the model or one of its variants) at ``(t, y)``: the
         compiled right-hand side and the integrands."""
+        if id(model) not in self.compiled:  # variants at a shorter step, made as needed
+            arrays = model._core.arrays()
+            self.compiled[id(model)] = (arrays, workspace(self.spatial, arrays))
         arrays, work = self.compiled[id(model)]
         f = np.empty(self.n2)
         status = stepping.derivative(arrays, self.key, t, y, self.charts, f, work)

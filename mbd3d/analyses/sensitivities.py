@@ -35,12 +35,12 @@ from mbd3d.analyses.modes import Modes, ModesAlong, modes_about
 from mbd3d.analyses.position import singular_error
 from mbd3d.analyses.statics import accurate_stiffness, active_rows, equilibrium_residual
 from mbd3d.errors import ModelError
-from mbd3d.io.parameters import parameter_variants
+from mbd3d.io.parameters import parameter_tangent
 from mbd3d.io.results import Results
 from mbd3d.io.sensitivity_results import ModeSensitivities, Sensitivities
 from mbd3d.model import constraints
 from mbd3d.model.equations import generalized_forces, mass_matrix
-from mbd3d.model.tangents import OFFSETS, ModelTangent, reach, state_scale
+from mbd3d.model.tangents import reach, state_scale
 
 __all__ = ["sensitivities"]
 
@@ -86,8 +86,7 @@ def sensitivities(results: Results | Modes | ModesAlong, parameters: Sequence[st
     model = results.model
     what = f"sensitivities of the {results.analysis} of '{model.name}'"
     _check(model, results, what)
-    tangents = [ModelTangent(model, *parameter_variants(model, name, OFFSETS),
-                             f"{what} to parameter '{name}'") for name in parameters]
+    tangents = [parameter_tangent(model, name, what) for name in parameters]
     if results.analysis == "static equilibrium":
         dq, dlam = _static(results, tangents)
         return Sensitivities(results, parameters, tangents, dq, np.zeros_like(dq),

@@ -21,9 +21,10 @@ import numpy as np
 from mbd3d.errors import ModelError, did_you_mean
 from mbd3d.io.model_file import ModelFileError, _Reader
 from mbd3d.io.model_writer import model_data
+from mbd3d.model.tangents import OFFSETS, ModelTangent
 
 __all__ = ["parameters", "with_parameters", "ModelVariants", "parameter_value",
-           "parameter_variants"]
+           "parameter_variants", "parameter_tangent"]
 
 #: the parts of a model's data that hold its parameters (not its format, name or analyses)
 _SECTIONS = ("gravity", "bodies", "joints", "forces")
@@ -115,12 +116,13 @@ def _changed(data: dict, values: Mapping[str, float], whole: bool = True):
     return _Reader(f"<model '{name}'>", {}).build(data).model
 
 
-def parameter_variants(model, name: str, offsets: Sequence[float]) -> tuple[list, float]:
+def parameter_variants(model, name: str, offsets: Sequence[float], refine: int = 0
+                       ) -> tuple[list, float]:
     """The model built again with parameter ``name`` moved by each of ``offsets`` steps, and
     the step: the power of two nearest a thousandth of the parameter's size (of its vector's
-    length where it is a component, or of the model's length scale where both are zero). A
-    field written as a whole number (a point drawn at ``(0, 0)``) takes the fractions; one
-    that counts refuses them, naming the parameter.
+    length where it is a component, or of the model's length scale where both are zero),
+    divided by ``2**refine``. A field written as a whole number (a point drawn at ``(0,
+    0)``) takes the fractions; one that counts refuses them, naming the parameter.
 
     Raises
     ------
@@ -131,7 +133,8 @@ def parameter_variants(model, name: str, offsets: Sequence[float]) -> tuple[list
     value, size = parameter_value(model, name)
     # a power of two: the changed values are then exact, and so are the data that are
     # linear in them (a joint's point is the parameter itself)
-    step = 2.0 ** round(math.log2(1e-3 * (max(abs(value), size) or model.length_scale)))
+    step = 2.0 ** (round(math.log2(1e-3 * (max(abs(value), size) or model.length_scale)))
+                   - refine)
     data = _data(model)
     variants = []
     for o in offsets:
@@ -143,6 +146,14 @@ def parameter_variants(model, name: str, offsets: Sequence[float]) -> tuple[list
                              f"model invalid ({exc}): it has no derivative of its own; change "
                              "it together with the numbers it must agree with") from None
     return variants, step
+
+
+def parameter_tangent(model, name: str, what: str) -> ModelTangent:
+    """The :class:`~mbd3d.model.tangents.ModelTangent` of ``model`` along parameter ``name``
+    (its variants, and at shorter steps when asked), messages naming ``what``."""
+    return ModelTangent(model, *parameter_variants(model, name, OFFSETS),
+                        f"{what} to parameter '{name}'",
+                        finer=lambda k: parameter_variants(model, name, OFFSETS, refine=k))
 
 
 def _data(model) -> dict:
