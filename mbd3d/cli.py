@@ -130,10 +130,10 @@ def _optimize_parser(commands) -> None:
     optimize = commands.add_parser("optimize", help="move parameters within bounds to "
                                    "minimise an objective, from several starts, on Dask")
     optimize.add_argument("model", help="the model file (.yaml)")
-    optimize.add_argument("--vary", action="append", required=True, metavar="FIELD=LOW:HIGH",
+    optimize.add_argument("--vary", action="append", metavar="FIELD=LOW:HIGH",
                           help="a parameter and its bounds, e.g. bodies.rod.mass=0.5:5 "
-                               "(repeatable)")
-    goal = optimize.add_mutually_exclusive_group(required=True)
+                               "(repeatable; these, or the file's optimize: section)")
+    goal = optimize.add_mutually_exclusive_group()
     goal.add_argument("--minimize", metavar="STATISTIC:COLUMN",
                       help="rms, peak, mean or final of a results column, e.g. "
                            "peak:motor.effort")
@@ -142,9 +142,10 @@ def _optimize_parser(commands) -> None:
                            "results' column names, a row per time (the analysis' times)")
     optimize.add_argument("--analysis", choices=_KINDS[:3], help="default: as for run")
     optimize.add_argument("--t", metavar="START:STOP:STEP", help="output times [s]")
-    optimize.add_argument("--starts", type=int, default=4,
-                          help="starts: the file's values, then spread over the bounds")
-    optimize.add_argument("--seed", type=int, default=0, help="of the spread starts")
+    optimize.add_argument("--starts", type=int,
+                          help="starts: the file's values, then spread over the bounds "
+                               "(default 4)")
+    optimize.add_argument("--seed", type=int, help="of the spread starts (default 0)")
     optimize.add_argument("--out", metavar="FILE.yaml", help="write the best model there")
     optimize.add_argument("--overwrite", action="store_true", help="replace --out")
     optimize.add_argument("--folder", help="where the starts are kept (default: "
@@ -526,18 +527,15 @@ def _optimize(args) -> int:
     import mbd3d as mb  # noqa: PLC0415
 
     path = str(pathlib.Path(args.model).resolve())
-    loaded, bounds = read(path), optimization.parse_bounds(args.vary)
-    if args.fit is not None:
-        if args.t is not None:
-            raise ModelError("--t: a fit runs at its measurements' times")
-        objective = optimization.read_measurements(args.fit)
-    else:
-        objective = optimization.parse_objective(args.minimize)
+    loaded = read(path)
+    bounds, objective, starts, seed = optimization.command_terms(args, loaded)
+    if isinstance(objective, optimization.Fit) and args.t is not None:
+        raise ModelError("--t: a fit runs at its measurements' times")
     analysis = _study_analysis(args, loaded, getattr(objective, "t", None))
     out = args.out and check_output_path(args.out, args.overwrite, "the optimised model file")
     table = optimization.optimize(
         loaded.model, analysis, bounds, objective,
-        starts=args.starts, seed=args.seed,
+        starts=starts, seed=seed,
         folder=args.folder or pathlib.Path(args.model).stem + "_optimize",
         client=args.scheduler, backend="serial" if args.serial else "auto",
         factory=_FileFactory(path, {name: name for name in bounds}))

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.optimize
 
 from mbd3d.errors import MBDError, ModelError, did_you_mean
+from mbd3d.io.optimization_spec import OptimizationSpec
 from mbd3d.io.parameters import ModelVariants, parameter_value, with_parameters
 from mbd3d.io.results import Results
 from mbd3d.sweep_table import SweepTable
@@ -336,6 +337,22 @@ class _Value(_stat):
 # -- the command line's terms (mbd3d optimize) ---------------------------------------------------
 #: the largest measurement file read (a fit's data), and its most rows
 MAX_DATA_BYTES, MAX_DATA_ROWS = 50_000_000, 1_000_000
+
+
+def command_terms(args: Any, loaded: Any) -> tuple[dict, Objective | Fit, int, int]:
+    """``(bounds, objective, starts, seed)`` of ``mbd3d optimize``: the command line's
+    (``args.vary``, ``fit``, ``minimize``, ``starts``, ``seed``) over those of the model
+    file ``loaded`` (its ``optimize:`` section, :mod:`mbd3d.io.optimization_spec`)."""
+    section = loaded.optimization or OptimizationSpec({})
+    bounds = parse_bounds(args.vary) if args.vary else section.vary
+    fit = args.fit if args.fit or args.minimize else section.fit
+    if not bounds or not (fit or args.minimize or section.minimize):
+        raise ModelError(f"{loaded.path}: give the parameters to vary (--vary) and what to "
+                         "minimise (--minimize or --fit), or an optimize: section")
+    objective = (read_measurements(fit) if fit is not None
+                 else parse_objective(args.minimize or section.minimize))
+    return (bounds, objective, section.starts if args.starts is None else args.starts,
+            section.seed if args.seed is None else args.seed)
 
 
 def parse_bounds(items: Sequence[str]) -> dict:

@@ -132,6 +132,31 @@ def test_the_command_fits_a_file_and_writes_the_best_model(tmp_path):
     assert again.returncode == 2 and "--overwrite" in again.stderr  # nothing replaced
 
 
+def test_the_file_states_what_to_vary_and_fit(tmp_path):
+    # the model file's optimize: section, read as the command line's terms
+    start = mb.load(EXAMPLES / "models" / "identify_slider_crank.yaml")
+    truth = mb.with_parameters(start, dict(zip(MASSES, identify.TRUE)))
+    (tmp_path / "torque.csv").write_text("t [s],motor.effort\n" + "".join(
+        f"{float(t)!r},{float(value)!r}\n" for t, value in zip(T, measured_torque(truth))))
+    text = (EXAMPLES / "models" / "identify_slider_crank.yaml").read_text()
+    model_file = tmp_path / "model.yaml"
+    model_file.write_text(text + "optimize:\n  vary:\n" + "".join(
+        f"    {name}: [0.1, 20.0]\n" for name in MASSES) + "  fit: torque.csv\n  starts: 2\n")
+    done = mbd3d("optimize", model_file, "--serial", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "SweepTable(2 runs, 0 failed)" in done.stdout
+    assert (tmp_path / "model_optimize" / "table.csv").exists()
+    model_file.write_text(text + "optimize:\n  vary:\n    bodies.rod.mass: [2.0, 1.0]\n"
+                          "  minimize: rms:motor.effort\n")
+    bad = mbd3d("optimize", model_file, "--serial", cwd=tmp_path)
+    line = len(text.splitlines()) + 3
+    assert bad.returncode == 2 and f"model.yaml:{line}: optimize.vary.bodies.rod.mass: bounds" \
+        in bad.stderr, bad.stderr
+    nothing = mbd3d("optimize", EXAMPLES / "models" / "identify_slider_crank.yaml",
+                    "--serial", cwd=tmp_path)
+    assert nothing.returncode == 2 and "or an optimize: section" in nothing.stderr
+
+
 @pytest.mark.parametrize("args, message", [
     (["--vary", "bodies.rod.mass=1", "--minimize", "rms:motor.effort"], "FIELD=LOW:HIGH"),
     (["--vary", "bodies.rod.mass=2:1", "--minimize", "rms:motor.effort"], "lower < upper"),

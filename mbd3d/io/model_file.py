@@ -31,6 +31,9 @@ The format, version 1 (every field in SI units)::
     analyses:                      # optional: what `mbd3d run` does, and where it writes
       - {kind: forward, t: {start: 0.0, stop: 2.0, step: 0.01}, method: DOP853, rtol: 1e-10,
          rrd: run.rrd, csv: results}
+    optimize:                      # optional: what `mbd3d optimize` varies and minimises
+      vary: {bodies.crank.mass: [0.5, 2.0]}           # (mbd3d.io.optimization_spec)
+      minimize: peak:crank.omega
 
 Types are the classes of :mod:`mbd3d.joints` and the force elements of :mod:`mbd3d`
 (``PointForce``, ``Torque``, ``SpringDamper``, ``RotationalSpringDamper``, ``JointFriction``
@@ -70,6 +73,7 @@ from typing import Any, Callable
 import numpy as np
 
 from mbd3d.errors import ModelError, did_you_mean
+from mbd3d.io.optimization_spec import read_optimization
 from mbd3d.io.yaml12 import YamlError, load_yaml
 
 __all__ = ["AnalysisSpec", "ModelFile", "load", "read", "FORMAT_VERSION"]
@@ -79,7 +83,7 @@ FORMAT_VERSION = 1
 #: YAML 1.2 reading of it), so a hostile file cannot hold a run for more than a few minutes
 MAX_FILE_BYTES = 64_000_000
 _TOP_LEVEL = ("mbd3d", "name", "dim", "gravity", "urdf", "mjcf", "bodies", "joints", "forces",
-              "analyses")
+              "analyses", "optimize")
 _URDF_FIELDS = ("file", "fixed_base", "joint_positions", "drive")
 _MJCF_FIELDS = ("file", "joint_positions", "drive", "keyframe")
 _BODY_FIELDS = ("name", "mass", "inertia", "position", "angle", "orientation", "velocity",
@@ -125,6 +129,8 @@ class ModelFile:
     #: every other file the model was built from (a URDF and its meshes, mesh files of
     #: bodies), absolute paths: what a result made from the file also depends on
     sources: tuple[str, ...] = ()
+    #: its ``optimize:`` section (:mod:`mbd3d.io.optimization_spec`), or None
+    optimization: Any = None
 
 
 # -- reading ----------------------------------------------------------------------------------
@@ -336,7 +342,10 @@ class _Reader:
         analyses = [self._analysis(self._mapping(entry, ("analyses", index)),
                                    ("analyses", index))
                     for index, entry in enumerate(self._list(data, "analyses"))]
-        return ModelFile(model, analyses, data, self.path, tuple(dict.fromkeys(self.sources)))
+        optimization = (read_optimization(self, data["optimize"]) if "optimize" in data
+                        else None)
+        return ModelFile(model, analyses, data, self.path, tuple(dict.fromkeys(self.sources)),
+                         optimization)
 
     def _robot(self, kind: str, entry, builder, named: dict) -> None:
         """The robot of a URDF or MJCF file (``kind``), the start of the model (bodies and
