@@ -212,7 +212,7 @@ def starting_points(model, bounds: Mapping[str, tuple[float, float]], count: int
 
 def optimize(model, analysis: Analysis, bounds: Mapping[str, tuple[float, float]],
              objective: Objective | Fit, *, starts: int = 1, seed: int = 0,
-             folder: str | os.PathLike = "optimization", client: Any = None,
+             folder: str | os.PathLike, client: Any = None,
              backend: str = "auto", factory=None, progress: bool = True) -> SweepTable:
     """Minimise ``objective`` over the parameters in ``bounds`` from ``starts`` starts.
 
