@@ -93,7 +93,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--rows", type=int, default=11, help="rows of the summary table")
     run.add_argument("--sensitivity", action="append", default=[], metavar="PARAMETER",
                      help="also the results' derivatives with respect to a parameter, e.g. "
-                          "bodies.rod.mass (repeatable; kinematic, inverse and equilibrium)")
+                          "bodies.rod.mass (repeatable; kinematic, inverse, equilibrium and "
+                          "forward with an explicit method)")
     run.set_defaults(command=_run, name="run")
 
     view = commands.add_parser("view", help="open a recording in the Rerun viewer")
@@ -280,9 +281,14 @@ def _run(args) -> int:
     if csv_path is not None:
         from mbd3d.io.exports import CsvWriter  # noqa: PLC0415
         observers.append(CsvWriter(csv_path, overwrite=args.overwrite))
-    failure = None
+    failure = forward = None
     try:
-        res = spec.run(model, observers=observers)
+        if args.sensitivity and spec.kind == "forward":  # integrated with the motion
+            forward = mb.forward_sensitivities(model, spec.t, args.sensitivity,
+                                               observers=observers, **spec.options)
+            res = forward.results
+        else:
+            res = spec.run(model, observers=observers)
     except mb.MBDError as exc:  # what was computed before the failure is still written
         if getattr(exc, "results", None) is None:
             raise
@@ -298,7 +304,8 @@ def _run(args) -> int:
     if csv_path is not None:
         print(f"\nCSV written to {os.path.abspath(csv_path)}")
     if args.sensitivity and failure is None and res.status == "complete":
-        _run_sensitivities(args, res, sensitivity_csv)
+        _run_sensitivities(args, forward or mb.sensitivities(res, args.sensitivity),
+                           sensitivity_csv)
     if rrd is not None and args.show and failure is None:
         from mbd3d.viewer import show  # noqa: PLC0415
         show(rrd)
@@ -316,9 +323,12 @@ def _check_sensitivities(args, model, spec, csv_path) -> str | None:
 
     if not args.sensitivity:
         return None
-    if spec.kind not in ("kinematic", "inverse", "equilibrium"):
-        raise ModelError(f"--sensitivity is for kinematic, inverse and equilibrium analyses, "
-                         f"not {spec.kind}")
+    if spec.kind not in ("kinematic", "inverse", "equilibrium", "forward"):
+        raise ModelError(f"--sensitivity is for kinematic, inverse, equilibrium and forward "
+                         f"analyses, not {spec.kind}")
+    if spec.kind == "forward":
+        from mbd3d.optimization import check_forward_options  # noqa: PLC0415
+        check_forward_options(spec.options, "--sensitivity")
     for name in args.sensitivity:
         parameter_value(model, name)
     if csv_path is None:
@@ -327,13 +337,12 @@ def _check_sensitivities(args, model, spec, csv_path) -> str | None:
                              "the sensitivities' CSV file")
 
 
-def _run_sensitivities(args, res, csv_path: str | None) -> None:
-    """Print the results' sensitivities to each ``--sensitivity`` parameter, a table per
-    parameter (the first coordinates, and the drivers' efforts), and write them all."""
-    import mbd3d as mb  # noqa: PLC0415
+def _run_sensitivities(args, sens, csv_path: str | None) -> None:
+    """Print the results' sensitivities ``sens`` to each ``--sensitivity`` parameter, a
+    table per parameter (the first coordinates, and the drivers' efforts), and write them."""
     from mbd3d.io.results import format_table  # noqa: PLC0415
 
-    sens = mb.sensitivities(res, args.sensitivity)
+    res = sens.results
     columns = sens.columns()
     for name in args.sensitivity:
         shown = {"t [s]": columns["t [s]"]}

@@ -38,7 +38,7 @@ from mbd3d.sweep_table import SweepTable
 from mbd3d.sweeps import Analysis, sweep
 
 __all__ = ["Objective", "Fit", "LocalOptimization", "optimize", "best", "column",
-           "starting_points"]
+           "starting_points", "check_forward_options"]
 
 _STATISTICS = ("rms", "peak", "mean", "final")
 
@@ -250,7 +250,8 @@ def optimize(model, analysis: Analysis, bounds: Mapping[str, tuple[float, float]
         raise ModelError("optimize: a fit's analysis must run at the measured times")
     if not (isinstance(starts, int) and starts >= 1):
         raise ModelError(f"optimize: starts must be a whole number >= 1, got {starts!r}")
-    _check_forward(analysis)
+    if analysis.kind == "forward dynamics":
+        check_forward_options(analysis.options, "optimize")
     _check_columns(model, analysis, objective)
     local = LocalOptimization(analysis, bounds, objective)
     metrics = {"objective": _stat("objective"), "start objective": _stat("start"),
@@ -268,19 +269,18 @@ def best(table: SweepTable) -> dict | None:
     return min(rows, key=lambda row: row["objective"], default=None)
 
 
-def _check_forward(analysis: Analysis) -> None:
-    """Forward dynamics' options are those its sensitivities take (an explicit method)."""
-    if analysis.kind != "forward dynamics":
-        return
+def check_forward_options(options: Mapping[str, Any], what: str) -> None:
+    """Forward dynamics' ``options`` are those its sensitivities take (an explicit method);
+    messages start with ``what``."""
     import inspect  # noqa: PLC0415
     import mbd3d as mb  # noqa: PLC0415
 
     accepted = inspect.signature(mb.forward_sensitivities).parameters
-    refused = [f"option {name}" for name in analysis.options if name not in accepted]
-    if analysis.options.get("method") == "generalized-alpha":
+    refused = [f"option {name}" for name in options if name not in accepted]
+    if options.get("method") == "generalized-alpha":
         refused.insert(0, "method 'generalized-alpha'")
     if refused:
-        raise ModelError(f"optimize: forward dynamics' gradients come from "
+        raise ModelError(f"{what}: forward dynamics' gradients come from "
                          f"mb.forward_sensitivities, which takes the explicit methods and "
                          f"not {', '.join(refused)}: give method='DOP853' (or RK45, RK23) "
                          "and its options")

@@ -175,8 +175,10 @@ def test_a_model_file_can_ask_for_a_linearisation(tmp_path):
                                                        ": mass"),
     (("run", "{good}", "--analysis", "inverse", "--method", "RK45"), "--method is for forward"),
     (("run", "{good}", "--sensitivity", "bodies.bar.mas"), "did you mean 'bodies.bar.mass'"),
-    (("run", "{good}", "--analysis", "forward", "--sensitivity", "bodies.bar.mass"),
-     "--sensitivity is for kinematic, inverse and equilibrium analyses, not forward"),
+    (("run", "{good}", "--analysis", "modes", "--sensitivity", "bodies.bar.mass"),
+     "--sensitivity is for kinematic, inverse, equilibrium and forward analyses, not modes"),
+    (("run", "{good}", "--analysis", "forward", "--method", "generalized-alpha",
+      "--sensitivity", "bodies.bar.mass"), "not method 'generalized-alpha'"),
     (("check", "{missing}"), "cannot be read"),
     (("view", "{missing}"), "no recording"),
 ])
@@ -217,6 +219,23 @@ def test_run_prints_and_writes_the_sensitivities_asked_for(tmp_path):
     assert refused.returncode == 2 and "_sensitivities.csv' already exists" in refused.stderr
     assert refused.stdout == "" and not (tmp_path / "slider_crank_inverse.csv").exists()
     assert mbd3d(*command, "--overwrite", cwd=tmp_path).returncode == 0
+
+
+def test_run_integrates_forward_sensitivities_with_the_motion(tmp_path):
+    # the Haug slider-crank's file (DOP853, rtol 1e-11): the CSV holds what
+    # mb.forward_sensitivities gives for the same run
+    name = "forces.spring.stiffness"
+    done = mbd3d("run", MODELS / "haug_slider_crank.yaml", "--t", "0:1:0.5", "--csv",
+                 tmp_path, "--sensitivity", name, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    with open(tmp_path / "haug_slider_crank_forward_sensitivities.csv", newline="") as f:
+        written = [float(row[f"d(crank.theta)/d({name})"]) for row in csv.DictReader(f)]
+    sens = mb.forward_sensitivities(mb.load(MODELS / "haug_slider_crank.yaml"),
+                                    [0.0, 0.5, 1.0], [name], method="DOP853", rtol=1e-11,
+                                    atol=1e-13)
+    np.testing.assert_allclose(written, sens.sensitivity("crank.theta", name), rtol=1e-12,
+                               atol=1e-300)
+    assert abs(written[-1]) > 1e-4
 
 
 def test_an_unknown_command_is_a_usage_error():
