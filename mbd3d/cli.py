@@ -562,7 +562,7 @@ def _optimize(args) -> int:
           + "".join(f"\n  {name} = {value:.9g}" for name, value in values.items()))
     if out:
         mb.save(mb.with_parameters(loaded.model, values), out, analyses=loaded.analyses,
-                overwrite=args.overwrite)
+                overwrite=args.overwrite, optimization=loaded.optimization)
         print(f"optimised model written to {os.path.abspath(out)}")
     return 0
 

@@ -13,6 +13,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d.optimization import Fit, Objective, best, optimize, read_measurements
+from mbd3d.io.model_file import read
 from mbd3d.sweeps import Analysis
 
 EXAMPLES = pathlib.Path(__file__).parent.parent / "examples"
@@ -142,10 +143,16 @@ def test_the_file_states_what_to_vary_and_fit(tmp_path):
     model_file = tmp_path / "model.yaml"
     model_file.write_text(text + "optimize:\n  vary:\n" + "".join(
         f"    {name}: [0.1, 20.0]\n" for name in MASSES) + "  fit: torque.csv\n  starts: 2\n")
-    done = mbd3d("optimize", model_file, "--serial", cwd=tmp_path)
+    (tmp_path / "best").mkdir()
+    done = mbd3d("optimize", model_file, "--serial", "--out", tmp_path / "best" / "best.yaml",
+                 cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert "SweepTable(2 runs, 0 failed)" in done.stdout
     assert (tmp_path / "model_optimize" / "table.csv").exists()
+    # the best model's file keeps the section, its measurements found from where it is
+    kept = read(tmp_path / "best" / "best.yaml")
+    assert kept.optimization == read(model_file).optimization
+    assert mb.parameters(kept.model)[MASSES[0]] == pytest.approx(identify.TRUE[0], abs=1e-8)
     model_file.write_text(text + "optimize:\n  vary:\n    bodies.rod.mass: [2.0, 1.0]\n"
                           "  minimize: rms:motor.effort\n")
     bad = mbd3d("optimize", model_file, "--serial", cwd=tmp_path)

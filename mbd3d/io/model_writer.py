@@ -20,7 +20,7 @@ __all__ = ["save", "model_data"]
 
 
 def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | dict] = (),
-         overwrite: bool = False) -> str:
+         overwrite: bool = False, optimization: Any = None) -> str:
     """Write ``model`` as a model file that rebuilds it (see the module doc).
 
     Each body is written with the arguments of ``add_body`` that made it, each joint, driver
@@ -29,7 +29,9 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
     ``<stem>.<body>.obj``, the body's name made a file name (characters other than letters,
     digits, ``.``, ``_`` and ``-`` replaced, and a digest of the name added when any was),
     so that no name can put a file elsewhere. Every file is checked before any is written,
-    and none that exists is replaced unless ``overwrite``.
+    and none that exists is replaced unless ``overwrite``. ``optimization`` (a file's
+    :class:`~mbd3d.io.optimization_spec.OptimizationSpec`) is written as its ``optimize:``
+    section, its measurements' file named relative to the new file.
 
     Raises
     ------
@@ -53,6 +55,8 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
         shape, body.name, meshes.get(body.name), folder, overwrite))
     if analyses:
         data["analyses"] = [_analysis_entry(a) for a in analyses]
+    if optimization is not None:
+        data["optimize"] = optimization.entry(folder)
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
     return files.atomic_write(target, lambda f: f.write(text), text=True, overwrite=overwrite,
                               what="the model file")

@@ -17,6 +17,8 @@ section's. Mistakes are reported with the file, the line and the field.
 from __future__ import annotations
 
 import math
+import os
+import pathlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,6 +37,15 @@ class OptimizationSpec:
     minimize: str | None = None
     starts: int = 4
     seed: int = 0
+
+    def entry(self, folder: str | os.PathLike) -> dict:
+        """The section as a file in ``folder`` writes it (``fit`` relative to it)."""
+        entry: dict = {"vary": {name: list(pair) for name, pair in self.vary.items()}}
+        if self.fit is not None:
+            entry["fit"] = pathlib.Path(os.path.relpath(self.fit, folder)).as_posix()
+        else:
+            entry["minimize"] = self.minimize
+        return {**entry, "starts": self.starts, "seed": self.seed}
 
 
 def read_optimization(reader: Any, entry: Any) -> OptimizationSpec:
@@ -71,7 +82,7 @@ def read_optimization(reader: Any, entry: Any) -> OptimizationSpec:
             raise reader.error(where + (key,), f"must be a whole number >= {least}, got "
                                                f"{value!r}")
         counts[key] = value
-    fit = str(reader.folder / entry["fit"]) if "fit" in entry else None
+    fit = os.path.normpath(reader.folder / entry["fit"]) if "fit" in entry else None
     return OptimizationSpec(bounds, fit, entry.get("minimize"), **counts)
 
 
