@@ -221,6 +221,7 @@ def test_run_prints_and_writes_the_sensitivities_asked_for(tmp_path):
     assert mbd3d(*command, "--overwrite", cwd=tmp_path).returncode == 0
 
 
+@pytest.mark.compiled_only
 def test_run_integrates_forward_sensitivities_with_the_motion(tmp_path):
     # the Haug slider-crank's file (DOP853, rtol 1e-11): the CSV holds what
     # mb.forward_sensitivities gives for the same run

@@ -84,6 +84,7 @@ def test_minimize_stops_at_the_bound_the_gradient_points_to(tmp_path):
     assert row["objective"] < row["start objective"]
 
 
+@pytest.mark.compiled_only
 def test_forward_dynamics_gradients_come_from_its_sensitivities(tmp_path):
     # the Haug slider-crank's crank angle after 2 s against its spring's stiffness: the
     # objective's gradient from mb.forward_sensitivities against differences of runs
