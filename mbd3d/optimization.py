@@ -191,7 +191,7 @@ class LocalOptimization:
 
 
 def starting_points(model, bounds: Mapping[str, tuple[float, float]], count: int, seed: int
-           ) -> list[dict]:
+                    ) -> list[dict]:
     """``count`` starting points: the model's own values clipped into the bounds, then a
     seeded Latin hypercube over them (each parameter's range cut into ``count - 1`` strata,
     one point in each, the strata paired at random)."""
@@ -238,7 +238,7 @@ def optimize(model, analysis: Analysis, bounds: Mapping[str, tuple[float, float]
     -------
     SweepTable
         One row per start: the start's values (its parameters) and the metrics ``objective``
-        (the least found), ``start objective``, ``evaluations``, ``success`` and each
+        (the least found; of a fit, the sum of the squared residuals), ``start objective``, ``evaluations``, ``success`` and each
         parameter's optimised value (``"<name> optimised"``); :func:`best` picks the best.
     """
     bounds = _checked_bounds(model, bounds)

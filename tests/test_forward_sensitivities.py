@@ -100,7 +100,7 @@ def test_closed_loop_against_differences(constraint_tol):
     tight = dict(options, rtol=1e-13, atol=1e-15)
     for j, name in enumerate(names):
         # steps of 1e-5 of the parameter's size: the angle moves by 16 rad per N m of the
-        # torque, and a difference's error grows with the fifth power of its step's move
+        # torque, and a difference's error grows with the fourth power of its step's move
         # (steps of 1e-4 were 4e-8 off at 0.8 s), its noise as the runs' error over the step
         h = 1e-5 * max(abs(mb.parameters(model)[name]), 0.1)
         runs = central_difference(model, name, h, lambda m: state(mb.forward_dynamics(

@@ -101,7 +101,7 @@ class ModelTangent:
 
         ``reach``: how far the state moves per unit of ``offset``, relative to its scale (the
         largest ``|s_i| / scale_i``). Where a step of the variants would move it further than
-        :data:`REACH`, the stencil's error (the fifth power of that move) would show: a crank
+        :data:`REACH`, the stencil's error (the fourth power of that move) would show: a crank
         whose angle changes by 16 rad per N m of its torque, differenced with steps of 2e-3
         N m, was off by 4e-4. The change is then the parameter's alone (the variants with the
         state held, ``offset`` 0) plus the state's alone (``quantity(model, offset)``, the
