@@ -238,8 +238,9 @@ def optimize(model, analysis: Analysis, bounds: Mapping[str, tuple[float, float]
     -------
     SweepTable
         One row per start: the start's values (its parameters) and the metrics ``objective``
-        (the least found; of a fit, the sum of the squared residuals), ``start objective``, ``evaluations``, ``success`` and each
-        parameter's optimised value (``"<name> optimised"``); :func:`best` picks the best.
+        (the least found; of a fit, the sum of the squared residuals), ``start objective``,
+        ``evaluations``, ``success`` and each parameter's optimised value (``"<name>
+        optimised"``); :func:`best` picks the best.
     """
     bounds = _checked_bounds(model, bounds)
     if not isinstance(objective, (Objective, Fit)):
