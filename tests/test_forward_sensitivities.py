@@ -180,6 +180,9 @@ def test_refused_by_name():
     with pytest.raises(mb.ModelError, match="integral 'G'.*finite number"):
         mb.forward_sensitivities(model, [0.0, 0.1], SPRING,
                                  integrals={"G": lambda m, t, q, qd: math.nan})
+    with pytest.raises(mb.ModelError, match="integral 'G'.*finite number"):
+        mb.forward_sensitivities(model, [0.0, 0.1], SPRING,
+                                 integrals={"G": lambda m, t, q, qd: "energy"})
     ball = mb.load(EXAMPLES / "models" / "rigid_impacts.yaml")
     with pytest.raises(mb.ModelError, match="rigid contacts"):
         mb.forward_sensitivities(ball, [0.0, 0.1], [next(iter(mb.parameters(ball)))])

@@ -37,7 +37,7 @@ from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.kinematics import project_state
 from mbd3d.analyses.position import LARGEST_DENSE_ANALYSIS, singular_error
 
-__all__ = ["ExplicitRungeKutta", "stiffest_elements"]
+__all__ = ["ExplicitRungeKutta", "FAILURES", "stiffest_elements"]
 
 
 class ExplicitRungeKutta(Integrator):
@@ -204,7 +204,7 @@ class ExplicitRungeKutta(Integrator):
 
     def check(self, segment: Segment) -> None:
         flags, model, method = segment.flags, self.model, self.request.method
-        if flags in _FAILURES:
+        if flags in FAILURES:
             raise self._failure(flags, segment.t_new, self.y_old)
         if flags & stepping.CHECK_STIFFNESS:
             t = self.request.t
@@ -460,7 +460,7 @@ _STEPS_PER_CALL = 2000
 #: step in three was rejected; a reset costs one 3x3 product per body, not a restart.
 _STEP_CHART_LIMIT = 0.0
 #: what the compiled loop returns when it failed
-_FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
+FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
 
 
 def _initial_step(arrays, key, tableau, t0: float, y: np.ndarray,

@@ -53,7 +53,7 @@ from mbd3d.numerics.compiled.structures import workspace
 from mbd3d.numerics.linalg import factor_model_augmented
 from mbd3d.analyses.accelerations import consistent_accelerations
 from mbd3d.analyses.driver import DynamicsRequest, Segment, drive
-from mbd3d.analyses.explicit import ExplicitRungeKutta
+from mbd3d.analyses.explicit import FAILURES, ExplicitRungeKutta
 from mbd3d.analyses.position import hold_indices
 
 __all__ = ["forward_sensitivities", "SensitiveRungeKutta"]
@@ -164,18 +164,19 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         held = hold_indices(self.model, self.request.hold)
         z = np.zeros(self.m + len(self.tangents) * self.width)
         zero = np.zeros(self.n)
-        for j, tangent in enumerate(self.tangents):
-            s, sd = _projected(self.model, tangent, t0, q, qd, self.chart(), zero, zero, held)
+        pairs = [_projected(self.model, tangent, t0, q, qd, self.chart(), zero, zero, held)
+                 for tangent in self.tangents]
+        for j, (s, sd) in enumerate(pairs):
             z[self._s(j)] = self._state_tangent(q, qd, s, sd)
         self.z = z
-        self._record(t0, q, qd, *first, z)
+        self._record(t0, q, qd, *first, pairs, z)
         return first
 
     def advance(self, t_target: float, every_step: bool) -> Segment:
         y_start = self.y.copy()
         charts = self.chart()
         segment = super().advance(t_target, True)  # one step: the sensitivities follow it
-        if segment.flags in _FAILURES:
+        if segment.flags in FAILURES:
             return segment
         if self.spatial:
             moved = np.any(self.charts != charts, axis=(1, 2))
@@ -203,11 +204,10 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         kind = self.tableau.dense_kind
         z = interpolate(kind, self.z_dense, self.z_old, t_old, step, t)
         q_from, qd_from = segment.state_at(t)  # before the output's projection
-        for j, tangent in enumerate(self.tangents):
-            s, sd = self._rate_tangent(q_from, qd_from, z[self._s(j)])
-            s, sd = _projected(self.model, tangent, t, q, qd, self.chart(), s, sd)
-            z[self._s(j)] = self._state_tangent(q, qd, s, sd)
-        self._record(t, q, qd, qdd, lam, z)
+        pairs = [_projected(self.model, tangent, t, q, qd, self.chart(),
+                            *self._rate_tangent(q_from, qd_from, z[self._s(j)]))
+                 for j, tangent in enumerate(self.tangents)]
+        self._record(t, q, qd, qdd, lam, pairs, z)
         return q, qd, qdd, lam
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
@@ -288,22 +288,25 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         out = np.empty(self.m)
         for k, (name, g) in enumerate(self.integrands.items()):
             value = g(model, t, q, qd)
-            if not np.isfinite(value) or np.ndim(value):
+            try:
+                out[k] = value if np.ndim(value) == 0 else np.nan
+            except (TypeError, ValueError):
+                out[k] = np.nan
+            if not np.isfinite(out[k]):
                 raise ModelError(f"integral '{name}': g(model, t, q, qd) must return a finite "
                                  f"number, returned {value!r} at t = {t:.6g} s")
-            out[k] = value
         return out
 
     def _reset_charts(self, y_start: np.ndarray, moved: np.ndarray) -> None:
         """Map the Rodrigues parameters' sensitivities through the chart reset at the start
         of the step just taken (sheet 1.5; the body-axis velocities are unchanged)."""
-        for b in np.flatnonzero(moved):
-            o = 6 * b + 3
-            g = y_start[o:o + 3]
-            J = (np.eye(3) - _tilde(g)) / (1.0 + g @ g)
-            for j in range(len(self.tangents)):
-                start = self._s(j).start
-                self.z[start + o:start + o + 3] = J @ self.z[start + o:start + o + 3]
+        bodies = np.flatnonzero(moved)
+        g = y_start[:self.n].reshape(-1, 6)[bodies, 3:]
+        # J s = (s - g x s) / (1 + g.g), every moved body at once
+        for j in range(len(self.tangents)):
+            S = self.z[self._s(j)][:self.n].reshape(-1, 6)  # a view into z
+            s = S[bodies, 3:]
+            S[bodies, 3:] = (s - np.cross(g, s)) / (1.0 + np.sum(g * g, axis=1))[:, None]
         self._k0 = None
 
     # -- coordinates: the sensitivities of y = (q, v) and of (q, qd) ------------------------
@@ -328,14 +331,14 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         return np.concatenate([s, body.velocities(q, sd - along)])
 
     # -- results --------------------------------------------------------------------------------
-    def _record(self, t: float, q, qd, qdd, lam, z: np.ndarray) -> None:
-        """The sensitivities at an output time, of ``(q, qd)`` from ``z``, of ``(qdd, lam)``
-        as their change along each parameter at that state."""
+    def _record(self, t: float, q, qd, qdd, lam, pairs: list, z: np.ndarray) -> None:
+        """The sensitivities at an output time: of ``(q, qd)`` each parameter's ``(s, s')``
+        of ``pairs``, of ``(qdd, lam)`` their change along it at that state, of the integrals
+        from ``z``."""
         charts, p = self.chart(), len(self.tangents)
         out = [np.zeros((self.n, p)), np.zeros((self.n, p)), np.zeros((self.n, p)),
                np.zeros((len(lam), p)), z[:self.m].copy(), np.zeros((self.m, p))]
-        for j, tangent in enumerate(self.tangents):
-            s, sd = self._rate_tangent(q, qd, z[self._s(j)])
+        for j, (tangent, (s, sd)) in enumerate(zip(self.tangents, pairs)):
 
             def moved(variant, h):
                 a, multipliers, _ = consistent_accelerations(variant, t, q + h * s, qd + h * sd,
@@ -412,11 +415,3 @@ def _velocity_residual(variant, t: float, q: np.ndarray, qd: np.ndarray, charts)
     fr = constraints.frames(variant, q, charts=charts)
     _, data, _, nu = constraints.evaluate(variant, t, fr, False, True, False, True)
     return constraints.jacobian_times(variant, data, qd) - nu
-
-
-def _tilde(g: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -g[2], g[1]], [g[2], 0.0, -g[0]], [-g[1], g[0], 0.0]])
-
-
-#: what the compiled loop returns when it failed
-_FAILURES = (stepping.STEP_TOO_SMALL, stepping.SINGULAR, stepping.DIVERGED)
