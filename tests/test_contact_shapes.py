@@ -6,12 +6,14 @@ a box bouncing on its corners."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from fractions import Fraction
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq, minimize, minimize_scalar
+from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
@@ -55,6 +57,30 @@ def _box_point(centre, A, half, p) -> float:
     found = minimize(lambda x: float(np.sum((x - local) ** 2)), np.zeros(3), method="L-BFGS-B",
                      bounds=list(zip(-half, half)), options={"ftol": 1e-30, "gtol": 1e-14})
     return math.sqrt(found.fun)
+
+
+def _box_segment(centre, A, half, a, b) -> float:
+    """Signed distance of the segment ``[a, b]`` from the box: where the segment runs through
+    the box, minus the least translation that parts them, the distance from the origin to the
+    boundary of the box less the segment (the convex hull of the corners less the ends, by
+    Qhull); else SciPy's least squared distance over the segment's and the box's points."""
+    la, lb = A.T @ (a - centre), A.T @ (b - a) + A.T @ (a - centre)
+    dim = len(half)
+    corners = np.array(list(itertools.product(*[(-h, h) for h in half])))
+    hull = ConvexHull(np.vstack([corners - la, corners - lb]))
+    # facets n . x + offset <= 0 inside, n unit outward: the origin's distance to each
+    inside = -hull.equations[:, -1]
+    if np.all(inside > 0.0):
+        return -float(np.min(inside))
+
+    def distance2(x):
+        return float(np.sum((x[1:] - la - x[0] * (lb - la)) ** 2))
+
+    best = min((minimize(distance2, np.r_[t, np.zeros(dim)], method="L-BFGS-B",
+                         bounds=[(0, 1)] + list(zip(-half, half)),
+                         options={"ftol": 1e-30, "gtol": 1e-14})
+                for t in (0.0, 0.5, 1.0)), key=lambda r: r.fun)
+    return math.sqrt(best.fun)
 
 
 def _exact_segment_distance(a, b, c, d) -> float:
@@ -149,9 +175,66 @@ def test_closest_point_of_a_segment_and_a_box_against_scipy():
         assert np.linalg.norm(n) == pytest.approx(1.0, abs=1e-14)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_closest_points_of_a_segment_and_a_box_against_scipy_and_qhull(dim):
+    """The kernel's signed distance of a segment from a box against :func:`_box_segment`
+    (apart: SciPy's least distance; through the box: minus Qhull's least translation that
+    parts them), for segments of every sort about a turned box; the points it gives are on the
+    segment and on the box's surface, ``distance n`` apart along a unit ``n``. A segment
+    lying square above a face is nearest at the middle of what lies over it."""
+    rng = np.random.default_rng(7 + dim)
+    A = np.zeros((1, 3, 3))
+    A[0, :dim, :dim] = Rotation.random(random_state=dim).as_matrix()[:dim, :dim]
+    if dim == 2:
+        A[0, :2, :2] = [[math.cos(0.7), -math.sin(0.7)], [math.sin(0.7), math.cos(0.7)]]
+    half = np.array([0.3, 0.2, 0.5])[:dim]
+    centre = np.array([0.1, -0.2, 0.3])
+    centre[dim:] = 0.0
+    c_i, c_j, n = np.zeros(3), np.zeros(3), np.zeros(3)
+    inside = 0
+    for k in range(400):
+        # apart (moved off by a box's size), about it and far through it
+        spread, off = ((1.2, 2.0), (1.8, 0.0), (0.7, 0.0))[k % 3]
+        shift = half * off * rng.choice([-1.0, 1.0], dim)
+        a, e = np.zeros(3), np.zeros(3)
+        a[:dim] = centre[:dim] + A[0, :dim, :dim] @ (
+            half * rng.uniform(-spread, spread, dim) + shift)
+        e[:dim] = centre[:dim] + A[0, :dim, :dim] @ (
+            half * rng.uniform(-spread, spread, dim) + shift)
+        distance = core.box_to_segment(A, 0, centre, half, a, e, c_i, c_j, n)
+        expected = _box_segment(centre[:dim], A[0, :dim, :dim], half, a[:dim], e[:dim])
+        assert distance == pytest.approx(expected, abs=1e-9), k
+        inside += distance < 0.0
+        t = (c_j - a) @ (e - a) / ((e - a) @ (e - a))
+        assert -1e-12 <= t <= 1 + 1e-12
+        np.testing.assert_allclose(c_j, a + t * (e - a), rtol=0, atol=1e-12)
+        local = A[0, :dim, :dim].T @ (c_i[:dim] - centre[:dim])
+        assert np.all(np.abs(local) <= half + 1e-12)  # on the box
+        assert np.isclose(np.max(np.abs(local) / half), 1.0, rtol=0, atol=1e-12)  # its surface
+        np.testing.assert_allclose(c_j, c_i + distance * n, rtol=0, atol=1e-12)
+        assert np.linalg.norm(n) == pytest.approx(1.0, abs=1e-14)
+    assert 50 < inside < 350
+    # lying square above the top face from beyond its left edge to over it: the middle of the
+    # part over the face
+    top = centre + A[0] @ np.r_[0.0, half[1], 0.0][:3]
+    along, up = A[0] @ np.eye(3)[0], A[0] @ np.eye(3)[1]
+    a, e = top + 0.1 * up - 0.8 * along, top + 0.1 * up + 0.1 * along
+    assert core.box_to_segment(A, 0, centre, half, a, e, c_i, c_j, n) == pytest.approx(0.1)
+    np.testing.assert_allclose(c_j, top + 0.1 * up + 0.5 * (0.1 - 0.3) * along, rtol=0,
+                               atol=1e-12)
+    np.testing.assert_allclose(n, up, rtol=0, atol=1e-12)
+    # and 0.05 below the top face, into the box from beyond its left edge: pushed out through
+    # the top at the middle of the part inside
+    a, e = a - 0.15 * up, e - 0.15 * up
+    assert core.box_to_segment(A, 0, centre, half, a, e, c_i, c_j, n) == pytest.approx(-0.05)
+    np.testing.assert_allclose(c_j, top - 0.05 * up + 0.5 * (0.1 - 0.3) * along, rtol=0,
+                               atol=1e-12)
+    np.testing.assert_allclose(n, up, rtol=0, atol=1e-12)
+
+
 #: the pairs: (first shape, second shape) built on bodies one and two
-PAIRS = ["capsule-sphere", "capsule-capsule", "box-sphere", "sphere-box", "capsule-plane",
-         "box-plane", "sphere-hole", "capsule-hole"]
+PAIRS = ["capsule-sphere", "capsule-capsule", "box-sphere", "sphere-box", "box-capsule",
+         "capsule-box", "capsule-plane", "box-plane", "sphere-hole", "capsule-hole"]
 #: the hole of body two: its radius and axis (body frame)
 R_HOLE, AXIS = 0.4, np.array([0.3, 0.8, -0.5]) / np.linalg.norm([0.3, 0.8, -0.5])
 R_I, R_J = 0.15, 0.1
@@ -195,6 +278,10 @@ def _gap(kind, q, charts) -> float:
         return _box_point(on1(CENTRE_I), A1, HALF, on2(ENDS_J[0])) - R_BOX - R_J
     if kind == "sphere-box":  # the box is body two's, centred at CENTRE_I of it
         return _box_point(on2(CENTRE_I), A2, HALF, on1(ENDS_I[0])) - R_BOX - R_I
+    if kind == "box-capsule":
+        return _box_segment(on1(CENTRE_I), A1, HALF, on2(ENDS_J[0]), on2(ENDS_J[1])) - R_BOX - R_J
+    if kind == "capsule-box":
+        return _box_segment(on2(CENTRE_I), A2, HALF, on1(ENDS_I[0]), on1(ENDS_I[1])) - R_BOX - R_I
     if second == "hole":  # the pin's centre off the axis, square to it
         h, P = A2 @ AXIS, on2(CENTRE_J)
         centres = [on1(e) for e in ENDS_I[:2 if first == "capsule" else 1]]
@@ -249,7 +336,8 @@ def _overlapping(kind, rng, deep=False):
 
 
 @pytest.mark.filterwarnings("ignore::mbd3d.ContactWarning")  # the drawing is any overlap
-@pytest.mark.parametrize("kind", PAIRS + ["box-sphere deep", "sphere-box deep"])
+@pytest.mark.parametrize("kind", PAIRS + ["box-sphere deep", "sphere-box deep",
+                                          "box-capsule deep", "capsule-box deep"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_gap_and_force_follow_the_shapes_distance_and_the_hertz_potential(kind, seed):
     """The gap against SciPy's minimised distance (deep: the sphere's centre inside the box,
@@ -410,6 +498,52 @@ def test_a_capsule_lying_on_the_floor_rests_on_both_ends():
                                rtol=1e-10, atol=0)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_plank_hinged_at_one_end_rests_on_a_box_edge_by_the_moment_balance(dim):
+    """A plank (a capsule of radius r) hinged to the ground at its end leans on the top edge
+    ``E = (D, H)`` of a fixed box (planar: its corner), pressing it by a linear law of
+    stiffness K: at rest the contact's moment about the hinge, ``K (r - d) (E . u)`` with ``d
+    = D sin(theta) - H cos(theta)`` the edge's distance from the plank's axis ``u``, balances
+    the weight's ``m g L / 2 cos(theta)`` (solved by Brent's method apart from the model); the
+    force is square to the plank, at the edge."""
+    m, L, r, K, D, H = 2.0, 1.0, 0.02, 1e6, 0.5, 0.3
+    touching = brentq(lambda a: D * math.sin(a) - H * math.cos(a) - r, 0.0, 1.5)
+    drawn = touching - 1e-4  # pressed in a little
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) + (0.0,) * (dim - 2))
+    pad = (0.0,) * (dim - 2)
+    axis = np.array([math.cos(drawn), math.sin(drawn)])
+    pose = ({"angle": drawn} if dim == 2 else
+            {"orientation": Rotation.from_rotvec([0, 0, drawn]).as_matrix()})
+    plank = b.add_body("plank", mass=m, position=tuple(0.5 * L * axis) + pad,
+                       inertia=m * L ** 2 / 12 if dim == 2 else np.diag([1e-4, 1.0, 1.0])
+                       * m * L ** 2 / 12, **pose)
+    b.add(mb.joints.Revolute("hinge", b.ground, plank, at=(0.0, 0.0) + pad,
+                             **({} if dim == 2 else {"axis": (0.0, 0.0, 1.0)})))
+    step = mb.Box(b.ground, (0.4, 0.3) + (0.2,) * (dim - 2), at=(D + 0.2, H - 0.15) + pad)
+    b.add(mb.Contact("lean", step, mb.Capsule(plank, r, ends=[(-L / 2, 0.0) + pad,
+                                                              (L / 2, 0.0) + pad]),
+                     law=mb.LinearContact(stiffness=K, damping=0.0)))
+    with pytest.warns(mb.ContactWarning, match="contact 'lean': the shapes overlap"):
+        model = b.build()
+    rest = mb.static_equilibrium(model)
+
+    def moments(a):
+        return (K * (r - (D * math.sin(a) - H * math.cos(a))) * (D * math.cos(a)
+                + H * math.sin(a)) - m * G * L / 2 * math.cos(a))
+    expected = brentq(moments, touching - 0.1, touching, xtol=1e-15)
+    tip = np.asarray(rest.point("plank", (L / 2, 0.0) + pad))[0]
+    assert math.atan2(tip[1], tip[0]) == pytest.approx(expected, abs=1e-10)
+    charts = None if rest.charts is None else rest.charts[0]
+    states = mb.contact_states(model, rest.q[0], charts=charts)
+    u = np.array([math.cos(expected), math.sin(expected)])
+    force = m * G * L / 2 * math.cos(expected) / (u @ [D, H])
+    assert states.normal_force[0] == pytest.approx(force, rel=1e-9)
+    np.testing.assert_allclose(states.normal[0][:2], [-u[1], u[0]], rtol=0, atol=1e-9)
+    # midway between the edge and the plank's surface, pressed delta = F / K below it
+    np.testing.assert_allclose(states.point[0][:2], np.array([D, H]) - force / K / 2
+                               * np.array([-u[1], u[0]]), rtol=0, atol=1e-12)
+
+
 def _head_on(first, second, law, closing=2.0):
     """Two free bodies of 1 kg closing at ``closing`` m/s along x, centres 1.25 m apart, no
     gravity; the measured restitution."""
@@ -424,19 +558,21 @@ def _head_on(first, second, law, closing=2.0):
     return (res.qd[-1, 6] - res.qd[-1, 0]) / closing, res
 
 
-@pytest.mark.parametrize("pair", ["sphere on a capsule", "crossed capsules", "sphere on a box"])
+@pytest.mark.parametrize("pair", ["sphere on a capsule", "crossed capsules", "sphere on a box",
+                                  "capsule on a box"])
 @pytest.mark.parametrize("e", [0.3, 0.8])
 def test_head_on_impacts_rebound_with_the_calibrated_restitution(pair, e):
     """Chrono's restitution test with the spheres replaced: struck at its middle, square to
     its axis or face, a capsule or a box takes the impact as a sphere would, so the law's
-    calibration to e holds exactly and no body turns."""
+    calibration to e holds exactly and no body turns (a capsule lying along a box's face is
+    pushed at the middle of what faces it)."""
     sphere = lambda body: mb.Sphere(body, 0.5)  # noqa: E731
     across_y = lambda body: mb.Capsule(body, 0.5, ends=[(0, -0.4, 0), (0, 0.4, 0)])  # noqa
     across_z = lambda body: mb.Capsule(body, 0.5, ends=[(0, 0, -0.4), (0, 0, 0.4)])  # noqa
     box = lambda body: mb.Box(body, (1.0, 0.8, 0.6))  # noqa: E731
     first, second = {"sphere on a capsule": (sphere, across_y),
                      "crossed capsules": (across_y, across_z),
-                     "sphere on a box": (box, sphere)}[pair]
+                     "sphere on a box": (box, sphere), "capsule on a box": (box, across_y)}[pair]
     law = mb.LinearContact(stiffness=1e5, restitution=e)
     measured, res = _head_on(first, second, law)
     assert measured == pytest.approx(e, abs=1e-8)
@@ -463,6 +599,31 @@ def test_a_box_bouncing_on_its_corners_keeps_its_energy():
     total = kinetic + np.array([mb.potential_energy(model, q, c) for q, c in zip(res.q, charts)])
     assert np.ptp(kinetic) > 1.0  # it fell and struck
     np.testing.assert_allclose(total, total[0], rtol=0, atol=1e-8 * np.ptp(kinetic))
+
+
+def test_a_capsule_tumbling_across_a_box_edge_keeps_its_energy():
+    """An undamped linear law: a rod dropped turning onto a fixed box strikes it near an edge
+    with its end, then another edge with its middle (the nearest points moving along the rod
+    and over the box's faces and edges) and tumbles off, keeping its energy, which only the
+    integrator's error changes."""
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G))
+    rod = b.add_body("rod", mass=1.5, inertia=np.diag([2e-3, 0.05, 0.05]),
+                     position=(0.12, 0.02, 0.15),
+                     orientation=Rotation.from_rotvec([0.1, 0.35, 0.8]).as_matrix(),
+                     angular_velocity=(1.0, -2.0, 0.5))
+    b.add(mb.Contact("edge", mb.Box(b.ground, (0.4, 0.4, 0.2), at=(-0.1, 0.0, -0.1)),
+                     mb.Capsule(rod, 0.03, ends=[(-0.3, 0, 0), (0.3, 0, 0)]),
+                     law=mb.LinearContact(stiffness=1e6, damping=0.0)))
+    model = b.build()
+    res = mb.forward_dynamics(model, np.linspace(0.0, 1.0, 201), method="DOP853", rtol=1e-10,
+                              atol=1e-12)
+    kinetic = np.array([mb.kinetic_energy(model, q, qd, c)
+                        for q, qd, c in zip(res.q, res.qd, res.charts)])
+    total = kinetic + np.array([mb.potential_energy(model, q, c)
+                                for q, c in zip(res.q, res.charts)])
+    assert np.max(res.contacts().normal_force) > 500.0  # it struck
+    assert res.body("rod").position[-1, 2] < -1.0  # and fell off
+    np.testing.assert_allclose(total, total[0], rtol=0, atol=1e-10 * np.ptp(kinetic))
 
 
 def test_bad_shapes_are_named():
@@ -494,11 +655,9 @@ def test_bad_shapes_are_named():
         b.add(mb.Contact("pin", mb.Sphere(one, 0.1), hole(two), law=law))
         with pytest.raises(mb.ModelError, match=f"contact 'pin': .*{words}"):
             b.build()
-    with pytest.raises(mb.ModelError, match="no contact between a Box and a Capsule.*put "
-                       "Spheres at the box's corners"):
-        mb.Contact("boxes", mb.Box(one, (1, 1, 1)), mb.Capsule(two, 0.1, ends=((0, 0, 0),
-                                                                              (1, 0, 0))),
-                   law=law)
+    with pytest.raises(mb.ModelError, match="no contact between a Box and a Hole; the pairs "
+                       "are Box-Box, Box-Capsule"):
+        mb.Contact("boxes", mb.Box(one, (1, 1, 1)), mb.Hole(two, 0.1, axis=(0, 0, 1)), law=law)
     b = mb.ModelBuilder(dim=3)
     one = b.add_body("one", mass=1.0, inertia=np.eye(3) * 0.1, position=(0, 0, 0))
     b.add(mb.Contact("sharp", mb.Box(one, (1, 1, 1)), mb.Plane(b.ground, normal=(0, 0, 1),
@@ -522,6 +681,8 @@ def test_capsules_and_boxes_round_trip_through_a_model_file(tmp_path):
                      law=law))
     b.add(mb.Contact("rod crate", mb.Box(crate, (0.3, 0.2, 0.1)), mb.Sphere(rod, 0.05),
                      law=law))
+    b.add(mb.Contact("rod across crate", mb.Capsule(rod, 0.05, ends=[(-0.3, 0, 0), (0.3, 0, 0)]),
+                     mb.Box(crate, (0.3, 0.2, 0.1), radius=0.01), law=law, friction=0.2))
     b.add(mb.Contact("pin", mb.Sphere(rod, 0.02, at=(0.3, 0.0, 0.5)),
                      mb.Hole(crate, 0.03, at=(0.3, 0.0, 0.5), axis_at=(0.0, 1.0, 0.0)), law=law))
     model = b.build()

@@ -435,7 +435,7 @@ def test_bad_contacts_are_named():
                       match=r"contact 'bounce': the shapes overlap by 0\.05 m .* force of 5000 N;"):
         b.build()
     with pytest.raises(mb.ModelError, match="contact 'bad': no contact between a Plane and a "
-                       "Plane; the pairs are Box-Box, Box-Plane"):
+                       "Plane; the pairs are Box-Box, Box-Capsule, Box-Plane"):
         mb.Contact("bad", floor, floor, law=mb.LinearContact(stiffness=1.0, damping=0.0))
 
 

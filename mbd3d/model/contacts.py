@@ -38,8 +38,8 @@ __all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "Contact", "Conta
 class Contact(ForceElement):
     """A compliant contact between shapes on two bodies: a sphere, a capsule or a box against
     a plane; a sphere or a capsule against a sphere or a capsule, or inside a hole (a pin with
-    clearance); a box against a sphere or a box; a sphere (a roller) or a plane (a flat
-    face) on a planar disc cam; in either order.
+    clearance); a box against a sphere, a capsule or a box; a sphere (a roller) or a plane
+    (a flat face) on a planar disc cam; in either order.
 
     The normal force ``F_n`` [N] of ``law`` pushes the shapes apart while they overlap; the
     friction force ``-friction F_n tanh(|v_t| / slip_velocity) v_t / |v_t|`` opposes the slip
@@ -56,7 +56,9 @@ class Contact(ForceElement):
         ``"name[corner -+-]"``); of two boxes each corner of either touches the other box
         (``"name[first corner -+-]"``, ``"name[second corner +--]"``: faces and corners
         meet, two edges that cross with no corner inside the other box do not). A law's
-        calibration then holds for one of them touching alone.
+        calibration then holds for one of them touching alone. A capsule touches a box at
+        its core's point nearest the box (or deepest in it), one row; lying flat on a face,
+        at the middle of what lies on it (as two parallel capsules touch).
     law : ContactLaw
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact`,
         :class:`~mbd3d.HuntCrossley` or :class:`~mbd3d.ImpactFunction`; or

@@ -137,8 +137,8 @@ class PairRows:
 
 #: the pairs the core evaluates, first shape (its body i) then second
 _PAIRS = {(Sphere, Plane), (Sphere, Sphere), (Capsule, Plane), (Capsule, Sphere),
-          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Box, Box), (Sphere, Hole),
-          (Capsule, Hole), (Cam, Sphere), (Cam, Plane)}
+          (Capsule, Capsule), (Box, Plane), (Box, Sphere), (Box, Capsule), (Box, Box),
+          (Sphere, Hole), (Capsule, Hole), (Cam, Sphere), (Cam, Plane)}
 
 
 def pair_order(first: Any, second: Any, what: str) -> bool:
@@ -151,8 +151,7 @@ def pair_order(first: Any, second: Any, what: str) -> bool:
         return True
     names = ", ".join(sorted(f"{a.__name__}-{b.__name__}" for a, b in _PAIRS))
     raise ModelError(f"{what}: no contact between a {kinds[0].__name__} and a "
-                     f"{kinds[1].__name__}; the pairs are {names}, in either order (a box "
-                     "against a capsule: put Spheres at the box's corners against the capsule)")
+                     f"{kinds[1].__name__}; the pairs are {names}, in either order")
 
 
 def pair_rows(ctx: "BuildContext", first: Any, second: Any, what: str) -> PairRows:
@@ -184,7 +183,7 @@ def _rows(ctx, first, second, what, swapped) -> PairRows:
     kind = {Sphere: kernel.SPHERE_SPHERE, Capsule: kernel.SEGMENT_SPHERE,
             Box: kernel.BOX_SPHERE}[type(first)]
     if isinstance(second, Capsule):
-        kind = kernel.SEGMENT_SEGMENT
+        kind = kernel.BOX_SEGMENT if isinstance(first, Box) else kernel.SEGMENT_SEGMENT
     cores = list(core_i) + list(core_j)
     if isinstance(first, Box):  # the centre and half sizes, not the corners
         cores = list(_box(ctx, first, what)[1:]) + list(core_j)

@@ -11,6 +11,8 @@ PIN_IN_HOLE, CAM_SPHERE, CAM_PLANE = 5, 6, 7
 HINGE_STOP, SLIDE_STOP, CONE_STOP = 8, 9, 10
 #: a contact group's row: its shapes' pairs found near each other at each evaluation
 GROUP = 11
+#: a box against a capsule (after the group's row, so that the kinds' numbers stay)
+BOX_SEGMENT = 12
 #: body points per contact (``points[k]``)
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction

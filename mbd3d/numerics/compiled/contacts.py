@@ -15,6 +15,8 @@ and its body points ``points[k]`` (body frames):
   of ``j``;
 - ``BOX_SPHERE``: a box along ``i``'s axes centred at ``points[k, 0]`` with half sizes
   ``points[k, 1]``, rounded by ``r_i``, against the sphere at ``points[k, 2]`` of ``j``;
+- ``BOX_SEGMENT``: the box (as above) against a capsule of radius ``r_j`` around the segment
+  from ``points[k, 2]`` to ``points[k, 3]`` of ``j``;
 - ``PIN_IN_HOLE``: a pin, the sphere of radius ``r_i`` at ``points[k, 0]`` of ``i`` (planar:
   a circle), inside a hole of radius ``r_j`` of ``j``, the cylinder about the axis through
   ``points[k, 1]`` along the unit ``points[k, 2]`` (planar: the circle about ``points[k, 1]``,
@@ -35,10 +37,12 @@ and its body points ``points[k]`` (body frames):
 
 Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
 closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
-nearest face).
+nearest face; of a segment running through a box, minus the least translation that parts
+them).
 
 With ``n`` the unit normal from ``i`` to ``j`` (``-m`` against a plane, ``(c_j - c_i) / |c_j -
-c_i|`` between cores, the face's normal inside a box, the cam's outward normal ``N``), both
+c_i|`` between cores, the face's normal inside a box, the separating axis of a segment
+through a box, the cam's outward normal ``N``), both
 bodies are pushed apart at the point ``x = c_i + (r_i + g / 2) n`` midway between the two
 surfaces (in a hole, midway between the pin's surface and the hole's wall; on a cam, ``c_i =
 X`` and ``r_i = 0``), each at its own material point there, so that the pair
@@ -80,21 +84,23 @@ from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.contact_laws import (damping, dissipated_power, law_force,
                                                   law_slopes, normal_force)
 from mbd3d.numerics.compiled.contact_table import (
-    BOX_SPHERE, CAM_PLANE, CAM_SPHERE, CONE_STOP, DISSIPATION, FRICTION, GAP, GAP_RATE, GROUP,
-    HINGE_STOP, NORMAL, NORMAL_FORCE, PIN_IN_HOLE, POINT, POINTS, POTENTIAL, REPORT_COLUMNS,
-    SEGMENT_SEGMENT, SEGMENT_SPHERE, SLIDE_STOP, SPHERE_PLANE, SPHERE_SPHERE, is_stop)
+    BOX_SEGMENT, BOX_SPHERE, CAM_PLANE, CAM_SPHERE, CONE_STOP, DISSIPATION, FRICTION, GAP,
+    GAP_RATE, GROUP, HINGE_STOP, NORMAL, NORMAL_FORCE, PIN_IN_HOLE, POINT, POINTS, POTENTIAL,
+    REPORT_COLUMNS, SEGMENT_SEGMENT, SEGMENT_SPHERE, SLIDE_STOP, SPHERE_PLANE, SPHERE_SPHERE,
+    is_stop)
 from mbd3d.numerics.compiled.forces import _add_pair, _point, _turn, _velocity
 from mbd3d.numerics.compiled.joint_stops import _stop_coordinate, _stop_into, _stop_side
-from mbd3d.numerics.compiled.shapes import (box_to_point, cam_to_line, cam_to_point,
-                                            closest_between_segments, closest_on_segment)
+from mbd3d.numerics.compiled.shapes import (box_to_point, box_to_segment, cam_to_line,
+                                            cam_to_point, closest_between_segments,
+                                            closest_on_segment)
 
 #: the table's layout (:mod:`.contact_table`) and the pairs' and rows' kernels
 __all__ = ["SPHERE_PLANE", "SPHERE_SPHERE", "SEGMENT_SPHERE", "SEGMENT_SEGMENT", "BOX_SPHERE",
-           "PIN_IN_HOLE", "CAM_SPHERE", "CAM_PLANE", "HINGE_STOP", "SLIDE_STOP", "CONE_STOP",
-           "GROUP", "POINTS", "GAP", "GAP_RATE", "NORMAL_FORCE", "FRICTION", "POINT", "NORMAL",
-           "POTENTIAL", "DISSIPATION", "REPORT_COLUMNS", "pair_into", "pair_power",
-           "pair_potential", "report_pair", "contact_forces_into", "switches_into",
-           "contact_tangents_into", "pair_tangent"]
+           "BOX_SEGMENT", "PIN_IN_HOLE", "CAM_SPHERE", "CAM_PLANE", "HINGE_STOP", "SLIDE_STOP",
+           "CONE_STOP", "GROUP", "POINTS", "GAP", "GAP_RATE", "NORMAL_FORCE", "FRICTION",
+           "POINT", "NORMAL", "POTENTIAL", "DISSIPATION", "REPORT_COLUMNS", "pair_into",
+           "pair_power", "pair_potential", "report_pair", "contact_forces_into",
+           "switches_into", "contact_tangents_into", "pair_tangent"]
 
 @jit
 def _normal_and_gap(A, Q, k, kind, i, j, points, values, curves, x_k, n, work) -> float:
@@ -128,6 +134,12 @@ def _normal_and_gap(A, Q, k, kind, i, j, points, values, curves, x_k, n, work) -
         _point(A, Q, i, points[k, 0], work[0])
         _point(A, Q, j, points[k, 2], c_j)
         gap = box_to_point(A, i, work[0], points[k, 1], c_j, c_i, n)
+        return _midway(c_i, n, values[k, 1], gap - values[k, 1] - values[k, 2], x_k)
+    if kind == BOX_SEGMENT:
+        _point(A, Q, i, points[k, 0], work[0])
+        _point(A, Q, j, points[k, 2], work[1])
+        _point(A, Q, j, points[k, 3], work[2])
+        gap = box_to_segment(A, i, work[0], points[k, 1], work[1], work[2], c_i, c_j, n)
         return _midway(c_i, n, values[k, 1], gap - values[k, 1] - values[k, 2], x_k)
     if kind == SPHERE_SPHERE:
         _point(A, Q, i, points[k, 0], c_i)
