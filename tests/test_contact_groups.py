@@ -31,6 +31,8 @@ def _brute_force_pairs(A, Q, bodies, points, values, dim) -> set:
     for s, (kind, r, _) in enumerate(values):
         if kind == grid.SPHERE:
             centre[s], radius[s] = world(s, 0), r
+        elif kind == grid.BOX:  # its half diagonal, whichever way it is turned
+            centre[s], radius[s] = world(s, 0), np.linalg.norm(points[s, 1]) + r
         elif kind == grid.CAPSULE:
             a, b = world(s, 0), world(s, 1)
             centre[s], radius[s] = (a + b) / 2, np.linalg.norm(b - a) / 2 + r
@@ -67,11 +69,14 @@ def test_the_grid_finds_the_pairs_a_search_over_all_pairs_finds(dim):
             A[:-1] = [[[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]]
                       for a in rng.uniform(0, 2 * math.pi, n_bodies)]
         values = np.zeros((count, 3))
-        values[:, 0] = rng.choice([grid.SPHERE, grid.SPHERE, grid.CAPSULE, grid.PLANE], count)
+        values[:, 0] = rng.choice([grid.SPHERE, grid.SPHERE, grid.CAPSULE, grid.BOX,
+                                   grid.PLANE], count)
         values[:, 1] = rng.uniform(0.005, 0.3, count) * rng.uniform(0.1, 1.0)
         points = rng.uniform(-0.3, 0.3, (count, 2, dim))
         planes = values[:, 0] == grid.PLANE
         points[planes, 1] /= np.linalg.norm(points[planes, 1], axis=1)[:, None]
+        boxes = values[:, 0] == grid.BOX
+        points[boxes, 1] = np.abs(points[boxes, 1])  # half sizes
         pairs = grid.near_pairs(A, Q, bodies, points, values, 0, count)
         found = {tuple(int(s) for s in p) for p in pairs}
         assert len(found) == len(pairs), "a pair found twice"
@@ -79,8 +84,9 @@ def test_the_grid_finds_the_pairs_a_search_over_all_pairs_finds(dim):
 
 
 def _pile(dim: int, group: bool, law) -> mb.Model:
-    """Balls, two capsules and a ball fixed to the ground, overlapping here and there, in a
-    corner of two planes; as one group, or as a Contact for every pair of shapes."""
+    """Balls, two capsules, two boxes (rounded, turned), a ball and a box fixed to the ground,
+    overlapping here and there, in a corner of two planes; as one group, or as a Contact for
+    every pair of shapes."""
     up = np.eye(dim)[dim - 1]
     b = mb.ModelBuilder(dim=dim, gravity=-9.81 * up)
     rng = np.random.default_rng(7)
@@ -97,7 +103,17 @@ def _pile(dim: int, group: bool, law) -> mb.Model:
         end = 0.2 * np.eye(dim)[k % (dim - 1)]
         shapes.append(mb.Capsule(body, radius=0.04, ends=(-end, end)))
         shapes.append(mb.Sphere(body, radius=0.03, point=end))  # a knob: same body, no pair
+    for k in range(2):
+        size = np.array([0.12, 0.08, 0.1][:dim]) * (1.0 + 0.5 * k)
+        turn = ({"angle": 0.4 + k} if dim == 2 else
+                {"orientation": Rotation.from_rotvec([0.3, 0.2 + k, 0.1]).as_matrix()})
+        body = b.add_body(f"crate{k}", mass=1.5 + k, inertia=0.004 if dim == 2 else
+                          (0.004, 0.005, 0.006), **turn,
+                          position=np.append(np.full(dim - 1, 0.15 + 0.2 * k), 0.08 + 0.1 * k))
+        shapes.append(mb.Box(body, size, radius=0.01 * (k + 1)))
     shapes.append(mb.Sphere(b.ground, radius=0.1, at=np.append(np.full(dim - 1, 0.3), 0.0)))
+    shapes.append(mb.Box(b.ground, np.full(dim, 0.1), at=np.append(np.full(dim - 1, 0.05), 0.02),
+                         radius=0.005))
     shapes.append(mb.Plane(b.ground, normal=up))
     shapes.append(mb.Plane(b.ground, normal=np.eye(dim)[0], at=np.zeros(dim)))
     if group:
@@ -202,8 +218,8 @@ def test_bad_groups_are_named():
     one = b.add_body("one", mass=1.0, inertia=(1.0, 1.0, 1.0), position=(0.0, 0.0, 0.0))
     two = b.add_body("two", mass=1.0, inertia=(1.0, 1.0, 1.0), position=(1.0, 0.0, 0.0))
     law = mb.HertzContact(stiffness=1e6, restitution=0.5)
-    with pytest.raises(ModelError, match=r"contact group 'g': shape 1 is a Box.*add a Contact"):
-        mb.ContactGroup("g", [mb.Sphere(one, 0.1), mb.Box(two, size=(1, 1, 1))], law=law)
+    with pytest.raises(ModelError, match=r"contact group 'g': shape 1 is a Hole.*add a Contact"):
+        mb.ContactGroup("g", [mb.Sphere(one, 0.1), mb.Hole(two, 0.1, axis=(0, 0, 1))], law=law)
     with pytest.raises(ModelError, match="contact group 'g': give shapes on at least two"):
         mb.ContactGroup("g", [mb.Sphere(one, 0.1), mb.Sphere(one, 0.2)], law=law)
     with pytest.raises(ModelError, match="contact group 'g': law must be a compliant law"):

@@ -1,5 +1,6 @@
-"""Contact groups: many spheres and capsules (planar: circles and stadiums), and the planes
-(lines) that bound them, of which every pair on two bodies may touch, by one law.
+"""Contact groups: many spheres, capsules and boxes (planar: circles, stadiums and
+rectangles), and the planes (lines) that bound them, of which every pair on two bodies may
+touch, by one law.
 
 A group is found pair by pair at each evaluation by a broad phase on a uniform grid
 (:mod:`mbd3d.numerics.compiled.contact_grid`), so that its cost grows with the shapes and the
@@ -20,7 +21,7 @@ from mbd3d.model.body import Body
 from mbd3d.model.contact_laws import ContactLaw, pair_mass
 from mbd3d.model.contact_rows import _Contacts
 from mbd3d.model.forces import ForceElement, _CompiledForces
-from mbd3d.model.shapes import Capsule, Plane, Sphere, outline, shape_core
+from mbd3d.model.shapes import Box, Capsule, Plane, Sphere, outline, shape_core
 from mbd3d.numerics.checks import finite_scalar
 from mbd3d.numerics.compiled import contact_grid as grid
 from mbd3d.numerics.compiled.contact_table import GROUP, POINTS
@@ -36,10 +37,11 @@ MAX_CLASSES = 256
 
 
 class ContactGroup(ForceElement):
-    """Compliant contacts between every two of many shapes on different bodies: spheres and
-    capsules (planar: circles and stadiums) against each other and against planes (lines),
-    by one law and one friction coefficient, as :class:`~mbd3d.Contact` would give each pair
-    on its own; the pairs near each other are found at each evaluation, in a time that grows
+    """Compliant contacts between every two of many shapes on different bodies: spheres,
+    capsules and boxes (planar: circles, stadiums and rectangles) against each other and
+    against planes (lines), by one law and one friction coefficient, as
+    :class:`~mbd3d.Contact` would give each pair on its own (a box against a plane or a box
+    at its corners); the pairs near each other are found at each evaluation, in a time that grows
     with the number of shapes (a uniform grid), not with the number of pairs.
 
     The group is one row of :func:`~mbd3d.contact_states` and of the results' contacts,
@@ -53,7 +55,7 @@ class ContactGroup(ForceElement):
     Parameters
     ----------
     name : str
-    shapes : sequence of Sphere, Capsule or Plane
+    shapes : sequence of Sphere, Capsule, Box or Plane
         At least two, on at least two bodies; two planes never touch each other, nor do two
         shapes of one body.
     law : ContactLaw
@@ -85,9 +87,9 @@ class ContactGroup(ForceElement):
         what = f"contact group '{name}'"
         shapes = list(shapes)
         for k, shape in enumerate(shapes):
-            if not isinstance(shape, (Sphere, Capsule, Plane)):
+            if not isinstance(shape, (Sphere, Capsule, Box, Plane)):
                 raise ModelError(f"{what}: shape {k} is a {type(shape).__name__}; a group holds "
-                                 "Spheres, Capsules and Planes (add a Contact for a box, a "
+                                 "Spheres, Capsules, Boxes and Planes (add a Contact for a "
                                  "hole or a cam)")
         if len({id(s.body) for s in shapes}) < 2:
             raise ModelError(f"{what}: give shapes on at least two bodies, got {len(shapes)} "
@@ -143,7 +145,7 @@ class ContactGroup(ForceElement):
             for (kind_b, r_b, m_b), b in classes.items():
                 mass = pair_mass([m_a, m_b])
                 radius = (r_a if kind_b == grid.PLANE else r_b if kind_a == grid.PLANE
-                          else r_a * r_b / (r_a + r_b))
+                          else r_a * r_b / (r_a + r_b) if r_a + r_b > 0.0 else 0.0)
                 K, n, D, p = ((0.0, 1.0, 0.0, 0.0) if kind_a == kind_b == grid.PLANE
                               or not math.isfinite(mass)
                               else self.law.constants(mass, radius, what))

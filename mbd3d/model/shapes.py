@@ -294,11 +294,15 @@ def outline(ctx: "BuildContext", shape: Any, what: str) -> Outline:
 
 
 def shape_core(ctx: "BuildContext", shape: Any, what: str) -> tuple[int, float, np.ndarray]:
-    """``(kind, radius, points)`` of a sphere, a capsule or a plane of a contact group in its
-    body frame (see :mod:`mbd3d.numerics.compiled.contact_grid`; a plane's radius infinite)."""
+    """``(kind, radius, points)`` of a sphere, a capsule, a box or a plane of a contact group
+    in its body frame (see :mod:`mbd3d.numerics.compiled.contact_grid`; a plane's radius
+    infinite, a box's its rounding)."""
     if isinstance(shape, Plane):
         P = resolve_point(ctx, shape.body, shape.point, shape.at, f"{what}: plane point")
         return grid.PLANE, math.inf, np.stack([P, _plane_normal(ctx, shape, what)])
+    if isinstance(shape, Box):
+        radius, centre, half = _box(ctx, shape, what)
+        return grid.BOX, radius, np.stack([centre, half])
     radius, core = _core(ctx, shape, what)
     return (grid.SPHERE if isinstance(shape, Sphere) else grid.CAPSULE), radius, core
 

@@ -4,8 +4,10 @@ other to touch, found on a uniform grid in expected time linear in the number of
 A group's shape ``s`` (rows ``first ... first + count`` of the shape table) is on body
 ``bodies[s]`` with ``values[s] = (kind, radius, class)`` and body points ``points[s]`` (2,
 dim): a ``SPHERE``'s centre (the second row unused), a ``CAPSULE``'s two ends, a ``PLANE``'s
-point and outward unit normal. Each sphere and capsule is bounded by a sphere about its
-centre (a capsule's: its ends' midpoint, of radius half its length plus its radius). The grid's
+point and outward unit normal, a ``BOX``'s centre and half sizes (along its body's axes).
+Each sphere, capsule and box is bounded by a sphere about its centre (a capsule's: its ends'
+midpoint, of radius half its length plus its radius; a box's: its half diagonal plus its
+rounding). The grid's
 cells are cubes (planar: squares) as wide as the widest bounding sphere, so that two
 bounding spheres that overlap have their centres in the same or in neighbouring cells. The
 shapes are bucketed by a hash of their cell (Teschner et al., "Optimized spatial hashing for
@@ -27,7 +29,7 @@ from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.forces import _point, _turn
 
 #: the kinds of a group's shapes
-SPHERE, CAPSULE, PLANE = 0, 1, 2
+SPHERE, CAPSULE, PLANE, BOX = 0, 1, 2, 3
 #: cell coordinates are clipped to this magnitude (far-flung shapes share the border cells),
 #: so that the hash's products stay within 64 bits
 _FAR = 1 << 20
@@ -36,8 +38,8 @@ _FAR = 1 << 20
 @jit
 def bounding_spheres(A, Q, bodies, points, values, first: int, count: int, centres,
                      radii) -> float:
-    """``centres[s]`` (global, 3D) and ``radii[s]`` of the group's spheres and capsules
-    (``radii`` -1 for a plane); returns the largest radius."""
+    """``centres[s]`` (global, 3D) and ``radii[s]`` of the group's spheres, capsules and
+    boxes (``radii`` -1 for a plane); returns the largest radius."""
     a, b = np.zeros(3), np.zeros(3)
     largest = 0.0
     for s in range(count):
@@ -47,9 +49,13 @@ def bounding_spheres(A, Q, bodies, points, values, first: int, count: int, centr
             radii[s] = -1.0
             continue
         _point(A, Q, body, points[r, 0], a)
-        if kind == SPHERE:
+        if kind == SPHERE or kind == BOX:
             centres[s] = a
-            radii[s] = values[r, 1]
+            diagonal = 0.0
+            if kind == BOX:
+                for x in range(points.shape[2]):
+                    diagonal += points[r, 1, x] ** 2
+            radii[s] = math.sqrt(diagonal) + values[r, 1]
         else:
             _point(A, Q, body, points[r, 1], b)
             length = 0.0
