@@ -19,7 +19,11 @@ every accepted step of the state takes the same step of the sensitivities (the f
 - the dense output of the sensitivities is the method's own interpolant of their stages, so
   output times need no extra steps;
 - where the state is projected onto the constraints (after a drifting step, at every output)
-  its sensitivities are projected as the projection's derivative (sheet 1.4); where a spatial
+  its sensitivities are projected as the projection's derivative (sheet 1.4), to first order
+  in the projection's correction: the neglected change of the projection's direction is of
+  the size of the drift a step leaves (below about ``rtol`` of the state), so the
+  sensitivities are those of the computed solution to about that, not to rounding (a run of
+  fixed 25 ms steps drifting 1e-4 is followed to 8e-6, see the tests); where a spatial
   body's chart is reset, its Rodrigues parameters' sensitivities are mapped by the reset's
   Jacobian ``(I - g*~) / (1 + g*.g*)`` (sheet 1.5);
 - the start is consistent: ``Cq s0 = -C_p`` and its velocity rows, with the least mass-weighted
