@@ -63,6 +63,8 @@ YAML's own are refused. A mistake is reported with the file, the line and the fi
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import inspect
 import os
 import pathlib
@@ -263,6 +265,18 @@ def _field_named(message: str, where: tuple, entry: dict) -> tuple:
     return where
 
 
+
+@functools.lru_cache(maxsize=None)
+def _arguments_of(function: Callable) -> tuple[list, list]:
+    """The keyword arguments ``function`` (a class or a function) takes, and those it needs:
+    read once per function, since every element of a file (and every variant a sensitivity
+    builds) is checked against its class's."""
+    parameters = inspect.signature(function).parameters
+    accepted = [name for name, p in parameters.items()
+                if name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+    return accepted, [name for name in accepted
+                      if parameters[name].default is inspect.Parameter.empty]
+
 class _Reader:
     """Builds a model from plain data, naming the file, line and field of each mistake."""
 
@@ -398,22 +412,16 @@ class _Reader:
             raise self.error(where, f"must be a mapping of fields, got {entry!r}")
         return entry
 
+    @contextlib.contextmanager
     def _at(self, where: tuple, entry: dict | None = None):
         """A context in which a ModelError is reported at ``where``, or at the field of
         ``entry`` its message names (``position must ...``)."""
-        reader = self
-
-        class _Context:
-            def __enter__(self):
-                return self
-
-            def __exit__(self, kind, exc, traceback):
-                if isinstance(exc, ModelError) and not isinstance(exc, ModelFileError):
-                    raise reader.error(_field_named(str(exc), where, entry or {}),
-                                       str(exc)) from None
-                return False
-
-        return _Context()
+        try:
+            yield
+        except ModelFileError:
+            raise
+        except ModelError as exc:
+            raise self.error(_field_named(str(exc), where, entry or {}), str(exc)) from None
 
     def _element(self, entry: dict, where: tuple, types: dict, named: dict, motion_types):
         kind = entry.get("type")
@@ -442,16 +450,14 @@ class _Reader:
 
     def _check_arguments(self, function: Callable, arguments: dict, where: tuple,
                          kind: str) -> None:
-        parameters = inspect.signature(function).parameters
-        accepted = [name for name, p in parameters.items()
-                    if name != "self" and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+        accepted, required = _arguments_of(function)
         for key in arguments:
             if key not in accepted:
                 raise self.error(where + (key,), f"{kind} takes no '{key}'"
                                                  f"{did_you_mean(key, accepted)} (it takes: "
                                                  f"{', '.join(accepted)})")
-        for name in accepted:
-            if parameters[name].default is inspect.Parameter.empty and name not in arguments:
+        for name in required:
+            if name not in arguments:
                 raise self.error(where, f"{kind} needs '{name}'")
 
     def _motion(self, value: dict, where: tuple, motion_types: dict, named: dict | None = None):

@@ -130,16 +130,16 @@ def parameter_variants(model, name: str, offsets: Sequence[float], refine: int =
         A name that is not a parameter of the model (with the nearest ones), or a model the
         changed value makes invalid (a universal joint's axes no longer perpendicular).
     """
-    value, size = parameter_value(model, name)
+    data = _data(model)
+    value, size = _value_in(data, name)
     # a power of two: the changed values are then exact, and so are the data that are
     # linear in them (a joint's point is the parameter itself)
     step = 2.0 ** (round(math.log2(1e-3 * (max(abs(value), size) or model.length_scale)))
                    - refine)
-    data = _data(model)
     variants = []
     for o in offsets:
         try:
-            variants.append(_changed(copy.deepcopy(data), {name: value + o * step},
+            variants.append(_changed(_plain_copy(data), {name: value + o * step},
                                      whole=False))
         except ModelError as exc:
             raise ModelError(f"parameter '{name}' changed by {o * step:.3g} alone makes the "
@@ -163,6 +163,16 @@ def _data(model) -> dict:
     except ModelFileError as exc:
         raise ModelError(f"model '{model.name}': parameters are named by the fields of the "
                          f"model's file, which cannot hold it: {exc}") from None
+
+
+def _plain_copy(data: Any) -> Any:
+    """A copy of a model's file as plain data: its dicts and lists copied, what they hold
+    (numbers, strings, a mesh) shared, as a build reads but never changes it."""
+    if isinstance(data, dict):
+        return {key: _plain_copy(value) for key, value in data.items()}
+    if isinstance(data, list):
+        return [_plain_copy(value) for value in data]
+    return data
 
 
 def _fields(data: dict) -> dict[str, tuple[Any, Any]]:
@@ -202,9 +212,14 @@ def parameter_value(model, name: str) -> tuple[float, float]:
     ModelError
         A name that is not a parameter of the model, with the nearest ones.
     """
-    fields = _fields(_data(model))
+    return _value_in(_data(model), name)
+
+
+def _value_in(data: dict, name: str) -> tuple[float, float]:
+    """:func:`parameter_value` read from the model's file as plain data."""
+    fields = _fields(data)
     if name not in fields:
-        raise ModelError(f"model '{model.name}': no parameter '{name}'"
+        raise ModelError(f"model '{data.get('name')}': no parameter '{name}'"
                          f"{did_you_mean(name, fields)}; mb.parameters(model) lists them")
     container, key = fields[name]
     size = 0.0
