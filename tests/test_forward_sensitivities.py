@@ -83,6 +83,20 @@ def state(res) -> np.ndarray:
     return np.concatenate([res.q, res.qd, res.qdd, res.lam], axis=1)
 
 
+def sensitivity_and_difference(model, sens, j: int, name: str, options: dict) -> tuple:
+    """Parameter ``j``'s ``(dq, dqd, dqdd, dlam)`` side by side from ``sens``, and the same
+    from central differences of runs with ``options``, in steps of 1e-5 of the parameter's
+    size: the angle moves by 16 rad per N m of the torque, and a difference's error grows
+    with the fourth power of its step's move (steps of 1e-4 were 4e-8 off at 0.8 s), its
+    noise as the runs' error over the step."""
+    h = 1e-5 * max(abs(mb.parameters(model)[name]), 0.1)
+    runs = central_difference(model, name, h, lambda m: state(mb.forward_dynamics(
+        m, sens.results.t, **options)))
+    got = np.concatenate([sens.dq[:, :, j], sens.dqd[:, :, j], sens.dqdd[:, :, j],
+                          sens.dlam[:, :, j]], axis=1)
+    return got, runs
+
+
 @pytest.mark.compiled_only
 @pytest.mark.parametrize("constraint_tol", [1e-8, 1e-14], ids=["few projections", "projected"])
 def test_closed_loop_against_differences(constraint_tol):
@@ -99,14 +113,7 @@ def test_closed_loop_against_differences(constraint_tol):
         assert sens.results.stats["projections"] > 100
     tight = dict(options, rtol=1e-13, atol=1e-15)
     for j, name in enumerate(names):
-        # steps of 1e-5 of the parameter's size: the angle moves by 16 rad per N m of the
-        # torque, and a difference's error grows with the fourth power of its step's move
-        # (steps of 1e-4 were 4e-8 off at 0.8 s), its noise as the runs' error over the step
-        h = 1e-5 * max(abs(mb.parameters(model)[name]), 0.1)
-        runs = central_difference(model, name, h, lambda m: state(mb.forward_dynamics(
-            m, t, **tight)))
-        got = np.concatenate([sens.dq[:, :, j], sens.dqd[:, :, j], sens.dqdd[:, :, j],
-                              sens.dlam[:, :, j]], axis=1)
+        got, runs = sensitivity_and_difference(model, sens, j, name, tight)
         n, m = model.n_coordinates, model.n_constraints
         for part, columns in (("q", slice(0, n)), ("qd", slice(n, 2 * n)),
                               ("qdd", slice(2 * n, 3 * n)), ("lam", slice(3 * n, 3 * n + m))):
@@ -127,11 +134,7 @@ def test_a_held_start_against_differences():
     sens = mb.forward_sensitivities(model, t, names, **options)
     tight = dict(options, rtol=1e-13, atol=1e-15)
     for j, name in enumerate(names):
-        h = 1e-5 * max(abs(mb.parameters(model)[name]), 0.1)
-        reference = central_difference(model, name, h, lambda m: state(mb.forward_dynamics(
-            m, t, **tight)))
-        got = np.concatenate([sens.dq[:, :, j], sens.dqd[:, :, j], sens.dqdd[:, :, j],
-                              sens.dlam[:, :, j]], axis=1)
+        got, reference = sensitivity_and_difference(model, sens, j, name, tight)
         assert sens.dq[0, model.coordinate_index("crank.theta"), j] == 0.0
         assert np.max(np.abs(got - reference)) <= 1e-8 * np.max(np.abs(reference)), name
 
@@ -151,11 +154,7 @@ def test_coarse_projected_steps_against_differences():
     stats = sens.results.stats
     assert stats["steps"] == 20 and stats["projections"] >= 10 and stats["max_drift"] > 1e-5
     for j, name in enumerate(names):
-        h = 1e-5 * max(abs(mb.parameters(model)[name]), 0.1)
-        reference = central_difference(model, name, h, lambda m: state(mb.forward_dynamics(
-            m, t, **options)))
-        got = np.concatenate([sens.dq[:, :, j], sens.dqd[:, :, j], sens.dqdd[:, :, j],
-                              sens.dlam[:, :, j]], axis=1)
+        got, reference = sensitivity_and_difference(model, sens, j, name, options)
         assert np.max(np.abs(got - reference)) <= 2e-5 * np.max(np.abs(reference)), name
 
 
