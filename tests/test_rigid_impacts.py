@@ -393,12 +393,6 @@ def test_rigid_contacts_refuse_bad_input():
         falling_ball(2, 0.5, rest_speed=0.0)
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
     ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.05))
-    with pytest.raises(ModelError, match="friction at a rigid contact"):
-        b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS), mb.Plane(b.ground, normal=(0, 1)),
-                         law=mb.RigidImpact(restitution=0.5), friction=0.3))
-        b.build()
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
-    ball = b.add_body("ball", mass=1.0, inertia=0.004, position=(0.0, 0.05))
     b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS), mb.Plane(b.ground, normal=(0, 1)),
                      law=mb.RigidImpact(restitution=0.5)))
     with pytest.warns(mb.ContactWarning, match="rigid contact"):

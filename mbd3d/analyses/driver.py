@@ -391,6 +391,9 @@ def _impact_events(rigid: RigidContacts) -> tuple[Event, ...]:
 
     def pressing(index: int) -> Callable:
         return lambda t, q, qd: rigid.holding.release_value(index, t, q, qd)
+
+    def rubbing(index: int) -> Callable:
+        return lambda t, q, qd: rigid.holding.friction_value(index, t, q, qd)
     if not len(rigid):
         return ()
     events = tuple(Event(name, gap(k), direction=-1, action=rigid.act, rate=rate(k))
@@ -399,6 +402,9 @@ def _impact_events(rigid: RigidContacts) -> tuple[Event, ...]:
         events += tuple(Event(f"{name} lets go", pressing(k), direction=-1,
                               action=rigid.holding.release)
                         for k, name in enumerate(rigid.names))
+        events += tuple(Event(f"{name} slips or sticks", rubbing(k), direction=-1,
+                              action=rigid.holding.switch_friction)
+                        for k, name in enumerate(rigid.names) if rigid.mu[k] > 0.0)
     return events
 
 
@@ -415,12 +421,13 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
 
     def store(q, qd, qdd, lam, segment: Segment | None = None) -> None:
         tk = float(t[out.done])
-        forces = None  # the normal forces of the rigid rows held at rest, every contact row's
+        forces = friction = None  # of the rigid rows held at rest, every contact row's
         if rigid.holding is not None:
-            forces = np.zeros(len(rigid.group.names))
-            forces[rigid.rows] = rigid.holding.forces(tk, q, qd)
+            r = len(rigid.group.names)
+            forces, friction = np.zeros(r), np.zeros((r, 3))
+            forces[rigid.rows], friction[rigid.rows] = rigid.holding.forces(tk, q, qd)
         out.store(q, qd, qdd, lam, integrator.chart(), integrator.turns(), forces,
-                  integrator.dissipated(tk, segment))
+                  integrator.dissipated(tk, segment), friction)
 
     def loop() -> tuple[str, str] | None:
         q, qd, redundant = initial_state(request, integrator, integrator.rows_dependent)

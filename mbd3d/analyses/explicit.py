@@ -97,7 +97,10 @@ class ExplicitRungeKutta(Integrator):
                                                    redundant=self.redundant, fallback=False)
             if len(self._power):  # as the compiled forces report it
                 self._power[:] = contact_power(self.model, q, qd, charts_now)
-            return self._held_accelerations(tt, q, qd, qdd, lam)
+            qdd, lam = self._held_accelerations(tt, q, qd, qdd, lam)
+            if self.holding and len(self._power):  # the friction of the rows held at rest
+                self._power[self.held.rigid.rows] += self.held.power(tt, q, qd)
+            return qdd, lam
         except (SingularJacobianError, IntegrationError):
             return None
 
@@ -237,6 +240,8 @@ class ExplicitRungeKutta(Integrator):
         if not (segment.flags & stepping.DRIFTED or held):
             return
         q, qd = self._split(self.y)
+        if held:
+            self.held.follow(self.t_now, q, qd)  # sliding rows follow their slip
         tol, t_now = self.request.projection_tol, self.t_now
         changed = bool(segment.flags & stepping.DRIFTED)
         if changed:

@@ -79,6 +79,7 @@ class RigidContacts:
         self.units = [group.owners[r].units[0] for r in self.rows]
         self.scale = np.array([model.length_scale if u == "m" else 1.0 for u in self.units])
         self.e, self.rest_speed = group.restitution[self.rows], group.rest_speed[self.rows]
+        self.mu, self.slip_velocity = group.friction[self.rows], group.slip_velocity[self.rows]
         self.floor = self.idle = None  # where the rows fire, which were left idle: start()
         self.records = stats.setdefault("impacts", [])
         self._key, self._report, self._points = None, None, None
@@ -110,7 +111,14 @@ class RigidContacts:
             self._key = key
             self._report = (states.gap[0, self.rows], states.gap_rate[0, self.rows])
             self._points = states.point[0, self.rows]
+            self._slips = (states.slip_velocity[0, self.rows], states.normal[0, self.rows])
         return self._report
+
+    def slips(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(slip velocity (r, 3) [m/s], normal (r, 3))`` of the rigid rows at ``(q, qd)``,
+        global axes (:class:`~mbd3d.ContactStates`)."""
+        self.states(q, qd)
+        return self._slips
 
     def start(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Refuse rows inside each other at the run's start ``t``; hold the rows that rest
@@ -182,9 +190,14 @@ class RigidContacts:
         return qd
 
     def gap_rows(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
-        """``G`` (a, n) of the ``active`` rows: the rate of a gap is linear in the
-        velocities, so column ``c`` is the rates at the unit velocity of coordinate ``c``
-        (only the coordinates of the rows' bodies, the others' columns are zero)."""
+        """``G`` (a, n) of the ``active`` rows: ``g' = G qd`` (:meth:`rate_rows`)."""
+        return self.rate_rows(q, active)[0]
+
+    def rate_rows(self, q: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(G (a, n), T (a, 3, n))`` of the ``active`` rows: their gap rates ``G qd`` and
+        slip velocities ``T qd`` are linear in the velocities, so column ``c`` is those at
+        the unit velocity of coordinate ``c`` (only the coordinates of the rows' bodies, the
+        others' columns are zero)."""
         model, rows = self.model, self.rows[active]
         nb, nc = model.n_bodies, model.n_coords_per_body
         bodies = self.group._bodies(model)[rows].ravel()
@@ -194,10 +207,12 @@ class RigidContacts:
         unit[np.arange(len(columns)), columns] = 1.0
         chart = self.chart()
         charts = None if chart is None else np.broadcast_to(chart, (len(columns),) + chart.shape)
-        rates = contact_history(model, np.broadcast_to(q, unit.shape), unit, charts).gap_rate
+        states = contact_history(model, np.broadcast_to(q, unit.shape), unit, charts)
         G = np.zeros((len(rows), model.n_coordinates))
-        G[:, columns] = rates[:, rows].T
-        return G
+        G[:, columns] = states.gap_rate[:, rows].T
+        T = np.zeros((len(rows), 3, model.n_coordinates))
+        T[:, :, columns] = states.slip_velocity[:, rows].transpose(1, 2, 0)
+        return G, T
 
     def response(self, t: float, q: np.ndarray, G: np.ndarray) -> np.ndarray:
         """``[S G^T; Y]`` (n + m, a): the velocities a unit impulse on each row gives, the
@@ -233,6 +248,8 @@ class RigidContacts:
         if self.holding is not None:
             # a held row that the impact leaves opening faster than its rest speed flies off
             self.holding.let_go(t, (rate >= self.rest_speed) & self.holding.mask)
+            # impacts are frictionless: the rows held with friction slide on along their slip
+            self.holding.follow(t, q, qd)
             return self.holding.hold(t, q, qd, slow) if np.any(slow) else (q, qd)
         if not np.any(slow):
             return q, qd
@@ -252,12 +269,21 @@ class RigidContacts:
         accelerations that the accelerations do not make, by a central difference of the
         gap rates along ``qd`` over a step that moves nothing by more than 1e-6 of the
         model's size (about 1e-10 relative)."""
+        return self._convective(q, qd)[0]
+
+    def slip_convective(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """``(dT/dq qd) qd`` (r, 3) of every row's slip velocity [m/s^2], as
+        :meth:`convective` the gaps'."""
+        return self._convective(q, qd)[1]
+
+    def _convective(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         speed = np.max(np.abs(qd) / self.model.coordinate_scale, initial=0.0)
         if speed == 0.0:
-            return np.zeros(len(self))
+            return np.zeros(len(self)), np.zeros((len(self), 3))
         s = 1e-6 / speed
-        ahead, behind = self.states(q + s * qd, qd)[1], self.states(q - s * qd, qd)[1]
-        return (ahead - behind) / (2 * s)
+        ahead = self.states(q + s * qd, qd)[1], self.slips(q + s * qd, qd)[0]
+        behind = self.states(q - s * qd, qd)[1], self.slips(q - s * qd, qd)[0]
+        return tuple((a - b) / (2 * s) for a, b in zip(ahead, behind))
 
     def acceleration_scale(self, t: float, q: np.ndarray, qd: np.ndarray,
                            qdd: np.ndarray | None = None) -> float:

@@ -18,10 +18,18 @@ through the switch), locates where: there the row is released, and its gap watch
 the next touch. ``(dG/dq qd) qd`` is
 :meth:`RigidContacts.convective <mbd3d.analyses.impacts.RigidContacts.convective>`.
 
+A held row with a friction coefficient sticks or slides with Coulomb's friction
+(:mod:`mbd3d.analyses.sticking`: its force then joins the complementarity problem); its
+switches are events: a sticking row's force reaching its cone (``mu f - |s|`` [N] crossing
+zero), a sliding row's slip along its direction reaching zero (``v . u`` [m/s]), each
+watched once its function has left zero after the last switch. The impacts stay
+frictionless; the rows slide on along their slip after them.
+
 Like the joints, the held rows drift under integration: a step that leaves one open or closing
 by more than ``constraint_tol`` (of the model's length scale) is projected back (mass-weighted,
-the joints holding). Held rows are evaluated in Python at each right-hand side (the explicit
-methods' callback); generalized-alpha does not hold rows yet, and stops where one comes to rest.
+the joints holding; a sticking row's slip with it). Held rows are evaluated in Python at each
+right-hand side (the explicit methods' callback); generalized-alpha does not hold rows yet, and
+stops where one comes to rest.
 """
 
 from __future__ import annotations
@@ -31,12 +39,17 @@ import numpy as np
 from mbd3d.analyses.accelerations import consistent_accelerations
 from mbd3d.analyses.impacts import CLOSING, PRESSED, RigidContacts, impulses
 from mbd3d.analyses.kinematics import project_state
+from mbd3d.analyses.sticking import (direction, mixed_complementarity, share_by_capacity,
+                                     tangents)
 from mbd3d.io.history import energies
 
 __all__ = ["HeldRows"]
 
 #: rounds of the position projection of the held rows (each one Newton step on their gaps)
 _ROUNDS = 4
+#: a sliding row whose slip along its direction is below _STOPPED of its rest speed has
+#: stopped sliding (the friction event fires there)
+_STOPPED = 1e-6
 
 
 class HeldRows:
@@ -49,6 +62,15 @@ class HeldRows:
     def __init__(self, rigid: RigidContacts, tol: float, stats: dict):
         self.rigid, self.model, self.tol = rigid, rigid.model, tol
         self.mask = np.zeros(len(rigid), dtype=bool)
+        self.mu, self.planar = rigid.mu, rigid.model.n_coords_per_body == 3
+        #: per row with friction, held: whether it sticks (its slip held at zero), else the
+        #: direction it slides along (unit, global; :mod:`mbd3d.analyses.sticking`)
+        self.stuck = np.zeros(len(rigid), dtype=bool)
+        self.along = np.zeros((len(rigid), 3))
+        #: per row, whether its friction event is watched: only once its function has left
+        #: zero after a switch (a slide from a push just at the cone starts with no
+        #: acceleration, its slip dithering about zero by rounding for a while)
+        self.armed = np.zeros(len(rigid), dtype=bool)
         self.records = stats.setdefault("rests", [])
         self._key, self._solution = None, None
 
@@ -61,21 +83,103 @@ class HeldRows:
         joints' ``qdd0`` and ``lam0`` there."""
         return self._solve(t, q, qd, self.mask, qdd0, lam0)[:2]
 
-    def forces(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """The normal force of every rigid row at ``(t, q, qd)``: zero where not held."""
-        return self._solve(t, q, qd, self.mask)[2]
+    def forces(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(normal (r,) [N], friction (r, 3) [N])``: every rigid row's normal force and the
+        friction on its second shape (global axes) at ``(t, q, qd)``; zero where not held."""
+        solution = self._solve(t, q, qd, self.mask)
+        return solution[2], solution[5]
+
+    def power(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The power [W] every rigid row's friction dissipates at ``(t, q, qd)`` (>= 0)."""
+        if not np.any(self.mask & (self.mu > 0.0)):
+            return np.zeros(len(self.mask))
+        slip = self.rigid.slips(q, qd)[0]
+        return -np.einsum("ki,ki->k", self._solve(t, q, qd, self.mask)[5], slip)
+
+    def friction_value(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
+        """The friction event's function of rigid row ``index``: sticking, how far its force
+        is inside its cone, ``mu f - |s|`` [N]; sliding, its slip along the direction it
+        slides, ``v . u`` [m/s]; 1 where it is not held, has no friction or is not armed."""
+        if not (self.mask[index] and self.mu[index] > 0.0 and self.armed[index]):
+            return 1.0
+        return float(self._solve(t, q, qd, self.mask)[6][index])
+
+    def switch_friction(self, t: float, q: np.ndarray, qd: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """The friction events' action: the sticking rows whose force reached their cone
+        slide, away from that force; the sliding rows whose slip reached zero stick, where
+        their force then stays within the cone, else slide on the other way."""
+        _, _, f, _, _, friction, margin = self._solve(t, q, qd, self.mask)
+        rubbing = self.mask & (self.mu > 0.0)
+        slipping = rubbing & self.stuck & (margin <= 1e-9 * self.mu * f)
+        stopping = rubbing & ~self.stuck & (margin <= _STOPPED * self.rigid.rest_speed)
+        self._slide_away(slipping, friction)
+        self._record(t, "slip", slipping)
+        return self._stick(t, q, qd, stopping)
+
+    def follow(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
+        """After a step or a jump: the sliding rows slide along their slip where it is
+        beyond their slip velocity (below, the rounding of a slip that has just started
+        would turn them: :func:`mbd3d.analyses.sticking.direction`), and the sticking rows
+        that a jump (an impact elsewhere) left slipping beyond their rest speed slide along
+        it; the events of the rows whose function has left zero (1e-6 of the cone,
+        :data:`_STOPPED` of the rest speed) armed."""
+        rubbing = self.mask & (self.mu > 0.0)
+        if not np.any(rubbing):
+            return
+        rigid = self.rigid
+        slip = rigid.slips(q, qd)[0]
+        speed = np.linalg.norm(slip, axis=1)
+        jumped = rubbing & self.stuck & (speed > rigid.rest_speed)
+        turned = jumped | rubbing & ~self.stuck & (speed > rigid.slip_velocity)
+        self.along[turned] = slip[turned] / speed[turned, None]
+        self.stuck[jumped] = self.armed[jumped] = False
+        _, _, f, _, _, _, margin = self._solve(t, q, qd, self.mask)
+        away = np.where(self.stuck, margin > 1e-6 * self.mu * f,
+                        margin > _STOPPED * self.rigid.rest_speed)
+        self.armed |= rubbing & away
+
+    def _slide_away(self, rows: np.ndarray, friction: np.ndarray) -> None:
+        """The ``rows`` slide away from their (sticking) friction ``friction`` (r, 3)."""
+        for k in np.flatnonzero(rows):
+            size = float(np.linalg.norm(friction[k]))
+            self.stuck[k] = self.armed[k] = False
+            if size > 0.0:
+                self.along[k] = -friction[k] / size
+
+    def _stick(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """Stick the ``rows`` whose friction then stays within its cone (the others slide
+        away from it), their slips set to zero (the energy this takes recorded)."""
+        if not np.any(rows):
+            return q, qd
+        self.stuck |= rows
+        self.armed[rows] = False
+        for _ in range(int(np.sum(rows)) + 1):
+            _, _, f, _, _, friction, _ = self._solve(t, q, qd, self.mask)
+            over = rows & self.stuck & (np.linalg.norm(friction, axis=1)
+                                        > (1.0 + 1e-9) * self.mu * f)
+            if not np.any(over):
+                break
+            self._slide_away(over, friction)
+        stuck = rows & self.stuck
+        if np.any(stuck):
+            before = self._kinetic(q, qd)
+            q, qd = self.settle(t, q, qd, force=True)
+            self._record(t, "stick", stuck, max(before - self._kinetic(q, qd), 0.0))
+        return q, qd
 
     def release_value(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
         """The release event's function of rigid row ``index``: ``f - w / W_kk`` [N] while
         held (positive while it presses), 1 otherwise."""
         if not self.mask[index]:
             return 1.0
-        _, _, f, w, diag = self._solve(t, q, qd, self.mask)
+        _, _, f, w, diag, _, _ = self._solve(t, q, qd, self.mask)
         return float(f[index] - w[index] / diag[index])
 
     def release(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The release events' action: the held rows that no longer press let go."""
-        _, _, f, w, diag = self._solve(t, q, qd, self.mask)
+        _, _, f, _, diag, _, _ = self._solve(t, q, qd, self.mask)
         self.let_go(t, self.mask & ~self._pressing(t, q, qd, f, diag))
         self.rigid.watch(q, qd)
         return q, qd
@@ -84,6 +188,7 @@ class HeldRows:
         """Release the held ``rows`` at ``t`` (recorded)."""
         self._record(t, "release", rows & self.mask)
         self.mask = self.mask & ~rows
+        self.stuck[rows], self.armed[rows], self.along[rows] = False, False, 0.0
 
     def hold(self, t: float, q: np.ndarray, qd: np.ndarray, candidates: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray]:
@@ -95,7 +200,7 @@ class HeldRows:
         _, rate = rigid.states(q, qd)
         # pressed at the state as it is: the slow rates' part of the gaps' accelerations is
         # below what the threshold tells apart
-        _, _, f, _, diag = self._solve(t, q, qd, rows)
+        _, _, f, _, diag, _, _ = self._solve(t, q, qd, rows)
         held = self._pressing(t, q, qd, f, diag) & rows
         if not np.any(held):
             self.let_go(t, self.mask)
@@ -110,6 +215,15 @@ class HeldRows:
             self._record(t, "rest", new | bounced, lost)
         self.let_go(t, self.mask & ~held)
         self.mask = held
+        # the new rows with friction slide along their slip, or stick where it is slow
+        slip = rigid.slips(q, qd)[0]
+        speed = np.linalg.norm(slip, axis=1)
+        slow = new & (self.mu > 0.0) & (speed <= rigid.rest_speed)
+        moving = new & (speed > 0.0)
+        self.along[moving] = slip[moving] / speed[moving, None]
+        self.follow(t, q, qd)
+        q, qd = self._stick(t, q, qd, slow)
+        self.follow(t, q, qd)
         return q, qd
 
     def _record(self, t: float, event: str, rows: np.ndarray, energy_lost: float = 0.0
@@ -132,8 +246,10 @@ class HeldRows:
         rigid, model = self.rigid, self.model
         scale = rigid.scale[rows]
         gap, rate = rigid.states(q, qd)
+        slip = np.linalg.norm(rigid.slips(q, qd)[0][rows & self.stuck], axis=1)
         drift = max(np.max(np.abs(gap[rows]) / scale, initial=0.0),
-                    np.max(np.abs(rate[rows]) / scale, initial=0.0))
+                    np.max(np.abs(rate[rows]) / scale, initial=0.0),
+                    np.max(slip / model.length_scale, initial=0.0))
         if not np.any(rows) or (drift <= tol and not force):
             return None if not force else (q, qd)
         chart, redundant = rigid.chart(), rigid.redundant()
@@ -141,19 +257,26 @@ class HeldRows:
             g = rigid.states(q, qd)[0][rows]
             if np.max(np.abs(g) / scale) <= 1e-3 * tol:
                 break
-            q = q + self._correction(t, q, rows, -g)
+            G = rigid.gap_rows(q, rows)
+            q = q + self._correction(t, q, G, -g)
             q, qd = project_state(model, t, q, qd, 1e-3 * tol, chart, redundant)
-        qd = qd + self._correction(t, q, rows, -rigid.states(q, qd)[1][rows])
-        return q, qd
+        # the rates: the rows' gaps' and the sticking rows' slips (in their tangents) zero
+        G, T = rigid.rate_rows(q, rows)
+        rates = [G]
+        normals = rigid.slips(q, qd)[1]
+        for a, k in enumerate(np.flatnonzero(rows)):
+            if self.stuck[k]:
+                rates.append(tangents(normals[k], self.planar) @ T[a])
+        R = np.vstack(rates)
+        return q, qd + self._correction(t, q, R, -(R @ qd))
 
-    def _correction(self, t: float, q: np.ndarray, rows: np.ndarray, change: np.ndarray
+    def _correction(self, t: float, q: np.ndarray, R: np.ndarray, change: np.ndarray
                     ) -> np.ndarray:
         """The mass-weighted least change ``X mu`` of the coordinates (or rates) that changes
-        the ``rows``' gaps (or rates) by ``change``, the joints holding to first order."""
-        rigid = self.rigid
-        G = rigid.gap_rows(q, rows)
-        X = rigid.response(t, q, G)[:self.model.n_coordinates]
-        return X @ np.linalg.lstsq(G @ X, change, rcond=1e-12)[0]
+        ``R q`` (or ``R qd``; ``R`` rows of gap rates or slips) by ``change``, the joints
+        holding to first order."""
+        X = self.rigid.response(t, q, R)[:self.model.n_coordinates]
+        return X @ np.linalg.lstsq(R @ X, change, rcond=1e-12)[0]
 
     def _pressing(self, t: float, q: np.ndarray, qd: np.ndarray, f: np.ndarray,
                   diag: np.ndarray) -> np.ndarray:
@@ -168,8 +291,8 @@ class HeldRows:
         right-hand side, the outputs and every release event ask at the same states."""
         rigid, model = self.rigid, self.model
         chart = rigid.chart()
-        key = (t, q.tobytes(), qd.tobytes(), rows.tobytes(),
-               None if chart is None else chart.tobytes())
+        key = (t, q.tobytes(), qd.tobytes(), rows.tobytes(), self.stuck.tobytes(),
+               self.along.tobytes(), None if chart is None else chart.tobytes())
         if key == self._key:
             return self._solution
         if qdd0 is None:
@@ -177,18 +300,60 @@ class HeldRows:
                                                      redundant=rigid.redundant())
         r, n = len(rigid), model.n_coordinates
         f, w, diag = np.zeros(r), np.zeros(r), np.ones(r)
+        friction, margin = np.zeros((r, 3)), np.ones(r)
         qdd, lam = qdd0, lam0
         if np.any(rows):
-            G = rigid.gap_rows(q, rows)
-            XY = rigid.response(t, q, G)
-            W = G @ XY[:n]
+            a = int(np.sum(rows))
+            G, T = rigid.rate_rows(q, rows)
             b = G @ qdd0 + rigid.convective(q, qd)[rows]
-            f[rows] = _spread(W, b, impulses(W, b))
-            w[rows] = W @ f[rows] + b
-            diag[rows] = np.diag(W)
-            qdd, lam = qdd0 + XY[:n] @ f[rows], lam0 + XY[n:] @ f[rows]
-        self._key, self._solution = key, (qdd, lam, f, w, diag)
-        return qdd, lam, f, w, diag
+            if np.any(self.mu[rows] > 0.0):
+                z, XY, W = self._with_friction(t, q, qd, rows, G, T, qdd0, b, friction,
+                                               margin)
+            else:
+                XY = rigid.response(t, q, G)
+                W = G @ XY[:n]
+                z = _spread(W, b, impulses(W, b))
+            f[rows] = z[:a]
+            w[rows] = W[:a] @ z + b
+            diag[rows] = np.diag(W)[:a]
+            qdd, lam = qdd0 + XY[:n] @ z, lam0 + XY[n:] @ z
+        self._key, self._solution = key, (qdd, lam, f, w, diag, friction, margin)
+        return self._solution
+
+    def _with_friction(self, t, q, qd, rows, G, T, qdd0, b, friction, margin) -> tuple:
+        """``(z, [X; Y], A)`` of the held ``rows`` with friction (:mod:`.sticking`): ``z``
+        their normal forces then the sticking rows' tangential ones, ``A`` the response of
+        the normal rows then the sticking rows' slips to them; ``friction`` (on the second
+        shapes) and the events' ``margin`` filled for the rows."""
+        rigid, n = self.rigid, self.model.n_coordinates
+        held = np.flatnonzero(rows)
+        slip, normal = (x[held] for x in rigid.slips(q, qd))
+        mu, stuck = self.mu[held], self.stuck[held] & (self.mu[held] > 0.0)
+        sliding = (mu > 0.0) & ~stuck
+        blend = rigid.slip_velocity[held]
+        e = np.array([direction(v, u, b) if s else np.zeros(3)
+                      for v, u, b, s in zip(slip, self.along[held], blend, sliding)])
+        columns = G - mu[:, None] * np.einsum("ki,kin->kn", e, T)
+        bases = [tangents(normal[a], self.planar) for a in np.flatnonzero(stuck)]
+        Ts = np.vstack([B @ T[a] for B, a in zip(bases, np.flatnonzero(stuck))] or
+                       [np.zeros((0, n))])
+        XY = rigid.response(t, q, np.vstack([columns, Ts]))
+        A = np.vstack([G, Ts]) @ XY[:n]
+        conv = rigid.slip_convective(q, qd)[held]
+        c = np.concatenate([b] + [B @ (T[a] @ qdd0 + conv[a])
+                                  for B, a in zip(bases, np.flatnonzero(stuck))])
+        z = mixed_complementarity(A, c, len(held))
+        f = z[:len(held)]
+        d = 1 if self.planar else 2
+        capacity = np.repeat(mu[stuck] * f[stuck], d)
+        z[len(held):] = share_by_capacity(A[len(held):, len(held):], z[len(held):], capacity)
+        for i, a in enumerate(np.flatnonzero(stuck)):
+            friction[held[a]] = bases[i].T @ z[len(held) + d * i:len(held) + d * (i + 1)]
+        friction[held[sliding]] = -(mu * f)[sliding, None] * e[sliding]
+        margin[held[stuck]] = mu[stuck] * f[stuck] - np.linalg.norm(friction[held[stuck]],
+                                                                    axis=1)
+        margin[held[sliding]] = np.einsum("ki,ki->k", slip[sliding], self.along[held[sliding]])
+        return z, XY, A
 
     def _kinetic(self, q: np.ndarray, qd: np.ndarray) -> float:
         """The kinetic energy [J] at ``(q, qd)``."""

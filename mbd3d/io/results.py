@@ -67,7 +67,8 @@ class Results:
                  message: str = "", stats: dict | None = None, charts: np.ndarray | None = None,
                  turns: np.ndarray | None = None,
                  model_t: np.ndarray | None = None, contact_forces: np.ndarray | None = None,
-                 contact_dissipation: np.ndarray | None = None):
+                 contact_dissipation: np.ndarray | None = None,
+                 contact_friction: np.ndarray | None = None):
         self.model = model
         self.analysis = analysis
         self.t = np.asarray(t, dtype=float)
@@ -84,6 +85,9 @@ class Results:
         #: the normal forces [N; a turning stop's: N m] of the contact rows held closed as
         #: constraints (rigid contacts at rest), (k, contact rows), where a run held any
         self.contact_forces = contact_forces
+        #: the friction [N] on the second shape of those rows (rigid contacts at rest with a
+        #: friction coefficient), global axes, (k, contact rows, 3), where a run held any
+        self.contact_friction = contact_friction
         #: the energy [J] each compliant contact row has dissipated since the start (its
         #: damper, its friction; :mod:`mbd3d.analyses.dissipation`), (k, contact rows), where
         #: forward dynamics ran a model with contacts (else None)
@@ -111,7 +115,9 @@ class Results:
                        contact_forces=None if self.contact_forces is None
                        else self.contact_forces[sl],
                        contact_dissipation=None if self.contact_dissipation is None
-                       else self.contact_dissipation[sl])
+                       else self.contact_dissipation[sl],
+                       contact_friction=None if self.contact_friction is None
+                       else self.contact_friction[sl])
 
     # -- named access ----------------------------------------------------------------------------
     def _require_lam(self) -> np.ndarray:
@@ -256,10 +262,12 @@ class Results:
         friction force, point and normal, one column per contact row (a capsule's end, a
         box's corner), each array with a leading time axis (k, r, ...); see
         :class:`mbd3d.ContactStates`. A model without contacts is refused. A rigid contact
-        held at rest carries the force that holds it."""
+        held at rest carries the force that holds it, and its friction."""
         states = history.contact_history(self.model, self.q, self.qd, self.charts)
         if self.contact_forces is not None:
             states.normal_force[...] += self.contact_forces
+        if self.contact_friction is not None:
+            states.friction_force[...] += self.contact_friction
         if self.contact_dissipation is not None:
             states = dataclasses.replace(states, dissipated_energy=self.contact_dissipation)
         return states
@@ -432,7 +440,7 @@ class Results:
     def to_npz(self, path: str | os.PathLike | BinaryIO,
                overwrite: bool = True) -> str | None:
         """Write the raw arrays (``t``, ``q``, ``qd``, ``qdd``, ``lam``, ``charts``,
-        ``chart_quaternions``, ``contact_forces``), the labels of the coordinates and rows and
+        ``chart_quaternions``, ``contact_forces``, ``contact_friction``), the labels of the coordinates and rows and
         the run's statistics (JSON) to a compressed NumPy ``.npz`` file: a path (checked, then
         written atomically; its absolute path is returned) or an open binary file.
         :func:`mbd3d.read_results` reads it back against the model."""

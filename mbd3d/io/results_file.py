@@ -25,7 +25,8 @@ __all__ = ["to_npz", "read_npz"]
 #: the arrays of a file, by name: the Results attribute each holds
 _ARRAYS = {"t": "t", "q": "q", "qd": "qd", "qdd": "qdd", "lam": "lam", "charts": "charts",
            "chart_quaternions": "turns", "contact_forces": "contact_forces",
-           "contact_dissipation": "contact_dissipation", "model_t": "model_t"}
+           "contact_dissipation": "contact_dissipation", "model_t": "model_t",
+           "contact_friction": "contact_friction"}
 #: the text fields of a file
 _TEXTS = ("coordinate_labels", "row_labels", "analysis", "status", "message", "model", "stats")
 #: the longest time series a file may hold, and the largest text [bytes]
@@ -69,9 +70,9 @@ def read_npz(path: str | os.PathLike, model) -> dict[str, Any]:
     """The arguments of :class:`~mbd3d.Results` (but the model) that :func:`to_npz` wrote
     to ``path``, checked against ``model`` (see :func:`mbd3d.read_results`)."""
     where = f"results file '{os.fspath(path)}'"
-    # the widest array per time point: charts, coordinates, rows or contact rows
+    # the widest array per time point: charts, coordinates, rows or contact rows' friction
     width = max(9 * (model.n_bodies + 1), model.n_coordinates, len(model.row_labels),
-                _contact_rows(model))
+                3 * _contact_rows(model))
     try:
         with zipfile.ZipFile(path) as archive:
             sizes = {info.filename.removesuffix(".npy"): info.file_size
@@ -86,6 +87,7 @@ def read_npz(path: str | os.PathLike, model) -> dict[str, Any]:
     k, n, m = len(data["t"]), model.n_coordinates, len(model.row_labels)
     shapes = {"q": (k, n), "qd": (k, n), "qdd": (k, n), "lam": (k, m), "model_t": (k,),
               "contact_forces": (k, None), "contact_dissipation": (k, None),
+              "contact_friction": (k, None, 3),
               "charts": (k, model.n_bodies + 1, 3, 3),
               "chart_quaternions": (k, model.n_bodies + 1, 4)}
     for name, shape in shapes.items():
@@ -103,7 +105,8 @@ def read_npz(path: str | os.PathLike, model) -> dict[str, Any]:
                 message=str(data["message"]), stats=stats if isinstance(stats, dict) else {},
                 charts=data.get("charts"), turns=data.get("chart_quaternions"),
                 model_t=data.get("model_t"), contact_forces=data.get("contact_forces"),
-                contact_dissipation=data.get("contact_dissipation"))
+                contact_dissipation=data.get("contact_dissipation"),
+                contact_friction=data.get("contact_friction"))
 
 
 def _contact_rows(model) -> int:

@@ -31,14 +31,16 @@ class ResultsBuffer:
         self.lam = np.empty((k, model.n_constraints)) if with_lam else None
         self.charts = None if model.charts0 is None else np.empty((k,) + model.charts0.shape)
         self.turns = self.contact_forces = self.contact_dissipation = None
+        self.contact_friction = None
         self.done = 0
 
     def store(self, q, qd, qdd, lam=None, chart=None, turns=None, contact_forces=None,
-              contact_dissipation=None) -> None:
+              contact_dissipation=None, contact_friction=None) -> None:
         """The next time point's state (``chart``: its reference rotations, spatial models;
         ``turns``: the charts' quaternions whose signs follow the motion, where tracked;
-        ``contact_forces``: the normal forces of the contact rows held as constraints;
-        ``contact_dissipation``: the energy each contact row has dissipated)."""
+        ``contact_forces``, ``contact_friction``: the normal forces (r,) and friction (r, 3)
+        of the contact rows held as constraints; ``contact_dissipation``: the energy each
+        contact row has dissipated)."""
         k = self.done
         self.q[k], self.qd[k], self.qdd[k] = q, qd, qdd
         if self.lam is not None:
@@ -53,6 +55,10 @@ class ResultsBuffer:
             if self.contact_forces is None:
                 self.contact_forces = np.zeros((len(self.t),) + np.shape(contact_forces))
             self.contact_forces[k] = contact_forces
+        if contact_friction is not None:
+            if self.contact_friction is None:
+                self.contact_friction = np.zeros((len(self.t),) + np.shape(contact_friction))
+            self.contact_friction[k] = contact_friction
         if contact_dissipation is not None:
             if self.contact_dissipation is None:
                 self.contact_dissipation = np.zeros((len(self.t), len(contact_dissipation)))
@@ -69,6 +75,8 @@ class ResultsBuffer:
                        turns=None if self.turns is None else self.turns[:k],
                        contact_forces=None if self.contact_forces is None
                        else self.contact_forces[:k],
+                       contact_friction=None if self.contact_friction is None
+                       else self.contact_friction[:k],
                        contact_dissipation=None if self.contact_dissipation is None
                        else self.contact_dissipation[:k])
 

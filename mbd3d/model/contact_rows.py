@@ -59,6 +59,11 @@ class _Contacts(_CompiledForces):
         self.rigid = np.array([law.rigid for law in laws], dtype=bool)
         self.restitution = np.array([law.restitution if law.rigid else np.nan for law in laws])
         self.rest_speed = np.array([law.rest_speed if law.rigid else np.nan for law in laws])
+        #: per row, its friction coefficient (0 at a stop) and slip velocity [m/s]
+        kinds = self._values[:, 0]
+        stops = (kinds >= kernel.HINGE_STOP) & (kinds <= kernel.CONE_STOP)
+        self.friction = np.where(stops, 0.0, self._values[:, 7])
+        self.slip_velocity = np.where(stops, np.nan, self._values[:, 8])
         #: the contacts' shapes in their bodies' frames, for drawing
         self.outlines = [o for e in elements for o in e.outlines(ctx)]
         self._group_tables(ctx, elements)

@@ -63,7 +63,9 @@ class Contact(ForceElement):
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact`,
         :class:`~mbd3d.HuntCrossley` or :class:`~mbd3d.ImpactFunction`; or
         :class:`~mbd3d.RigidImpact`, which makes the contact
-        rigid: no force, every touch an impact (forward dynamics, without friction). Laws
+        rigid: no force, every touch an impact (forward dynamics; the impacts are frictionless),
+        and where it comes to rest it is held closed, sticking or sliding with Coulomb's
+        friction (the explicit methods; see ``friction``). Laws
         calibrated to a restitution use the pair's effective
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
         free bodies, not the inertia the pair has through joints (give ``effective_mass``).
@@ -71,9 +73,13 @@ class Contact(ForceElement):
         sphere's or a capsule's, a box's rounding, a plane's infinite; a hole's negative; a
         cam's smallest radius, its base circle, where a follower dwells).
     friction : float
-        Coulomb coefficient ``mu`` >= 0.
+        Coulomb coefficient ``mu`` >= 0. At a rigid contact held at rest it is exact: the
+        contact sticks (no slip) while its friction stays within ``mu F_n``, and slides with
+        ``mu F_n`` against the slip beyond; each switch is an event of the run
+        (:mod:`mbd3d.analyses.sticking`).
     slip_velocity : float
-        [m/s] > 0, the slip below which friction falls off smoothly to zero.
+        [m/s] > 0, the slip below which friction falls off smoothly to zero (compliant laws;
+        a rigid contact's friction does not fall off).
     effective_mass : float, optional
         [kg], overrides ``m*`` in the laws' calibration.
 
@@ -132,10 +138,6 @@ class Contact(ForceElement):
         slip = finite_scalar(self.slip_velocity, f"{what}: slip_velocity", positive=True)
         if mu < 0.0:
             raise ModelError(f"{what}: friction must be >= 0, got {self.friction!r}")
-        if mu > 0.0 and self.law.rigid:
-            raise ModelError(f"{what}: friction at a rigid contact (stick and slip) is not "
-                             "modelled yet; give friction=0, or a compliant law (HertzContact, "
-                             "LinearContact) with friction")
         mass = self._effective_mass(what)
         K, n, D, p = self.law.constants(mass, rows.radius, what)
         d = self.law.damping_ramp(what)
@@ -178,6 +180,10 @@ class ContactStates:
         its force or torque on body j.
     potential_energy : ndarray (k,)
         Of the law's spring part [J].
+    slip_velocity : ndarray (k, 3)
+        Of the second shape's material point at the contact point relative to the first's,
+        its part in the tangent plane [m/s], global axes (what friction opposes; zero at a
+        joint stop).
     dissipated_energy : ndarray (k,) or None
         Over a forward dynamics run (:meth:`mbd3d.Results.contacts`): the energy [J] the
         row's damper and friction have dissipated since the start; else None.
@@ -191,6 +197,7 @@ class ContactStates:
     point: np.ndarray
     normal: np.ndarray
     potential_energy: np.ndarray
+    slip_velocity: np.ndarray
     dissipated_energy: np.ndarray | None = None
 
 
@@ -214,7 +221,8 @@ def states_of(group: _Contacts, report: np.ndarray, k: int | None = None) -> Con
                          friction_force=r[..., c.FRICTION:c.FRICTION + 3].copy(),
                          point=r[..., c.POINT:c.POINT + 3].copy(),
                          normal=r[..., c.NORMAL:c.NORMAL + 3].copy(),
-                         potential_energy=r[..., c.POTENTIAL].copy())
+                         potential_energy=r[..., c.POTENTIAL].copy(),
+                         slip_velocity=r[..., c.SLIP:c.SLIP + 3].copy())
 
 
 def contact_states(model: "Model", q: np.ndarray, qd: np.ndarray | None = None,

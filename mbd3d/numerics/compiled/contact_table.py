@@ -17,9 +17,10 @@ BOX_SEGMENT = 12
 POINTS = 4
 #: the columns of a contact's report: gap [m], gap rate [m/s], normal force [N], friction
 #: force on j (3) [N], contact point (3) [m], normal from i to j (3), potential energy [J],
-#: dissipated power [W]
+#: dissipated power [W], the slip velocity of j's material point at the contact point
+#: relative to i's, its part along the tangent plane (3) [m/s] (what friction opposes)
 GAP, GAP_RATE, NORMAL_FORCE, FRICTION, POINT, NORMAL, POTENTIAL = 0, 1, 2, 3, 6, 9, 12
-DISSIPATION, REPORT_COLUMNS = 13, 14
+DISSIPATION, SLIP, REPORT_COLUMNS = 13, 14, 17
 
 
 @jit

@@ -86,8 +86,8 @@ from mbd3d.numerics.compiled.contact_laws import (damping, dissipated_power, law
 from mbd3d.numerics.compiled.contact_table import (
     BOX_SEGMENT, BOX_SPHERE, CAM_PLANE, CAM_SPHERE, CONE_STOP, DISSIPATION, FRICTION, GAP,
     GAP_RATE, GROUP, HINGE_STOP, NORMAL, NORMAL_FORCE, PIN_IN_HOLE, POINT, POINTS, POTENTIAL,
-    REPORT_COLUMNS, SEGMENT_SEGMENT, SEGMENT_SPHERE, SLIDE_STOP, SPHERE_PLANE, SPHERE_SPHERE,
-    is_stop)
+    REPORT_COLUMNS, SEGMENT_SEGMENT, SEGMENT_SPHERE, SLIDE_STOP, SLIP, SPHERE_PLANE,
+    SPHERE_SPHERE, is_stop)
 from mbd3d.numerics.compiled.forces import _add_pair, _point, _turn, _velocity
 from mbd3d.numerics.compiled.joint_stops import _stop_coordinate, _stop_into, _stop_side
 from mbd3d.numerics.compiled.shapes import (box_to_point, box_to_segment, cam_to_line,
@@ -98,7 +98,7 @@ from mbd3d.numerics.compiled.shapes import (box_to_point, box_to_segment, cam_to
 __all__ = ["SPHERE_PLANE", "SPHERE_SPHERE", "SEGMENT_SPHERE", "SEGMENT_SEGMENT", "BOX_SPHERE",
            "BOX_SEGMENT", "PIN_IN_HOLE", "CAM_SPHERE", "CAM_PLANE", "HINGE_STOP", "SLIDE_STOP",
            "CONE_STOP", "GROUP", "POINTS", "GAP", "GAP_RATE", "NORMAL_FORCE", "FRICTION",
-           "POINT", "NORMAL", "POTENTIAL", "DISSIPATION", "REPORT_COLUMNS", "pair_into",
+           "POINT", "NORMAL", "POTENTIAL", "DISSIPATION", "SLIP", "REPORT_COLUMNS", "pair_into",
            "pair_power", "pair_potential", "report_pair", "contact_forces_into",
            "switches_into", "contact_tangents_into", "pair_tangent"]
 
@@ -275,6 +275,7 @@ def report_pair(report, r, values, k, gap, rate, force, friction, slip, Q, i, ve
         report[r, FRICTION + x] = friction * vectors[5, x]
         report[r, POINT + x] = vectors[2, x] + (Q[i, x] if x < dim else 0.0)
         report[r, NORMAL + x] = vectors[1, x]
+        report[r, SLIP + x] = vectors[5, x]
     report[r, POTENTIAL] = pair_potential(values, k, gap)
 
 
