@@ -279,8 +279,12 @@ def test_a_block_pulled_by_a_spring_holds_until_the_pull_reaches_mu_m_g(dim):
                                rtol=1e-8, atol=1e-12)
 
 
-def test_the_friction_of_a_held_contact_is_kept_in_a_results_file(tmp_path):
-    """Written and read back, a run keeps its held contacts' friction forces."""
+def test_the_friction_of_a_held_contact_is_kept_in_a_results_file_and_on_the_time_line(
+        tmp_path):
+    """Written and read back, a run keeps its held contacts' friction forces; the recording
+    says where the ball starts to roll."""
+    from mbd3d.viewer import read_component, record
+
     model = ball_on_floor(2, 0.3)
     qd0 = np.zeros(model.n_coordinates)
     qd0[0] = 1.0
@@ -290,3 +294,9 @@ def test_the_friction_of_a_held_contact_is_kept_in_a_results_file(tmp_path):
     back = mb.read_results(path, model)
     np.testing.assert_array_equal(back.contacts().friction_force, res.contacts().friction_force)
     assert np.any(back.contacts().friction_force != 0.0)
+    record(res, tmp_path / "ball.rrd")
+    times, text = read_component(tmp_path / "ball.rrd", "/impacts/rests", "TextLog:text",
+                                 timeline="sim_time")
+    assert [str(row[0]) for row in text][1].startswith("floor sticks (its slip took")
+    stick = res.stats["rests"][1]["time"]
+    np.testing.assert_allclose(times[1].astype(np.int64) * 1e-9, stick, atol=1e-9)

@@ -32,9 +32,10 @@ def log_contact_events(stream, results: Results, size: float) -> None:
             text=text, level=["INFO"] * len(impacts)))
     rests = results.stats.get("rests") or []
     if rests:
-        text = [f"{', '.join(r['contacts'])} " + (
-            f"comes to rest (its bounces took {r['energy_lost']:.6g} J)"
-            if r["event"] == "rest" else "lets go") for r in rests]
+        said = {"rest": "comes to rest (its bounces took {:.6g} J)", "release": "lets go",
+                "stick": "sticks (its slip took {:.6g} J)", "slip": "slips"}
+        text = [f"{', '.join(r['contacts'])} " + said[r["event"]].format(r["energy_lost"])
+                for r in rests]
         stream.send_columns("impacts/rests",
                             indexes=[sim_time_column(np.array([r["time"] for r in rests]))],
                             columns=rr.TextLog.columns(text=text, level=["INFO"] * len(rests)))
