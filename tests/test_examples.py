@@ -180,6 +180,21 @@ def test_rigid_impacts_example(capsys, tmp_path):
     assert recorded_steps(rrd, "rod") == len(res.t)
 
 
+def test_backspin_example(capsys, tmp_path):
+    """Each throw sticks and rolls where the closed form says; the last comes back."""
+    rrd = tmp_path / "backspin.rrd"
+    runs = load("backspin").main(n_points=41, rrd=str(rrd))
+    out = capsys.readouterr().out
+    rows = re.findall(r"^\s+(-?[\d.]+)\s+(\S+)\s+(\S+)\s+(\S+)\s+(\S+)$", out, re.MULTILINE)
+    assert len(rows) == 3
+    for _, sticks, by_hand, rolls, rolls_by_hand in rows:
+        assert float(sticks) == pytest.approx(float(by_hand), rel=1e-8)
+        assert float(rolls) == pytest.approx(float(rolls_by_hand), rel=1e-8)
+    assert float(rows[-1][3]) < 0.0  # the strong backspin brings it back
+    assert all(res.status == "complete" for res in runs)
+    assert recorded_steps(rrd, "ball") == 41
+
+
 def test_cam_jump_example(capsys, tmp_path):
     rrd = tmp_path / "jump.rrd"
     res = load("cam_jump").main(n_points=81, rrd=str(rrd))
