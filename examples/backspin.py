@@ -23,28 +23,24 @@ from mbd3d.viewer import check_recording_first, record, run_script
 G, RADIUS, MASS, MU, V0 = 9.81, 0.1, 2.0, 0.2, 2.0
 
 
-def build() -> mb.Model:
-    """The ball on the floor z = 0."""
+def build(omega0: float) -> mb.Model:
+    """The ball on the floor z = 0, thrown at V0 along x spinning at ``omega0`` [rad/s] about
+    y."""
     b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -G), name="backspin")
     ball = b.add_body("ball", mass=MASS, inertia=0.4 * MASS * RADIUS ** 2 * np.ones(3),
-                      position=(0.0, 0.0, RADIUS))
+                      position=(0.0, 0.0, RADIUS), velocity=(V0, 0.0, 0.0),
+                      angular_velocity=(0.0, omega0, 0.0))
     b.add(mb.Contact("floor", mb.Sphere(ball, RADIUS), mb.Plane(b.ground, normal=(0, 0, 1)),
                      law=mb.RigidImpact(restitution=0.0), friction=MU))
     return b.build()
 
 
-def throw(model: mb.Model, omega0: float, t: np.ndarray) -> mb.Results:
-    """The ball thrown at V0 along x spinning at ``omega0`` [rad/s] about y."""
-    qd0 = np.zeros(model.n_coordinates)
-    qd0[0], qd0[4] = V0, omega0 / 2  # a Rodrigues parameter's rate at zero is half the spin's
-    return mb.forward_dynamics(model, t, qd0=qd0, method="DOP853", rtol=1e-10, atol=1e-12)
-
-
 @check_recording_first
 def main(n_points: int = 201, rrd: str | None = None, show: bool = False) -> list:
-    model, t = build(), np.linspace(0.0, 2.0, n_points)
+    t = np.linspace(0.0, 2.0, n_points)
     spins = [0.0, -V0 / RADIUS, -4 * V0 / RADIUS]
-    runs = [throw(model, omega0, t) for omega0 in spins]
+    runs = [mb.forward_dynamics(build(omega0), t, method="DOP853", rtol=1e-10, atol=1e-12)
+            for omega0 in spins]
     sticks = [next(r["time"] for r in res.stats["rests"] if r["event"] == "stick")
               for res in runs]
     slips = [V0 - RADIUS * omega0 for omega0 in spins]
