@@ -5,14 +5,16 @@ its slip velocity ``v = T qd`` (the tangential part of the second shape's materi
 velocity relative to the first's, :class:`~mbd3d.ContactStates`) held at zero by a tangential
 force ``s`` of free sign, which must stay within the cone ``|s| <= mu f``; or *slides* along a
 direction ``u``, the friction ``-mu f e`` opposing ``e``, the slip's direction (``u`` where the
-slip vanishes: at the start of a slide; :func:`direction`). With ``[X; Y]`` the augmented system's response to a
-unit generalized force along each column (the joints holding) and ``f`` the normal forces::
+slip vanishes: at the start of a slide; :func:`direction`). With ``[X; Y]`` the augmented
+system's response to a unit generalized force along each column (the joints holding) and
+``f`` the normal forces::
 
     qdd = qdd0 + X z,   z = (f, s),   columns  G_k^T - mu_k T_k^T e_k  (sliding),
-                                               G_k^T, B_k T_k ^T (sticking, B_k its tangents)
+                                               G_k^T, (B_k T_k)^T (sticking, B_k its tangents)
     0 <= f  _|_  G qdd + g >= 0,     B T qdd + t = 0 (the sticking rows)
 
-a mixed complementarity problem (:func:`mixed_complementarity`), not symmetric where rows
+with ``g`` and ``t`` the gaps' and the slips' convective terms (``(dG/dq qd) qd``): a mixed
+complementarity problem (:func:`mixed_complementarity`), not symmetric where rows
 slide. Where sticking rows depend on each other (a box's corners flat on a floor: their slips
 are one) the split of their tangential forces is not determined by the motion; it is taken in
 proportion to each row's ``mu f`` (:func:`share_by_capacity`), so that they reach their cones
@@ -26,6 +28,7 @@ import numpy as np
 from mbd3d.errors import ModelError
 
 __all__ = ["direction", "tangents", "mixed_complementarity", "share_by_capacity"]
+
 
 def direction(slip: np.ndarray, along: np.ndarray, blend: float) -> np.ndarray:
     """The direction (unit, global) in which a sliding row slips: its slip velocity's
@@ -74,8 +77,8 @@ def mixed_complementarity(A: np.ndarray, c: np.ndarray, a: int) -> np.ndarray:
     """``z`` with ``0 <= z_k _|_ (A z + c)_k >= 0`` for ``k < a`` and ``(A z + c)_k = 0``
     beyond, by Murty's least-index principal pivoting: starting from every ``k < a`` pressing,
     the first row whose force pulls or whose rate sinks is switched, until none is. It ends
-    for a P-matrix ``A`` (a mechanism whose sliding friction does not make a contact pull
-    itself in: Painleve's paradox is refused, naming it)."""
+    for a P-matrix ``A``; where it does not (sliding friction that presses a contact closed
+    the harder it presses: Painleve's paradox), the run is refused, saying so."""
     m = len(c)
     size = max(float(np.max(np.abs(c), initial=0.0)), np.finfo(float).tiny)
     pressing = np.ones(a, dtype=bool)
