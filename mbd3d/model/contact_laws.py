@@ -179,8 +179,9 @@ class RigidImpact(ContactLaw):
         this after an impact while its bodies still press together would bounce ever shorter
         (an infinity of impacts in a finite time): it has come to rest. The explicit
         integrators then hold it closed until its force would pull
-        (:mod:`mbd3d.analyses.resting`); generalized-alpha stops the run there, naming it,
-        with the results up to that time.
+        (:mod:`mbd3d.analyses.resting`), sticking or sliding with the contact's Coulomb
+        friction (:mod:`mbd3d.analyses.sticking`); generalized-alpha stops the run there,
+        naming it, with the results up to that time.
     """
 
     restitution: float
