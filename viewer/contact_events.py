@@ -26,8 +26,8 @@ def log_contact_events(stream, results: Results, size: float) -> None:
             positions=np.array([i["point"] for i in impacts]),
             radii=np.full(len(impacts), 0.03 * size), labels=[i["contact"] for i in impacts]))
         text = [f"impact at {i['contact']}: closing at {-i['rate_before']:.6g}, opening at "
-                f"{i['rate_after']:.6g}, impulse {i['impulse']:.6g}, energy lost "
-                f"{i['energy_lost']:.6g} J" for i in impacts]
+                f"{i['rate_after']:.6g}, impulse {i['impulse']:.6g}" + _rubbed(i)
+                + f", energy lost {i['energy_lost']:.6g} J" for i in impacts]
         stream.send_columns("impacts", indexes=times, columns=rr.TextLog.columns(
             text=text, level=["INFO"] * len(impacts)))
     rests = results.stats.get("rests") or []
@@ -39,3 +39,10 @@ def log_contact_events(stream, results: Results, size: float) -> None:
         stream.send_columns("impacts/rests",
                             indexes=[sim_time_column(np.array([r["time"] for r in rests]))],
                             columns=rr.TextLog.columns(text=text, level=["INFO"] * len(rests)))
+
+
+def _rubbed(impact: dict) -> str:
+    """The friction impulse's size in an impact's text, where it has one (files written
+    before impacts had friction have none)."""
+    size = float(np.linalg.norm(impact.get("friction_impulse", [0.0, 0.0, 0.0])))
+    return f", friction impulse {size:.6g}" if size > 0.0 else ""

@@ -144,7 +144,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         rather than by a sliver of less than a twentieth of a step). With rigid contacts
         (:class:`mbd3d.RigidImpact`, resolved by :mod:`mbd3d.analyses.impacts`),
         ``impacts``: one dict per contact row and impact, its ``time`` [s], ``contact``,
-        ``impulse`` [N s; a turning stop's N m s], ``rate_before`` and ``rate_after`` (the
+        ``impulse`` [N s; a turning stop's N m s], ``friction_impulse`` (the friction's on
+        the second shape, global axes [N s]), ``rate_before`` and ``rate_after`` (the
         gap's, [m/s or rad/s]), ``energy_lost`` [J] and ``point`` (global [m]: midway
         between the shapes; a stop's, its joint's point on body j); and where the explicit
         methods hold rigid contacts at rest (:mod:`mbd3d.analyses.resting`), ``rests``: one

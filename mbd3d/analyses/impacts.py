@@ -18,8 +18,14 @@ set (:func:`impulses`). An impulse can close a row that was only touching (a row
 the law is applied again to the rows then closing, until none is (the sequential impacts of
 Newton's cradle, whose struck ball alone leaves).
 
-Each row's energy lost, ``-(1 - e) lam v- / 2`` (>= 0), adds up to the kinetic energy lost
-where no driver moves. A row that is left touching, opening slower than its ``rest_speed``
+Rows with a friction coefficient ``mu`` take a friction impulse too, by Coulomb's law on the
+slip after the impact (:func:`~mbd3d.analyses.sticking.impact_with_friction`): the slip stops
+where the impulse that stops it stays within ``mu lam``, else the row slides with ``mu lam``
+against the slip it leaves with. Each row's energy lost, the work of its impulses
+``-(lam (v- + v+) + P_t . (s- + s+)) / 2`` (without friction ``-(1 - e) lam v- / 2`` >= 0),
+adds up to the kinetic energy lost where no driver moves; an impact whose rows would give
+the motion energy (Newton's law and Coulomb's together can, where a row's friction turns
+its normal rate: Kane's paradox) is refused, naming it. A row that is left touching, opening slower than its ``rest_speed``
 while the free motion presses it closed, would bounce ever shorter (infinitely many impacts
 in a finite time): it has come to rest. The explicit integrators then hold it closed until it
 lets go (:mod:`mbd3d.analyses.resting`); generalized-alpha does not yet, and the run stops
@@ -32,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from mbd3d.analyses.sticking import impact_with_friction
 from mbd3d.errors import ModelError
 from mbd3d.io.history import contact_history
 from mbd3d.model import constraints
@@ -171,23 +178,56 @@ class RigidContacts:
         return q, qd
 
     def _impact(self, t, q, qd, active: np.ndarray, before: np.ndarray) -> np.ndarray:
-        """One round: Newton's law on the ``active`` rows closing at ``before``; recorded."""
-        G = self.gap_rows(q, active)
-        X = self.response(t, q, G)[:self.model.n_coordinates]
-        e = self.e[active]
-        lam = impulses(G @ X, (1.0 + e) * before)
-        qd = qd + X @ lam
+        """One round: Newton's law on the ``active`` rows closing at ``before``, with
+        Coulomb's friction where they have it
+        (:func:`~mbd3d.analyses.sticking.impact_with_friction`); recorded."""
+        n, e = self.model.n_coordinates, self.e[active]
+        G, T = self.rate_rows(q, active)
+        if np.any(self.mu[active] > 0.0):
+            slip = T @ qd
+            qd, lam, P_t = self._with_friction(t, q, qd, active, e, G, T)
+            # each row's impulses' work: what it takes from the motion, or gives (Kane's)
+            lost = -0.5 * (lam * (before + G @ qd)
+                           + np.einsum("ki,ki->k", P_t, slip + T @ qd))
+            self._refuse_gain(t, active, lost, lam * np.abs(before)
+                              + np.linalg.norm(P_t, axis=1) * np.linalg.norm(slip, axis=1))
+        else:
+            X = self.response(t, q, G)[:n]
+            lam = impulses(G @ X, (1.0 + e) * before)
+            qd, P_t = qd + X @ lam, np.zeros((len(lam), 3))
+            # >= 0 (a row at rest enters at zero rate, to rounding)
+            lost = np.maximum(-0.5 * (1.0 - e) * lam * before, 0.0)
         after = G @ qd
         self.states(q, qd)
         for a, k in enumerate(np.flatnonzero(active)):
             if lam[a] > 0.0:
                 self.records.append({
                     "time": t, "contact": self.names[k], "impulse": float(lam[a]),
-                    "rate_before": float(before[a]), "rate_after": float(after[a]),
-                    # >= 0 (a row at rest enters at zero rate, to rounding)
-                    "energy_lost": max(float(-0.5 * (1.0 - e[a]) * lam[a] * before[a]), 0.0),
+                    "friction_impulse": P_t[a].tolist(), "rate_before": float(before[a]),
+                    "rate_after": float(after[a]), "energy_lost": float(lost[a]),
                     "point": self._points[k].tolist()})
         return qd
+
+    def _with_friction(self, t, q, qd, active, e, G, T) -> tuple:
+        """:func:`~mbd3d.analyses.sticking.impact_with_friction` on the ``active`` rows."""
+        n = self.model.n_coordinates
+        return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e, qd,
+                                    lambda R: self.response(t, q, R)[:n],
+                                    self.model.n_coords_per_body == 3)
+
+    def _refuse_gain(self, t: float, active: np.ndarray, lost: np.ndarray,
+                     size: np.ndarray) -> None:
+        """Refuse an impact whose rows' impulses would give the motion energy: Newton's law
+        with Coulomb's friction can, where a row's friction turns another's normal rate
+        (Kane and Levinson's double pendulum)."""
+        if float(np.sum(lost)) >= -1e-9 * float(np.sum(size)):
+            return
+        names = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
+        raise ModelError(
+            f"forward dynamics of '{self.model.name}': the impact at t = {t:.9g} s on {names} "
+            f"would give the motion {-float(np.sum(lost)):.6g} J: Newton's restitution with "
+            "Coulomb's friction is not dissipative at this impact (Kane's paradox); lower the "
+            "restitution or the friction coefficient, or give the contacts compliant laws")
 
     def gap_rows(self, q: np.ndarray, active: np.ndarray) -> np.ndarray:
         """``G`` (a, n) of the ``active`` rows: ``g' = G qd`` (:meth:`rate_rows`)."""
@@ -248,7 +288,7 @@ class RigidContacts:
         if self.holding is not None:
             # a held row that the impact leaves opening faster than its rest speed flies off
             self.holding.let_go(t, (rate >= self.rest_speed) & self.holding.mask)
-            # impacts are frictionless: the rows held with friction slide on along their slip
+            # the rows held with friction that the impact left slipping slide on along it
             self.holding.follow(t, q, qd)
             return self.holding.hold(t, q, qd, slow) if np.any(slow) else (q, qd)
         if not np.any(slow):

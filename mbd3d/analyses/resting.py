@@ -22,8 +22,13 @@ A held row with a friction coefficient sticks or slides with Coulomb's friction
 (:mod:`mbd3d.analyses.sticking`: its force then joins the complementarity problem); its
 switches are events: a sticking row's force reaching its cone (``mu f - |s|`` [N] crossing
 zero), a sliding row's slip along its direction reaching zero (``v . u`` [m/s]), each
-watched once its function has left zero after the last switch. The impacts stay
-frictionless; the rows slide on along their slip after them.
+watched once its function has left zero after the last switch. Held rows take part in
+impacts with their friction (:mod:`mbd3d.analyses.impacts`); a sticking row that an impact
+leaves slipping slides on along its slip. Where a sliding row comes to rest, the settling
+that takes its last bounce away carries its friction too (``mu`` times that impulse, even
+pulling): its friction then adds up to ``mu`` times its normal impulse, as the bounces
+would have, so a ball bouncing to rest while it slides loses its slip exactly as one that
+slides all along.
 
 Like the joints, the held rows drift under integration: a step that leaves one open or closing
 by more than ``constraint_tol`` (of the model's length scale) is projected back (mass-weighted,
@@ -194,7 +199,7 @@ class HeldRows:
              ) -> tuple[np.ndarray, np.ndarray]:
         """Hold the ``candidates`` (touching, slow) that the free motion presses closed, with
         the rows held already: their rates and gaps are set to zero (the kinetic energy this
-        takes, at most what a bounce below the rest speed carries, is recorded)."""
+        takes, about what a bounce below the rest speed carries, is recorded)."""
         rows = candidates | self.mask
         rigid = self.rigid
         _, rate = rigid.states(q, qd)
@@ -205,22 +210,27 @@ class HeldRows:
         if not np.any(held):
             self.let_go(t, self.mask)
             return q, qd
-        before = self._kinetic(q, qd)
+        before, new = self._kinetic(q, qd), held & ~self.mask
+        # the new rows with friction slide along their slip (their settling rubs), or stick
+        # where it is slow
+        slip = rigid.slips(q, qd)[0]
+        speed = np.linalg.norm(slip, axis=1)
+        slow = new & (self.mu > 0.0) & (speed <= rigid.rest_speed)
+        moving = new & (speed > 0.0)
+        self.along[moving] = slip[moving] / speed[moving, None]
         q, qd = self.settle(t, q, qd, held, force=True)
-        # what the settling takes (>= 0 but for rounding, where nothing moved)
-        lost, new = max(before - self._kinetic(q, qd), 0.0), held & ~self.mask
+        # what the settling takes (>= 0 but for rounding): the bounces' energy, less what a
+        # sliding row's friction gives back where its bounce is pulled down (its bounces
+        # would have rubbed less than the force that replaces them will)
+        lost = before - self._kinetic(q, qd)
+        if not np.any(held & (self.mu > 0.0) & ~self.stuck):
+            lost = max(lost, 0.0)
         # rows held already that an impact left opening slowly: their bounce is taken too
         bounced = held & self.mask & (np.abs(rate) > CLOSING * rigid.rest_speed)
         if np.any(new) or np.any(bounced):
             self._record(t, "rest", new | bounced, lost)
         self.let_go(t, self.mask & ~held)
         self.mask = held
-        # the new rows with friction slide along their slip, or stick where it is slow
-        slip = rigid.slips(q, qd)[0]
-        speed = np.linalg.norm(slip, axis=1)
-        slow = new & (self.mu > 0.0) & (speed <= rigid.rest_speed)
-        moving = new & (speed > 0.0)
-        self.along[moving] = slip[moving] / speed[moving, None]
         self.follow(t, q, qd)
         q, qd = self._stick(t, q, qd, slow)
         self.follow(t, q, qd)
@@ -260,22 +270,31 @@ class HeldRows:
             G = rigid.gap_rows(q, rows)
             q = q + self._correction(t, q, G, -g)
             q, qd = project_state(model, t, q, qd, 1e-3 * tol, chart, redundant)
-        # the rates: the rows' gaps' and the sticking rows' slips (in their tangents) zero
+        # the rates: the rows' gaps' and the sticking rows' slips (in their tangents) zero, by
+        # impulses along the rows, with Coulomb's friction where rows slide: the bounces a row
+        # coming to rest no longer makes (or its drift) rub as the force that replaces them
         G, T = rigid.rate_rows(q, rows)
+        held = np.flatnonzero(rows)
+        sliding = (self.mu[held] > 0.0) & ~self.stuck[held]
         rates = [G]
+        columns = [G - (self.mu[held] * sliding)[:, None] * np.einsum(
+            "ki,kin->kn", self.along[held], T)]
         normals = rigid.slips(q, qd)[1]
-        for a, k in enumerate(np.flatnonzero(rows)):
+        for a, k in enumerate(held):
             if self.stuck[k]:
                 rates.append(tangents(normals[k], self.planar) @ T[a])
+                columns.append(rates[-1])
         R = np.vstack(rates)
-        return q, qd + self._correction(t, q, R, -(R @ qd))
+        return q, qd + self._correction(t, q, R, -(R @ qd), np.vstack(columns))
 
-    def _correction(self, t: float, q: np.ndarray, R: np.ndarray, change: np.ndarray
-                    ) -> np.ndarray:
-        """The mass-weighted least change ``X mu`` of the coordinates (or rates) that changes
-        ``R q`` (or ``R qd``; ``R`` rows of gap rates or slips) by ``change``, the joints
-        holding to first order."""
-        X = self.rigid.response(t, q, R)[:self.model.n_coordinates]
+    def _correction(self, t: float, q: np.ndarray, R: np.ndarray, change: np.ndarray,
+                    columns: np.ndarray | None = None) -> np.ndarray:
+        """The change ``X mu`` of the coordinates (or rates) that changes ``R q`` (or
+        ``R qd``; ``R`` rows of gap rates or slips) by ``change``, the joints holding to first
+        order, ``X`` the response to generalized impulses along ``columns`` (default ``R``:
+        the mass-weighted least change)."""
+        X = self.rigid.response(t, q, R if columns is None else columns)
+        X = X[:self.model.n_coordinates]
         return X @ np.linalg.lstsq(R @ X, change, rcond=1e-12)[0]
 
     def _pressing(self, t: float, q: np.ndarray, qd: np.ndarray, f: np.ndarray,

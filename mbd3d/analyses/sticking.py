@@ -27,7 +27,12 @@ import numpy as np
 
 from mbd3d.errors import ModelError
 
-__all__ = ["direction", "tangents", "mixed_complementarity", "share_by_capacity"]
+__all__ = ["direction", "tangents", "mixed_complementarity", "share_by_capacity",
+           "impact_with_friction"]
+
+#: trials of an impact's sticking and sliding rows (each a change of one row's mode) before
+#: the impact is refused; Newton iterations on the directions its rows slide in space
+_TRIALS, _NEWTON = 200, 50
 
 
 def direction(slip: np.ndarray, along: np.ndarray, blend: float) -> np.ndarray:
@@ -73,12 +78,14 @@ def _solve_part(A: np.ndarray, c: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return z
 
 
-def mixed_complementarity(A: np.ndarray, c: np.ndarray, a: int) -> np.ndarray:
+def mixed_complementarity(A: np.ndarray, c: np.ndarray, a: int,
+                          what: str = "forces of the rigid contacts held at rest") -> np.ndarray:
     """``z`` with ``0 <= z_k _|_ (A z + c)_k >= 0`` for ``k < a`` and ``(A z + c)_k = 0``
     beyond, by Murty's least-index principal pivoting: starting from every ``k < a`` pressing,
     the first row whose force pulls or whose rate sinks is switched, until none is. It ends
     for a P-matrix ``A``; where it does not (sliding friction that presses a contact closed
-    the harder it presses: Painleve's paradox), the run is refused, saying so."""
+    the harder it presses: Painleve's paradox), the run is refused, saying so (``what``: the
+    forces or impulses sought)."""
     m = len(c)
     size = max(float(np.max(np.abs(c), initial=0.0)), np.finfo(float).tiny)
     pressing = np.ones(a, dtype=bool)
@@ -91,10 +98,9 @@ def mixed_complementarity(A: np.ndarray, c: np.ndarray, a: int) -> np.ndarray:
             z[:a][~pressing] = 0.0
             return z
         pressing[wrong[0]] = not pressing[wrong[0]]
-    raise ModelError("the forces of the rigid contacts held at rest were not found: sliding "
-                     "friction there would press a contact closed harder the harder it "
-                     "presses (Painleve's paradox); lower the friction coefficient or give "
-                     "the contacts compliant laws")
+    raise ModelError(f"the {what} were not found: sliding friction there would press a "
+                     "contact closed harder the harder it presses (Painleve's paradox); "
+                     "lower the friction coefficient or give the contacts compliant laws")
 
 
 def share_by_capacity(A: np.ndarray, s: np.ndarray, capacity: np.ndarray) -> np.ndarray:
@@ -108,3 +114,127 @@ def share_by_capacity(A: np.ndarray, s: np.ndarray, capacity: np.ndarray) -> np.
     target = A @ s
     y = np.linalg.lstsq((A * D) @ A, target, rcond=1e-10)[0]
     return D * (A @ y)
+
+
+def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: np.ndarray,
+                         e: np.ndarray, qd: np.ndarray, response, planar: bool
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An impact on rigid rows with Coulomb's friction: ``(qd+, P_n (a,) [N s], P_t (a, 3)
+    [N s])``, the velocities after it and each row's normal and friction impulses (the
+    friction on the second shape, global axes).
+
+    Newton's law holds the normal rates as without friction (``G qd+ + e G qd- >= 0``,
+    complementary to ``P_n >= 0``) and Coulomb's the slips after the impact, as a held row's
+    (Moreau's law, the tangential restitution zero): a row *sticks*, ``T qd+ = 0`` with
+    ``|P_t| <= mu P_n``, or *slides*, ``P_t = -mu P_n u`` with ``u`` the direction of its slip
+    ``T qd+`` after the impact. ``G`` (a, n) and ``T`` (a, 3, n) are the rows' gap and slip
+    rows at the impact, ``normal`` (a, 3) their normals, ``response(R)`` the velocities
+    (n, k) a unit impulse on each row of ``R`` gives, the joints holding. Every row starts
+    sticking; a row that cannot stick (its slip tied to its normal rate) or whose impulse
+    leaves its cone slides, away from that impulse, and a planar row whose slip turned back
+    slides the other way, until the modes hold; in space the sliding rows' directions are
+    those their slips come out along (:func:`_settle_directions`)."""
+    a = len(G)
+    bases = [tangents(normal[k], planar) for k in range(a)]
+    stuck, phi = mu > 0.0, np.zeros(a)
+    before = max(float(np.max(np.abs(G @ qd), initial=0.0)),
+                 float(np.max(np.abs(T @ qd), initial=0.0)), np.finfo(float).tiny)
+    for _ in range(_TRIALS):
+        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, e, qd, response, stuck,
+                                                    phi, before)
+        slip = T @ after
+        speed = np.linalg.norm(slip, axis=1)
+        # a row that cannot stick with the others (a pendulum's tip bouncing off a floor:
+        # its slip and its gap's rate move together) slides along the slip it is left with
+        unheld = np.flatnonzero(stuck & (speed > 1e-9 * before))
+        size = max(float(np.max(P_n, initial=0.0)), np.finfo(float).tiny)
+        over = np.flatnonzero(stuck & (np.linalg.norm(P_t, axis=1)
+                                       > (1.0 + 1e-9) * mu * P_n + 1e-12 * size))
+        if len(unheld) or len(over):
+            k = unheld[0] if len(unheld) else over[0]
+            stuck[k] = False
+            phi[k] = _angle(bases[k], slip[k] if len(unheld) else -P_t[k])
+            continue
+        sliding = (mu > 0.0) & ~stuck
+        along = _directions(bases, phi)
+        back = np.flatnonzero(sliding & (np.einsum("ki,ki->k", slip, along) < -1e-12 * before))
+        if not len(back):
+            return after, P_n, P_t
+        phi[back[0]] += np.pi
+    raise ModelError("the impulses of an impact with friction were not found: its rows "
+                     "could neither stick nor slide consistently (sliding friction that "
+                     "presses a contact closed, Painleve's paradox at an impact); lower the "
+                     "friction coefficients or give the contacts compliant laws")
+
+
+def _angle(basis: np.ndarray, vector: np.ndarray) -> float:
+    """The angle [rad] of ``vector`` from the first tangent of ``basis`` about the normal (0
+    or pi in the plane)."""
+    return float(np.arctan2(basis[1] @ vector, basis[0] @ vector) if len(basis) > 1
+                 else (0.0 if basis[0] @ vector >= 0.0 else np.pi))
+
+
+def _directions(bases: list, phi: np.ndarray) -> np.ndarray:
+    """The unit directions (a, 3) at angles ``phi`` from each row's first tangent."""
+    return np.array([np.cos(p) * B[0] + (np.sin(p) * B[1] if len(B) > 1 else 0.0)
+                     for B, p in zip(bases, phi)]).reshape(len(phi), 3)
+
+
+def _settle_directions(G, T, bases, mu, e, qd, response, stuck, phi, before) -> tuple:
+    """``((qd+, P_n, P_t), phi)`` with the sliding rows' directions those of their slips
+    after the impact: in the plane as given; in space, each row's angle ``phi`` solved by
+    Newton's method (a difference Jacobian, the step halved until the mismatch falls), since
+    a row's friction turns its own slip and the others' (substitution alone can circle)."""
+    sliding = np.flatnonzero((mu > 0.0) & ~stuck)
+
+    def mismatch(angles):
+        out = _impact_trial(G, T, bases, mu, e, qd, response, stuck, _directions(bases, angles))
+        slip = T[sliding] @ out[0]
+        moving = np.linalg.norm(slip, axis=1) > 1e-12 * before
+        turn = np.array([_angle(bases[k], v) for k, v in zip(sliding, slip)]) - angles[sliding]
+        return out, np.where(moving, (turn + np.pi) % (2 * np.pi) - np.pi, 0.0)
+
+    out, r = mismatch(phi)
+    if len(bases) == 0 or len(bases[0]) == 1:
+        return out, phi
+    for _ in range(_NEWTON):
+        if np.max(np.abs(r), initial=0.0) <= 1e-12:
+            return out, phi
+        J = np.empty((len(sliding), len(sliding)))
+        for j, k in enumerate(sliding):
+            nudged = phi.copy()
+            nudged[k] += 1e-7
+            J[:, j] = (mismatch(nudged)[1] - r) / 1e-7
+        step = np.linalg.lstsq(J, -r, rcond=1e-12)[0]
+        for _ in range(30):
+            trial = phi.copy()
+            trial[sliding] += step
+            new, r_new = mismatch(trial)
+            if np.linalg.norm(r_new) < np.linalg.norm(r):
+                break
+            step = 0.5 * step
+        out, r, phi = new, r_new, trial
+    raise ModelError("the impulses of an impact with friction were not found: the directions "
+                     "in which its rows slide did not settle; lower the friction "
+                     "coefficients or give the contacts compliant laws")
+
+
+def _impact_trial(G, T, bases, mu, e, qd, response, stuck, along) -> tuple:
+    """``(qd+, P_n, P_t)`` of an impact with the rows ``stuck`` sticking and the others
+    with friction sliding ``along`` (:func:`impact_with_friction`)."""
+    a, n = G.shape
+    sliding = (mu > 0.0) & ~stuck
+    columns = G - (mu * sliding)[:, None] * np.einsum("ki,kin->kn", along, T)
+    sticking = np.flatnonzero(stuck)
+    Ts = np.vstack([bases[k] @ T[k] for k in sticking] or [np.zeros((0, n))])
+    X = response(np.vstack([columns, Ts]))
+    A = np.vstack([G, Ts]) @ X
+    c = np.concatenate([(1.0 + e) * (G @ qd), Ts @ qd])
+    z = mixed_complementarity(A, c, a, "impulses of an impact with friction")
+    d = len(bases[0]) if a else 1
+    z[a:] = share_by_capacity(A[a:, a:], z[a:], np.repeat(mu[stuck] * z[:a][stuck], d))
+    P_t = np.zeros((a, 3))
+    for i, k in enumerate(sticking):
+        P_t[k] = bases[k].T @ z[a + d * i:a + d * (i + 1)]
+    P_t[sliding] = -(mu * z[:a])[sliding, None] * along[sliding]
+    return qd + X @ z, z[:a], P_t

@@ -63,9 +63,9 @@ class Contact(ForceElement):
         :class:`~mbd3d.LinearContact`, :class:`~mbd3d.HertzContact`,
         :class:`~mbd3d.HuntCrossley` or :class:`~mbd3d.ImpactFunction`; or
         :class:`~mbd3d.RigidImpact`, which makes the contact
-        rigid: no force, every touch an impact (forward dynamics; the impacts are frictionless),
-        and where it comes to rest it is held closed, sticking or sliding with Coulomb's
-        friction (the explicit methods; see ``friction``). Laws
+        rigid: no force, every touch an impact (forward dynamics; with Coulomb's friction
+        where it has ``friction``), and where it comes to rest it is held closed, sticking or
+        sliding with Coulomb's friction (the explicit methods; see ``friction``). Laws
         calibrated to a restitution use the pair's effective
         mass ``m* = m_i m_j / (m_i + m_j)`` (``m`` of the ground infinite): the masses of the
         free bodies, not the inertia the pair has through joints (give ``effective_mass``).
@@ -76,7 +76,9 @@ class Contact(ForceElement):
         Coulomb coefficient ``mu`` >= 0. At a rigid contact held at rest it is exact: the
         contact sticks (no slip) while its friction stays within ``mu F_n``, and slides with
         ``mu F_n`` against the slip beyond; each switch is an event of the run
-        (:mod:`mbd3d.analyses.sticking`).
+        (:mod:`mbd3d.analyses.sticking`). At a rigid impact the same law holds for the
+        impulses: the slip after it stops where ``mu`` times the normal impulse can stop it,
+        else the contact slides with that much against the slip it leaves with.
     slip_velocity : float
         [m/s] > 0, the slip below which friction falls off smoothly to zero (compliant laws;
         a rigid contact's friction does not fall off).
