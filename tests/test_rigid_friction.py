@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
+from mbd3d.errors import ModelError
 from mbd3d.joints import Prismatic, TranslationDriver
 
 G = 9.81
@@ -99,11 +100,12 @@ def test_a_ball_thrown_sliding_rolls_from_where_its_slip_runs_out(dim):
     np.testing.assert_allclose(energy["total"], energy["total"][0], rtol=1e-9)
 
 
-def block_on_slope(dim: int, mu: float, alpha: float, pull: tuple | None = None) -> mb.Model:
+def block_on_slope(dim: int, mu: float, alpha: float, pull: tuple | None = None,
+                   static: float | None = None) -> mb.Model:
     """A block lying flat on a rigid floor with friction ``mu``, gravity tilted by ``alpha``
     down the +x axis (an incline), its corners the contacts; ``pull = (k, v)``: a spring of
     stiffness k [N/m] from its centre of mass, slack at the start, along x to a slider driven
-    away at v [m/s]."""
+    away at v [m/s]; ``static``: a static coefficient above ``mu`` (the kinetic one)."""
     down = (math.sin(alpha), -math.cos(alpha))
     if dim == 2:
         b = mb.ModelBuilder(dim=2, gravity=(G * down[0], G * down[1]))
@@ -116,8 +118,8 @@ def block_on_slope(dim: int, mu: float, alpha: float, pull: tuple | None = None)
                                         LENGTH ** 2 + WIDTH ** 2])
         block = b.add_body("block", mass=MASS, inertia=inertia, position=(0.0, 0.0, HEIGHT / 2))
         size, floor = (LENGTH, WIDTH, HEIGHT), mb.Plane(b.ground, normal=(0.0, 0.0, 1.0))
-    b.add(mb.Contact("floor", mb.Box(block, size), floor, law=mb.RigidImpact(restitution=0.0),
-                     friction=mu))
+    b.add(mb.Contact("floor", mb.Box(block, size), floor,
+                     law=mb.RigidImpact(restitution=0.0, static_friction=static), friction=mu))
     if pull is not None:
         end = (PULLER,) + (0.0,) * (dim - 2) + (HEIGHT / 2,)
         puller = b.add_body("puller", mass=1.0, inertia=0.01 if dim == 2 else (0.01,) * 3,
@@ -300,3 +302,67 @@ def test_the_friction_of_a_held_contact_is_kept_in_a_results_file_and_on_the_tim
     assert [str(row[0]) for row in text][1].startswith("floor sticks (its slip took")
     stick = res.stats["rests"][1]["time"]
     np.testing.assert_allclose(times[1].astype(np.int64) * 1e-9, stick, atol=1e-9)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_block_pulled_through_a_spring_sticks_and_slips_in_a_limit_cycle(dim):
+    """With a static coefficient mu_s above the kinetic mu_k (``RigidImpact(static_friction)``)
+    the pulled block of the test above sticks and slips for ever: it holds until the spring's
+    k e = mu_s m g, then slides with y = e - mu_k m g / k swinging as
+    y = D cos(w tau) + (v / w) sin(w tau) from y = D = (mu_s - mu_k) m g / k, until its
+    speed v - y' is zero again at w tau = pi + 2 phi, tan(phi) = v / (w D), where y = -D:
+    the spring then pulls with (2 mu_k - mu_s) m g, inside the cone, and it sticks until
+    y is back at D, 2 D / v later. Every slip and stick at its closed-form time (1e-9 s), the
+    block where y puts it (1e-9 m), friction mu_k m g while it slides and the spring's pull
+    while it sticks, and mu_k m g times the way slid dissipated."""
+    # mu_s > 3 mu_k: where it sticks, the spring pushes it back harder than mu_k m g
+    mu_k, mu_s, k, v = 0.15, 0.5, 200.0, 0.15
+    D, w = (mu_s - mu_k) * MASS * G / k, math.sqrt(k / MASS)
+    phi = math.atan2(v / w, D)
+    t1, slide, stick = mu_s * MASS * G / (k * v), (math.pi + 2 * phi) / w, 2 * D / v
+    period = slide + stick
+    t = np.linspace(0.0, t1 + 2 * period + 0.5 * slide, 121)
+    res = mb.forward_dynamics(block_on_slope(dim, mu_k, 0.0, pull=(k, v), static=mu_s), t,
+                              **TIGHT)
+    assert res.status == "complete"
+    switches = [(r["time"], r["event"]) for r in res.stats["rests"]
+                if r["event"] in ("stick", "slip") and r["time"] > 0.0]
+    expected = [(t1 + n * period + shift, event) for n in range(3)
+                for shift, event in ((0.0, "slip"), (slide, "stick"))][:5]
+    assert [e for _, e in switches] == [e for _, e in expected]
+    np.testing.assert_allclose([s for s, _ in switches], [s for s, _ in expected], rtol=0,
+                               atol=1e-9)
+    # y over time: D cos + (v / w) sin while sliding (from each slip), rising at v while stuck
+    cycle = np.mod(t - t1, period)
+    y = np.where(cycle < slide, D * np.cos(w * cycle) + v / w * np.sin(w * cycle),
+                 -D + v * (cycle - slide))
+    y = np.where(t < t1, v * t - mu_k * MASS * G / k, y)
+    x = res.body("block").position[:, 0]
+    np.testing.assert_allclose(x, v * t - y - mu_k * MASS * G / k, rtol=0, atol=1e-9)
+    F = np.linalg.norm(res.contacts().friction_force, axis=2).sum(axis=1)
+    sliding = (t > t1) & (cycle > 1e-6) & (cycle < slide - 1e-6)
+    np.testing.assert_allclose(F[sliding], mu_k * MASS * G, rtol=1e-9)
+    np.testing.assert_allclose(F[~sliding], k * np.abs(v * t - x)[~sliding], rtol=1e-9,
+                               atol=1e-9)
+    np.testing.assert_allclose(res.energy_balance()["dissipated"], mu_k * MASS * G * x,
+                               rtol=1e-8, atol=1e-12)
+
+
+def test_a_static_coefficient_below_the_kinetic_one_is_refused_naming_the_contact():
+    """Sticking must hold at least what sliding rubs: mu_s >= mu_k, else refused by name."""
+    with pytest.raises(ModelError, match=r"contact 'floor'.*static_friction 0\.2 is below its "
+                                         r"friction 0\.3"):
+        block_on_slope(2, 0.3, 0.0, static=0.2)
+
+
+def test_a_static_coefficient_is_kept_in_a_model_file(tmp_path):
+    """Saved and loaded, the block still holds until the spring pulls with mu_s m g (the
+    kinetic coefficient would let it go at a third of that time), and names its parameter."""
+    mu_k, mu_s, k, v = 0.15, 0.5, 200.0, 0.15
+    path = tmp_path / "stick_slip.yaml"
+    mb.save(block_on_slope(2, mu_k, 0.0, pull=(k, v), static=mu_s), path)
+    model = mb.load(path)
+    assert "forces.floor.law.static_friction" in mb.parameters(model)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.6, 7), **TIGHT)
+    slips = [r["time"] for r in res.stats["rests"] if r["event"] == "slip"]
+    np.testing.assert_allclose(slips[0], mu_s * MASS * G / (k * v), rtol=0, atol=1e-9)

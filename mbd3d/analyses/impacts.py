@@ -87,6 +87,7 @@ class RigidContacts:
         self.scale = np.array([model.length_scale if u == "m" else 1.0 for u in self.units])
         self.e, self.rest_speed = group.restitution[self.rows], group.rest_speed[self.rows]
         self.mu, self.slip_velocity = group.friction[self.rows], group.slip_velocity[self.rows]
+        self.mu_static = group.static_friction[self.rows]
         self.floor = self.idle = None  # where the rows fire, which were left idle: start()
         self.records = stats.setdefault("impacts", [])
         self._key, self._report, self._points = None, None, None
@@ -183,7 +184,7 @@ class RigidContacts:
         (:func:`~mbd3d.analyses.sticking.impact_with_friction`); recorded."""
         n, e = self.model.n_coordinates, self.e[active]
         G, T = self.rate_rows(q, active)
-        if np.any(self.mu[active] > 0.0):
+        if np.any(self.mu_static[active] > 0.0):
             slip = T @ qd
             qd, lam, P_t = self._with_friction(t, q, qd, active, e, G, T)
             # each row's impulses' work: what it takes from the motion, or gives (Kane's)
@@ -213,7 +214,8 @@ class RigidContacts:
         n = self.model.n_coordinates
         return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e, qd,
                                     lambda R: self.response(t, q, R)[:n],
-                                    self.model.n_coords_per_body == 3)
+                                    self.model.n_coords_per_body == 3,
+                                    self.mu_static[active])
 
     def _refuse_gain(self, t: float, active: np.ndarray, lost: np.ndarray,
                      size: np.ndarray) -> None:

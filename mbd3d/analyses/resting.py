@@ -20,7 +20,7 @@ the next touch. ``(dG/dq qd) qd`` is
 
 A held row with a friction coefficient sticks or slides with Coulomb's friction
 (:mod:`mbd3d.analyses.sticking`: its force then joins the complementarity problem); its
-switches are events: a sticking row's force reaching its cone (``mu f - |s|`` [N] crossing
+switches are events: a sticking row's force reaching its cone (``mu_s f - |s|`` [N] crossing
 zero), a sliding row's slip along its direction reaching zero (``v . u`` [m/s]), each
 watched once its function has left zero after the last switch. Held rows take part in
 impacts with their friction (:mod:`mbd3d.analyses.impacts`); a sticking row that an impact
@@ -68,6 +68,8 @@ class HeldRows:
         self.rigid, self.model, self.tol = rigid, rigid.model, tol
         self.mask = np.zeros(len(rigid), dtype=bool)
         self.mu, self.planar = rigid.mu, rigid.model.n_coords_per_body == 3
+        #: the static coefficients: a sticking row holds within mu_static f, slides with mu f
+        self.mu_static = rigid.mu_static
         #: per row with friction, held: whether it sticks (its slip held at zero), else the
         #: direction it slides along (unit, global; :mod:`mbd3d.analyses.sticking`)
         self.stuck = np.zeros(len(rigid), dtype=bool)
@@ -96,7 +98,7 @@ class HeldRows:
 
     def power(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The power [W] every rigid row's friction dissipates at ``(t, q, qd)`` (>= 0)."""
-        if not np.any(self.mask & (self.mu > 0.0)):
+        if not np.any(self.mask & (self.mu_static > 0.0)):
             return np.zeros(len(self.mask))
         slip = self.rigid.slips(q, qd)[0]
         return -np.einsum("ki,ki->k", self._solve(t, q, qd, self.mask)[5], slip)
@@ -105,7 +107,7 @@ class HeldRows:
         """The friction event's function of rigid row ``index``: sticking, how far its force
         is inside its cone, ``mu f - |s|`` [N]; sliding, its slip along the direction it
         slides, ``v . u`` [m/s]; 1 where it is not held, has no friction or is not armed."""
-        if not (self.mask[index] and self.mu[index] > 0.0 and self.armed[index]):
+        if not (self.mask[index] and self.mu_static[index] > 0.0 and self.armed[index]):
             return 1.0
         return float(self._solve(t, q, qd, self.mask)[6][index])
 
@@ -115,8 +117,8 @@ class HeldRows:
         slide, away from that force; the sliding rows whose slip reached zero stick, where
         their force then stays within the cone, else slide on the other way."""
         _, _, f, _, _, friction, margin = self._solve(t, q, qd, self.mask)
-        rubbing = self.mask & (self.mu > 0.0)
-        slipping = rubbing & self.stuck & (margin <= 1e-9 * self.mu * f)
+        rubbing = self.mask & (self.mu_static > 0.0)
+        slipping = rubbing & self.stuck & (margin <= 1e-9 * self.mu_static * f)
         stopping = rubbing & ~self.stuck & (margin <= _STOPPED * self.rigid.rest_speed)
         self._slide_away(slipping, friction)
         self._record(t, "slip", slipping)
@@ -129,7 +131,7 @@ class HeldRows:
         that a jump (an impact elsewhere) left slipping beyond their rest speed slide along
         it; the events of the rows whose function has left zero (1e-6 of the cone,
         :data:`_STOPPED` of the rest speed) armed."""
-        rubbing = self.mask & (self.mu > 0.0)
+        rubbing = self.mask & (self.mu_static > 0.0)
         if not np.any(rubbing):
             return
         rigid = self.rigid
@@ -140,7 +142,7 @@ class HeldRows:
         self.along[turned] = slip[turned] / speed[turned, None]
         self.stuck[jumped] = self.armed[jumped] = False
         _, _, f, _, _, _, margin = self._solve(t, q, qd, self.mask)
-        away = np.where(self.stuck, margin > 1e-6 * self.mu * f,
+        away = np.where(self.stuck, margin > 1e-6 * self.mu_static * f,
                         margin > _STOPPED * self.rigid.rest_speed)
         self.armed |= rubbing & away
 
@@ -163,7 +165,7 @@ class HeldRows:
         for _ in range(int(np.sum(rows)) + 1):
             _, _, f, _, _, friction, _ = self._solve(t, q, qd, self.mask)
             over = rows & self.stuck & (np.linalg.norm(friction, axis=1)
-                                        > (1.0 + 1e-9) * self.mu * f)
+                                        > (1.0 + 1e-9) * self.mu_static * f)
             if not np.any(over):
                 break
             self._slide_away(over, friction)
@@ -215,7 +217,7 @@ class HeldRows:
         # where it is slow
         slip = rigid.slips(q, qd)[0]
         speed = np.linalg.norm(slip, axis=1)
-        slow = new & (self.mu > 0.0) & (speed <= rigid.rest_speed)
+        slow = new & (self.mu_static > 0.0) & (speed <= rigid.rest_speed)
         moving = new & (speed > 0.0)
         self.along[moving] = slip[moving] / speed[moving, None]
         q, qd = self.settle(t, q, qd, held, force=True)
@@ -275,7 +277,7 @@ class HeldRows:
         # coming to rest no longer makes (or its drift) rub as the force that replaces them
         G, T = rigid.rate_rows(q, rows)
         held = np.flatnonzero(rows)
-        sliding = (self.mu[held] > 0.0) & ~self.stuck[held]
+        sliding = (self.mu_static[held] > 0.0) & ~self.stuck[held]
         rates = [G]
         columns = [G - (self.mu[held] * sliding)[:, None] * np.einsum(
             "ki,kin->kn", self.along[held], T)]
@@ -325,7 +327,7 @@ class HeldRows:
             a = int(np.sum(rows))
             G, T = rigid.rate_rows(q, rows)
             b = G @ qdd0 + rigid.convective(q, qd)[rows]
-            if np.any(self.mu[rows] > 0.0):
+            if np.any(self.mu_static[rows] > 0.0):
                 z, XY, W = self._with_friction(t, q, qd, rows, G, T, qdd0, b, friction,
                                                margin)
             else:
@@ -347,8 +349,9 @@ class HeldRows:
         rigid, n = self.rigid, self.model.n_coordinates
         held = np.flatnonzero(rows)
         slip, normal = (x[held] for x in rigid.slips(q, qd))
-        mu, stuck = self.mu[held], self.stuck[held] & (self.mu[held] > 0.0)
-        sliding = (mu > 0.0) & ~stuck
+        mu, mu_s = self.mu[held], self.mu_static[held]
+        stuck = self.stuck[held] & (mu_s > 0.0)
+        sliding = (mu_s > 0.0) & ~stuck
         blend = rigid.slip_velocity[held]
         e = np.array([direction(v, u, b) if s else np.zeros(3)
                       for v, u, b, s in zip(slip, self.along[held], blend, sliding)])
@@ -364,12 +367,12 @@ class HeldRows:
         z = mixed_complementarity(A, c, len(held))
         f = z[:len(held)]
         d = 1 if self.planar else 2
-        capacity = np.repeat(mu[stuck] * f[stuck], d)
+        capacity = np.repeat(mu_s[stuck] * f[stuck], d)
         z[len(held):] = share_by_capacity(A[len(held):, len(held):], z[len(held):], capacity)
         for i, a in enumerate(np.flatnonzero(stuck)):
             friction[held[a]] = bases[i].T @ z[len(held) + d * i:len(held) + d * (i + 1)]
         friction[held[sliding]] = -(mu * f)[sliding, None] * e[sliding]
-        margin[held[stuck]] = mu[stuck] * f[stuck] - np.linalg.norm(friction[held[stuck]],
+        margin[held[stuck]] = mu_s[stuck] * f[stuck] - np.linalg.norm(friction[held[stuck]],
                                                                     axis=1)
         margin[held[sliding]] = np.einsum("ki,ki->k", slip[sliding], self.along[held[sliding]])
         return z, XY, A

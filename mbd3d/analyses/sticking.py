@@ -3,9 +3,10 @@
 A held row (:mod:`mbd3d.analyses.resting`) with a friction coefficient ``mu`` either *sticks*,
 its slip velocity ``v = T qd`` (the tangential part of the second shape's material point's
 velocity relative to the first's, :class:`~mbd3d.ContactStates`) held at zero by a tangential
-force ``s`` of free sign, which must stay within the cone ``|s| <= mu f``; or *slides* along a
-direction ``u``, the friction ``-mu f e`` opposing ``e``, the slip's direction (``u`` where the
-slip vanishes: at the start of a slide; :func:`direction`). With ``[X; Y]`` the augmented
+force ``s`` of free sign, which must stay within the cone ``|s| <= mu_s f`` (``mu_s`` the
+static coefficient, :class:`~mbd3d.RigidImpact`'s ``static_friction``, at least ``mu``); or
+*slides* along a direction ``u``, the friction ``-mu f e`` opposing ``e``, the slip's direction
+(``u`` where the slip vanishes: at the start of a slide; :func:`direction`). With ``[X; Y]`` the augmented
 system's response to a unit generalized force along each column (the joints holding) and
 ``f`` the normal forces::
 
@@ -117,7 +118,8 @@ def share_by_capacity(A: np.ndarray, s: np.ndarray, capacity: np.ndarray) -> np.
 
 
 def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: np.ndarray,
-                         e: np.ndarray, qd: np.ndarray, response, planar: bool
+                         e: np.ndarray, qd: np.ndarray, response, planar: bool,
+                         mu_static: np.ndarray | None = None
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An impact on rigid rows with Coulomb's friction: ``(qd+, P_n (a,) [N s], P_t (a, 3)
     [N s])``, the velocities after it and each row's normal and friction impulses (the
@@ -126,8 +128,8 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
     Newton's law holds the normal rates as without friction (``G qd+ + e G qd- >= 0``,
     complementary to ``P_n >= 0``) and Coulomb's the slips after the impact, as a held row's
     (Moreau's law, the tangential restitution zero): a row *sticks*, ``T qd+ = 0`` with
-    ``|P_t| <= mu P_n``, or *slides*, ``P_t = -mu P_n u`` with ``u`` the direction of its slip
-    ``T qd+`` after the impact. ``G`` (a, n) and ``T`` (a, 3, n) are the rows' gap and slip
+    ``|P_t| <= mu_s P_n`` (``mu_static``, default ``mu``), or *slides*, ``P_t = -mu P_n u``
+    with ``u`` the direction of its slip ``T qd+`` after the impact. ``G`` (a, n) and ``T`` (a, 3, n) are the rows' gap and slip
     rows at the impact, ``normal`` (a, 3) their normals, ``response(R)`` the velocities
     (n, k) a unit impulse on each row of ``R`` gives, the joints holding. Every row starts
     sticking; a row that cannot stick (its slip tied to its normal rate) or whose impulse
@@ -135,13 +137,14 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
     slides the other way, until the modes hold; in space the sliding rows' directions are
     those their slips come out along (:func:`_settle_directions`)."""
     a = len(G)
+    mu_s = mu if mu_static is None else mu_static
     bases = [tangents(normal[k], planar) for k in range(a)]
-    stuck, phi = mu > 0.0, np.zeros(a)
+    stuck, phi = mu_s > 0.0, np.zeros(a)
     before = max(float(np.max(np.abs(G @ qd), initial=0.0)),
                  float(np.max(np.abs(T @ qd), initial=0.0)), np.finfo(float).tiny)
     for _ in range(_TRIALS):
-        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, e, qd, response, stuck,
-                                                    phi, before)
+        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, mu_s, e, qd, response,
+                                                    stuck, phi, before)
         slip = T @ after
         speed = np.linalg.norm(slip, axis=1)
         # a row that cannot stick with the others (a pendulum's tip bouncing off a floor:
@@ -149,13 +152,13 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
         unheld = np.flatnonzero(stuck & (speed > 1e-9 * before))
         size = max(float(np.max(P_n, initial=0.0)), np.finfo(float).tiny)
         over = np.flatnonzero(stuck & (np.linalg.norm(P_t, axis=1)
-                                       > (1.0 + 1e-9) * mu * P_n + 1e-12 * size))
+                                       > (1.0 + 1e-9) * mu_s * P_n + 1e-12 * size))
         if len(unheld) or len(over):
             k = unheld[0] if len(unheld) else over[0]
             stuck[k] = False
             phi[k] = _angle(bases[k], slip[k] if len(unheld) else -P_t[k])
             continue
-        sliding = (mu > 0.0) & ~stuck
+        sliding = (mu_s > 0.0) & ~stuck
         along = _directions(bases, phi)
         back = np.flatnonzero(sliding & (np.einsum("ki,ki->k", slip, along) < -1e-12 * before))
         if not len(back):
@@ -180,15 +183,16 @@ def _directions(bases: list, phi: np.ndarray) -> np.ndarray:
                      for B, p in zip(bases, phi)]).reshape(len(phi), 3)
 
 
-def _settle_directions(G, T, bases, mu, e, qd, response, stuck, phi, before) -> tuple:
+def _settle_directions(G, T, bases, mu, mu_s, e, qd, response, stuck, phi, before) -> tuple:
     """``((qd+, P_n, P_t), phi)`` with the sliding rows' directions those of their slips
     after the impact: in the plane as given; in space, each row's angle ``phi`` solved by
     Newton's method (a difference Jacobian, the step halved until the mismatch falls), since
     a row's friction turns its own slip and the others' (substitution alone can circle)."""
-    sliding = np.flatnonzero((mu > 0.0) & ~stuck)
+    sliding = np.flatnonzero((mu_s > 0.0) & ~stuck)
 
     def mismatch(angles):
-        out = _impact_trial(G, T, bases, mu, e, qd, response, stuck, _directions(bases, angles))
+        out = _impact_trial(G, T, bases, mu, mu_s, e, qd, response, stuck,
+                            _directions(bases, angles))
         slip = T[sliding] @ out[0]
         moving = np.linalg.norm(slip, axis=1) > 1e-12 * before
         turn = np.array([_angle(bases[k], v) for k, v in zip(sliding, slip)]) - angles[sliding]
@@ -219,7 +223,7 @@ def _settle_directions(G, T, bases, mu, e, qd, response, stuck, phi, before) -> 
                      "coefficients or give the contacts compliant laws")
 
 
-def _impact_trial(G, T, bases, mu, e, qd, response, stuck, along) -> tuple:
+def _impact_trial(G, T, bases, mu, mu_s, e, qd, response, stuck, along) -> tuple:
     """``(qd+, P_n, P_t)`` of an impact with the rows ``stuck`` sticking and the others
     with friction sliding ``along`` (:func:`impact_with_friction`)."""
     a, n = G.shape
@@ -232,7 +236,7 @@ def _impact_trial(G, T, bases, mu, e, qd, response, stuck, along) -> tuple:
     c = np.concatenate([(1.0 + e) * (G @ qd), Ts @ qd])
     z = mixed_complementarity(A, c, a, "impulses of an impact with friction")
     d = len(bases[0]) if a else 1
-    z[a:] = share_by_capacity(A[a:, a:], z[a:], np.repeat(mu[stuck] * z[:a][stuck], d))
+    z[a:] = share_by_capacity(A[a:, a:], z[a:], np.repeat(mu_s[stuck] * z[:a][stuck], d))
     P_t = np.zeros((a, 3))
     for i, k in enumerate(sticking):
         P_t[k] = bases[k].T @ z[a + d * i:a + d * (i + 1)]

@@ -165,10 +165,10 @@ class RigidImpact(ContactLaw):
     """Rigid bodies: the shapes never overlap, and every touch is an impact resolved by
     Newton's law of restitution on the whole mechanism at once (the joints hold through it).
 
-    At a touch the gap's rate ``v-`` (< 0) turns into ``-e v-``, the impulse acting along the
-    contact's normal only (no friction), on every contact that touches closing at that
-    instant together (:mod:`mbd3d.analyses.impacts`); forward dynamics only (the other
-    analyses see no force).
+    At a touch the gap's rate ``v-`` (< 0) turns into ``-e v-``, on every contact that
+    touches closing at that instant together (:mod:`mbd3d.analyses.impacts`), with a friction
+    impulse where the contact has ``friction``: Coulomb's law on the slip after the impact;
+    forward dynamics only (the other analyses see no force).
 
     Parameters
     ----------
@@ -182,10 +182,17 @@ class RigidImpact(ContactLaw):
         (:mod:`mbd3d.analyses.resting`), sticking or sliding with the contact's Coulomb
         friction (:mod:`mbd3d.analyses.sticking`); generalized-alpha stops the run there,
         naming it, with the results up to that time.
+    static_friction : float, optional
+        Coulomb's static coefficient ``mu_s``, at least the contact's ``friction`` (the
+        kinetic one, with which it slides): the contact sticks, at rest and through an
+        impact, while its friction stays within ``mu_s`` times its normal force (or
+        impulse). Default: the contact's ``friction`` (one coefficient). A sticking contact
+        that gives way then slides with less than held it: stick-slip.
     """
 
     restitution: float
     rest_speed: float = 1e-3
+    static_friction: float | None = None
 
     rigid = True
 
@@ -195,6 +202,11 @@ class RigidImpact(ContactLaw):
             raise ModelError(f"{what}: restitution must lie in [0, 1], got "
                              f"{self.restitution!r}")
         _stiffness(self.rest_speed, f"{what}: rest_speed")
+        if self.static_friction is not None:
+            mu_s = finite_scalar(self.static_friction, f"{what}: static_friction")
+            if mu_s < 0.0:
+                raise ModelError(f"{what}: static_friction must be >= 0, got "
+                                 f"{self.static_friction!r}")
         return 0.0, 1.0, 0.0, 0.0
 
 

@@ -64,6 +64,10 @@ class _Contacts(_CompiledForces):
         stops = (kinds >= kernel.HINGE_STOP) & (kinds <= kernel.CONE_STOP)
         self.friction = np.where(stops, 0.0, self._values[:, 7])
         self.slip_velocity = np.where(stops, np.nan, self._values[:, 8])
+        #: per row, its static friction coefficient (rigid rows: their law's, else the
+        #: friction), checked to hold at least what the row rubs sliding
+        self.static_friction = np.array([_static(e, law, mu, stop) for e, law, mu, stop
+                                         in zip(self.owners, laws, self.friction, stops)])
         #: the contacts' shapes in their bodies' frames, for drawing
         self.outlines = [o for e in elements for o in e.outlines(ctx)]
         self._group_tables(ctx, elements)
@@ -231,3 +235,20 @@ class _Contacts(_CompiledForces):
     def states(self, model, fr, k: int = 1) -> np.ndarray:
         """The report of ``k`` states stacked in ``fr`` (see :meth:`_report`), (k * r, c)."""
         return self._report(fr, self._tables(model), k)
+
+
+def _static(owner, law, mu: float, stop: bool) -> float:
+    """The static friction coefficient of a row of ``owner`` whose law is ``law`` and kinetic
+    coefficient ``mu`` (a :class:`~mbd3d.RigidImpact`'s ``static_friction``, else ``mu``)."""
+    mu_s = getattr(law, "static_friction", None) if law.rigid else None
+    if mu_s is None:
+        return float(mu)
+    what = getattr(owner, "what", f"'{owner.name}'")
+    if stop and mu_s > 0.0:
+        raise ModelError(f"{what}: a joint stop has no friction, so no static_friction "
+                         f"({mu_s:g}); leave it out of its RigidImpact")
+    if mu_s < mu:
+        raise ModelError(f"{what}: static_friction {mu_s:g} is below its friction {mu:g}: "
+                         "a contact sticks with at least what it rubs sliding; give "
+                         "static_friction >= friction (the kinetic coefficient)")
+    return float(mu_s)
