@@ -94,10 +94,13 @@ class _Core:
         #: shares this core, and evaluates its own in Python: see constraints.driver_values)
         self.motions = (model.driver_motions, model.rotation_motions)
         force_tables = [group.table(model) for group in model.force_groups]
-        #: parts only Python can evaluate: force elements or motions given as functions, and
+        #: the force groups only Python can evaluate (elements given as functions); the others
+        #: are evaluated in the compiled core whatever else a model has in Python
+        self.python_forces = tuple(group for group, table in zip(model.force_groups,
+                                                                 force_tables) if table is None)
+        #: parts only Python can evaluate: those force groups, motions given as functions, and
         #: joint friction (it needs the multipliers)
-        self.python_parts = (any(t is None for t in terms)
-                             or any(t is None for t in force_tables)
+        self.python_parts = (any(t is None for t in terms) or bool(self.python_forces)
                              or model.friction is not None)
         driver_table = motion_table([] if self.python_parts else terms[:len(model.driver_rows)])
         rotation_table = motion_table([] if self.python_parts
@@ -105,7 +108,7 @@ class _Core:
         #: the fields of the records of the force elements and of the range-space solve (empty
         #: tables: none); made into records with the model's (see arrays), so that it stays
         #: picklable
-        self._forces = _force_fields(model, [] if self.python_parts else force_tables)
+        self._forces = _force_fields(model, [t for t in force_tables if t is not None])
         self._range_space = _range_space_fields(range_space)
         # writable contiguous copies: the compiled functions are typed (and cached) for those
         self._fields = dict(
@@ -248,19 +251,20 @@ def _force_fields(model, tables: list[dict]) -> dict:
 def python_parts(model, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndarray,
                  friction: bool = False):
     """What the compiled loops take from Python (see
-    :class:`mbd3d.numerics.compiled.callbacks.Run`): the generalized forces of the force
-    elements (n,), ``(f, f', f'')`` of the drivers (n_drivers, 3) and of the rotation drivers'
-    motions (k, 3) at ``(t, q, qd)``, ``charts`` the spatial bodies' (ignored for planar
+    :class:`mbd3d.numerics.compiled.callbacks.Run`): the generalized forces (n,) of the force
+    elements given as Python functions (the others are compiled), ``(f, f', f'')`` of the
+    drivers (n_drivers, 3) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``, ``charts`` the spatial bodies' (ignored for planar
     ones). With ``friction``, the joints' friction of the multipliers of this very state is
     added to the forces (generalized-alpha; the explicit integrators take friction with the
     accelerations)."""
     charts = charts if model.dim == 3 else None
     extra = np.zeros(model.n_coordinates)
     friction = model.friction is not None and friction
-    if model.force_groups or friction:
+    groups = model._core.python_forces
+    if groups or friction:
         fr = frames(model, q, qd, charts)
         Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
-        for group in model.force_groups:
+        for group in groups:
             group.apply(model, t, fr, Q)
         if friction:
             x = augmented_accelerations(model, t, q, qd, charts)
@@ -300,9 +304,9 @@ def augmented_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
                                                         core.no_motions))
     fr = frames(model, q, qd, charts)
     extra = core.no_forces
-    if model.force_groups:
+    if core.python_forces:  # the others are compiled
         Q = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
-        for group in model.force_groups:
+        for group in core.python_forces:
             group.apply(model, t, fr, Q)
         extra = Q[:model.n_bodies].ravel()
     phi = motion_phases(model, t)
