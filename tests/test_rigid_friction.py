@@ -366,3 +366,23 @@ def test_a_static_coefficient_is_kept_in_a_model_file(tmp_path):
     res = mb.forward_dynamics(model, np.linspace(0.0, 0.6, 7), **TIGHT)
     slips = [r["time"] for r in res.stats["rests"] if r["event"] == "slip"]
     np.testing.assert_allclose(slips[0], mu_s * MASS * G / (k * v), rtol=0, atol=1e-9)
+
+
+def test_a_rod_whose_sliding_end_would_jam_is_refused_naming_it():
+    """Painleve's rod: a rod at 45 degrees (1 m, 1 kg) whose lower end slides on the floor
+    towards its foot with friction mu = 2. The end's normal acceleration per unit normal
+    force is (1 + 3 cos^2 - 3 mu sin cos) / m = -0.5 / m: friction would press the end down
+    the harder, the harder the floor pushed (no force holds it, none lets it go), so the
+    run is refused where it starts, naming the contact and the time, with the results so
+    far attached."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G))
+    theta = math.pi / 4
+    rod = b.add_body("rod", mass=1.0, inertia=1.0 / 12,
+                     position=(0.5 * math.cos(theta), 0.5 * math.sin(theta)), angle=theta,
+                     velocity=(-1.0, 0.0))
+    b.add(mb.Contact("end", mb.Sphere(rod, 1e-3, point=(-0.5, 0.0)),
+                     mb.Plane(b.ground, normal=(0.0, 1.0), point=(0.0, -1e-3)),
+                     law=mb.RigidImpact(restitution=0.0), friction=2.0))
+    with pytest.raises(ModelError, match=r"held at rest \('end'\) at t = 0 s.*Painleve") as error:
+        mb.forward_dynamics(b.build(), np.linspace(0.0, 0.2, 3), **TIGHT)
+    assert error.value.results.status == "failed"

@@ -210,8 +210,17 @@ class RigidContacts:
         return qd
 
     def _with_friction(self, t, q, qd, active, e, G, T) -> tuple:
-        """:func:`~mbd3d.analyses.sticking.impact_with_friction` on the ``active`` rows."""
+        """:func:`~mbd3d.analyses.sticking.impact_with_friction` on the ``active`` rows; where
+        it fails, the run is refused naming the rows and the time."""
         n = self.model.n_coordinates
+        try:
+            return self._impact_with_friction(t, q, qd, active, e, G, T, n)
+        except ModelError as error:
+            names = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
+            raise ModelError(f"forward dynamics of '{self.model.name}': at the impact at t = "
+                             f"{t:.9g} s on {names}, {error}") from None
+
+    def _impact_with_friction(self, t, q, qd, active, e, G, T, n) -> tuple:
         return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e, qd,
                                     lambda R: self.response(t, q, R)[:n],
                                     self.model.n_coords_per_body == 3,

@@ -364,7 +364,9 @@ class HeldRows:
         conv = rigid.slip_convective(q, qd)[held]
         c = np.concatenate([b] + [B @ (T[a] @ qdd0 + conv[a])
                                   for B, a in zip(bases, np.flatnonzero(stuck))])
-        z = mixed_complementarity(A, c, len(held))
+        names = ", ".join(f"'{rigid.names[k]}'" for k in held[:6])
+        z = mixed_complementarity(A, c, len(held), f"forces of the rigid contacts held at rest "
+                                  f"({names}) at t = {t:.9g} s")
         f = z[:len(held)]
         d = 1 if self.planar else 2
         capacity = np.repeat(mu_s[stuck] * f[stuck], d)
