@@ -195,6 +195,22 @@ def test_backspin_example(capsys, tmp_path):
     assert recorded_steps(rrd, "ball") == 41
 
 
+def test_stick_slip_example(capsys, tmp_path):
+    """Every slip and stick at its closed-form time; friction takes mu_k m g of the way."""
+    rrd = tmp_path / "stick_slip.rrd"
+    res = load("stick_slip").main(n_points=61, rrd=str(rrd))
+    out = capsys.readouterr().out
+    rows = re.findall(r"^\s+(slip|stick)\s+(\S+)\s+(\S+)$", out, re.MULTILINE)
+    assert [event for event, _, _ in rows] == ["slip", "stick", "slip", "stick", "slip"]
+    for _, found, by_hand in rows:
+        assert float(found) == pytest.approx(float(by_hand), rel=1e-8)
+    took, by_hand = (float(x) for x in re.search(r"friction took (\S+) J \(mu_k m g times the "
+                                                   r"way: (\S+) J\)", out).groups())
+    assert took == pytest.approx(by_hand, rel=1e-6)
+    assert res.status == "complete"
+    assert recorded_steps(rrd, "block") == 61
+
+
 def test_cam_jump_example(capsys, tmp_path):
     rrd = tmp_path / "jump.rrd"
     res = load("cam_jump").main(n_points=81, rrd=str(rrd))

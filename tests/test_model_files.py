@@ -90,6 +90,8 @@ EXAMPLES = {
     "backspin": (lambda m: m.build(-4 * m.V0 / m.RADIUS), {
         "kind": "forward", "t": steps(0.0, 2.0, 0.01), "method": "DOP853", "rtol": 1e-10,
         "atol": 1e-12}),
+    "stick_slip": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 3.0, 0.01),
+                                         "method": "DOP853", "rtol": 1e-10, "atol": 1e-12}),
     "rigid_impacts": (lambda m: m.build(), {"kind": "forward", "t": steps(0.0, 2.0, 0.005),
                                             "method": "DOP853", "rtol": 1e-10,
                                             "atol": 1e-12}),

@@ -304,7 +304,7 @@ def test_the_friction_of_a_held_contact_is_kept_in_a_results_file_and_on_the_tim
     np.testing.assert_allclose(times[1].astype(np.int64) * 1e-9, stick, atol=1e-9)
 
 
-@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dim", [2, pytest.param(3, marks=pytest.mark.compiled_only)])
 def test_a_block_pulled_through_a_spring_sticks_and_slips_in_a_limit_cycle(dim):
     """With a static coefficient mu_s above the kinetic mu_k (``RigidImpact(static_friction)``)
     the pulled block of the test above sticks and slips for ever: it holds until the spring's
