@@ -342,3 +342,23 @@ def test_a_spatial_rod_striking_a_floor_slides_the_way_its_slip_leaves(v, omega,
     turned = np.degrees(np.arccos(-P[:2] @ slip_before / np.linalg.norm(P[:2])
                                   / np.linalg.norm(slip_before)))
     np.testing.assert_allclose(turned, turn, atol=0.05)
+
+
+def test_the_friction_impulses_are_kept_in_a_results_file_and_on_the_time_line(tmp_path):
+    """Written and read back, a run keeps each impact's friction impulse; the recording's
+    time line gives its size beside the normal impulse."""
+    from mbd3d.viewer import read_component, record
+
+    model = tilted_rod(0.6, (1.5, -1.5), 0.5, 0.2, 0.5)
+    res = mb.forward_dynamics(model, np.linspace(0.0, 0.2, 5), **TIGHT)
+    (impact,) = res.stats["impacts"]
+    path = tmp_path / "rod.npz"
+    res.to_npz(path)
+    (back,) = mb.read_results(path, model).stats["impacts"]
+    assert back["friction_impulse"] == impact["friction_impulse"]
+    record(res, tmp_path / "rod.rrd")
+    _, text = read_component(tmp_path / "rod.rrd", "/impacts", "TextLog:text",
+                             timeline="sim_time")
+    size = np.linalg.norm(impact["friction_impulse"])
+    assert f"friction impulse {size:.6g}," in str(text[0][0])
+    np.testing.assert_allclose(size, 0.2 * impact["impulse"], rtol=1e-12)
