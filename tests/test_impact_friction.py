@@ -104,7 +104,8 @@ def rod_impacts_by_hand(angle: float, v: np.ndarray, omega: float, mu: float, e:
     impulse-momentum equations of one body: ``m dv = P``, ``I domega = r x P`` with ``r`` from
     the centre to the contact point; Newton's law on the point's normal velocity and
     Coulomb's on its slip after the impact: sticking within ``static P_n`` (default ``mu``),
-    or sliding along +x or -x against a slip that goes that way, with ``mu P_n``. ``[(v+, omega+, P)]``, ``P`` on the rod."""
+    or sliding along +x or -x against a slip that goes that way, with ``mu P_n``.
+    ``[(v+, omega+, P)]``, ``P`` on the rod."""
     inertia = ROD_MASS * ROD ** 2 / 12
     r = np.array([-ROD / 2 * np.cos(angle), -ROD / 2 * np.sin(angle) - END])
 

@@ -25,8 +25,10 @@ against the slip it leaves with. Each row's energy lost, the work of its impulse
 ``-(lam (v- + v+) + P_t . (s- + s+)) / 2`` (without friction ``-(1 - e) lam v- / 2`` >= 0),
 adds up to the kinetic energy lost where no driver moves; an impact whose rows would give
 the motion energy (Newton's law and Coulomb's together can, where a row's friction turns
-its normal rate: Kane's paradox) is refused, naming it. A row that is left touching, opening slower than its ``rest_speed``
-while the free motion presses it closed, would bounce ever shorter (infinitely many impacts
+its normal rate: Kane's paradox) is refused, naming it.
+
+A row that is left touching, opening slower than its ``rest_speed`` while the free motion
+presses it closed, would bounce ever shorter (infinitely many impacts
 in a finite time): it has come to rest. The explicit integrators then hold it closed until it
 lets go (:mod:`mbd3d.analyses.resting`); generalized-alpha does not yet, and the run stops
 there (:class:`RunStopped`), naming it.
@@ -215,17 +217,14 @@ class RigidContacts:
         it fails, the run is refused naming the rows and the time."""
         n = self.model.n_coordinates
         try:
-            return self._impact_with_friction(t, q, qd, active, e, G, T, n)
+            return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e,
+                                        qd, lambda R: self.response(t, q, R)[:n],
+                                        self.model.n_coords_per_body == 3,
+                                        self.mu_static[active])
         except ModelError as error:
             names = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
             raise ModelError(f"forward dynamics of '{self.model.name}': at the impact at t = "
                              f"{t:.9g} s on {names}, {error}") from None
-
-    def _impact_with_friction(self, t, q, qd, active, e, G, T, n) -> tuple:
-        return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e, qd,
-                                    lambda R: self.response(t, q, R)[:n],
-                                    self.model.n_coords_per_body == 3,
-                                    self.mu_static[active])
 
     def _refuse_gain(self, t: float, active: np.ndarray, lost: np.ndarray,
                      size: np.ndarray) -> None:

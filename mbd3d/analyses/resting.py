@@ -105,7 +105,7 @@ class HeldRows:
 
     def friction_value(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
         """The friction event's function of rigid row ``index``: sticking, how far its force
-        is inside its cone, ``mu f - |s|`` [N]; sliding, its slip along the direction it
+        is inside its cone, ``mu_s f - |s|`` [N]; sliding, its slip along the direction it
         slides, ``v . u`` [m/s]; 1 where it is not held, has no friction or is not armed."""
         if not (self.mask[index] and self.mu_static[index] > 0.0 and self.armed[index]):
             return 1.0

@@ -6,9 +6,9 @@ velocity relative to the first's, :class:`~mbd3d.ContactStates`) held at zero by
 force ``s`` of free sign, which must stay within the cone ``|s| <= mu_s f`` (``mu_s`` the
 static coefficient, :class:`~mbd3d.RigidImpact`'s ``static_friction``, at least ``mu``); or
 *slides* along a direction ``u``, the friction ``-mu f e`` opposing ``e``, the slip's direction
-(``u`` where the slip vanishes: at the start of a slide; :func:`direction`). With ``[X; Y]`` the augmented
-system's response to a unit generalized force along each column (the joints holding) and
-``f`` the normal forces::
+(``u`` where the slip vanishes: at the start of a slide; :func:`direction`). With ``[X; Y]``
+the augmented system's response to a unit generalized force along each column (the joints
+holding) and ``f`` the normal forces::
 
     qdd = qdd0 + X z,   z = (f, s),   columns  G_k^T - mu_k T_k^T e_k  (sliding),
                                                G_k^T, (B_k T_k)^T (sticking, B_k its tangents)
@@ -129,9 +129,10 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
     complementary to ``P_n >= 0``) and Coulomb's the slips after the impact, as a held row's
     (Moreau's law, the tangential restitution zero): a row *sticks*, ``T qd+ = 0`` with
     ``|P_t| <= mu_s P_n`` (``mu_static``, default ``mu``), or *slides*, ``P_t = -mu P_n u``
-    with ``u`` the direction of its slip ``T qd+`` after the impact. ``G`` (a, n) and ``T`` (a, 3, n) are the rows' gap and slip
-    rows at the impact, ``normal`` (a, 3) their normals, ``response(R)`` the velocities
-    (n, k) a unit impulse on each row of ``R`` gives, the joints holding. Every row starts
+    with ``u`` the direction of its slip ``T qd+`` after the impact. ``G`` (a, n) and ``T``
+    (a, 3, n) are the rows' gap and slip rows at the impact, ``normal`` (a, 3) their normals,
+    ``response(R)`` the velocities (n, k) a unit impulse on each row of ``R`` gives, the joints
+    holding. Every row starts
     sticking; a row that cannot stick (its slip tied to its normal rate) or whose impulse
     leaves its cone slides, away from that impulse, and a planar row whose slip turned back
     slides the other way, until the modes hold; in space the sliding rows' directions are

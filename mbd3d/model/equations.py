@@ -253,10 +253,10 @@ def python_parts(model, t: float, q: np.ndarray, qd: np.ndarray, charts: np.ndar
     """What the compiled loops take from Python (see
     :class:`mbd3d.numerics.compiled.callbacks.Run`): the generalized forces (n,) of the force
     elements given as Python functions (the others are compiled), ``(f, f', f'')`` of the
-    drivers (n_drivers, 3) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``, ``charts`` the spatial bodies' (ignored for planar
-    ones). With ``friction``, the joints' friction of the multipliers of this very state is
-    added to the forces (generalized-alpha; the explicit integrators take friction with the
-    accelerations)."""
+    drivers (n_drivers, 3) and of the rotation drivers' motions (k, 3) at ``(t, q, qd)``,
+    ``charts`` the spatial bodies' (ignored for planar ones). With ``friction``, the joints'
+    friction of the multipliers of this very state is added to the forces
+    (generalized-alpha; the explicit integrators take friction with the accelerations)."""
     charts = charts if model.dim == 3 else None
     extra = np.zeros(model.n_coordinates)
     friction = model.friction is not None and friction
