@@ -372,7 +372,7 @@ def test_the_spring_tangent_generalized_alpha_iterates_with_is_the_forces_deriva
     (constant Jacobians), and the damper rate's change with the line's direction,
     ``c e d'^T (I - e e^T) / l`` on the centres' coordinates, written out here and taken off
     the differences; the rest is the exact derivative."""
-    from mbd3d.analyses.implicit import _force_tangent
+    from mbd3d.analyses.alpha_step import force_tangent
     from mbd3d.model import constraints
 
     rng = np.random.default_rng(dim + 2 * moving)
@@ -419,7 +419,7 @@ def test_the_spring_tangent_generalized_alpha_iterates_with_is_the_forces_deriva
             for c, sign_c in zip(ends, (-1.0, 1.0)):
                 if a < n_bodies and c < n_bodies:
                     left_out[a * nc:a * nc + dim, c * nc:c * nc + dim] += sign_a * sign_c * block
-    tangent = _force_tangent(model, 0.3, q, qd, charts, w)
+    tangent = force_tangent(model, 0.3, q, qd, charts, w)
     np.testing.assert_allclose(tangent, K - left_out + w * D, rtol=0,
                                atol=1e-6 * np.abs(K).max())
     if moving:  # the left-out term is what the test says it is, not zero

@@ -321,7 +321,7 @@ def test_spring_damper_tangent_equals_finite_differences_at_free_length(dim):
     the terms the tangent leaves out vanish); the damper part is exact at any state."""
     from mbd3d.model import constraints
     from mbd3d.model.equations import generalized_forces
-    from mbd3d.analyses.implicit import _force_tangent
+    from mbd3d.analyses.alpha_step import force_tangent
     from mbd3d.numerics.rotations import axis_angle
     rng = np.random.default_rng(7)
     b = mb.ModelBuilder(dim=dim)
@@ -338,7 +338,7 @@ def test_spring_damper_tangent_equals_finite_differences_at_free_length(dim):
     model = b.build()
     q, qd = model.q0, np.zeros(model.n_coordinates)
     weight = 40.0
-    analytic = _force_tangent(model, 0.0, q, qd, model.charts0, weight)
+    analytic = force_tangent(model, 0.0, q, qd, model.charts0, weight)
     analytic = analytic.toarray() if hasattr(analytic, "toarray") else analytic
     numeric = np.empty_like(analytic)
     for j in range(model.n_coordinates):
@@ -368,8 +368,8 @@ def _differenced_tangent(model, q, qd, charts, weight, h=1e-7):
 
 
 def _contact_tangent(model, q, qd, charts, weight):
-    from mbd3d.analyses.implicit import _force_tangent
-    T = _force_tangent(model, 0.0, q, qd, charts, weight)
+    from mbd3d.analyses.alpha_step import force_tangent
+    T = force_tangent(model, 0.0, q, qd, charts, weight)
     return T.toarray() if hasattr(T, "toarray") else T
 
 

@@ -70,6 +70,16 @@ class TrapezoidalDissipation:
         group = contact_group(model, required=False)
         self.z = np.zeros((4, 0 if group is None else len(group.names)))
         self.t_old = self.t_new = 0.0
+        #: the rigid contacts held at rest, whose friction dissipates too (None: none held)
+        self.held = None
+
+    def _power(self, t: float, q: np.ndarray, qd: np.ndarray, charts) -> np.ndarray:
+        """Every contact row's dissipated power [W] at ``(q, qd)``, a held rigid row's
+        friction's included."""
+        power = contact_power(self.model, q, qd, charts)
+        if self.held is not None:
+            power[self.held.rigid.rows] += self.held.power(t, q, qd)
+        return power
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray, charts) -> None:
         """Go on from the state ``(q, qd)`` at ``t`` (the start, or inside the last step)."""
@@ -77,7 +87,7 @@ class TrapezoidalDissipation:
         if not z.shape[1]:
             return
         z[0] = self.at(t)
-        z[1], z[2] = z[0], contact_power(self.model, q, qd, charts)
+        z[1], z[2] = z[0], self._power(t, q, qd, charts)
         z[3] = z[2]
         self.t_old = self.t_new = t
 
@@ -87,7 +97,7 @@ class TrapezoidalDissipation:
         if not z.shape[1]:
             return
         z[1], z[3] = z[0], z[2]
-        z[2] = contact_power(self.model, q, qd, charts)
+        z[2] = self._power(t, q, qd, charts)
         z[0] = z[1] + 0.5 * (t - self.t_new) * (z[2] + z[3])
         self.t_old, self.t_new = self.t_new, t
 

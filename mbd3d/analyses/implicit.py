@@ -37,18 +37,14 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
-
 import numpy as np
-import scipy.sparse as sp
 
 from mbd3d.model import constraints
 from mbd3d.numerics.checks import finite_scalar
-from mbd3d.model.equations import augmented_accelerations, generalized_forces, python_parts
 from mbd3d.errors import AccuracyWarning, IntegrationError, ModelError, user_stacklevel
-from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
+from mbd3d.analyses.alpha_step import GeneralizedAlpha, NewtonStep
 from mbd3d.analyses.contact_steps import ContactSteps
 from mbd3d.analyses.kinematics import project_state
 from mbd3d.analyses.dissipation import TrapezoidalDissipation
@@ -69,131 +65,6 @@ _TURN_SAMPLE = 16
 _STEPS_PER_CALL = 200
 
 
-@dataclass(frozen=True)
-class GeneralizedAlpha:
-    """Coefficients of the generalized-alpha method for a spectral radius ``rho_inf`` in [0, 1]
-    (Chung and Hulbert 1993: second order, unconditionally stable, least low-frequency
-    damping for the high-frequency damping asked)."""
-
-    rho_inf: float
-
-    def __post_init__(self):
-        if not (np.isfinite(self.rho_inf) and 0.0 <= self.rho_inf <= 1.0):
-            raise ModelError(f"rho_inf must be between 0 and 1, got {self.rho_inf!r}")
-
-    @property
-    def alpha_m(self) -> float:
-        return (2.0 * self.rho_inf - 1.0) / (self.rho_inf + 1.0)
-
-    @property
-    def alpha_f(self) -> float:
-        return self.rho_inf / (self.rho_inf + 1.0)
-
-    @property
-    def gamma(self) -> float:
-        return 0.5 + self.alpha_f - self.alpha_m
-
-    @property
-    def beta(self) -> float:
-        return 0.25 * (self.gamma + 0.5) ** 2
-
-
-def _force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
-    """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements (and the
-    joints' friction's ``D``), or None when there are none (gravity does not depend on the state; the spatial bodies' quadratic
-    velocity terms are left out of the iteration matrix, which only slows convergence). Groups with an analytic tangent
-    (spring-dampers, contacts and joint stops) give it directly; the others are differenced forward, only over the
-    coordinates of the bodies they act on."""
-    if not model.force_groups and model.friction is None:
-        return None
-    n, nc, nb = model.n_coordinates, model.n_coords_per_body, model.n_bodies
-    fr = constraints.frames(model, q, qd, charts)
-    rows, cols, values = [], [], []
-    if model.friction is not None:
-        # the regularised friction's slope in the sliding speed, at the loads of this state:
-        # steep near sticking, where Newton's iteration would not converge without it
-        x = augmented_accelerations(model, t, q, qd, charts)
-        if x is not None:
-            damping = gamma_prime * model.friction.damping(model, fr, x[n:])
-            r, c = np.nonzero(damping)
-            rows.append(r), cols.append(c), values.append(damping[r, c])
-    for group in model.force_groups:
-        if group.analytic_tangent:
-            r, c, v = group.tangent(model, t, fr, gamma_prime)
-            keep = (r < n) & (c < n)  # the ground block (last) is not a coordinate
-            rows.append(r[keep]), cols.append(c[keep]), values.append(v[keep])
-    differenced = [g for g in model.force_groups if not g.analytic_tangent]
-    if differenced:
-        def forces(*state):
-            Q = np.zeros((nb + 1, nc))
-            for group in differenced:
-                group.apply(model, t, constraints.frames(model, *state, charts), Q)
-            return Q[:nb].ravel()
-        bodies = sorted({int(model.padded_index(body)) for group in differenced
-                         for element in group.elements for _, body in element.bodies()
-                         if not body.is_ground})
-        f0 = forces(q, qd)
-        for j in (b * nc + k for b in bodies for k in range(nc)):
-            for vector, weight in ((q, 1.0), (qd, gamma_prime)):
-                h = 1.5e-8 * max(1.0, abs(vector[j]))
-                shifted = vector.copy()
-                shifted[j] += h
-                column = -(forces(*((shifted, qd) if vector is q else (q, shifted))) - f0) / h
-                nonzero = np.flatnonzero(column)
-                rows.append(nonzero), cols.append(np.full(len(nonzero), j))
-                values.append(weight * column[nonzero])
-    if not values:
-        return None  # elements acting on the ground only
-    T = sp.coo_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(n, n))
-    return T.tocsr() if model.sparse else T.toarray()
-
-
-class _IterationFactors:
-    """The factors of the last iteration matrix of a step (``beta' M + gamma' D + K + p Cq^T
-    Cq``), to project velocities with (:meth:`solve`), and the indicator of singular
-    positions (the conditioning of ``Cq`` in the metric of ``M``, free of the step; see
-    :mod:`mbd3d.analyses.passages`). They live in the run's buffers: valid until the next
-    step."""
-
-    def __init__(self, arrays, buffers, python_factors, penalty, beta_prime, blocks):
-        self.arrays, self.buffers, self.python_factors = arrays, buffers, python_factors
-        self.penalty = penalty
-        matrix, band, _ = buffers
-        log_det = (python_factors.log_abs_determinant if python_factors is not None
-                   else kernel.log_abs_determinant(arrays, matrix, band))
-        self.indicator = (log_det - len(blocks) * blocks.shape[1] * np.log(beta_prime)
-                          - float(np.sum(np.linalg.slogdet(blocks)[1])))
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        if self.python_factors is not None:
-            return self.python_factors.solve(b)
-        x = np.empty(len(b))
-        kernel.solve_factored(self.arrays, *self.buffers, np.ascontiguousarray(b, dtype=float),
-                              x)
-        return x
-
-
-def _tangent_storage(model, tangent) -> tuple[np.ndarray, bool]:
-    """The applied forces' tangent in the scaled storage of the iteration matrix's layout
-    (dense: (n, n) flattened; banded: the band), and whether Python must factor the matrix
-    instead (SuperLU: the sparse layout, or a tangent reaching outside the band)."""
-    pattern = model._penalty_pattern
-    if pattern.layout == "sparse":
-        return np.zeros(0), True
-    if tangent is None:
-        return np.zeros(0), False
-    d = pattern.scale
-    if pattern.layout == "dense":
-        T = tangent.toarray() if sp.issparse(tangent) else np.asarray(tangent)
-        return np.ascontiguousarray((d[:, None] * T * d[None, :]).ravel()), False
-    # the band storage the compiled LU takes is LAPACK's, flattened in column order
-    band = np.zeros((pattern.band_rows, pattern.size), order="F")
-    if not pattern._add_to_band(band, sp.diags(d) @ sp.csr_matrix(tangent) @ sp.diags(d)):
-        return np.zeros(0), True
-    return band.ravel(order="F"), False
-
-
 class GeneralizedAlphaIntegrator(Integrator):
     """Generalized-alpha with the fixed step ``request.step`` as the driver runs it (see
     :func:`mbd3d.forward_dynamics`, ``method="generalized-alpha"``).
@@ -210,6 +81,7 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     #: Newton's tolerance on the residual, the penalty ratio and the iterations per step
     newton_tol, relative_penalty, max_newton_iterations = 1e-10, 1e8, 30
+    holds_contacts = True
 
     def __init__(self, request: DynamicsRequest):
         model = self.model = request.model
@@ -224,7 +96,8 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.request, self.coefficients = request, GeneralizedAlpha(request.rho_inf)
         self.stats = {"method": "generalized-alpha", "rho_inf": request.rho_inf, "steps": 0,
                       "rejected_steps": 0, "newton_iterations": 0, "factorizations": 0,
-                      "chart_resets": 0, "max_drift": 0.0, "singular_outputs": [],
+                      "chart_resets": 0, "projections": 0, "max_drift": 0.0,
+                      "singular_outputs": [],
                       "smallest_step": math.inf, "wall_time": 0.0}
         self.redundant = False  # set at the start: the constraint rows depend on each other
         self.passages = PassageWatch(model)
@@ -235,7 +108,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.charts = None if model.charts0 is None else np.array(model.charts0)
         self.meshes = constraints.has_spatial_meshes(model)
         self._turn_warned = False
-        self.newton = _NewtonStep(model, self.coefficients, self.stats, self.newton_tol,
+        self.newton = NewtonStep(model, self.coefficients, self.stats, self.newton_tol,
                                   self.relative_penalty, self.max_newton_iterations,
                                   request.projection_tol)
         self.contacts = ContactSteps(model)
@@ -259,16 +132,26 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.passages.close()  # a passage still open at the end (or at a failure)
 
     def _accelerations(self, tt: float, q: np.ndarray, qd: np.ndarray, lam_guess) -> tuple:
-        # from lam = 0 where the rows depend on each other: the minimum-norm multipliers
-        qdd, lam, regular = consistent_accelerations(self.model, tt, q, qd, self.charts,
-                                                     None if self.redundant else lam_guess,
-                                                     self.redundant)
+        qdd, lam, regular = self._consistent(tt, q, qd, lam_guess)
         if not regular:
             self.stats["singular_outputs"].append(float(tt))
         return qdd, lam
 
+    def _consistent(self, tt: float, q: np.ndarray, qd: np.ndarray, lam_guess) -> tuple:
+        """``(qdd, lam, regular)`` at ``(tt, q, qd)`` with the forces of the rigid contacts
+        held at rest (from lam = 0 where the rows depend on each other: the minimum-norm
+        multipliers)."""
+        qdd, lam, regular = consistent_accelerations(self.model, tt, q, qd, self.charts,
+                                                     None if self.redundant else lam_guess,
+                                                     self.redundant)
+        if self.holding:
+            qdd, lam = self.held.accelerations(tt, q, qd, qdd, lam)
+        return qdd, lam, regular
+
     def start(self, t0: float, q: np.ndarray, qd: np.ndarray, redundant: bool) -> tuple:
         self.redundant = redundant
+        self.newton.hold(self.held if self.holding else None)
+        self.dissipation.held = self.held if self.holding else None
         self.qdd, self.lam = self._accelerations(t0, q, qd, None)
         self.q, self.qd, self.a = q, qd, self.qdd.copy()
         self.tt, self.h = t0, min(self.step, self.request.max_step)
@@ -345,9 +228,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.tt += h_try
         if self.contacts.accept(self.tt, q, qd, self.charts):
             # a touch or a release in the step: the recursion starts again (see contact_steps)
-            qdd, lam, _ = consistent_accelerations(self.model, self.tt, q, qd, self.charts,
-                                                   None if self.redundant else lam,
-                                                   self.redundant)
+            qdd, lam, _ = self._consistent(self.tt, q, qd, lam)
             a = qdd.copy()
         self.stats["steps"] += 1
         self.stats["smallest_step"] = min(self.stats["smallest_step"], h_try)
@@ -424,12 +305,23 @@ class GeneralizedAlphaIntegrator(Integrator):
         if t < segment.t_new:  # between step ends: the interpolant, projected
             q, qd = project_state(self.model, t, *segment.state_at(t),
                                   self.request.projection_tol, self.charts, self.redundant)
-            return (q, qd) + self._accelerations(t, q, qd, self.lam)
-        q, S = self.q, self.S
-        qd = self.newton.project_velocity(t, q, self.qd, self.charts, S, S.penalty)
+        else:
+            q, S = self.q, self.S
+            qd = self.newton.project_velocity(t, q, self.qd, self.charts, S, S.penalty)
+        if self.holding:  # the rows held at rest too
+            q, qd = self.held.settle(t, q, qd, tol=self.request.projection_tol) or (q, qd)
         return (q, qd) + self._accelerations(t, q, qd, self.lam)
 
     def after_step(self, segment: Segment) -> None:
+        if self.holding:
+            # the held rows' gaps drift as the joints' velocities do at acceleration level:
+            # brought back where beyond the tolerance, the recursion going on (its
+            # accelerations are the motion's; the change is below the tolerance asked)
+            self.held.follow(self.tt, self.q, self.qd)  # sliding rows follow their slip
+            settled = self.held.settle(self.tt, self.q, self.qd)
+            if settled is not None:
+                self.q, self.qd = settled
+                self.stats["projections"] += 1
         self._reset_charts()
 
     def _reset_charts(self) -> None:
@@ -447,115 +339,9 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         self.tt, self.q, self.qd = t, q, qd
+        self.newton.hold(self.held if self.holding else None)  # rows held or let go
+        self.dissipation.held = self.held if self.holding else None
         self.contacts.restart(t, q, qd, self.charts)
         self.dissipation.restart(t, q, qd, self.charts)
-        self.qdd, self.lam, _ = consistent_accelerations(self.model, t, q, qd, self.charts,
-                                                         self.lam, self.redundant)
+        self.qdd, self.lam, _ = self._consistent(t, q, qd, self.lam)
         self.a = self.qdd.copy()
-
-
-class _NewtonStep:
-    """One generalized-alpha step: the Newton iteration on the new positions (compiled:
-    :func:`mbd3d.numerics.compiled.generalized_alpha.newton_step`), with the iteration
-    matrix's records and buffers made once per run."""
-
-    def __init__(self, model, coefficients: GeneralizedAlpha, stats: dict, newton_tol: float,
-                 relative_penalty: float, max_iterations: int, projection_tol: float):
-        self.model, self.stats, self.projection_tol = model, stats, projection_tol
-        self.am, self.af = coefficients.alpha_m, coefficients.alpha_f
-        self.beta, self.gamma = coefficients.beta, coefficients.gamma
-        self.newton_tol, self.relative_penalty = newton_tol, relative_penalty
-        self.max_iterations = max_iterations
-        #: whether the last step tried failed on a singular iteration matrix
-        self.singular = False
-        n, m = model.n_coordinates, model.n_constraints
-        self.spatial = model.dim == 3
-        self.work = model._core.workspace()
-        self.arrays = model._core.penalty_arrays(model)
-        self.penalty, self.lam_effective = np.empty(m), np.empty(m)
-        layout = model._penalty_pattern.layout
-        self.buffers = (np.empty((n, n) if layout == "dense" else (0, 0)),
-                        np.empty(model._penalty_pattern.band_rows * n if layout == "banded"
-                                 else 0),
-                        np.empty(n, dtype=np.int64))
-        self.counters = np.zeros(2, dtype=np.int64)
-        # joint friction: every Newton iterate takes the friction of its own state's
-        # multipliers (consistent with the reactions there, see mbd3d.model.friction), neither
-        # a previous step's nor the iteration's penalty estimates, which are noisy at 1e-4
-        self.run = callbacks.Run(
-            lambda tt, q, qd, charts: python_parts(model, tt, q, qd, charts, friction=True),
-            factor=lambda values, tangent: model._penalty_pattern.factor(values, tangent))
-
-    def project_velocity(self, tt, q, qd, chart, lu, penalty):
-        """Mass-orthogonal projection onto ``Cq qd = -Ct`` with the iteration matrix's
-        factors: each pass cuts the violation by the penalty ratio."""
-        model, stats = self.model, self.stats
-        fr = constraints.frames(model, q, charts=chart)
-        C, jac_data, _ = constraints.evaluate(model, tt, fr)
-        nu = constraints.velocity_rhs(model, tt, fr)
-        violation = constraints.jacobian_times(model, jac_data, qd) - nu
-        stats["max_drift"] = max(stats["max_drift"],
-                                 constraints.largest_relative(model, C),
-                                 constraints.largest_relative(model, violation))
-        for _ in range(8):
-            if constraints.largest_relative(model, violation) <= self.projection_tol:
-                break
-            qd = qd - lu.solve(constraints.jacobian_transpose_times(model, jac_data,
-                                                                     penalty * violation))
-            violation = constraints.jacobian_times(model, jac_data, qd) - nu
-        return qd
-
-    def __call__(self, tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
-        """One step: the new state and the iteration matrix's factors, or None when Newton
-        does not converge."""
-        model, am, af, beta, gamma = self.model, self.am, self.af, self.beta, self.gamma
-        shift = (af * qdd_n - am * a_n) / (1.0 - am)
-        q_hat = q_n + h * qd_n + h * h * (0.5 - beta) * a_n + h * h * beta * shift
-        qd_hat = qd_n + h * (1.0 - gamma) * a_n + h * gamma * shift
-        beta_prime = (1.0 - am) / (h * h * beta * (1.0 - af))
-        gamma_prime = gamma / (h * beta)
-        q = q_hat + qdd_n / beta_prime  # predictor: unchanged accelerations
-        lam = lam_n.copy()
-        # the applied forces' tangent varies slowly: once per step, at the predictor
-        tangent = _force_tangent(model, tt, q, qd_hat + gamma_prime * (q - q_hat), chart,
-                                 gamma_prime)
-        extra, python_factor = _tangent_storage(model, tangent)
-        self.run.tangent = tangent
-        # The iteration matrix is factored at every iterate (full Newton): the constraint
-        # force p C Cq^T is normal to the free directions only at the configuration where Cq
-        # is evaluated, and it is large (p is the penalty ratio times the mass term); with
-        # factors kept from the predictor, its part along the free directions of the old
-        # factors passed the convergence test as a tangential force error (a velocity
-        # oscillation of 1e-2 rad/s on a slider-crank at h = 1e-3, 200 times the method's
-        # own error). The geometric stiffness d(Cq^T lam)/dq is left out (Gauss-Newton on
-        # the penalty term, as in ALI3-P): tried, with lam or lam + p C, it made the free
-        # slider-crank at h = 5e-4 reject thousands of steps where it rejects none without
-        # it (p C is far larger than lam between iterates, so neither is the curvature the
-        # next iterate sees).
-        outcome = kernel.newton_step(
-            self.work, self.arrays, self.run.key, tt, q, q_hat, qd_hat, beta_prime,
-            gamma_prime, lam, chart if self.spatial else None, extra, python_factor,
-            self.relative_penalty, self.newton_tol, self.projection_tol, self.max_iterations,
-            self.penalty, self.lam_effective, *self.buffers, self.counters)
-        self.stats["newton_iterations"], self.stats["factorizations"] = (
-            int(self.counters[0]), int(self.counters[1]))
-        # a singular iteration matrix is a failed step like any other: an iterate thrown
-        # far off by a step too long for the motion (a body's Rodrigues parameters at 1e5,
-        # nearly half a turn) is singular at the iterate, not in the model; a shorter step
-        # is tried, and the refusal says which it was if none converges
-        self.singular = outcome == kernel.SINGULAR_MATRIX
-        if outcome == kernel.NOT_FINITE and np.all(np.isfinite(q)):
-            # a force element or motion that cannot be evaluated there is named
-            constraints.driver_values(model, tt)
-            generalized_forces(model, tt, constraints.frames(
-                model, q, qd_hat + gamma_prime * (q - q_hat), chart))
-        if outcome != kernel.CONVERGED:
-            return None
-        qdd = beta_prime * (q - q_hat)
-        qd = qd_hat + gamma_prime * (q - q_hat)
-        a = shift + (1.0 - af) / (1.0 - am) * qdd
-        S = _IterationFactors(self.arrays, self.buffers,
-                              self.run.factors if python_factor else None,
-                              self.penalty.copy(), beta_prime,
-                              kernel.last_mass_blocks(self.work))
-        return (q, qd, qdd, a, self.lam_effective.copy()), S

@@ -32,9 +32,11 @@ slides all along.
 
 Like the joints, the held rows drift under integration: a step that leaves one open or closing
 by more than ``constraint_tol`` (of the model's length scale) is projected back (mass-weighted,
-the joints holding; a sticking row's slip with it). Held rows are evaluated in Python at each
-right-hand side (the explicit methods' callback); generalized-alpha does not hold rows yet, and
-stops where one comes to rest.
+the joints holding; a sticking row's slip with it), and so is the state a release starts the
+flight from. Held rows are evaluated in Python at each right-hand side (the explicit methods'
+callback) and at each Newton iterate of generalized-alpha, which adds their forces
+(:meth:`HeldRows.applied`) to the applied forces of the iterate's own state; its
+recursion goes on through the projections (the change is below the tolerance).
 """
 
 from __future__ import annotations
@@ -79,7 +81,7 @@ class HeldRows:
         #: acceleration, its slip dithering about zero by rounding for a while)
         self.armed = np.zeros(len(rigid), dtype=bool)
         self.records = stats.setdefault("rests", [])
-        self._key, self._solution = None, None
+        self._key, self._solution, self._applied = None, None, None
 
     def any(self) -> bool:
         return bool(np.any(self.mask))
@@ -89,6 +91,14 @@ class HeldRows:
         """``(qdd, lam)`` at ``(t, q, qd)`` with the held rows' forces (module doc), from the
         joints' ``qdd0`` and ``lam0`` there."""
         return self._solve(t, q, qd, self.mask, qdd0, lam0)[:2]
+
+    def applied(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The generalized forces (n,) of the held rows' normal forces and friction at ``(t,
+        q, qd)``: what generalized-alpha adds to the applied forces of each Newton iterate
+        (the rows' constraint on their gaps' accelerations, held at the iterate's own state
+        as the joints' friction is)."""
+        self._solve(t, q, qd, self.mask)
+        return self._applied
 
     def forces(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(normal (r,) [N], friction (r, 3) [N])``: every rigid row's normal force and the
@@ -185,7 +195,10 @@ class HeldRows:
         return float(f[index] - w[index] / diag[index])
 
     def release(self, t: float, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The release events' action: the held rows that no longer press let go."""
+        """The release events' action: the held rows that no longer press let go, from
+        their gaps and rates at zero (their drift, which generalized-alpha's steps leave up
+        to the tolerance, would otherwise start the flight)."""
+        q, qd = self.settle(t, q, qd, force=True)
         _, _, f, _, diag, _, _ = self._solve(t, q, qd, self.mask)
         self.let_go(t, self.mask & ~self._pressing(t, q, qd, f, diag))
         self.rigid.watch(q, qd)
@@ -322,30 +335,33 @@ class HeldRows:
         r, n = len(rigid), model.n_coordinates
         f, w, diag = np.zeros(r), np.zeros(r), np.ones(r)
         friction, margin = np.zeros((r, 3)), np.ones(r)
-        qdd, lam = qdd0, lam0
+        qdd, lam, applied = qdd0, lam0, np.zeros(n)
         if np.any(rows):
             a = int(np.sum(rows))
             G, T = rigid.rate_rows(q, rows)
             b = G @ qdd0 + rigid.convective(q, qd)[rows]
             if np.any(self.mu_static[rows] > 0.0):
-                z, XY, W = self._with_friction(t, q, qd, rows, G, T, qdd0, b, friction,
-                                               margin)
+                z, XY, W, columns = self._with_friction(t, q, qd, rows, G, T, qdd0, b,
+                                                        friction, margin)
             else:
+                columns = G
                 XY = rigid.response(t, q, G)
                 W = G @ XY[:n]
                 z = _spread(W, b, impulses(W, b))
             f[rows] = z[:a]
             w[rows] = W[:a] @ z + b
             diag[rows] = np.diag(W)[:a]
-            qdd, lam = qdd0 + XY[:n] @ z, lam0 + XY[n:] @ z
+            qdd, lam, applied = qdd0 + XY[:n] @ z, lam0 + XY[n:] @ z, columns.T @ z
         self._key, self._solution = key, (qdd, lam, f, w, diag, friction, margin)
+        self._applied = applied
         return self._solution
 
     def _with_friction(self, t, q, qd, rows, G, T, qdd0, b, friction, margin) -> tuple:
-        """``(z, [X; Y], A)`` of the held ``rows`` with friction (:mod:`.sticking`): ``z``
-        their normal forces then the sticking rows' tangential ones, ``A`` the response of
-        the normal rows then the sticking rows' slips to them; ``friction`` (on the second
-        shapes) and the events' ``margin`` filled for the rows."""
+        """``(z, [X; Y], A, columns)`` of the held ``rows`` with friction (:mod:`.sticking`):
+        ``z`` their normal forces then the sticking rows' tangential ones, ``columns`` the
+        generalized directions they act along, ``A`` the response of the normal rows then
+        the sticking rows' slips to them; ``friction`` (on the second shapes) and the events'
+        ``margin`` filled for the rows."""
         rigid, n = self.rigid, self.model.n_coordinates
         held = np.flatnonzero(rows)
         slip, normal = (x[held] for x in rigid.slips(q, qd))
@@ -359,7 +375,8 @@ class HeldRows:
         bases = [tangents(normal[a], self.planar) for a in np.flatnonzero(stuck)]
         Ts = np.vstack([B @ T[a] for B, a in zip(bases, np.flatnonzero(stuck))] or
                        [np.zeros((0, n))])
-        XY = rigid.response(t, q, np.vstack([columns, Ts]))
+        columns = np.vstack([columns, Ts])
+        XY = rigid.response(t, q, columns)
         A = np.vstack([G, Ts]) @ XY[:n]
         conv = rigid.slip_convective(q, qd)[held]
         c = np.concatenate([b] + [B @ (T[a] @ qdd0 + conv[a])
@@ -377,7 +394,7 @@ class HeldRows:
         margin[held[stuck]] = mu_s[stuck] * f[stuck] - np.linalg.norm(friction[held[stuck]],
                                                                     axis=1)
         margin[held[sliding]] = np.einsum("ki,ki->k", slip[sliding], self.along[held[sliding]])
-        return z, XY, A
+        return z, XY, A, columns
 
     def _kinetic(self, q: np.ndarray, qd: np.ndarray) -> float:
         """The kinetic energy [J] at ``(q, qd)``."""

@@ -138,20 +138,23 @@ class _Core:
             jac_cols=np.array(model._jac_cols, dtype=np.int64),
             no_forces=np.zeros(model.n_coordinates), no_drivers=np.zeros((0, 3)),
             no_motions=np.zeros((0, 3)))
-        self._records: dict[bool, structures.ModelArrays] = {}
+        self._records: dict[tuple[bool, bool], structures.ModelArrays] = {}
         self._penalty = None
         self._scratch = threading.local()
         self.no_forces = self._fields["no_forces"]
         self.no_motions = self._fields["no_motions"]
 
-    def arrays(self, python_accelerations: bool = False) -> "structures.ModelArrays":
+    def arrays(self, python_accelerations: bool = False,
+               python_parts: bool = False) -> "structures.ModelArrays":
         """The model as the compiled functions take it; ``python_accelerations``: the
         accelerations come from Python (redundant rows, joint friction, rigid contacts held at
-        rest: :meth:`mbd3d.analyses.explicit.ExplicitRungeKutta._python_accelerations`)."""
-        key = bool(python_accelerations)
+        rest: :meth:`mbd3d.analyses.explicit.ExplicitRungeKutta._python_accelerations`);
+        ``python_parts``: the forces and motions too, whatever the model has in Python
+        (generalized-alpha adds the forces of rigid contacts held at rest to them)."""
+        key = (bool(python_accelerations), bool(python_parts) or self.python_parts)
         if key not in self._records:
             forces, range_space = self._forces, self._range_space
-            fields = dict(self._fields, python_accelerations=key,
+            fields = dict(self._fields, python_accelerations=key[0], python_parts=key[1],
                           forces=structures.force_arrays(*(forces[name] for name in
                                                            structures.FORCE_FIELDS)),
                           range_space=structures.range_space_arrays(
@@ -192,8 +195,7 @@ class _Core:
     @property
     def record(self) -> "structures.ModelArrays":
         """:meth:`arrays` of the accelerations solved in compiled code."""
-        records = self._records
-        return records[False] if False in records else self.arrays()
+        return self.arrays()
 
     def __getstate__(self) -> dict:
         return {key: value for key, value in self.__dict__.items()
