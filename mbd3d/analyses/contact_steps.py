@@ -51,6 +51,9 @@ class ContactSteps:
         self.model = model
         self.group = contact_group(model, required=False)
         self.tries, self.t = 0, None
+        #: the frames of the last state asked about (a step's end is asked about by the
+        #: retry, the acceptance and the dissipation), and the report of the last measured
+        self._key, self._fr, self.report = None, None, None
 
     def start(self, t: float, q: np.ndarray, qd: np.ndarray, charts) -> None:
         """Begin at the state ``(q, qd)`` at ``t``, no impact under way."""
@@ -124,7 +127,7 @@ class ContactSteps:
         """Gaps and rates at ``(q, qd)`` at ``t``, and the rates' rates over the last step
         where the rows were ``was_apart`` at its start too (else 0); the rows ``apart`` get
         the period of the impact their closing speed heads for, and no touch."""
-        report = self.group.states(self.model, constraints.frames(self.model, q, qd, charts))
+        report = self.report = self.group.states(self.model, self._frames(q, qd, charts))
         gap, rate = report[:, kernel.GAP], report[:, kernel.GAP_RATE]
         self.acc = np.zeros_like(rate)
         if was_apart is not None and self.t is not None and t > self.t:
@@ -135,4 +138,15 @@ class ContactSteps:
         self.period[apart], self.touch[apart] = heading[apart], -np.inf
 
     def _switches(self, q, qd, charts) -> np.ndarray:
-        return self.group.switches(self.model, constraints.frames(self.model, q, qd, charts))
+        return self.group.switches(self.model, self._frames(q, qd, charts))
+
+    def _frames(self, q, qd, charts):
+        key = (q.tobytes(), qd.tobytes(), None if charts is None else charts.tobytes())
+        if key != self._key:
+            self._key, self._fr = key, constraints.frames(self.model, q, qd, charts)
+        return self._fr
+
+    def power(self) -> np.ndarray:
+        """Each row's dissipated power [W] at the state :meth:`accept` or :meth:`restart`
+        last measured."""
+        return self.report[:, kernel.DISSIPATION]

@@ -73,10 +73,11 @@ class TrapezoidalDissipation:
         #: the rigid contacts held at rest, whose friction dissipates too (None: none held)
         self.held = None
 
-    def _power(self, t: float, q: np.ndarray, qd: np.ndarray, charts) -> np.ndarray:
-        """Every contact row's dissipated power [W] at ``(q, qd)``, a held rigid row's
-        friction's included."""
-        power = contact_power(self.model, q, qd, charts)
+    def _power(self, t: float, q: np.ndarray, qd: np.ndarray, charts,
+               power: np.ndarray | None = None) -> np.ndarray:
+        """Every contact row's dissipated power [W] at ``(q, qd)`` (``power``: the compliant
+        rows', evaluated there already), a held rigid row's friction's included."""
+        power = contact_power(self.model, q, qd, charts) if power is None else power.copy()
         if self.held is not None:
             power[self.held.rigid.rows] += self.held.power(t, q, qd)
         return power
@@ -91,13 +92,15 @@ class TrapezoidalDissipation:
         z[3] = z[2]
         self.t_old = self.t_new = t
 
-    def step(self, t: float, q: np.ndarray, qd: np.ndarray, charts) -> None:
-        """The step from the last end to ``t``, ending at ``(q, qd)``."""
+    def step(self, t: float, q: np.ndarray, qd: np.ndarray, charts,
+             power: np.ndarray | None = None) -> None:
+        """The step from the last end to ``t``, ending at ``(q, qd)`` (``power``: the
+        contacts' there, if evaluated already)."""
         z = self.z
         if not z.shape[1]:
             return
         z[1], z[3] = z[0], z[2]
-        z[2] = self._power(t, q, qd, charts)
+        z[2] = self._power(t, q, qd, charts, power)
         z[0] = z[1] + 0.5 * (t - self.t_new) * (z[2] + z[3])
         self.t_old, self.t_new = self.t_new, t
 

@@ -232,7 +232,8 @@ class GeneralizedAlphaIntegrator(Integrator):
             a = qdd.copy()
         self.stats["steps"] += 1
         self.stats["smallest_step"] = min(self.stats["smallest_step"], h_try)
-        self.dissipation.step(self.tt, q, qd, self.charts)
+        self.dissipation.step(self.tt, q, qd, self.charts,
+                              None if self.contacts.group is None else self.contacts.power())
         self.q, self.qd, self.qdd, self.a, self.lam, self.S = q, qd, qdd, a, lam, S
         t_step = self.tt  # where passages are noted: the step's end before it is snapped
         self.passages.step(t_step, S.indicator, q, self.charts)
