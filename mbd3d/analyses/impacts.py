@@ -244,25 +244,37 @@ class RigidContacts:
         """``G`` (a, n) of the ``active`` rows: ``g' = G qd`` (:meth:`rate_rows`)."""
         return self.rate_rows(q, active)[0]
 
-    def rate_rows(self, q: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def rate_rows(self, q: np.ndarray, active: np.ndarray, qd: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
         """``(G (a, n), T (a, 3, n))`` of the ``active`` rows: their gap rates ``G qd`` and
         slip velocities ``T qd`` are linear in the velocities, so column ``c`` is those at
         the unit velocity of coordinate ``c`` (only the coordinates of the rows' bodies, the
-        others' columns are zero)."""
+        others' columns are zero). With ``qd``, the convective terms at ``(q, qd)`` come from
+        the same evaluation of the contacts (:meth:`convective`; its cost is mostly per call)."""
         model, rows = self.model, self.rows[active]
         nb, nc = model.n_bodies, model.n_coords_per_body
         bodies = self.group._bodies(model)[rows].ravel()
         moving = np.unique(bodies[bodies < nb])
         columns = (moving[:, None] * nc + np.arange(nc)).ravel()
-        unit = np.zeros((len(columns), model.n_coordinates))
-        unit[np.arange(len(columns)), columns] = 1.0
+        k = len(columns)
+        ends = self._ends(q, qd) if qd is not None else None
+        positions, velocities = np.empty((k, len(q))), np.zeros((k, len(q)))
+        positions[:] = q
+        velocities[np.arange(k), columns] = 1.0
+        if ends is not None:
+            positions, velocities = np.vstack([positions, ends[0]]), np.vstack([velocities,
+                                                                                ends[1]])
         chart = self.chart()
-        charts = None if chart is None else np.broadcast_to(chart, (len(columns),) + chart.shape)
-        states = contact_history(model, np.broadcast_to(q, unit.shape), unit, charts)
+        charts = None if chart is None else np.broadcast_to(chart, (len(positions),)
+                                                            + chart.shape)
+        states = contact_history(model, positions, velocities, charts)
+        if ends is not None:
+            self._keep_convective(q, qd, ends[2], states.gap_rate[k:, self.rows],
+                                  states.slip_velocity[k:, self.rows])
         G = np.zeros((len(rows), model.n_coordinates))
-        G[:, columns] = states.gap_rate[:, rows].T
+        G[:, columns] = states.gap_rate[:k, rows].T
         T = np.zeros((len(rows), 3, model.n_coordinates))
-        T[:, :, columns] = states.slip_velocity[:, rows].transpose(1, 2, 0)
+        T[:, :, columns] = states.slip_velocity[:k, rows].transpose(1, 2, 0)
         return G, T
 
     def response(self, t: float, q: np.ndarray, G: np.ndarray) -> np.ndarray:
@@ -330,23 +342,40 @@ class RigidContacts:
     def _convective(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         # the gaps' and the slips' together, the last state's kept: a held row's friction asks
         # for both at the state whose gaps asked (two contact evaluations, not four)
-        chart = self.chart()
-        key = (q.tobytes(), qd.tobytes(), None if chart is None else chart.tobytes())
-        if key == self._convective_key:
+        if self._convective_key == self._state_key(q, qd):
             return self._convective_terms
+        ends = self._ends(q, qd)
+        if ends is None:
+            self._convective_key = None
+            return np.zeros(len(self)), np.zeros((len(self), 3))
+        chart = self.chart()
+        states = contact_history(self.model, *ends[:2],
+                                 None if chart is None else np.stack([chart, chart]))
+        self._keep_convective(q, qd, ends[2], states.gap_rate[:, self.rows],
+                              states.slip_velocity[:, self.rows])
+        return self._convective_terms
+
+    def _state_key(self, q: np.ndarray, qd: np.ndarray) -> tuple:
+        chart = self.chart()
+        return q.tobytes(), qd.tobytes(), None if chart is None else chart.tobytes()
+
+    def _ends(self, q: np.ndarray, qd: np.ndarray) -> tuple | None:
+        """The two states of the central difference of the convective terms (positions,
+        velocities) and its step, or None where nothing moves (the terms are zero) or they
+        are kept already."""
+        if self._convective_key == self._state_key(q, qd):
+            return None
         speed = np.max(np.abs(qd) / self.model.coordinate_scale, initial=0.0)
         if speed == 0.0:
-            terms = np.zeros(len(self)), np.zeros((len(self), 3))
-        else:
-            s = 1e-6 / speed
-            # both ends in one evaluation of the contacts (its cost is mostly per call)
-            ends = np.stack([q + s * qd, q - s * qd])
-            states = contact_history(self.model, ends, np.stack([qd, qd]),
-                                     None if chart is None else np.stack([chart, chart]))
-            rate, slip = states.gap_rate[:, self.rows], states.slip_velocity[:, self.rows]
-            terms = (rate[0] - rate[1]) / (2 * s), (slip[0] - slip[1]) / (2 * s)
-        self._convective_key, self._convective_terms = key, terms
-        return terms
+            return None
+        s = 1e-6 / speed  # nothing moves by more than 1e-6 of the model's size
+        return np.stack([q + s * qd, q - s * qd]), np.stack([qd, qd]), s
+
+    def _keep_convective(self, q, qd, s: float, rate: np.ndarray, slip: np.ndarray) -> None:
+        """Keep the convective terms at ``(q, qd)`` from the gap ``rate`` (2, r) and ``slip``
+        velocities (2, r, 3) at the ends of their central difference of step ``s``."""
+        self._convective_key = self._state_key(q, qd)
+        self._convective_terms = (rate[0] - rate[1]) / (2 * s), (slip[0] - slip[1]) / (2 * s)
 
     def acceleration_scale(self, t: float, q: np.ndarray, qd: np.ndarray,
                            qdd: np.ndarray | None = None) -> float:
@@ -397,6 +426,8 @@ def impulses(W: np.ndarray, b: np.ndarray) -> np.ndarray:
     there, a compliance far below any physical one, which shares the impulse evenly; the
     rates ``w`` are checked with ``W`` itself."""
     a = len(b)
+    if a == 1 and W[0, 0] > 0.0:  # one row (the common case): the active set's answer at once
+        return np.array([-b[0] / W[0, 0] if b[0] < 0.0 else 0.0])
     shift = 1e-12 * max(float(np.trace(W)) / max(a, 1), np.finfo(float).tiny)
     lam, free = np.zeros(a), np.zeros(a, dtype=bool)
     tol = 1e-12 * max(float(np.max(np.abs(b), initial=0.0)), np.finfo(float).tiny)
@@ -409,7 +440,9 @@ def impulses(W: np.ndarray, b: np.ndarray) -> np.ndarray:
         for _ in range(a + 1):
             z = np.zeros(a)
             Wf = W[np.ix_(free, free)]
-            if np.linalg.cond(Wf) > 1e10:  # dependent rows: the least compliance that helps
+            # (a single row's condition is 1 unless it is zero: no SVD for it)
+            if (Wf[0, 0] == 0.0 if len(Wf) == 1 else np.linalg.cond(Wf) > 1e10):
+                # dependent rows: the least compliance that helps
                 Wf = Wf + shift * np.eye(len(Wf))
             z[free] = np.linalg.solve(Wf, -b[free])
             if np.all(z[free] > 0.0):

@@ -338,7 +338,7 @@ class HeldRows:
         qdd, lam, applied = qdd0, lam0, np.zeros(n)
         if np.any(rows):
             a = int(np.sum(rows))
-            G, T = rigid.rate_rows(q, rows)
+            G, T = rigid.rate_rows(q, rows, qd)  # the convective terms in the same call
             b = G @ qdd0 + rigid.convective(q, qd)[rows]
             if np.any(self.mu_static[rows] > 0.0):
                 z, XY, W, columns = self._with_friction(t, q, qd, rows, G, T, qdd0, b,
