@@ -41,6 +41,16 @@ def ball_on_floor(dim: int, mu: float, radius: float = 0.1, mass: float = 2.0) -
     return b.build()
 
 
+def thrown_ball(dim: int, mu: float, radius: float, mass: float) -> tuple:
+    """``(model, k, v0, qd0)``: the ball of :func:`ball_on_floor` thrown along the floor at
+    ``v0`` without spin (slanted in space), ``k = 1 + m r^2 / I``."""
+    model = ball_on_floor(dim, mu, radius, mass)
+    v0 = np.array([1.5, 0.0]) if dim == 2 else np.array([1.2, -0.9, 0.0])
+    qd0 = np.zeros(model.n_coordinates)
+    qd0[:dim] = v0
+    return model, 3.0 if dim == 2 else 3.5, v0, qd0
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 def test_a_ball_thrown_sliding_rolls_from_where_its_slip_runs_out(dim):
     """Thrown at v0 without spin, the contact slips at s = v0 - mu g k t (friction mu m g
@@ -50,11 +60,7 @@ def test_a_ball_thrown_sliding_rolls_from_where_its_slip_runs_out(dim):
     the vertical too: the slip stays along the throw, the spin (no drilling friction at a
     point) stays as it is."""
     mu, radius, mass = 0.3, 0.1, 2.0
-    model = ball_on_floor(dim, mu, radius, mass)
-    k = 3.0 if dim == 2 else 3.5
-    v0 = np.array([1.5, 0.0]) if dim == 2 else np.array([1.2, -0.9, 0.0])
-    qd0 = np.zeros(model.n_coordinates)
-    qd0[:dim] = v0
+    model, k, v0, qd0 = thrown_ball(dim, mu, radius, mass)
     if dim == 3:
         qd0[5] = 3.0 / 2  # the Rodrigues rate of a spin of 3 rad/s about z, from g = 0
     t = np.linspace(0.0, 0.5, 51)
@@ -110,11 +116,7 @@ def test_generalized_alpha_holds_a_sliding_ball_until_it_rolls_as_the_closed_for
     stick time and rolling speed converge to the closed form at second order, a quarter of
     the error for half the step."""
     mu, radius, mass = 0.3, 0.1, 2.0
-    model = ball_on_floor(dim, mu, radius, mass)
-    k = 3.0 if dim == 2 else 3.5
-    v0 = np.array([1.5, 0.0]) if dim == 2 else np.array([1.2, -0.9, 0.0])
-    qd0 = np.zeros(model.n_coordinates)
-    qd0[:dim] = v0
+    model, k, v0, qd0 = thrown_ball(dim, mu, radius, mass)
     speed = float(np.linalg.norm(v0))
     t_stick = speed / (mu * G * k)
     v_end = (speed - mu * G * t_stick) * v0 / speed
