@@ -52,10 +52,12 @@ class GeneralizedAlpha:
 
 def force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_prime: float):
     """``K + gamma' D`` with ``K = -dQe/dq``, ``D = -dQe/dqd`` of the force elements (and the
-    joints' friction's ``D``), or None when there are none (gravity does not depend on the state; the spatial bodies' quadratic
-    velocity terms are left out of the iteration matrix, which only slows convergence). Groups with an analytic tangent
-    (spring-dampers, contacts and joint stops) give it directly; the others are differenced forward, only over the
-    coordinates of the bodies they act on."""
+    joints' friction's ``D``), or None when there are none (gravity does not depend on the
+    state; the spatial bodies' quadratic velocity terms are left out of the iteration
+    matrix, which only slows convergence): a sparse matrix for a sparse model, else an array.
+    Groups with an analytic tangent (spring-dampers, contacts and joint stops) give it
+    directly; the others are differenced forward, only over the coordinates of the bodies
+    they act on."""
     if not model.force_groups and model.friction is None:
         return None
     n, nc, nb = model.n_coordinates, model.n_coords_per_body, model.n_bodies
