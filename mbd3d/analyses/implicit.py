@@ -140,6 +140,12 @@ class GeneralizedAlphaIntegrator(Integrator):
             self.stats["singular_outputs"].append(float(tt))
         return qdd, lam
 
+    def _take_holds(self) -> None:
+        """The Newton step and the dissipation take the rigid rows held now (or none)."""
+        held = self.held if self.holding else None
+        self.newton.hold(held)
+        self.dissipation.held = held
+
     def _consistent(self, tt: float, q: np.ndarray, qd: np.ndarray, lam_guess) -> tuple:
         """``(qdd, lam, regular)`` at ``(tt, q, qd)`` with the forces of the rigid contacts
         held at rest (from lam = 0 where the rows depend on each other: the minimum-norm
@@ -153,8 +159,7 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     def start(self, t0: float, q: np.ndarray, qd: np.ndarray, redundant: bool) -> tuple:
         self.redundant = redundant
-        self.newton.hold(self.held if self.holding else None)
-        self.dissipation.held = self.held if self.holding else None
+        self._take_holds()
         self.qdd, self.lam = self._accelerations(t0, q, qd, None)
         self.q, self.qd, self.a = q, qd, self.qdd.copy()
         self.tt, self.h = t0, min(self.step, self.request.max_step)
@@ -320,7 +325,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         if self.holding:
             # the held rows' gaps drift as the joints' velocities do at acceleration level:
             # brought back where beyond the tolerance, the recursion going on (its
-            # accelerations are the motion's; the change is below the tolerance asked)
+            # accelerations are the motion's; the change is of the tolerance's size)
             self.held.follow(self.tt, self.q, self.qd)  # sliding rows follow their slip
             settled = self.held.settle(self.tt, self.q, self.qd)
             if settled is not None:
@@ -343,8 +348,7 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     def restart(self, t: float, q: np.ndarray, qd: np.ndarray) -> None:
         self.tt, self.q, self.qd = t, q, qd
-        self.newton.hold(self.held if self.holding else None)  # rows held or let go
-        self.dissipation.held = self.held if self.holding else None
+        self._take_holds()  # rows held or let go
         self.contacts.restart(t, q, qd, self.charts)
         self.dissipation.restart(t, q, qd, self.charts)
         self.qdd, self.lam, _ = self._consistent(t, q, qd, self.lam)

@@ -36,7 +36,7 @@ the joints holding; a sticking row's slip with it), and so is the state a releas
 flight from. Held rows are evaluated in Python at each right-hand side (the explicit methods'
 callback) and at each Newton iterate of generalized-alpha, which adds their forces
 (:meth:`HeldRows.applied`) to the applied forces of the iterate's own state; its
-recursion goes on through the projections (the change is below the tolerance).
+recursion goes on through the projections (each of the tolerance's size).
 """
 
 from __future__ import annotations
