@@ -1,10 +1,12 @@
 """What a time point of inverse dynamics costs (positions by Newton-Raphson from the last point,
-velocities, accelerations, multipliers), and where factoring the Jacobian densely stops paying.
+velocities, accelerations, multipliers), solved in one compiled call, through LAPACK with the
+Jacobian factored densely, and through SuperLU with it sparse.
 
 Models: the PUMA 560 of tests/data driven by a harmonic motion at each joint (36 coordinates),
-and planar chains driven at every pin (60 to 600 coordinates). Each is run with the Jacobian
-factored densely (LAPACK) and as a sparse matrix (SuperLU), medians of a few runs of 201 points
-in one process; mbd3d.model.constraints.KINEMATIC_DENSE_LIMIT is where the library switches.
+and planar chains driven at every pin (60 to 600 coordinates). Medians of a few runs of 201
+points in one process. mbd3d.model.constraints.KINEMATIC_DENSE_LIMIT is where the library
+switches to sparse factors; below it the compiled call is used where the model allows
+(mbd3d.analyses.kinematics.COMPILED_POINTS): the compiled column is measured only there.
 
 Run: python benchmarks/kinematics.py [--repeat N]
 """
@@ -20,6 +22,7 @@ import numpy as np
 
 import mbd3d as mb
 from mbd3d.joints import Revolute, RotationDriver
+from mbd3d.analyses import kinematics
 from mbd3d.model import constraints
 from measure import machine, median_time
 
@@ -50,16 +53,18 @@ def driven_chain(n_links: int) -> mb.Model:
     return b.build()
 
 
-def per_point(model: mb.Model, dense: bool, repeat: int, points: int = 201) -> float:
-    """Median cost of one time point [s] with the Jacobian factored densely or not."""
-    limit = constraints.KINEMATIC_DENSE_LIMIT
-    constraints.KINEMATIC_DENSE_LIMIT = 10 ** 9 if dense else -1
+def per_point(model: mb.Model, path: str, repeat: int, points: int = 201) -> float:
+    """Median cost of one time point [s] by ``path``: "compiled", "dense" (LAPACK) or
+    "sparse" (SuperLU)."""
+    limit, compiled = constraints.KINEMATIC_DENSE_LIMIT, kinematics.COMPILED_POINTS
+    constraints.KINEMATIC_DENSE_LIMIT = -1 if path == "sparse" else 10 ** 9
+    kinematics.COMPILED_POINTS = path == "compiled"
     try:
         t = np.linspace(0.0, 1.0, points)
         mb.inverse_dynamics(model, t[:3])  # compiles
         return median_time(lambda: mb.inverse_dynamics(model, t), repeat) / points
     finally:
-        constraints.KINEMATIC_DENSE_LIMIT = limit
+        constraints.KINEMATIC_DENSE_LIMIT, kinematics.COMPILED_POINTS = limit, compiled
 
 
 def main(repeat: int = 3, links: tuple = (20, 33, 50, 100, 200), points: int = 201
@@ -69,17 +74,22 @@ def main(repeat: int = 3, links: tuple = (20, 33, 50, 100, 200), points: int = 2
     for label, build in [("PUMA 560", puma)] + [
             (f"{n}-link chain", lambda n=n: driven_chain(n)) for n in links]:
         model = build()
-        dense, sparse = (per_point(model, d, repeat, points) for d in (True, False))
-        rows.append({"model": label, "n": model.n_coordinates, "dense": dense,
-                     "sparse": sparse})
+        small = model.n_coordinates <= constraints.KINEMATIC_DENSE_LIMIT
+        row = {"model": label, "n": model.n_coordinates,
+               "compiled": per_point(model, "compiled", repeat, points) if small else math.nan}
+        row.update({path: per_point(model, path, repeat, points) for path in ("dense", "sparse")})
+        rows.append(row)
     print(mb.format_table({
         "model": [r["model"] for r in rows],
         "coordinates": [r["n"] for r in rows],
+        "compiled [us/point]": [r["compiled"] * 1e6 for r in rows],
         "dense [us/point]": [r["dense"] * 1e6 for r in rows],
         "sparse [us/point]": [r["sparse"] * 1e6 for r in rows],
+        "dense / compiled": [r["dense"] / r["compiled"] for r in rows],
         "sparse / dense": [r["sparse"] / r["dense"] for r in rows],
     }, precision=4))
-    print(f"the library factors densely up to {constraints.KINEMATIC_DENSE_LIMIT} coordinates")
+    print(f"the library factors densely up to {constraints.KINEMATIC_DENSE_LIMIT} coordinates, "
+          "in the compiled call where the model allows")
     return rows
 
 

@@ -21,11 +21,13 @@ from mbd3d.numerics.checks import is_finite_vector
 from mbd3d.model.friction import consistent_multipliers, raise_friction_with_redundancy
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
+from mbd3d.numerics import compiled
+from mbd3d.numerics.compiled.kinematics import SOLVED, kinematic_point
 from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
-                                   jacobian_scaling, ranked_rows, solve_augmented,
+                                   jacobian_factors, jacobian_scaling, ranked_rows, solve_augmented,
                                    solve_augmented_lagrangian, solve_model_augmented, summarize)
-from mbd3d.analyses.position import (MAX_AUGMENTED_LAGRANGIAN, hold_indices, singular_error,
-                                     solve_position)
+from mbd3d.analyses.position import (MAX_AUGMENTED_LAGRANGIAN, MAX_NEWTON_ITERATIONS,
+                                     hold_indices, singular_error, solve_position)
 from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
@@ -315,14 +317,53 @@ def _mesh_pieces(model, q: np.ndarray, qd: np.ndarray, chart, h: float) -> int:
     return max(1, int(math.ceil(speed * h / (0.5 * math.pi))))
 
 
+#: solve the time points of a kinematic sweep in one compiled call where the model allows
+#: (:func:`_compiled_points`); interpreted (``NUMBA_DISABLE_JIT=1``) the LAPACK path is
+#: faster, and the tests set this to compare the two
+COMPILED_POINTS = not compiled.DISABLED
+
+
+def _compiled_points(model, surplus: bool) -> bool:
+    """Whether the time points of ``model`` are solved by
+    :func:`mbd3d.numerics.compiled.kinematics.kinematic_point`: its motions and forces are
+    in the compiled core (no joint friction, no Python functions), its rows as many as its
+    coordinates, its Jacobian factored densely."""
+    return (COMPILED_POINTS and not surplus and constraints.motions_compiled(model)
+            and model.n_constraints == model.n_coordinates
+            and not constraints.kinematic_sparse(model))
+
+
 class _PointSolver:
     """One time point of a kinematic sweep: positions from a guess, then velocities,
-    accelerations and (``forces``) multipliers, all from the factors of ``Cq``."""
+    accelerations and (``forces``) multipliers, all from the factors of ``Cq``; in one
+    compiled call where the model allows, else (and to name what failed) in Python."""
 
     def __init__(self, model, tol: float, surplus: bool, turns, analysis: str):
         self.model, self.tol, self.surplus, self.turns = model, tol, surplus, turns
         self.analysis, self.what = analysis, f"{analysis} of '{model.name}'"
         self.reference = 1.0  # the Jacobian's conditioning at the first time point
+        self.scales = None
+        if _compiled_points(model, surplus):
+            self.scales = (*jacobian_factors(model), np.asarray(model.length_rows, dtype=bool),
+                           np.asarray(model.position_coordinates, dtype=bool))
+
+    def _compiled(self, tk: float, q: np.ndarray, chart, first: bool, forces: bool):
+        """:meth:`__call__` in one compiled call; None where it fails (the caller then
+        solves the point in Python, which names the cause) or the Jacobian's conditioning
+        has fallen below :data:`SINGULAR_CONDITIONING` of the first point's."""
+        model, n = self.model, self.model.n_coordinates
+        q = np.array(q, dtype=float)
+        qd, qdd, lam = np.empty(n), np.empty(n), np.empty(n)
+        status, conditioning = kinematic_point(
+            model._core.workspace(), float(tk), q, chart, self.scales, self.tol,
+            model.length_scale, MAX_NEWTON_ITERATIONS, forces, qd, qdd, lam)
+        if status != SOLVED:
+            return None
+        if first:
+            self.reference = conditioning
+        if conditioning < SINGULAR_CONDITIONING * self.reference:
+            return None
+        return q, qd, qdd, lam if forces else None, chart
 
     def __call__(self, tk: float, q: np.ndarray, chart, first: bool, forces: bool):
         """Positions from the guess ``q``, velocities, accelerations and (``forces``) the
@@ -330,6 +371,10 @@ class _PointSolver:
         model = self.model
         # keep orientation coordinates away from their singularity (spatial bodies)
         q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=self.turns)
+        if self.scales is not None:
+            solved = self._compiled(tk, q, chart, first, forces)
+            if solved is not None:
+                return solved
         q = solve_position(model, q, tk, tol=self.tol, charts=chart, redundant=self.surplus)
         if self.surplus:
             if first:

@@ -25,6 +25,8 @@ from mbd3d.numerics.linalg import (PIVOT_TOLERANCE, Factorization, SingularMatri
 #: iterations of the augmented-Lagrangian solve with dependent rows: more means the rows are
 #: inconsistent (a lock-up), not redundant
 MAX_AUGMENTED_LAGRANGIAN = 50
+#: Newton-Raphson iterations of a position analysis before it gives up
+MAX_NEWTON_ITERATIONS = 50
 
 __all__ = ["solve_position", "hold_indices", "singular_error"]
 
@@ -271,7 +273,7 @@ def _no_convergence(model, equations: _PositionEquations, q: np.ndarray, C: np.n
 
 
 def solve_position(model, q_guess: Sequence[float] | None = None, t: float = 0.0, *,
-                   tol: float = 1e-12, max_iterations: int = 50,
+                   tol: float = 1e-12, max_iterations: int = MAX_NEWTON_ITERATIONS,
                    hold: Iterable[str | int] | None = None,
                    charts: np.ndarray | None = None, redundant: bool = False) -> np.ndarray:
     """Solve ``C(q, t) = 0`` by Newton-Raphson from ``q_guess``.

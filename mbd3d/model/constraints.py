@@ -14,11 +14,12 @@ import scipy.sparse as sp
 from mbd3d.model.body import Frames
 from mbd3d.errors import ModelError
 from mbd3d.model.primitives import evaluate_rows
-from mbd3d.numerics.compiled import motions as motions_kernel, rows as rows_kernel
+from mbd3d.numerics.compiled import (kinematics as kinematics_kernel, motions as motions_kernel,
+                                     rows as rows_kernel)
 
 __all__ = ["frames", "largest_relative", "evaluate", "residual", "jacobian", "jacobian_matrix",
            "jacobian_times", "jacobian_transpose_times", "velocity_rhs", "acceleration_rhs",
-           "driver_values", "motion_phases"]
+           "driver_values", "motion_phases", "motions_compiled"]
 
 
 def frames(model, q: np.ndarray, qd: np.ndarray | None = None,
@@ -60,16 +61,22 @@ def _compiled_motions(model, table: str, count: int, t: float) -> np.ndarray | N
     (``"rotation"``) motions from the compiled core's tables in one call; None where a
     motion is a Python function, a copy of the model has motions of its own, or a value is
     not finite (the caller's evaluation then names the driver)."""
-    core = model._core
-    if core.python_parts or not (core.motions[0] is model.driver_motions
-                                 and core.motions[1] is model.rotation_motions):
+    if not motions_compiled(model):
         return None
-    fields = core._fields
+    fields = model._core._fields
     out = np.empty((count, 3))
     motions_kernel.motion_values_into(fields[f"{table}_first"], fields[f"{table}_kinds"],
                                       fields[f"{table}_starts"], fields[f"{table}_params"],
                                       float(t), out)
     return out if np.all(np.isfinite(out)) else None
+
+
+def motions_compiled(model) -> bool:
+    """Whether the compiled core's tables hold the model's motions: none is a Python
+    function and the model is not a copy with motions of its own."""
+    core = model._core
+    return not core.python_parts and (core.motions[0] is model.driver_motions
+                                      and core.motions[1] is model.rotation_motions)
 
 
 def _motion_values(motions, names, t: float) -> np.ndarray:
@@ -112,40 +119,17 @@ def branch_cosines(model, t: float, fr: Frames) -> tuple[np.ndarray, np.ndarray,
     The spatial rotation drivers' rows are ``sin(theta - f)`` (``L = 1``; see
     :class:`mbd3d.model.primitives.Rotation`); the planar gear pairs' are
     ``|d| sin(psi - phi)`` (see :class:`mbd3d.model.primitives.Gear`), the spatial ones'
-    ``size sin(Phi)`` (see :class:`mbd3d.model.primitives.GearMesh`).
+    ``size sin(Phi)`` (see :class:`mbd3d.model.primitives.GearMesh`); evaluated by
+    :func:`mbd3d.numerics.compiled.kinematics.branch_cosines_into`.
     """
-    rows, cosines, amplitudes = [], [], []
-    for g in model.groups:
-        if g.cls.kind == "rotation":
-            phi = motion_phases(model, t)[:, 0]
-            f_i, g_i, f_j = g.params["f_i"], g.params["g_i"], g.params["f_j"]
-            w = np.cos(phi)[:, None] * f_i + np.sin(phi)[:, None] * g_i
-            cosine = np.vecdot(np.matvec(fr.A[g.bj], f_j), np.matvec(fr.A[g.bi], w))
-            amplitude = np.ones(g.count)
-        elif g.cls.kind == "gear":
-            # planar bodies: theta is the last coordinate, the ground's zero
-            real = g.params["real"]
-            psi = (real[:, 0] * fr.Q[g.bi, -1] + real[:, 1] * fr.Q[g.bj, -1] - real[:, 2])
-            d = (fr.Q[g.bj, :2] + np.matvec(fr.A[g.bj], g.params["u_j"])
-                 - fr.Q[g.bi, :2] - np.matvec(fr.A[g.bi], g.params["u_i"]))
-            amplitude = np.maximum(np.linalg.norm(d, axis=1), 1e-300)
-            cosine = (d[:, 0] * np.cos(psi) + d[:, 1] * np.sin(psi)) / amplitude
-        elif g.cls.kind == "gear_mesh":
-            p = g.params
-            d = (fr.Q[g.bj, :3] + np.matvec(fr.A[g.bj], p["u_j"])
-                 - fr.Q[g.bi, :3] - np.matvec(fr.A[g.bi], p["u_i"]))
-            along = [np.vecdot(d, np.matvec(fr.A[b], p[key])) for b, key in
-                     ((g.bi, "f_i"), (g.bi, "g_i"), (g.bj, "f_j"), (g.bj, "g_j"))]
-            cosine = np.cos(rows_kernel.mesh_phases(*along, p["real"]))
-            amplitude = p["real"][:, 3].copy()
-        else:
-            continue
-        rows.append(g.offset + np.arange(g.count))
-        cosines.append(cosine)
-        amplitudes.append(amplitude)
-    if not rows:
-        return np.zeros(0, dtype=int), np.zeros(0), np.zeros(0)
-    return np.concatenate(rows), np.concatenate(cosines), np.concatenate(amplitudes)
+    table = model.row_table
+    s = fr.vectors(table.vector_bodies, table.vector_local, False)[0]
+    cosine, amplitude = np.empty(model.n_constraints), np.empty(model.n_constraints)
+    kinematics_kernel.branch_cosines_into(table.code, table.bi, table.bj, table.first_row,
+                                          table.slots, table.motion, table.real,
+                                          motion_phases(model, t), fr.Q, s, cosine, amplitude)
+    rows = np.flatnonzero(amplitude > 0.0)
+    return rows, cosine[rows], amplitude[rows]
 
 
 def require_holonomic(model, what: str) -> None:

@@ -29,7 +29,7 @@ import scipy.sparse.linalg as spla
 from mbd3d.numerics.compiled.dense import penalty_scale, pivots_regular
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
-           "jacobian_scaling", "augmented_scaling",
+           "jacobian_scaling", "jacobian_factors", "augmented_scaling",
            "ranked_rows", "summarize", "augmented_matrix", "solve_augmented", "solve_model_augmented",
            "factor_model_augmented", "penalty_matrix", "solve_augmented_lagrangian"]
 
@@ -168,6 +168,12 @@ def jacobian_scaling(model, held: np.ndarray | None = None) -> tuple[np.ndarray,
     if held is not None and len(held):
         rows = np.concatenate([rows, 1.0 / model.coordinate_scale[held]])
     return rows, model.coordinate_scale
+
+
+def jacobian_factors(model) -> tuple[np.ndarray, np.ndarray]:
+    """The factors of :func:`jacobian_scaling` as :class:`Factorization` applies them:
+    rounded to powers of two, so that scaling is exact."""
+    return tuple(_power_of_two(np.asarray(f, dtype=float)) for f in jacobian_scaling(model))
 
 
 def augmented_scaling(model, held: np.ndarray | None = None) -> np.ndarray:

@@ -1,0 +1,317 @@
+"""One time point of kinematic analysis and inverse dynamics in one compiled call.
+
+For a fully driven mechanism (as many independent rows as coordinates): positions by
+Newton-Raphson with backtracking from a guess, then ``Cq qd = -Ct``, ``Cq qdd = Qd`` and
+(inverse dynamics) ``Cq^T lam = Qe + Qv - M qdd``, all with one dense LU of the Jacobian at
+the solved positions, scaled to the model's units as :mod:`mbd3d.numerics.linalg` scales it.
+The tests and limits are those of the analyses in Python
+(:func:`mbd3d.analyses.position.solve_position`, :mod:`mbd3d.analyses.kinematics`): the
+residual of each row against its own limit, the half-turn branches of ``L sin(e)`` rows, the
+pivot test, the reciprocal condition number of LAPACK's ``gecon`` and the velocity guard.
+A point that fails any of them returns :data:`FAILED`, and the caller solves it again in
+Python, whose errors name the joints and rows.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.accelerations import (applied_forces_into, motions_at,
+                                                   padded_into)
+from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
+                                            spatial_frames_into)
+from mbd3d.numerics.compiled.dense import (lu_factor, lu_solve_into, lu_solve_transpose_into,
+                                           reciprocal_condition)
+from mbd3d.numerics.compiled.rows import (GEAR, GEAR_MESH, ROTATION, constraint_rows_into,
+                                          mesh_phase)
+
+SOLVED, FAILED = 0, 1
+#: largest velocity residual accepted, relative to the velocities' own size (the value of
+#: mbd3d.analyses.kinematics.VELOCITY_TOLERANCE, which the tests compare with this one)
+VELOCITY_TOLERANCE = 1e-10
+
+
+@jit
+def branch_cosines_into(code, bi, bj, first_row, slots, motion, real, phi, Q, s, cosine,
+                        amplitude) -> None:
+    """``cos(e)`` and ``L`` of every row of the form ``L sin(e)`` (the spatial rotation
+    drivers' ``sin(theta - f)``, the planar gear pairs' ``|d| sin(psi - phi)``, the spatial
+    meshes' ``size sin(Phi)``; see :mod:`.rows`) into ``cosine`` and ``amplitude`` (m,); other
+    rows get a cosine of one and no amplitude. ``Q``: coordinates of the bodies and the
+    ground; ``s``: the body vectors; ``phi``: the rotation drivers' motions."""
+    cosine[:] = 1.0
+    amplitude[:] = 0.0
+    dim, nc = s.shape[1], Q.shape[1]
+    for e in range(code.shape[0]):
+        k, i, j, row = code[e], bi[e], bj[e], first_row[e]
+        p0, p1, p2 = slots[e, 0], slots[e, 1], slots[e, 2]
+        if k == ROTATION:
+            # w = A_i (f cos(f) + g sin(f)): the row is f_j . u, its cosine f_j . w
+            c, sn = math.cos(phi[motion[e], 0]), math.sin(phi[motion[e], 0])
+            total = 0.0
+            for x in range(dim):
+                total += s[p2, x] * (c * s[p0, x] + sn * s[p1, x])
+            cosine[row], amplitude[row] = total, 1.0
+        elif k == GEAR:
+            psi = real[e, 0] * Q[i, nc - 1] + real[e, 1] * Q[j, nc - 1] - real[e, 2]
+            d0 = Q[j, 0] + s[p1, 0] - Q[i, 0] - s[p0, 0]
+            d1 = Q[j, 1] + s[p1, 1] - Q[i, 1] - s[p0, 1]
+            size = max(math.sqrt(d0 * d0 + d1 * d1), 1e-300)
+            cosine[row] = (d0 * math.cos(psi) + d1 * math.sin(psi)) / size
+            amplitude[row] = size
+        elif k == GEAR_MESH:
+            si, sj, p3 = slots[e, 4], slots[e, 5], slots[e, 3]
+            x_i = y_i = x_j = y_j = 0.0
+            for x in range(dim):
+                d = Q[j, x] + s[sj, x] - Q[i, x] - s[si, x]
+                x_i += d * s[p0, x]
+                y_i += d * s[p1, x]
+                x_j += d * s[p2, x]
+                y_j += d * s[p3, x]
+            cosine[row] = math.cos(mesh_phase(x_i, y_i, x_j, y_j, real[e, 0], real[e, 1],
+                                              real[e, 2]))
+            amplitude[row] = real[e, 3]
+
+
+@jit
+def _frames_into(model, work, q, qd, charts, velocities) -> None:
+    """Frames and body vectors of ``(q, qd)`` into ``work`` (``qd`` read with
+    ``velocities``)."""
+    Q, Qd = work.Q, work.Qd
+    padded_into(q, Q)
+    if velocities:
+        padded_into(qd, Qd)
+    if charts is not None:
+        spatial_frames_into(Q, Qd, charts, velocities, work.A, work.axes, work.omega,
+                            work.kappa, work.Gb, work.omega_bar)
+    else:
+        planar_frames_into(Q, Qd, velocities, work.A, work.axes, work.omega, work.kappa)
+    body_vectors_into(work.A, work.axes, work.omega, work.kappa, model.vector_bodies,
+                      model.vector_local, velocities, work.s, work.J, work.v, work.a)
+
+
+@jit
+def _position_rows_into(model, work, q, charts, cosine, amplitude, C) -> None:
+    """At ``q``: the Newton residual ``C`` (m,) (``c(q) - c0 - f``, a row ``L sin(e)`` past a
+    quarter turn replaced by ``sign(e) L (2 - |sin e|)``, which keeps rising to the half
+    turn: see :mod:`mbd3d.analyses.position`), the Jacobian values ``work.data``, ``-Ct``
+    (``work.nu``) and the branch rows' cosines."""
+    _frames_into(model, work, q, q, charts, False)
+    yes = q.shape[0] >= 0  # run-time flags (see accelerations_into)
+    no = not yes
+    constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
+                         model.coordinate, model.motion, model.real, model.curves, work.phi,
+                         model.n_rows, work.Q, work.Q, work.s, work.J, work.v, work.a,
+                         model.destination, yes, yes, no, yes, C, work.data, work.gamma,
+                         work.nu, work.row_work, work.row_jacobian)
+    driver_rows, drivers = model.driver_rows, work.drivers
+    for k in range(driver_rows.shape[0]):
+        C[driver_rows[k]] -= drivers[k, 0]
+        work.nu[driver_rows[k]] = drivers[k, 1]
+    branch_cosines_into(model.code, model.bi, model.bj, model.first_row, model.slots,
+                        model.motion, model.real, work.phi, work.Q, work.s, cosine, amplitude)
+    for r in range(C.shape[0]):
+        C[r] -= model.c0[r]
+        if cosine[r] < 0.0:
+            sign = 1.0 if C[r] > 0.0 else (-1.0 if C[r] < 0.0 else 0.0)
+            C[r] = sign * (2.0 * amplitude[r] - abs(C[r]))
+
+
+@jit
+def _relative_norm(C, row_scale) -> float:
+    total = 0.0
+    for r in range(C.shape[0]):
+        total += (C[r] / row_scale[r]) ** 2
+    return math.sqrt(total)
+
+
+@jit
+def _converged(C, q, row_scale, length_rows, positions, tol, length_scale) -> bool:
+    """Whether every row's residual is within its limit: ``tol`` relative to the model's
+    scale, raised to the rounding level of the coordinates the row sums (see
+    :func:`mbd3d.solve_position`)."""
+    eps100 = 100.0 * np.finfo(np.float64).eps
+    angles = 0.0
+    lengths = 0.0
+    for c in range(q.shape[0]):
+        if positions[c]:
+            lengths = max(lengths, abs(q[c]))
+        else:
+            angles = max(angles, abs(q[c]))
+    limit_length = max(tol, eps100 * (1.0 + lengths / length_scale + angles))
+    limit_angle = max(tol, eps100 * (1.0 + angles))
+    for r in range(C.shape[0]):
+        limit = limit_length if length_rows[r] else limit_angle
+        if not abs(C[r]) / row_scale[r] <= limit:
+            return False
+    return True
+
+
+@jit
+def _factor_jacobian(model, data, sign, row_factor, column_factor, matrix):
+    """``diag(r) (sign Cq) diag(c)`` into ``matrix`` (n, n), factored in place: ``(piv,
+    regular, |.|_1)`` (``sign`` per row: -1 flips a branch row's Newton direction)."""
+    matrix[:, :] = 0.0
+    rows, cols = model.jac_rows, model.jac_cols
+    for p in range(rows.shape[0]):
+        r, c = rows[p], cols[p]
+        matrix[r, c] = sign[r] * data[p] * row_factor[r] * column_factor[c]
+    norm = 0.0
+    for c in range(matrix.shape[1]):
+        norm = max(norm, np.sum(np.abs(matrix[:, c])))
+    piv, regular = lu_factor(matrix, model.pivot_tolerance)
+    return piv, regular, norm
+
+
+@jit
+def _solve_scaled(matrix, piv, row_factor, column_factor, b, x, transpose) -> None:
+    """``x`` of ``A x = b`` (``transpose``: ``A^T x = b``) from the factors of the scaled
+    ``S = R A C``: ``x = C S^-1 R b``, or ``R S^-T C b``."""
+    inner, outer = (column_factor, row_factor) if transpose else (row_factor, column_factor)
+    for i in range(x.shape[0]):
+        x[i] = inner[i] * b[i]
+    if transpose:
+        lu_solve_transpose_into(matrix, piv, x)
+    else:
+        lu_solve_into(matrix, piv, x)
+    for i in range(x.shape[0]):
+        x[i] *= outer[i]
+
+
+@jit
+def newton_into(model, work, q, charts, scales, tol, length_scale, max_iterations, matrix):
+    """Solve ``C(q, t) = 0`` from ``q`` (overwritten), the motions already in ``work``:
+    Newton steps shortened by halving until the rows' norm decreases (the iteration of
+    :func:`mbd3d.solve_position`). Returns whether it converged; ``work.data`` and
+    ``work.nu`` then hold ``Cq`` and ``-Ct`` at the solution."""
+    row_factor, column_factor, length_rows, positions = scales
+    n, m = q.shape[0], model.n_rows
+    cosine, amplitude, sign = np.empty(m), np.empty(m), np.empty(m)
+    C, C_try, dq, q_try = np.empty(m), np.empty(m), np.empty(n), np.empty(n)
+    row_scale = model.row_scale
+    _position_rows_into(model, work, q, charts, cosine, amplitude, C)
+    norm = _relative_norm(C, row_scale)
+    for iteration in range(max_iterations + 1):
+        if _converged(C, q, row_scale, length_rows, positions, tol, length_scale):
+            return True
+        if iteration == max_iterations:
+            return False
+        for r in range(m):
+            sign[r] = -1.0 if cosine[r] < 0.0 else 1.0
+            C_try[r] = -C[r]
+        piv, regular, _ = _factor_jacobian(model, work.data, sign, row_factor, column_factor,
+                                           matrix)
+        if not regular:
+            return False
+        _solve_scaled(matrix, piv, row_factor, column_factor, C_try, dq, False)
+        step = 1.0
+        while True:
+            for c in range(n):
+                q_try[c] = q[c] + step * dq[c]
+            _position_rows_into(model, work, q_try, charts, cosine, amplitude, C_try)
+            norm_try = _relative_norm(C_try, row_scale)
+            if norm_try < (1.0 - 1e-4 * step) * norm:  # False for NaN
+                break
+            step *= 0.5
+            if step < 1e-6:
+                return False
+        q[:] = q_try
+        C[:] = C_try
+        norm = norm_try
+    return False
+
+
+@jit
+def velocities_regular(model, data, nu, qd) -> bool:
+    """Whether ``Cq qd = -Ct`` holds to :data:`VELOCITY_TOLERANCE` of the size of its
+    terms, each row over its scale (the velocity guard of
+    :mod:`mbd3d.analyses.kinematics`), and ``qd`` is finite."""
+    m = model.n_rows
+    terms, residual = np.abs(nu), -nu
+    rows, cols = model.jac_rows, model.jac_cols
+    for p in range(rows.shape[0]):
+        product = data[p] * qd[cols[p]]
+        terms[rows[p]] += abs(product)
+        residual[rows[p]] += product
+    size = 0.0
+    for r in range(m):
+        size = max(size, terms[r] / model.row_scale[r])
+    for c in range(qd.shape[0]):
+        if not abs(qd[c]) < np.inf:
+            return False
+    for r in range(m):
+        if not abs(residual[r]) / model.row_scale[r] <= VELOCITY_TOLERANCE * size:
+            return False
+    return True
+
+
+@jit
+def _accelerations_into(model, work, t, q, qd, charts, forces, extra) -> bool:
+    """``Qd`` at ``(q, qd)`` into ``work.gamma`` and, with ``forces``, ``Qe + Qv`` into
+    ``work.rhs[:n]`` and the mass blocks into ``work.blocks``; False where a force element
+    cannot be evaluated."""
+    if forces:
+        if not applied_forces_into(model, work, t, q, qd, charts, extra):
+            return False
+        body_vectors_into(work.A, work.axes, work.omega, work.kappa, model.vector_bodies,
+                          model.vector_local, forces, work.s, work.J, work.v, work.a)
+    else:
+        _frames_into(model, work, q, qd, charts, True)
+    yes = q.shape[0] >= 0
+    no = not yes
+    constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
+                         model.coordinate, model.motion, model.real, model.curves, work.phi,
+                         model.n_rows, work.Q, work.Qd, work.s, work.J, work.v, work.a,
+                         model.destination, no, no, yes, no, work.C, work.data, work.gamma,
+                         work.nu, work.row_work, work.row_jacobian)
+    driver_rows = model.driver_rows
+    for k in range(driver_rows.shape[0]):
+        work.gamma[driver_rows[k]] += work.drivers[k, 2]
+    return True
+
+
+@jit
+def kinematic_point(work, t, q, charts, scales, tol, length_scale, max_iterations, forces,
+                    qd, qdd, lam):
+    """Positions (``q``: the guess, overwritten), velocities ``qd``, accelerations ``qdd``
+    and, with ``forces``, the multipliers ``lam`` of the fully driven model of ``work`` at
+    ``t``. ``scales``: ``(row factors, column factors, length rows, position coordinates)``
+    of the model (see :func:`mbd3d.numerics.linalg.jacobian_scaling`); ``tol``, the Newton
+    tolerance relative to ``length_scale`` [m]. Returns ``(status, reciprocal condition
+    number of the scaled Jacobian)``: :data:`FAILED` when the motions are not finite, Newton
+    does not converge, the Jacobian is singular, the velocities fail their guard or a force
+    cannot be evaluated."""
+    model = work.model
+    n = q.shape[0]
+    row_factor, column_factor = scales[0], scales[1]
+    matrix = np.empty((n, n))
+    if not motions_at(model, work, t):
+        return FAILED, 0.0
+    if not newton_into(model, work, q, charts, scales, tol, length_scale, max_iterations,
+                       matrix):
+        return FAILED, 0.0
+    piv, regular, norm = _factor_jacobian(model, work.data, np.ones(n), row_factor,
+                                          column_factor, matrix)
+    if not regular:
+        return FAILED, 0.0
+    conditioning = reciprocal_condition(matrix, norm)
+    _solve_scaled(matrix, piv, row_factor, column_factor, work.nu, qd, False)
+    if not velocities_regular(model, work.data, work.nu, qd):
+        return FAILED, conditioning
+    if not _accelerations_into(model, work, t, q, qd, charts, forces, np.zeros(n)):
+        return FAILED, conditioning
+    _solve_scaled(matrix, piv, row_factor, column_factor, work.gamma, qdd, False)
+    if forces:
+        # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
+        nc = work.Q.shape[1]
+        b = work.rhs[:n].copy()
+        blocks = work.blocks
+        for k in range(blocks.shape[0]):
+            for i in range(nc):
+                for j in range(nc):
+                    b[k * nc + i] -= blocks[k, i, j] * qdd[k * nc + j]
+        _solve_scaled(matrix, piv, row_factor, column_factor, b, lam, True)
+    return SOLVED, conditioning

@@ -1,0 +1,137 @@
+"""The time points of kinematic analysis and inverse dynamics solved in one compiled call
+(:mod:`mbd3d.numerics.compiled.kinematics`) against LAPACK and against the analyses' own path
+through SciPy's LAPACK, which factors the Jacobian with ``getrf`` and estimates its
+conditioning with ``gecon``."""
+
+from __future__ import annotations
+
+import math
+import pathlib
+import warnings
+
+import numpy as np
+import pytest
+from scipy.linalg.lapack import dgecon, dgetrf
+
+import mbd3d as mb
+from mbd3d.analyses import kinematics
+from mbd3d.joints import Distance, Prismatic, Revolute, RotationDriver
+from mbd3d.mechanisms import four_bar, frame_along, slider_crank, spatial_slider_crank
+from mbd3d.model import constraints
+from mbd3d.numerics.compiled.kinematics import kinematic_point
+from mbd3d.numerics.linalg import Factorization, jacobian_scaling
+from mbd3d.numerics.compiled.dense import (lu_factor, lu_solve_transpose_into,
+                                           reciprocal_condition)
+from test_gears import gear_train, planetary
+
+DATA = pathlib.Path(__file__).parent / "data"
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 36, 80])
+def test_the_condition_estimate_is_lapacks(n):
+    """Hager's and Higham's estimate as LAPACK's gecon makes it, on matrices whose
+    conditioning spans ten orders (a column scaled down), and the transposed solve."""
+    rng = np.random.default_rng(n)
+    for trial in range(30):
+        # heavy-tailed entries (Cauchy) make the estimator's stopping rules matter
+        A = rng.standard_normal((n, n)) if trial < 6 else rng.standard_cauchy((n, n))
+        A[:, trial % n] *= 10.0 ** (-2 * (trial % 6))
+        norm = float(np.abs(A).sum(axis=0).max())
+        expected = dgecon(dgetrf(A)[0], norm, norm="1")[0]
+        LU = A.copy()
+        piv, regular = lu_factor(LU, 0.0)
+        assert regular
+        assert reciprocal_condition(LU, norm) == pytest.approx(expected, rel=1e-10)
+        b = rng.standard_normal(n)
+        x = b.copy()
+        lu_solve_transpose_into(LU, piv, x)
+        # a backward-stable solve: the residual at the rounding of the products it sums
+        size = np.abs(A.T) @ np.abs(x) + np.abs(b)
+        assert np.all(np.abs(A.T @ x - b) <= 1e-13 * n * size)
+
+
+def _puma() -> mb.Model:
+    """The PUMA 560 with each joint on its own harmonic motion (36 coordinates)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mb.UrdfWarning)
+        return mb.load_urdf(DATA / "puma560.urdf", drive={
+            f"joint{i + 1}": mb.Harmonic(0.5 + 0.1 * i, 1.3 + 0.4 * i, 0.0, 0.2 * i - 0.5)
+            for i in range(6)})
+
+
+def _linked_slider() -> mb.Model:
+    """A crank pushing a slider through a massless link (a Distance row, whose constant is
+    the link's length), the slider drawn turned by 0.4 rad (its rail's angle row keeps that
+    constant), a spring pulling it back."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="linked slider")
+    crank = b.add_body("crank", mass=1.0, inertia=2e-3, position=(0.05, 0.0))
+    slider = b.add_body("slider", mass=3.0, inertia=1e-2, position=(0.33, 0.0), angle=0.4)
+    pin = b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0)))
+    b.add(Distance("link", crank, slider, at_i=(0.1, 0.0), at_j=(0.33, 0.0)))
+    b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0)))
+    b.add(RotationDriver("motor", pin, motion=mb.Ramp(0.0, 3.0)))
+    b.add(mb.SpringDamper("spring", b.ground, slider, at_i=(0.6, 0.0), at_j=(0.33, 0.0),
+                          stiffness=400.0, damping=3.0, free_length=0.2))
+    return b.build()
+
+
+MODELS = {
+    "massless link and a turned slider": _linked_slider,
+    "slider-crank": slider_crank,
+    "four-bar": four_bar,
+    "gear train (half-turn branches)": lambda: gear_train(load=2.0),
+    "planetary": lambda: planetary(carrier_load=1.5),
+    "spatial slider-crank": spatial_slider_crank,
+    "PUMA 560": _puma,
+}
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_compiled_time_points_are_the_lapack_path_s(name, monkeypatch):
+    """Every number of inverse dynamics agrees with the path through LAPACK to rounding,
+    and no point falls back to Python (which would pass unseen, only slower)."""
+    model = MODELS[name]()
+    t = np.linspace(0.0, 0.4, 9)
+    with monkeypatch.context() as patch:
+        patch.setattr(kinematics, "COMPILED_POINTS", False)
+        expected = mb.inverse_dynamics(model, t)
+
+    def no_python_point(*args, **kwargs):
+        raise AssertionError("a time point was solved in Python")
+    monkeypatch.setattr(kinematics, "COMPILED_POINTS", True)
+    monkeypatch.setattr(kinematics, "solve_position", no_python_point)
+    res = mb.inverse_dynamics(model, t)
+    for field in ("q", "qd", "qdd", "lam"):
+        got, want = getattr(res, field), getattr(expected, field)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-11 * np.abs(want).max(),
+                                   err_msg=field)
+    if model.dim == 2:
+        # the conditioning the singular positions are judged by: LAPACK's estimate
+        q = res.q[-1].copy()
+        solver = kinematics._PointSolver(model, 1e-12, False, None, "inverse dynamics")
+        status, conditioning = kinematic_point(
+            model._core.workspace(), t[-1], q, None, solver.scales, 1e-12, model.length_scale,
+            50, True, *np.empty((3, model.n_coordinates)))
+        Cq = constraints.jacobian(model, t[-1], q, sparse=False)
+        lapack = Factorization(Cq, scaling=jacobian_scaling(model)).reciprocal_condition()
+        assert status == 0 and conditioning == pytest.approx(lapack, rel=1e-10)
+
+
+
+@pytest.mark.parametrize("target", [math.pi - 0.1, -math.pi + 0.2, 2.5 + 4 * math.pi])
+def test_compiled_points_reach_a_far_rotation_not_its_half_turn(target, monkeypatch):
+    """A hinge drawn at 0 and driven beyond a quarter turn: the row sin(theta - f) also
+    vanishes at the half turn, and Newton from the drawing must still end at f (mod a turn),
+    read back as the joint's angle."""
+    axis = np.array([0.0, 0.6, 0.8])
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    arm = b.add_body("arm", mass=1.0, inertia=(0.01, 0.02, 0.02), position=(0.3, 0.0, 0.0),
+                     orientation=frame_along(np.array([1.0, 0.0, 0.0]), axis))
+    pin = b.add(Revolute("pin", b.ground, arm, at=(0.0, 0.0, 0.0), axis=axis))
+    b.add(RotationDriver("motor", pin, motion=mb.Constant(target)))
+    monkeypatch.setattr(kinematics, "COMPILED_POINTS", True)
+    monkeypatch.setattr(kinematics, "solve_position", None)  # no point solved in Python
+    res = mb.kinematic_analysis(b.build(), [0.0])
+    turn = 2 * math.pi
+    assert (res.joint("pin").angle[0] - target + math.pi) % turn - math.pi == pytest.approx(
+        0.0, abs=1e-10)
