@@ -22,7 +22,8 @@ from mbd3d.model.friction import consistent_multipliers, raise_friction_with_red
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.numerics import compiled
-from mbd3d.numerics.compiled.kinematics import SOLVED, kinematic_point
+from mbd3d.model.spatial import CHART_LIMIT
+from mbd3d.numerics.compiled.kinematics import kinematic_points
 from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
                                    jacobian_factors, jacobian_scaling, ranked_rows, solve_augmented,
                                    solve_augmented_lagrangian, solve_model_augmented, summarize)
@@ -317,6 +318,8 @@ def _mesh_pieces(model, q: np.ndarray, qd: np.ndarray, chart, h: float) -> int:
     return max(1, int(math.ceil(speed * h / (0.5 * math.pi))))
 
 
+#: time points solved in one compiled call at most (a few milliseconds)
+POINTS_PER_CALL = 100
 #: solve the time points of a kinematic sweep in one compiled call where the model allows
 #: (:func:`_compiled_points`); interpreted (``NUMBA_DISABLE_JIT=1``) the LAPACK path is
 #: faster, and the tests set this to compare the two
@@ -347,23 +350,28 @@ class _PointSolver:
             self.scales = (*jacobian_factors(model), np.asarray(model.length_rows, dtype=bool),
                            np.asarray(model.position_coordinates, dtype=bool))
 
-    def _compiled(self, tk: float, q: np.ndarray, chart, first: bool, forces: bool):
-        """:meth:`__call__` in one compiled call; None where it fails (the caller then
-        solves the point in Python, which names the cause) or the Jacobian's conditioning
-        has fallen below :data:`SINGULAR_CONDITIONING` of the first point's."""
-        model, n = self.model, self.model.n_coordinates
-        q = np.array(q, dtype=float)
-        qd, qdd, lam = np.empty(n), np.empty(n), np.empty(n)
-        status, conditioning = kinematic_point(
-            model._core.workspace(), float(tk), q, chart, self.scales, self.tol,
-            model.length_scale, MAX_NEWTON_ITERATIONS, forces, qd, qdd, lam)
-        if status != SOLVED:
-            return None
-        if first:
-            self.reference = conditioning
-        if conditioning < SINGULAR_CONDITIONING * self.reference:
-            return None
-        return q, qd, qdd, lam if forces else None, chart
+    def batch(self, t: np.ndarray, start: int, stop: int, q: np.ndarray, chart, turns,
+              out: ResultsBuffer, forces: bool):
+        """Solve the points ``t[start:stop]`` in one compiled call
+        (:func:`~mbd3d.numerics.compiled.kinematics.kinematic_points`) into ``out``, from the
+        guess ``q`` of the first; returns ``(the first point not solved, its chart)``: that
+        point (failed, or singular) is for :meth:`__call__` to solve, which names the
+        cause."""
+        model, spatial = self.model, chart is not None
+        chart = np.array(chart, dtype=float) if spatial else None  # updated in place
+        if spatial and out.turns is None:
+            out.turns = np.empty((len(t),) + turns.shape)
+        empty = np.empty((0, 0))
+        settings = (self.scales, self.tol, model.length_scale, MAX_NEWTON_ITERATIONS,
+                    CHART_LIMIT, SINGULAR_CONDITIONING)
+        reached, self.reference = kinematic_points(
+            model._core.workspace(), t, start, stop, np.array(q, dtype=float), chart,
+            turns if spatial else np.empty((0, 4)), settings, forces, self.reference,
+            out.q, out.qd, out.qdd, out.lam if forces else empty,
+            out.charts if spatial else np.empty((0, 0, 0, 0)),
+            out.turns if spatial else empty)
+        out.done = reached
+        return reached, chart
 
     def __call__(self, tk: float, q: np.ndarray, chart, first: bool, forces: bool):
         """Positions from the guess ``q``, velocities, accelerations and (``forces``) the
@@ -371,10 +379,6 @@ class _PointSolver:
         model = self.model
         # keep orientation coordinates away from their singularity (spatial bodies)
         q, _, chart, _ = model.body_type.reset_charts(q, None, chart, turns=self.turns)
-        if self.scales is not None:
-            solved = self._compiled(tk, q, chart, first, forces)
-            if solved is not None:
-                return solved
         q = solve_position(model, q, tk, tol=self.tol, charts=chart, redundant=self.surplus)
         if self.surplus:
             if first:
@@ -440,10 +444,16 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
         guess = q + h * qd + 0.5 * h * h * qdd
         return guess if np.all(np.isfinite(guess)) else q  # a step it cannot extrapolate
 
+    # stretches of points in one compiled call: short enough that observers and Ctrl-C are
+    # heard between them; one point at a time where a spatial mesh needs steps between points
+    stretch = 1 if constraints.has_spatial_meshes(model) else POINTS_PER_CALL
+
     def loop() -> None:
         chart = model.charts0
         q = initial_guess(model, t[0], q_guess, chart, what, "q_guess")
-        for k, tk in enumerate(t):
+        k = 0
+        while k < len(t):
+            tk = t[k]
             if k > 0:
                 last = (t[k - 1], out.q[k - 1], out.qd[k - 1], out.qdd[k - 1])
                 # spatial gears know their angles modulo a tooth of the reduced ratio: steps
@@ -455,11 +465,19 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                         ts, predicted(*last[1:], ts - last[0]), chart, False, False)
                     last = (ts, q, qd, qdd)
                 q = predicted(*last[1:], tk - last[0])
+            if solve_point.scales is not None:
+                reached, chart = solve_point.batch(t, k, min(k + stretch, len(t)), q, chart,
+                                                   turns, out, with_forces)
+                if reached > k:
+                    k = reached
+                    watch.tick(t[k - 1], out.done)
+                    continue
             q, qd, qdd, lam, chart = solve_point(tk, q, chart, k == 0, with_forces)
             if surplus:
                 stats["singular_outputs"].append(float(tk))
             out.store(q, qd, qdd, lam, chart, None if turns is None else turns.copy())
             watch.tick(tk, out.done)
+            k += 1
 
     watch = Watch(observers, progress, model, t, analysis, out.partial)
     results = run_keeping_results(loop, out.partial, watch)

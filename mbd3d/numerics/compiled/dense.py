@@ -105,13 +105,15 @@ def _triangular_solves(LU: np.ndarray, x: np.ndarray, transpose: bool) -> None:
                 x[i] -= LU[i, j] * x[j]
             x[i] /= LU[i, i]
         return
+    # by rows of the factors (each x[i] done is taken out of the ones after it): the
+    # storage's order
     for i in range(n):
-        for j in range(i):
-            x[i] -= LU[j, i] * x[j]
         x[i] /= LU[i, i]
-    for i in range(n - 1, -1, -1):
         for j in range(i + 1, n):
-            x[i] -= LU[j, i] * x[j]
+            x[j] -= LU[i, j] * x[i]
+    for i in range(n - 1, -1, -1):
+        for j in range(i):
+            x[j] -= LU[i, j] * x[i]
 
 
 @jit
@@ -125,6 +127,14 @@ def _signs_into(x: np.ndarray, signs: np.ndarray) -> bool:
         signs[i] = sign
         x[i] = sign
     return same
+
+
+@jit
+def _absolute_sum(x: np.ndarray) -> float:
+    total = 0.0
+    for value in x:
+        total += abs(value)
+    return total
 
 
 @jit
@@ -149,7 +159,7 @@ def reciprocal_condition(LU: np.ndarray, norm: float) -> float:
         return 0.0
     x = np.full(n, 1.0 / n)
     _triangular_solves(LU, x, False)
-    estimate = np.sum(np.abs(x))
+    estimate = _absolute_sum(x)
     if n > 1:
         signs = np.zeros(n)
         _signs_into(x, signs)
@@ -160,7 +170,7 @@ def reciprocal_condition(LU: np.ndarray, norm: float) -> float:
             x[j] = 1.0
             _triangular_solves(LU, x, False)
             last = estimate
-            estimate = np.sum(np.abs(x))
+            estimate = _absolute_sum(x)
             # a repeated sign vector, or no growth: converged
             if _signs_into(x, signs) or estimate <= last:
                 break
@@ -174,7 +184,7 @@ def reciprocal_condition(LU: np.ndarray, norm: float) -> float:
             x[i] = sign * (1.0 + i / (n - 1))
             sign = -sign
         _triangular_solves(LU, x, False)
-        estimate = max(estimate, 2.0 * np.sum(np.abs(x)) / (3.0 * n))
+        estimate = max(estimate, 2.0 * _absolute_sum(x) / (3.0 * n))
     if not estimate > 0.0:
         return 0.0
     return (1.0 / estimate) / norm

@@ -1,4 +1,4 @@
-"""One time point of kinematic analysis and inverse dynamics in one compiled call.
+"""The time points of kinematic analysis and inverse dynamics in one compiled call.
 
 For a fully driven mechanism (as many independent rows as coordinates): positions by
 Newton-Raphson with backtracking from a guess, then ``Cq qd = -Ct``, ``Cq qdd = Qd`` and
@@ -9,7 +9,8 @@ The tests and limits are those of the analyses in Python
 residual of each row against its own limit, the half-turn branches of ``L sin(e)`` rows, the
 pivot test, the reciprocal condition number of LAPACK's ``gecon`` and the velocity guard.
 A point that fails any of them returns :data:`FAILED`, and the caller solves it again in
-Python, whose errors name the joints and rows.
+Python, whose errors name the joints and rows. :func:`kinematic_points` runs a stretch of
+time points, each from the second-order Taylor prediction of the last.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.accelerations import (applied_forces_into, motions_at,
                                                    padded_into)
 from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
-                                            spatial_frames_into)
+                                            spatial_frames_into, spatial_reset_charts)
 from mbd3d.numerics.compiled.dense import (lu_factor, lu_solve_into, lu_solve_transpose_into,
                                            reciprocal_condition)
 from mbd3d.numerics.compiled.rows import (GEAR, GEAR_MESH, ROTATION, constraint_rows_into,
@@ -315,3 +316,73 @@ def kinematic_point(work, t, q, charts, scales, tol, length_scale, max_iteration
                     b[k * nc + i] -= blocks[k, i, j] * qdd[k * nc + j]
         _solve_scaled(matrix, piv, row_factor, column_factor, b, lam, True)
     return SOLVED, conditioning
+
+
+@jit
+def _predict_into(t, k, out_q, out_qd, out_qdd, out_charts, guess) -> None:
+    """The guess of point ``k`` from the points before: ``q + h qd + h^2 qdd / 2``, plus
+    ``h^3 / 6`` times the rate of change of ``qdd`` where the two points before share their
+    charts (an error of order ``h^4``: Newton then converges in one iteration where it took
+    two), or the last ``q`` where that is not finite. It keeps Newton on the branch of the
+    last point."""
+    h = t[k] - t[k - 1]
+    jerk = k >= 2
+    if jerk and out_charts.shape[0]:
+        for b in range(out_charts.shape[1]):
+            for i in range(3):
+                for j in range(3):
+                    jerk = jerk and out_charts[k - 1, b, i, j] == out_charts[k - 2, b, i, j]
+    cubic = h ** 3 / (6.0 * (t[k - 1] - t[k - 2])) if jerk else 0.0
+    finite = True
+    for c in range(guess.shape[0]):
+        guess[c] = out_q[k - 1, c] + h * out_qd[k - 1, c] + 0.5 * h * h * out_qdd[k - 1, c]
+        if jerk:
+            guess[c] += cubic * (out_qdd[k - 1, c] - out_qdd[k - 2, c])
+        finite = finite and abs(guess[c]) < np.inf
+    if not finite:
+        guess[:] = out_q[k - 1]
+
+
+@jit
+def kinematic_points(work, t, start, stop, q, charts, turns, settings, forces, reference,
+                     out_q, out_qd, out_qdd, out_lam, out_charts, out_turns):
+    """Solve the time points ``t[start:stop]`` with :func:`kinematic_point` into the rows of
+    ``out_q``, ``out_qd``, ``out_qdd``, ``out_lam`` (with ``forces``) and, for a spatial model,
+    ``out_charts`` and ``out_turns``; ``q`` is the first point's guess, each later one's the
+    prediction from the point before.
+
+    ``charts`` (spatial; None for a planar model) and ``turns`` (the charts' quaternions whose
+    signs follow the motion; empty for a planar model): reset where a body's Rodrigues
+    parameters pass the chart limit, in place. ``settings``: ``(scales, tol, length_scale,
+    max_iterations, chart_limit, singular)``, the last the fraction of the first point's
+    conditioning (``reference``, set here when ``start`` is 0) below which a position is
+    singular. Returns ``(the first point not solved, reference)``: at a point that fails,
+    or is singular, the charts and turns are left as before it, for the caller to solve it
+    in Python."""
+    scales, tol, length_scale, max_iterations, chart_limit, singular = settings
+    n = q.shape[0]
+    guess, qd, qdd, lam = q.copy(), np.empty(n), np.empty(n), np.empty(n)
+    saved_charts, saved_turns = np.empty((0, 3, 3)), turns.copy()
+    for k in range(start, stop):
+        if k > start:
+            _predict_into(t, k, out_q, out_qd, out_qdd, out_charts, guess)
+        if charts is not None:
+            saved_charts = charts.copy()
+            saved_turns[:] = turns
+            spatial_reset_charts(guess, np.zeros(0), charts, chart_limit, turns)
+        status, conditioning = kinematic_point(work, t[k], guess, charts, scales, tol,
+                                               length_scale, max_iterations, forces, qd, qdd,
+                                               lam)
+        if status == SOLVED and k == 0:
+            reference = conditioning
+        if status != SOLVED or conditioning < singular * reference:
+            if charts is not None:
+                charts[:] = saved_charts
+                turns[:] = saved_turns
+            return k, reference
+        out_q[k], out_qd[k], out_qdd[k] = guess, qd, qdd
+        if forces:
+            out_lam[k] = lam
+        if charts is not None:
+            out_charts[k], out_turns[k] = charts, turns
+    return stop, reference
