@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.metadata
 import importlib.util
 import pathlib
 import sys
@@ -100,6 +101,21 @@ def test_kinematics_benchmark_runs(capsys, monkeypatch):
     assert [r["n"] for r in rows] == [36, 6]
     assert all(r["dense"] > 0 and r["compiled"] > 0 for r in rows)
     assert "factors densely up to" in capsys.readouterr().out
+
+
+def test_robots_benchmark_runs(capsys, monkeypatch):
+    """Inverse dynamics of the UR5 and the Panda against Pinocchio's RNEA at their smallest
+    (the script itself checks that the efforts agree)."""
+    pytest.importorskip("pinocchio")
+    try:
+        importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    rows = _load("robots").main(repeat=1, points=5)
+    assert [r["robot"] for r in rows] == ["UR5", "Panda"]
+    assert all(r["error"] < 1e-10 and r["mbd3d"] > 0 for r in rows)
+    assert "Pinocchio's RNEA loop" in capsys.readouterr().out
 
 
 def test_cradle_benchmark_runs_without_peers(capsys, monkeypatch):
