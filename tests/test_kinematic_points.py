@@ -5,7 +5,6 @@ conditioning with ``gecon``."""
 
 from __future__ import annotations
 
-import math
 import pathlib
 import warnings
 
@@ -16,7 +15,7 @@ from scipy.linalg.lapack import dgecon, dgetrf
 import mbd3d as mb
 from mbd3d.analyses import kinematics
 from mbd3d.joints import Distance, Prismatic, Revolute, RotationDriver
-from mbd3d.mechanisms import four_bar, frame_along, slider_crank, spatial_slider_crank
+from mbd3d.mechanisms import four_bar, slider_crank, spatial_slider_crank
 from mbd3d.model import constraints
 from mbd3d.numerics.compiled.kinematics import kinematic_point
 from mbd3d.numerics.linalg import Factorization, jacobian_scaling
@@ -124,21 +123,3 @@ def test_compiled_time_points_are_the_lapack_path_s(name, monkeypatch):
         assert status == 0 and conditioning == pytest.approx(lapack, rel=1e-10)
 
 
-
-@pytest.mark.parametrize("target", [math.pi - 0.1, -math.pi + 0.2, 2.5 + 4 * math.pi])
-def test_compiled_points_reach_a_far_rotation_not_its_half_turn(target, monkeypatch):
-    """A hinge drawn at 0 and driven beyond a quarter turn: the row sin(theta - f) also
-    vanishes at the half turn, and Newton from the drawing must still end at f (mod a turn),
-    read back as the joint's angle."""
-    axis = np.array([0.0, 0.6, 0.8])
-    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
-    arm = b.add_body("arm", mass=1.0, inertia=(0.01, 0.02, 0.02), position=(0.3, 0.0, 0.0),
-                     orientation=frame_along(np.array([1.0, 0.0, 0.0]), axis))
-    pin = b.add(Revolute("pin", b.ground, arm, at=(0.0, 0.0, 0.0), axis=axis))
-    b.add(RotationDriver("motor", pin, motion=mb.Constant(target)))
-    monkeypatch.setattr(kinematics, "COMPILED_POINTS", True)
-    monkeypatch.setattr(kinematics, "solve_position", None)  # no point solved in Python
-    res = mb.kinematic_analysis(b.build(), [0.0])
-    turn = 2 * math.pi
-    assert (res.joint("pin").angle[0] - target + math.pi) % turn - math.pi == pytest.approx(
-        0.0, abs=1e-10)

@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
+from mbd3d.analyses import kinematics
 from mbd3d.model import constraints
 from mbd3d.mechanisms import slider_crank, slider_crank_positions
 from mbd3d.joints import CoordinateDriver, Prismatic, Revolute, RotationDriver, Spherical, Universal
@@ -206,11 +207,17 @@ def test_translation_driver_and_joint_axes_reactions_in_space():
                                * np.ones((6, 1)), rtol=0, atol=1e-10)
 
 
+@pytest.mark.parametrize("compiled", [False, True], ids=["Python", "compiled"])
 @pytest.mark.parametrize("target", [math.pi - 0.1, -math.pi + 0.2, 3.0, 2.5 + 4 * math.pi])
-def test_a_rotation_driver_far_from_the_drawing_reaches_its_angle_not_the_half_turn(target):
+def test_a_rotation_driver_far_from_the_drawing_reaches_its_angle_not_the_half_turn(
+        target, compiled, monkeypatch):
     """The driver's row sin(theta - f) also vanishes half a turn from f; drawn at 0 and
     driven to beyond a quarter turn, the position must still be f (mod a turn), and the joint
-    angle reads it."""
+    angle reads it: in Python and in the compiled time points
+    (:mod:`mbd3d.numerics.compiled.kinematics`), which then leave no point to Python."""
+    monkeypatch.setattr(kinematics, "COMPILED_POINTS", compiled)
+    if compiled:
+        monkeypatch.setattr(kinematics, "solve_position", None)
     from mbd3d.mechanisms import frame_along
     axis = np.array([0.0, 0.6, 0.8])
     b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
