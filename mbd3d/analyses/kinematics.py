@@ -328,7 +328,7 @@ COMPILED_POINTS = not compiled.DISABLED
 
 def _compiled_points(model, surplus: bool) -> bool:
     """Whether the time points of ``model`` are solved by
-    :func:`mbd3d.numerics.compiled.kinematics.kinematic_point`: its motions and forces are
+    :func:`mbd3d.numerics.compiled.kinematics.kinematic_points`: its motions and forces are
     in the compiled core (no joint friction, no Python functions), its rows as many as its
     coordinates, its Jacobian factored densely."""
     return (COMPILED_POINTS and not surplus and constraints.motions_compiled(model)
@@ -469,6 +469,8 @@ def _sweep(model, times, q_guess, tol, with_forces: bool, analysis: str, observe
                 reached, chart = solve_point.batch(t, k, min(k + stretch, len(t)), q, chart,
                                                    turns, out, with_forces)
                 if reached > k:
+                    # a point the call handed back is tried once more from this loop's own
+                    # guess, then solved here in Python, which names what fails
                     k = reached
                     watch.tick(t[k - 1], out.done)
                     continue
