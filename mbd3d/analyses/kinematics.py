@@ -23,7 +23,7 @@ from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDrivenError
 from mbd3d.numerics import compiled
 from mbd3d.model.spatial import CHART_LIMIT
-from mbd3d.numerics.compiled.kinematics import kinematic_points
+from mbd3d.numerics.compiled.kinematics import VELOCITY_TOLERANCE, kinematic_points
 from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
                                    jacobian_factors, jacobian_scaling, ranked_rows, solve_augmented,
                                    solve_augmented_lagrangian, solve_model_augmented, summarize)
@@ -289,8 +289,6 @@ def _redundant_rates(model, t: float, q: np.ndarray, chart, with_forces: bool, a
 #: be 10^4 times more sensitive to the positions than at the start (relative to the start, so
 #: that a long chain, whose conditioning is modest everywhere, is not taken for singular)
 SINGULAR_CONDITIONING = 1e-4
-#: largest velocity residual accepted at a time point, relative to the velocities' own size
-VELOCITY_TOLERANCE = 1e-10
 
 
 def _check_velocities(model, Cq, qd: np.ndarray, nu: np.ndarray, t: float, what: str) -> None:

@@ -30,8 +30,8 @@ from mbd3d.numerics.compiled.rows import (GEAR, GEAR_MESH, ROTATION, constraint_
                                           mesh_phase)
 
 SOLVED, FAILED = 0, 1
-#: largest velocity residual accepted, relative to the velocities' own size (the value of
-#: mbd3d.analyses.kinematics.VELOCITY_TOLERANCE, which the tests compare with this one)
+#: largest velocity residual accepted at a time point, relative to the velocities' own size
+#: (the guard of both paths: mbd3d.analyses.kinematics takes it from here)
 VELOCITY_TOLERANCE = 1e-10
 
 
