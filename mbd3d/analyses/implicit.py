@@ -31,6 +31,11 @@ penalty part outweighs the mass matrix by the penalty ratio and must follow the 
 or the large constraint forces leak into the free directions. The spectral radius at infinity
 ``rho_inf`` (1: no numerical damping; 0: asymptotic annihilation) sets the coefficients; the
 method is second order.
+
+Between output times the steps of a model without compliant contacts, rigid contacts held at
+rest, spatial gear meshes or force elements (whose tangent is built here) run in a compiled
+loop (:mod:`mbd3d.numerics.compiled.alpha_loop`), the same steps as this module's
+:meth:`GeneralizedAlphaIntegrator._step` takes; it hands back what needs Python.
 """
 
 from __future__ import annotations
@@ -45,12 +50,14 @@ from mbd3d.numerics.checks import finite_scalar
 from mbd3d.errors import AccuracyWarning, IntegrationError, ModelError, user_stacklevel
 from mbd3d.numerics.rotations import to_quaternion
 from mbd3d.analyses.accelerations import consistent_accelerations, rows_dependent
-from mbd3d.analyses.alpha_step import GeneralizedAlpha, NewtonStep
+from mbd3d.analyses.alpha_step import GeneralizedAlpha, IterationFactors, NewtonStep
 from mbd3d.analyses.contact_steps import ContactSteps
 from mbd3d.analyses.kinematics import project_state
 from mbd3d.analyses.dissipation import TrapezoidalDissipation
 from mbd3d.analyses.driver import DynamicsRequest, Integrator, Segment
 from mbd3d.analyses.passages import PassageWatch
+from mbd3d.model.spatial import CHART_LIMIT
+from mbd3d.numerics.compiled import alpha_loop, generalized_alpha as kernel
 
 __all__ = ["GeneralizedAlpha", "GeneralizedAlphaIntegrator", "LARGEST_TURN"]
 
@@ -61,6 +68,9 @@ LARGEST_TURN = 1.0
 #: too long for the motion is too long for most of its steps, and the check costs 9 us, a
 #: sixth of a slider-crank's step
 _TURN_SAMPLE = 16
+#: whether the compiled loop takes the steps of the models it can (tests compare it with the
+#: steps taken here; interpreted, ``NUMBA_DISABLE_JIT=1``, it runs as Python too)
+COMPILED_STEPS = True
 #: steps one call of :meth:`GeneralizedAlphaIntegrator.advance` takes at most before it returns
 #: to the driver without reaching an output (so that the progress bar moves)
 _STEPS_PER_CALL = 200
@@ -118,6 +128,11 @@ class GeneralizedAlphaIntegrator(Integrator):
         if self.contacts.group is not None:
             self.stats["contact_retries"] = 0
         self.dissipation = TrapezoidalDissipation(model)
+        #: whether the compiled loop takes the steps while nothing is held at rest
+        self.compiled_steps = (COMPILED_STEPS and not model.force_groups and model.friction is None
+                               and model._penalty_pattern.layout != "sparse"
+                               and self.contacts.group is None and not self.meshes)
+        self._records = None
 
     def chart(self) -> np.ndarray | None:
         return self.charts
@@ -189,12 +204,18 @@ class GeneralizedAlphaIntegrator(Integrator):
     def advance(self, t_target: float, every_step: bool) -> Segment:
         """Steps until the output time ``t_target`` (one step when ``every_step``, at most
         :data:`_STEPS_PER_CALL` otherwise, so that interrupts and progress are seen)."""
+        if self.compiled_steps and not every_step and not self.holding:
+            return self._advance_compiled(t_target)
         steps = 1 if every_step else _STEPS_PER_CALL
         for k in range(steps):
             t_old, q_old, qd_old, _ = self._step(t_target)
             if self.tt >= t_target or k == steps - 1:
                 break  # the driver's after_step resets the charts after this one
             self._reset_charts()
+        return self._segment(t_old, q_old, qd_old)
+
+    def _segment(self, t_old: float, q_old: np.ndarray, qd_old: np.ndarray) -> Segment:
+        """The last step, from ``(t_old, q_old, qd_old)`` to the state reached."""
         t_new, q, qd = self.tt, self.q, self.qd
 
         def state_at(t: float) -> tuple[np.ndarray, np.ndarray]:
@@ -211,6 +232,72 @@ class GeneralizedAlphaIntegrator(Integrator):
             return (h00 * q_old + h10 * h * qd_old + h01 * q + h11 * h * qd,
                     d00 * q_old + d10 * qd_old + d01 * q + d11 * qd)
         return Segment(t_old, t_new, state_at)
+
+    def _advance_compiled(self, t_target: float) -> Segment:
+        """:meth:`advance` with the steps taken by the compiled loop
+        (:mod:`mbd3d.numerics.compiled.alpha_loop`); what it hands back is done here: a step
+        whose Newton iteration failed is taken by :meth:`_step` (shortened as there), a turn
+        too long is warned of, a chart reset restarts the recursion."""
+        newton, stats, c = self.newton, self.stats, self.coefficients
+        if self._records is None:
+            n = self.model.n_coordinates
+            self._records = (np.empty(2), np.empty(n), np.empty(n), np.empty(_STEPS_PER_CALL),
+                             np.empty(_STEPS_PER_CALL), np.empty((_STEPS_PER_CALL, n)))
+        times, q_old, qd_old, out_t, out_indicator, out_q = self._records
+        budget, last = _STEPS_PER_CALL, None
+        while True:
+            settings = (float(self.step), float(self.request.max_step), newton.relative_penalty,
+                        newton.newton_tol, newton.projection_tol, int(newton.max_iterations),
+                        CHART_LIMIT, LARGEST_TURN, not self._turn_warned, int(stats["steps"]),
+                        _TURN_SAMPLE)
+            times[:] = self.tt, float(self.request.t[-1])
+            # new arrays: the states handed out before (outputs, segments) stay as they were
+            q, qd, qdd, a, lam = (np.array(x, dtype=float)
+                                  for x in (self.q, self.qd, self.qdd, self.a, self.lam))
+            status, tt, t_old, h, h_last, smallest, taken, t_step, _ = alpha_loop.alpha_steps(
+                newton.work, newton.arrays, newton.run.key, (c.alpha_m, c.alpha_f, c.beta,
+                                                             c.gamma),
+                settings, times, float(t_target), float(self.h), q, qd, qdd, a, lam,
+                self.charts, newton.penalty, newton.lam_effective, *newton.buffers,
+                newton.counters, q_old, qd_old, out_t[:budget], out_indicator[:budget],
+                out_q[:budget])
+            budget -= taken
+            if taken:
+                self._accept_compiled(tt, h, (q, qd, qdd, a, lam), h_last, smallest, taken)
+                last = (t_old, q_old.copy(), qd_old.copy())
+                for k in range(taken):
+                    self.passages.step(float(out_t[k]), float(out_indicator[k]), out_q[k],
+                                       self.charts)
+            if status == alpha_loop.TURNED:
+                self._check_turn(self.q, q_old, h_last, t_step)
+            elif status == alpha_loop.NOT_CONVERGED:
+                last = self._step(t_target)[:3]
+                budget -= 1
+            if self.tt >= t_target or budget <= 0:
+                return self._segment(*last)
+            self._reset_charts()
+
+    def _accept_compiled(self, tt: float, h: float, state: tuple, h_last: float,
+                         smallest: float, taken: int) -> None:
+        """Take the state, the counts and the last step's factors the compiled loop left."""
+        newton, stats, c = self.newton, self.stats, self.coefficients
+        self.tt, self.h = tt, h
+        self.q, self.qd, self.qdd, self.a, self.lam = state
+        # every iterate was finite (else its Newton iteration failed): a state that is not
+        # can only be an overflow in the last update
+        if not np.all(np.isfinite(self.q)) or not np.all(np.isfinite(self.qd)):
+            raise IntegrationError(self._not_finite(tt), time=tt)
+        stats["steps"] += taken
+        stats["smallest_step"] = min(stats["smallest_step"], smallest)
+        stats["newton_iterations"], stats["factorizations"] = (int(newton.counters[0]),
+                                                               int(newton.counters[1]))
+        beta_prime = (1.0 - c.alpha_m) / (h_last * h_last * c.beta * (1.0 - c.alpha_f))
+        self.S = IterationFactors(newton.arrays, newton.buffers, None, newton.penalty.copy(),
+                                  beta_prime, kernel.last_mass_blocks(newton.work))
+
+    def _not_finite(self, t: float) -> str:
+        return (f"forward dynamics of '{self.model.name}': the state became non-finite at "
+                f"t = {t:.6g} s")
 
     def _step(self, t_target: float) -> tuple:
         """One accepted step towards ``t_target`` (shorter ones after a rejection), with the
@@ -246,8 +333,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         t_step = self.tt  # where passages are noted: the step's end before it is snapped
         self.passages.step(t_step, S.indicator, q, self.charts)
         if not np.all(np.isfinite(q)) or not np.all(np.isfinite(qd)):
-            raise IntegrationError(f"forward dynamics of '{self.model.name}': the state "
-                                   f"became non-finite at t = {t_step:.6g} s", time=t_step)
+            raise IntegrationError(self._not_finite(t_step), time=t_step)
         steps = self.stats["steps"]
         if not self._turn_warned and (steps <= _TURN_SAMPLE or steps % _TURN_SAMPLE == 0):
             self._check_turn(q, q_old, h_try, t_step)

@@ -42,24 +42,24 @@ def _callback_factor_solve(key, values, r):
 
 
 @jit
-def penalties_into(model, penalty_arrays, blocks, data, beta_prime, relative_penalty, out):
+def penalties_into(model, penalty_arrays, blocks, data, beta_prime, relative_penalty, out,
+                   norms, diagonal):
     """The penalties ``p`` (one per constraint row) of the augmented Lagrangian into ``out``:
     ``relative_penalty`` times the mass term ``beta' M`` per squared unit of ``Cq``, in the
     model's dimensionless units (coordinates over their scale ``s``, rows over theirs ``r``,
     masses over ``m L^2``): the mean scaled mass diagonal over the mean squared norm of the
     scaled rows that have entries, so that the ratio means the same at any size;
-    ``p_i = p~ m L^2 / r_i^2``."""
+    ``p_i = p~ m L^2 / r_i^2``. ``norms`` (rows) and ``diagonal`` (coordinates): scratch."""
     s = penalty_arrays.coordinate_scale
     r = model.row_scale
     mass_unit = penalty_arrays.mass_unit
     jac_rows, jac_cols = model.jac_rows, model.jac_cols
     m = r.shape[0]
-    norms = np.zeros(m)
+    norms[:] = 0.0
     for p in range(data.shape[0]):
         scaled = data[p] * s[jac_cols[p]] / r[jac_rows[p]]
         norms[jac_rows[p]] += scaled * scaled
     nc = blocks.shape[1]
-    diagonal = np.empty(blocks.shape[0] * nc)
     for b in range(blocks.shape[0]):
         for c in range(nc):
             k = b * nc + c
@@ -89,7 +89,7 @@ def iteration_values_into(penalty_arrays, beta_prime, blocks, penalty, data, jac
 
 
 @jit
-def factor_into(penalty_arrays, values, extra, matrix, band, piv) -> bool:
+def factor_into(penalty_arrays, values, extra, matrix, band, piv, reference) -> bool:
     """Factor ``D A D`` (``D`` the pattern's scale) of the matrix with entries ``values``, plus
     ``extra`` (already scaled, in the storage of the layout: (n, n) dense or the band; empty
     for none), into ``matrix`` (dense) or ``band``, row interchanges into ``piv``; returns
@@ -97,7 +97,8 @@ def factor_into(penalty_arrays, values, extra, matrix, band, piv) -> bool:
     its own column before factoring. The test is local because the pivots of ``beta' M +
     Cq^T p Cq`` span the penalty ratio times the spread of the masses by design, and a long
     chain spreads them further (a test against the largest pivot refused a 1000-link chain
-    whose smallest pivot was still 1e-10 of its column, 1e4 times the tolerance)."""
+    whose smallest pivot was still 1e-10 of its column, 1e4 times the tolerance).
+    ``reference`` (coordinates): scratch."""
     pattern = penalty_arrays
     if pattern.layout == DENSE:
         matrix[:, :] = 0.0
@@ -108,7 +109,7 @@ def factor_into(penalty_arrays, values, extra, matrix, band, piv) -> bool:
             for i in range(extra.shape[0]):
                 flat[i] += extra[i]
         size = matrix.shape[0]
-        reference = np.zeros(size)
+        reference[:] = 0.0
         for i in range(size):
             for j in range(size):
                 reference[j] = max(reference[j], abs(matrix[i, j]))
@@ -122,7 +123,7 @@ def factor_into(penalty_arrays, values, extra, matrix, band, piv) -> bool:
         for i in range(extra.shape[0]):
             band[i] += extra[i]
         size, rows = pattern.scale.shape[0], 2 * pattern.kl + pattern.ku + 1
-        reference = np.zeros(size)
+        reference[:] = 0.0
         for j in range(size):
             for i in range(j * rows, (j + 1) * rows):
                 reference[j] = max(reference[j], abs(band[i]))
@@ -196,6 +197,7 @@ def newton_step(work, penalty_arrays, key, t, q, q_hat, qd_hat, beta_prime, gamm
     n = model.n
     m = model.n_rows
     qd, qdd, r, dq = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    norms, diagonal, reference = np.empty(m), np.empty(n), np.empty(n)  # the callees' scratch
     values = np.empty(penalty_arrays.rows.shape[0])
     C, data, rhs, blocks = work.C, work.data, work.rhs, work.blocks
     s = penalty_arrays.coordinate_scale
@@ -227,7 +229,7 @@ def newton_step(work, penalty_arrays, key, t, q, q_hat, qd_hat, beta_prime, gamm
             C[i] -= model.c0[i]
             largest = max(largest, abs(C[i]) / model.row_scale[i])
         penalties_into(model, penalty_arrays, blocks, data, beta_prime, relative_penalty,
-                       penalty)
+                       penalty, norms, diagonal)
         for i in range(m):
             if iteration:
                 lam[i] += penalty[i] * C[i]  # method of multipliers, C at the new iterate
@@ -252,7 +254,7 @@ def newton_step(work, penalty_arrays, key, t, q, q_hat, qd_hat, beta_prime, gamm
             for i in range(n):
                 dq[i] = -x[i]
         else:
-            if not factor_into(penalty_arrays, values, extra, matrix, band, piv):
+            if not factor_into(penalty_arrays, values, extra, matrix, band, piv, reference):
                 return SINGULAR_MATRIX
             solve_factored(penalty_arrays, matrix, band, piv, r, dq)
             for i in range(n):

@@ -1,0 +1,160 @@
+"""Generalized-alpha's step loop, compiled, for the models whose steps need nothing from Python:
+no compliant contacts or stops (whose rules shorten the steps), no rigid contacts held at
+rest, no spatial gear meshes, no force elements with a tangent in the iteration matrix and a
+dense or banded iteration matrix. :mod:`mbd3d.analyses.implicit` drives it and takes the
+other models' steps itself; the step is the same (:func:`.generalized_alpha.newton_step`).
+
+A call takes accepted steps until the output time, a budget of steps, or something Python
+must do: a step whose Newton iteration fails (Python retries it shorter and names why none
+converges; an iterate that is not finite fails it), a body that turned too far in a step
+(Python warns) or a chart to re-reference (Python restarts the recursion from
+consistent accelerations in the new chart). Every accepted step's end time, positions and
+singular-position indicator are recorded for :class:`~mbd3d.analyses.passages.PassageWatch`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.dense import lu_factor
+from mbd3d.numerics.compiled.generalized_alpha import (CONVERGED, log_abs_determinant,
+                                                       newton_step)
+
+#: why :func:`alpha_steps` returned: the output time reached, the budget of steps spent, a
+#: step that did not converge (not taken: the state is the last accepted one), a body that
+#: turned more than the limit in the last step, a chart to reset
+REACHED, PAUSED, NOT_CONVERGED, TURNED, CHARTS = 0, 1, 2, 3, 4
+
+
+@jit
+def _log_abs_det_blocks(blocks) -> float:
+    """``sum log |det B|`` over the mass blocks ``B`` (as NumPy's ``slogdet``)."""
+    total = 0.0
+    for b in range(blocks.shape[0]):
+        lu = blocks[b].copy()
+        lu_factor(lu, 0.0)
+        for k in range(lu.shape[0]):
+            size = abs(lu[k, k])
+            total += math.log(size) if size > 0.0 else -np.inf
+    return total
+
+
+@jit
+def _largest_turn(q, q_old, nb, nc, dim) -> float:
+    """The largest change of a body's rotation coordinates in a step [rad] (a Rodrigues
+    parameter changes by about half the angle)."""
+    largest = 0.0
+    for b in range(nb):
+        for k in range(b * nc + dim, (b + 1) * nc):
+            largest = max(largest, abs(q[k] - q_old[k]) * (2.0 if dim == 3 else 1.0))
+    return largest
+
+
+@jit
+def _charts_due(q, nb, limit) -> bool:
+    """Whether a body's Rodrigues parameters passed the chart limit (as the body type's
+    ``reset_charts`` tests)."""
+    for b in range(nb):
+        o = 6 * b
+        if q[o + 3] ** 2 + q[o + 4] ** 2 + q[o + 5] ** 2 > limit * limit:
+            return True
+    return False
+
+
+@jit
+def _trial_step(t, h, t_end) -> float:
+    """The step towards ``t_end``: ``h``, or what lands on the end (two even steps instead of
+    a sliver), as the Python loop's ``_trial_step``."""
+    if t_end - (t + h) < 1e-9 * max(h, 1e-300):
+        return t_end - t
+    if t_end - (t + h) < 0.05 * h:
+        return 0.5 * (t_end - t)
+    return h
+
+
+@jit
+def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_target, h, q, qd,
+                qdd, a, lam, charts, penalty, lam_effective, matrix, band, piv, counters,
+                q_old, qd_old, out_t, out_indicator, out_q):
+    """Accepted steps from ``(times[0], q, qd, qdd, a, lam)`` (updated in place) towards
+    ``t_target``, at most ``out_t.shape[0]`` of them.
+
+    ``coefficients``: ``(alpha_m, alpha_f, beta, gamma)``. ``settings``: ``(step, max_step,
+    relative_penalty, newton_tol, projection_tol, max_iterations, chart_limit, largest_turn,
+    check_turns, steps_before, turn_sample)``. ``times``: ``(t, t_end)`` [s]. ``h``: the next
+    step [s]. ``charts``: None for a planar model. ``counters``: Newton iterations and
+    factorizations (a failed step's are not counted: Python takes that step again).
+    ``q_old``, ``qd_old``: the last accepted step's start. ``out_t``, ``out_indicator``,
+    ``out_q``: per accepted step its end (before it is snapped to ``t_target``), its
+    indicator and positions.
+
+    Returns ``(status, t, t_old, h, h_last, smallest, taken, t_step, turn)``: why it returned
+    (see the constants), the time reached, the last step's start, the next step, the last
+    step, the shortest step, the steps taken, the last step's end before snapping and its
+    largest turn [rad] (where it was checked).
+    """
+    am, af, beta, gamma = coefficients
+    (step, max_step, relative_penalty, newton_tol, projection_tol, max_iterations,
+     chart_limit, largest_turn, check_turns, steps_before, turn_sample) = settings
+    t, t_end = times[0], times[1]
+    n = q.shape[0]
+    nb, nc, dim = work.blocks.shape[0], work.blocks.shape[1], 3 if charts is not None else 2
+    extra = np.zeros(0)
+    q_hat, qd_hat, trial, shift = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    lam_try = np.empty(lam.shape[0])
+    t_old, h_last, smallest, t_step, turn = t, 0.0, np.inf, t, 0.0
+    for taken in range(out_t.shape[0]):
+        h_try = _trial_step(t, h, t_end)
+        for i in range(n):
+            shift[i] = (af * qdd[i] - am * a[i]) / (1.0 - am)
+            q_hat[i] = (q[i] + h_try * qd[i] + h_try * h_try * (0.5 - beta) * a[i]
+                        + h_try * h_try * beta * shift[i])
+            qd_hat[i] = qd[i] + h_try * (1.0 - gamma) * a[i] + h_try * gamma * shift[i]
+        beta_prime = (1.0 - am) / (h_try * h_try * beta * (1.0 - af))
+        gamma_prime = gamma / (h_try * beta)
+        for i in range(n):
+            trial[i] = q_hat[i] + qdd[i] / beta_prime  # predictor: unchanged accelerations
+        lam_try[:] = lam
+        iterations, factorizations = counters[0], counters[1]
+        outcome = newton_step(work, penalty_arrays, key, t + h_try, trial, q_hat, qd_hat,
+                              beta_prime, gamma_prime, lam_try, charts, extra, False,
+                              relative_penalty, newton_tol, projection_tol, max_iterations,
+                              penalty, lam_effective, matrix, band, piv, counters)
+        if outcome != CONVERGED:
+            counters[0], counters[1] = iterations, factorizations
+            return NOT_CONVERGED, t, t_old, h, h_last, smallest, taken, t_step, turn
+        q_old[:] = q
+        qd_old[:] = qd
+        t_old, h_last, smallest = t, h_try, min(smallest, h_try)
+        for i in range(n):
+            q[i] = trial[i]
+            qdd[i] = beta_prime * (trial[i] - q_hat[i])
+            qd[i] = qd_hat[i] + gamma_prime * (trial[i] - q_hat[i])
+            a[i] = shift[i] + (1.0 - af) / (1.0 - am) * qdd[i]
+        lam[:] = lam_effective
+        t += h_try
+        t_step = t
+        out_t[taken], out_q[taken] = t, q
+        out_indicator[taken] = (log_abs_determinant(penalty_arrays, matrix, band)
+                                - nb * nc * math.log(beta_prime)
+                                - _log_abs_det_blocks(work.blocks))
+        steps = steps_before + taken + 1
+        status = PAUSED
+        if check_turns and (steps <= turn_sample or steps % turn_sample == 0):
+            turn = _largest_turn(q, q_old, nb, nc, dim)
+            if turn > largest_turn:
+                status = TURNED
+        # back to the nominal step after a recovery, doubling (see the Python loop)
+        h = min(step, max_step, 2.0 * h)
+        if abs(t - t_target) <= 1e-12 * max(1.0, abs(t_target)):
+            t = t_target
+        if t >= t_target and status == PAUSED:
+            status = REACHED
+        elif charts is not None and status == PAUSED and _charts_due(q, nb, chart_limit):
+            status = CHARTS
+        if status != PAUSED or taken + 1 == out_t.shape[0]:
+            return status, t, t_old, h, h_last, smallest, taken + 1, t_step, turn
+    return PAUSED, t, t_old, h, h_last, smallest, 0, t_step, turn
