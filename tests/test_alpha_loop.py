@@ -125,3 +125,16 @@ def test_models_whose_steps_need_python_are_not_given_to_the_loop(monkeypatch):
         return four_bar(shaft_stiffness=50.0), {}, np.linspace(0.0, 0.1, 3), 1e-3
     res, calls = run(sprung, True, monkeypatch)
     assert calls == 0 and res.stats["steps"] == 100
+
+
+def test_the_loop_s_mass_determinants_are_numpy_s():
+    """The singular-position indicator takes ``log |det|`` of each mass block (a spatial
+    block changes with the orientation); the loop's own LU against NumPy's ``slogdet``."""
+    rng = np.random.default_rng(7)
+    blocks = rng.normal(size=(5, 6, 6)) * np.logspace(-3, 3, 5)[:, None, None]
+    blocks[2] = blocks[2] @ blocks[2].T  # symmetric, as mass blocks are
+    expected = float(np.sum(np.linalg.slogdet(blocks)[1]))
+    assert implicit.alpha_loop._log_abs_det_blocks(blocks) == pytest.approx(expected,
+                                                                            rel=1e-13)
+    blocks[3, :, 0] = 0.0  # a singular block: -inf, as slogdet
+    assert implicit.alpha_loop._log_abs_det_blocks(blocks) == -np.inf
