@@ -9,7 +9,10 @@ it). For each integrator and setting the script prints the error and the wall ti
 (its generalized-alpha, steps halved from 1e-4 s) and the cheapest mbd3d setting (DOP853,
 tolerances halved from 1e-6: the same search for both) that get the angle to 1e-6 rad, times
 the two in turn (3 rounds, so that a drift in the machine's speed hits both alike) and prints
-the ratio of their median wall times (target: mbd3d / Exudyn <= 0.01).
+the ratio of their median wall times (target: mbd3d / Exudyn <= 0.01). It also runs both
+engines' generalized-alpha at the same steps (``SAME_STEPS``), where they reach the same
+accuracy, and prints their errors, times and ratio (issue #34's target: at most 0.5 x
+Exudyn's time at h = 1e-3).
 
 Run: python benchmarks/slider_crank.py [--peers] [--quick]
 """
@@ -34,6 +37,9 @@ from measure import cheapest, interleaved_medians, machine  # noqa: E402
 
 #: crank rate at t = 0 [rad/s], duration [s], and the accuracy of the comparison [rad]
 CRANK_RATE, DURATION, TOLERANCE = 30.0, 2.0, 1e-6
+
+#: the steps at which both engines' generalized-alpha are timed [s]
+SAME_STEPS = (1e-3, 2.5e-4, 6.25e-5)
 
 #: the settings of the study, cheapest first
 STUDY = {
@@ -90,6 +96,7 @@ def main(compare: bool = False, quick: bool = False, repeat: int = 3) -> list[di
     right_hand_sides(model, q0, qd0, quick)
     if compare:
         compare_with_exudyn(model, q0, qd0, reference)
+        same_steps_as_exudyn(model, q0, qd0, reference)
     return rows
 
 
@@ -146,6 +153,33 @@ def compare_with_exudyn(model, q0, qd0, reference: float, repeat: int = 3) -> No
     print(f"mbd3d / Exudyn at {TOLERANCE:g} rad: {ratio:.3f} (target <= 0.01: "
           f"{'met' if ratio <= 0.01 else 'missed'}; medians of {repeat} rounds in which the "
           "engines ran in turn)")
+
+
+def same_steps_as_exudyn(model, q0, qd0, reference: float, repeat: int = 5) -> list[dict]:
+    """mbd3d's and Exudyn's generalized-alpha at the same steps (``SAME_STEPS``): the crank
+    angle's error at ``DURATION`` and the median wall time of ``repeat`` rounds in which the
+    two ran in turn."""
+    if not peers.available("exudyn"):
+        return []
+    rows = []
+    for h in SAME_STEPS:
+        runs = [lambda h=h: run(model, q0, qd0, "generalized-alpha", {"step": h}),
+                lambda h=h: peers.exudyn_slider_crank(h, qd0, DURATION, math.radians(65.0))]
+        errors = [abs(engine()[0] - reference) for engine in runs]
+        walls = interleaved_medians(runs, repeat)
+        rows.append({"step": h, "errors": errors, "walls": walls, "ratio": walls[0] / walls[1]})
+    print(mb.format_table({
+        "step [s]": [r["step"] for r in rows],
+        "mbd3d error [rad]": [r["errors"][0] for r in rows],
+        "Exudyn error [rad]": [r["errors"][1] for r in rows],
+        "mbd3d [s]": [r["walls"][0] for r in rows],
+        "Exudyn [s]": [r["walls"][1] for r in rows],
+        "mbd3d / Exudyn": [r["ratio"] for r in rows]}, precision=3))
+    ratio = rows[0]["ratio"]
+    print(f"generalized-alpha at the same step h = {SAME_STEPS[0]:g} s: {ratio:.2f} x Exudyn's "
+          f"time (target <= 0.5: {'met' if ratio <= 0.5 else 'missed'}; medians of {repeat} "
+          "rounds in which the engines ran in turn)")
+    return rows
 
 
 if __name__ == "__main__":
