@@ -16,7 +16,8 @@ import scipy.sparse as sp
 from mbd3d.errors import ModelError
 from mbd3d.model import constraints
 from mbd3d.model.equations import augmented_accelerations, generalized_forces, python_parts
-from mbd3d.numerics.compiled import callbacks, generalized_alpha as kernel, structures
+from mbd3d.numerics.compiled import (alpha_loop as loop, callbacks, generalized_alpha as kernel,
+                                    structures)
 
 __all__ = ["GeneralizedAlpha", "NewtonStep", "IterationFactors", "force_tangent"]
 
@@ -228,13 +229,10 @@ class NewtonStep:
     def __call__(self, tt, h, q_n, qd_n, qdd_n, a_n, lam_n, chart):
         """One step: the new state and the iteration matrix's factors, or None when Newton
         does not converge."""
-        model, am, af, beta, gamma = self.model, self.am, self.af, self.beta, self.gamma
-        shift = (af * qdd_n - am * a_n) / (1.0 - am)
-        q_hat = q_n + h * qd_n + h * h * (0.5 - beta) * a_n + h * h * beta * shift
-        qd_hat = qd_n + h * (1.0 - gamma) * a_n + h * gamma * shift
-        beta_prime = (1.0 - am) / (h * h * beta * (1.0 - af))
-        gamma_prime = gamma / (h * beta)
-        q = q_hat + qdd_n / beta_prime  # predictor: unchanged accelerations
+        model, coefficients = self.model, (self.am, self.af, self.beta, self.gamma)
+        shift, q_hat, qd_hat, q = (np.empty(len(q_n)) for _ in range(4))
+        beta_prime, gamma_prime = loop.predict_into(coefficients, h, q_n, qd_n, qdd_n, a_n,
+                                                    shift, q_hat, qd_hat, q)
         lam = lam_n.copy()
         # the applied forces' tangent varies slowly: once per step, at the predictor
         tangent = force_tangent(model, tt, q, qd_hat + gamma_prime * (q - q_hat), chart,
@@ -271,9 +269,9 @@ class NewtonStep:
                 model, q, qd_hat + gamma_prime * (q - q_hat), chart))
         if outcome != kernel.CONVERGED:
             return None
-        qdd = beta_prime * (q - q_hat)
-        qd = qd_hat + gamma_prime * (q - q_hat)
-        a = shift + (1.0 - af) / (1.0 - am) * qdd
+        qd, qdd, a = (np.empty(len(q)) for _ in range(3))
+        loop.rates_into(coefficients, beta_prime, gamma_prime, q, q_hat, qd_hat, shift, qd, qdd,
+                        a)
         S = IterationFactors(self.arrays, self.buffers,
                               self.run.factors if python_factor else None,
                               self.penalty.copy(), beta_prime,

@@ -185,13 +185,8 @@ class GeneralizedAlphaIntegrator(Integrator):
     def _trial_step(self) -> float:
         """The next step: the nominal one, shortened to land on the run's end (an output
         time it ends within rounding of is snapped to in :meth:`_step`)."""
-        tt, h = self.tt, min(self.h, self.contacts.limit(self.tt))
-        end = float(self.request.t[-1])
-        h_try = h
-        if end - (tt + h_try) < 1e-9 * max(h, 1e-300):
-            h_try = end - tt  # past the end, or within rounding of it
-        elif end - (tt + h_try) < 0.05 * h:
-            h_try = 0.5 * (end - tt)  # two even steps instead of a sliver
+        h_try = alpha_loop.trial_step(self.tt, min(self.h, self.contacts.limit(self.tt)),
+                                      float(self.request.t[-1]))
         if self.meshes:
             # spatial gears know their angles modulo a tooth of the reduced ratio: no step may
             # turn a mesh's gears by a quarter of one (half what lets Newton's guess be a tooth

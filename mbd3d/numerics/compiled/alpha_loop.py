@@ -65,14 +65,47 @@ def _charts_due(q, nb, limit) -> bool:
 
 
 @jit
-def _trial_step(t, h, t_end) -> float:
-    """The step towards ``t_end``: ``h``, or what lands on the end (two even steps instead of
-    a sliver), as the Python loop's ``_trial_step``."""
+def trial_step(t, h, t_end) -> float:
+    """The step [s] from ``t`` towards the run's end ``t_end``: ``h``, or what lands on the
+    end (past it or within rounding of it), or half the way there instead of a step and a
+    sliver (under a twentieth of ``h``)."""
     if t_end - (t + h) < 1e-9 * max(h, 1e-300):
         return t_end - t
     if t_end - (t + h) < 0.05 * h:
         return 0.5 * (t_end - t)
     return h
+
+
+@jit
+def predict_into(coefficients, h, q, qd, qdd, a, shift, q_hat, qd_hat, trial) -> tuple:
+    """The step ``h`` from ``(q, qd, qdd, a)``: ``shift = (alpha_f qdd - alpha_m a) / (1 -
+    alpha_m)``, the parts ``q_hat``, ``qd_hat`` of the new positions and rates that do not
+    depend on the new accelerations, and Newton's first guess ``trial`` (the accelerations
+    unchanged); returns ``(beta', gamma')`` (see :mod:`mbd3d.analyses.implicit`).
+    ``coefficients``: ``(alpha_m, alpha_f, beta, gamma)``."""
+    am, af, beta, gamma = coefficients
+    for i in range(q.shape[0]):
+        shift[i] = (af * qdd[i] - am * a[i]) / (1.0 - am)
+        q_hat[i] = (q[i] + h * qd[i] + h * h * (0.5 - beta) * a[i]
+                    + h * h * beta * shift[i])
+        qd_hat[i] = qd[i] + h * (1.0 - gamma) * a[i] + h * gamma * shift[i]
+    beta_prime = (1.0 - am) / (h * h * beta * (1.0 - af))
+    gamma_prime = gamma / (h * beta)
+    for i in range(q.shape[0]):
+        trial[i] = q_hat[i] + qdd[i] / beta_prime
+    return beta_prime, gamma_prime
+
+
+@jit
+def rates_into(coefficients, beta_prime, gamma_prime, q, q_hat, qd_hat, shift, qd, qdd,
+               a) -> None:
+    """The step's new rates ``qd``, accelerations ``qdd`` and ``a`` from its new positions
+    ``q`` (the quantities of :func:`predict_into`)."""
+    am, af = coefficients[0], coefficients[1]
+    for i in range(q.shape[0]):
+        qdd[i] = beta_prime * (q[i] - q_hat[i])
+        qd[i] = qd_hat[i] + gamma_prime * (q[i] - q_hat[i])
+        a[i] = shift[i] + (1.0 - af) / (1.0 - am) * qdd[i]
 
 
 @jit
@@ -96,7 +129,6 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
     step, the shortest step, the steps taken, the last step's end before snapping and its
     largest turn [rad] (where it was checked).
     """
-    am, af, beta, gamma = coefficients
     (step, max_step, relative_penalty, newton_tol, projection_tol, max_iterations,
      chart_limit, largest_turn, check_turns, steps_before, turn_sample) = settings
     t, t_end = times[0], times[1]
@@ -107,16 +139,9 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
     lam_try = np.empty(lam.shape[0])
     t_old, h_last, smallest, t_step, turn = t, 0.0, np.inf, t, 0.0
     for taken in range(out_t.shape[0]):
-        h_try = _trial_step(t, h, t_end)
-        for i in range(n):
-            shift[i] = (af * qdd[i] - am * a[i]) / (1.0 - am)
-            q_hat[i] = (q[i] + h_try * qd[i] + h_try * h_try * (0.5 - beta) * a[i]
-                        + h_try * h_try * beta * shift[i])
-            qd_hat[i] = qd[i] + h_try * (1.0 - gamma) * a[i] + h_try * gamma * shift[i]
-        beta_prime = (1.0 - am) / (h_try * h_try * beta * (1.0 - af))
-        gamma_prime = gamma / (h_try * beta)
-        for i in range(n):
-            trial[i] = q_hat[i] + qdd[i] / beta_prime  # predictor: unchanged accelerations
+        h_try = trial_step(t, h, t_end)
+        beta_prime, gamma_prime = predict_into(coefficients, h_try, q, qd, qdd, a, shift,
+                                               q_hat, qd_hat, trial)
         lam_try[:] = lam
         iterations, factorizations = counters[0], counters[1]
         outcome = newton_step(work, penalty_arrays, key, t + h_try, trial, q_hat, qd_hat,
@@ -129,11 +154,8 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
         q_old[:] = q
         qd_old[:] = qd
         t_old, h_last, smallest = t, h_try, min(smallest, h_try)
-        for i in range(n):
-            q[i] = trial[i]
-            qdd[i] = beta_prime * (trial[i] - q_hat[i])
-            qd[i] = qd_hat[i] + gamma_prime * (trial[i] - q_hat[i])
-            a[i] = shift[i] + (1.0 - af) / (1.0 - am) * qdd[i]
+        q[:] = trial
+        rates_into(coefficients, beta_prime, gamma_prime, q, q_hat, qd_hat, shift, qd, qdd, a)
         lam[:] = lam_effective
         t += h_try
         t_step = t
