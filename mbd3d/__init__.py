@@ -28,7 +28,8 @@ from mbd3d.model.equations import kinetic_energy, potential_energy
 from mbd3d.errors import (AnalysisError, AssemblyError, IntegrationError, MBDError, ModelError,
                           NotFullyDrivenError, OverDrivenError, SingularJacobianError,
                           AccuracyWarning, ContactWarning, LiftOffWarning, StiffnessWarning)
-from mbd3d.model.forces import ForceState, PointForce, RotationalSpringDamper, SpringDamper, Torque
+from mbd3d.model.forces import ForceState, PointForce, Torque
+from mbd3d.model.springs import RotationalSpringDamper, SpringDamper
 from mbd3d.model.friction import JointFriction
 from mbd3d.model.contacts import (Box, Cam, Capsule, Contact, ContactGroup, ContactStates, Hole,
                                   JointLimit, Plane, Sphere, contact_states)

@@ -11,7 +11,8 @@ import math
 import numpy as np
 
 from mbd3d.errors import ModelError
-from mbd3d.model.forces import RotationalSpringDamper, Torque
+from mbd3d.model.forces import Torque
+from mbd3d.model.springs import RotationalSpringDamper
 from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Motion, Ramp
 from mbd3d.numerics.rotations import frame_along

@@ -13,7 +13,7 @@ import pytest
 
 import mbd3d as mb
 from mbd3d.analyses import implicit
-from mbd3d.mechanisms import four_bar, pendulum_chain, slider_crank, spatial_chain
+from mbd3d.mechanisms import pendulum_chain, slider_crank, spatial_chain
 from test_examples import load
 
 
@@ -54,6 +54,51 @@ def four_bars():
     return load("iftomm_four_bar").build(2), {}, np.linspace(0.0, 3.0, 31), 1e-3
 
 
+def haug_slider_crank():
+    """Haug's slider-crank (SUNDIALS' idasSlCrank): a spring-damper and a force at a point of
+    the rod, whose tangents the loop builds in compiled code."""
+    return load("haug_slider_crank").build(), {}, np.linspace(0.0, 1.0, 11), 1e-3
+
+
+def sprung_chain():
+    """30 planar links with a torsion spring-damper at every pin, the last pulled at its end
+    by a force fixed in its own axes: a banded matrix with the springs' tangent in the band."""
+    from mbd3d.joints import Revolute
+    b = mb.ModelBuilder(dim=2)
+    previous = b.ground
+    for k in range(30):
+        body = b.add_body(f"link{k}", mass=1.0, inertia=1 / 12, position=(k + 0.5, 0.0))
+        b.add(Revolute(f"pin{k}", previous, body, at=(float(k), 0.0)))
+        b.add(mb.RotationalSpringDamper(f"torsion{k}", previous, body, stiffness=200.0,
+                                        damping=0.5))
+        previous = body
+    b.add(mb.PointForce("pull", previous, (0.0, -3.0), point=(0.5, 0.0), frame="body"))
+    return b.build(), {}, np.linspace(0.0, 0.5, 6), 1e-3
+
+
+def sprung_spatial_pair():
+    """Two spatial bodies on skew hinges with a torsion spring-damper, a spring-damper with an
+    actuator (its tension in the tangent at the step's end time) to the ground from an offset
+    point, a torque in body axes and a force in global axes at a point: every compiled force
+    element's tangent, turning through chart resets."""
+    from mbd3d.joints import Revolute
+    b = mb.ModelBuilder(dim=3)
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    one = b.add_body("one", mass=1.0, inertia=(0.03, 0.04, 0.05), position=(0.3, 0.0, 0.0),
+                     angular_velocity=5.0 * axis, velocity=np.cross(5.0 * axis, (0.3, 0.0, 0.0)))
+    two = b.add_body("two", mass=0.5, inertia=(0.02, 0.01, 0.02), position=(0.6, 0.2, 0.0),
+                     angular_velocity=5.0 * axis, velocity=np.cross(5.0 * axis, (0.6, 0.2, 0.0)))
+    hinge = b.add(Revolute("first", b.ground, one, at=(0.0, 0.0, 0.0), axis=axis))
+    b.add(Revolute("second", one, two, at=(0.6, 0.0, 0.0), axis=(0.0, 0.0, 1.0)))
+    b.add(mb.RotationalSpringDamper("torsion", joint=hinge, stiffness=0.05, damping=0.01))
+    b.add(mb.SpringDamper("spring", b.ground, two, at_i=(0.5, 0.5, 0.5), point_j=(0.1, 0.0, 0.0),
+                          stiffness=40.0, damping=0.2, free_length=0.3,
+                          actuator=mb.Harmonic(2.0, 30.0)))
+    b.add(mb.Torque("motor", one, (0.0, 0.0, 0.3), frame="body"))
+    b.add(mb.PointForce("push", two, (0.5, 0.0, -1.0), point=(0.1, 0.05, 0.0)))
+    return b.build(), {}, np.linspace(0.0, 2.0, 11), 1e-3
+
+
 def run(case, compiled: bool, monkeypatch, **options):
     """The case's generalized-alpha run with the steps in the compiled loop or in Python, and
     how many calls the compiled loop had."""
@@ -75,7 +120,8 @@ def run(case, compiled: bool, monkeypatch, **options):
 
 
 @pytest.mark.parametrize("case", [
-    free_slider_crank, spatial_pendulum, long_chain, four_bars,
+    free_slider_crank, spatial_pendulum, long_chain, four_bars, haug_slider_crank,
+    sprung_chain, sprung_spatial_pair,
     pytest.param(spatial_chain_falling, marks=pytest.mark.compiled_only)])  # 95 s interpreted
 def test_the_compiled_loop_takes_the_steps_python_takes(case, monkeypatch):
     compiled, calls = run(case, True, monkeypatch)
@@ -94,7 +140,7 @@ def test_the_compiled_loop_takes_the_steps_python_takes(case, monkeypatch):
     # what each case is there for happened
     if case is free_slider_crank:
         assert python.stats["rejected_steps"] > 0
-    if case in (spatial_pendulum, spatial_chain_falling):
+    if case in (spatial_pendulum, spatial_chain_falling, sprung_spatial_pair):
         assert python.stats["chart_resets"] > 0
     if case is four_bars:
         assert len(python.singular_passages) >= 2
@@ -120,11 +166,31 @@ def test_a_turn_too_long_is_warned_once_from_either_loop(monkeypatch):
 
 
 def test_models_whose_steps_need_python_are_not_given_to_the_loop(monkeypatch):
-    """A spring's tangent is built in Python at every step: such a model stays there."""
-    def sprung():
-        return four_bar(shaft_stiffness=50.0), {}, np.linspace(0.0, 0.1, 3), 1e-3
-    res, calls = run(sprung, True, monkeypatch)
-    assert calls == 0 and res.stats["steps"] == 100
+    """A force given as a Python function of the state (differenced in Python at every step)
+    or a spring between bodies the iteration matrix's band does not couple keeps its steps
+    in Python; a spring whose tangent lies in the band does not."""
+    from mbd3d.joints import Revolute
+
+    def chain(extra):
+        def case():
+            b = mb.ModelBuilder(dim=2)
+            links = [b.ground]
+            for k in range(12):
+                links.append(b.add_body(f"link{k}", mass=1.0, inertia=1 / 12,
+                                        position=(k + 0.5, 0.0)))
+                b.add(Revolute(f"pin{k}", links[-2], links[-1], at=(float(k), 0.0)))
+            b.add(extra(links))
+            return b.build(), {}, np.linspace(0.0, 0.05, 3), 1e-3
+        return case
+    near = chain(lambda links: mb.SpringDamper("near", links[3], links[4], stiffness=10.0))
+    far = chain(lambda links: mb.SpringDamper("far", links[1], links[12], stiffness=10.0))
+    felt = chain(lambda links: mb.PointForce("drag", links[5],
+                                             lambda t, state: -0.1 * state.velocity))
+    for case, in_loop in ((near, True), (far, False), (felt, False)):
+        model = case()[0]
+        assert model._penalty_pattern.layout == "banded"
+        res, calls = run(case, True, monkeypatch)
+        assert (calls > 0) == in_loop and res.stats["steps"] == 50
 
 
 def test_the_loop_s_mass_determinants_are_numpy_s():

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
 
 import mbd3d as mb
 from mbd3d.joints import CoordinateDriver, Distance, Fixed, Prismatic, Revolute, TranslationDriver
@@ -452,16 +453,14 @@ def test_a_torque_in_body_axes_turns_with_the_body_as_euler_s_equations_say():
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-def test_fixed_forces_and_torques_claim_a_zero_tangent_only_where_it_is_zero(dim):
-    """Generalized-alpha's iteration matrix takes a group's tangent as given where the group
-    says it has one: constant planar torques and constant forces in global axes at the
-    centre of mass do not depend on the state (their central differences over every
-    coordinate and rate vanish), and are not differenced; a force at another point or one
-    given as f(t, state) do depend on it, and so does a spatial torque, in body axes or in
-    global ones (its generalized force on the Rodrigues parameters: this test found that), and
-    they are differenced."""
-    from scipy.spatial.transform import Rotation
-
+def test_forces_and_torques_tangent_is_their_derivative_in_closed_form(dim):
+    """Generalized-alpha's iteration matrix takes the tangent of point forces and torques in
+    closed form (:mod:`mbd3d.numerics.compiled.force_tangents`): for a force in global axes at
+    the centre of mass and at another point, one in body axes, a torque in global and in body
+    axes, on a body turned away from its chart (Rodrigues parameters not zero) and moving, it
+    equals the central differences of the generalized forces over every coordinate and rate,
+    nothing left out (a spatial torque's generalized force on the Rodrigues parameters
+    depends on them, even in global axes). A force given as f(t, state) is differenced."""
     from mbd3d.model import constraints
 
     def group_of(element):
@@ -477,28 +476,135 @@ def test_fixed_forces_and_torques_claim_a_zero_tangent_only_where_it_is_zero(dim
 
     vec = (1.0, -2.0) + (0.5,) * (dim - 2)
     spin = 0.7 if dim == 2 else (0.7, -0.3, 0.2)
-    torques = [lambda body: mb.Torque("t", body, spin)]
-    free = [lambda body: mb.PointForce("f", body, vec)] + (torques if dim == 2 else [])
-    bound = [lambda body: mb.PointForce("f", body, vec, point=(0.2, 0.1) + (0.0,) * (dim - 2)),
-             lambda body: mb.PointForce("f", body, lambda t, state: state.velocity)]
-    if dim == 3:
-        bound += torques + [lambda body: mb.Torque("t", body, spin, frame="body")]
-    for element in free:
+    point = (0.2, 0.1) + (-0.3,) * (dim - 2)
+    known = [lambda body: mb.PointForce("f", body, vec),
+             lambda body: mb.PointForce("f", body, vec, point=point),
+             lambda body: mb.PointForce("f", body, vec, point=point, frame="body"),
+             lambda body: mb.Torque("t", body, spin),
+             lambda body: mb.Torque("t", body, spin, frame="body")]
+    rng = np.random.default_rng(dim)
+    for element in known:
         model, group = group_of(element)
-        assert group.analytic_tangent
-        fr = constraints.frames(model, model.q0, model.qd0, model.charts0)
-        rows, cols, values = group.tangent(model, 0.0, fr, 37.0)
-        assert len(rows) == len(cols) == len(values) == 0
+        assert group.analytic_tangent and group.compiled_tangent(model)
+        q = model.q0 + 0.3 * rng.normal(size=model.n_coordinates)  # away from the chart
+        qd = rng.normal(size=model.n_coordinates)
 
-        def Q(q, qd):
+        def Q(x, xd):
             out = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
-            group.apply(model, 0.0, constraints.frames(model, q, qd, model.charts0), out)
+            group.apply(model, 0.0, constraints.frames(model, x, xd, model.charts0), out)
             return out[:model.n_bodies].ravel()
-        for j in range(model.n_coordinates):
-            step = np.zeros(model.n_coordinates)
-            step[j] = 1e-6
-            for dq, dqd in ((step, 0 * step), (0 * step, step)):
-                change = Q(model.q0 + dq, model.qd0 + dqd) - Q(model.q0 - dq, model.qd0 - dqd)
-                np.testing.assert_allclose(change, 0.0, rtol=0, atol=1e-14)
-    for element in bound:
-        assert not group_of(element)[1].analytic_tangent
+        h = 1e-6
+        K = np.column_stack([-(Q(q + e, qd) - Q(q - e, qd)) / (2 * h)
+                             for e in h * np.eye(len(q))])
+        fr = constraints.frames(model, q, qd, model.charts0)
+        rows, cols, values = group.tangent(model, 0.0, fr, 37.0)
+        n = model.n_coordinates
+        keep = (rows < n) & (cols < n)
+        T = np.zeros((n, n))
+        np.add.at(T, (rows[keep], cols[keep]), values[keep])
+        np.testing.assert_allclose(T, K, rtol=0, atol=1e-8 * max(1.0, np.abs(K).max()))
+        if element is not known[0] and (dim == 3 or element is known[1]):
+            assert np.abs(K).max() > 0.1  # the state-dependent ones do depend on the state
+    state = lambda body: mb.PointForce("f", body, lambda t, state: state.velocity)  # noqa: E731
+    model, group = group_of(state)
+    assert not group.analytic_tangent and not group.compiled_tangent(model)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_rotational_spring_tangent_is_its_derivative_where_nothing_is_left_out(dim):
+    """The rotational spring-damper's tangent in closed form, ``(k + w c) G^T G`` with ``G``
+    the hinge axis on the bodies' rotation coordinates, against central differences of its
+    generalized forces: planar (two moving bodies, wound up) it is the whole derivative; in
+    space, about a skew hinge, its velocity part is exact at any state and its position part
+    where the torque is zero (the turning of the axis it leaves out carries the torque)."""
+    from mbd3d.model import constraints
+    k, c, w = 3.0, 0.4, 37.0
+    b = mb.ModelBuilder(dim=dim, gravity=None)
+    if dim == 2:
+        one = b.add_body("one", mass=1.0, inertia=0.1, position=(0.2, 0.1), angle=0.3)
+        two = b.add_body("two", mass=1.0, inertia=0.2, position=(-0.4, 0.5), angle=-0.6)
+        b.add(mb.RotationalSpringDamper("torsion", one, two, stiffness=k, damping=c,
+                                        free_angle=0.2))
+    else:
+        axis = np.array([1.0, 2.0, 2.0]) / 3.0
+        frame = Rotation.align_vectors([axis], [[0.0, 0.0, 1.0]])[0].as_matrix()
+        disc = b.add_body("disc", mass=1.0, inertia=(0.03, 0.04, 0.05), position=(0, 0, 0),
+                          orientation=frame)
+        hinge = b.add(Revolute("axle", b.ground, disc, at=(0.0, 0.0, 0.0), axis=axis))
+        b.add(mb.RotationalSpringDamper("torsion", joint=hinge, stiffness=k, damping=c))
+    model = b.build()
+    group = model.force_groups[0]
+    assert group.compiled_tangent(model)
+    rng = np.random.default_rng(dim)
+    q, moving = model.q0.copy(), rng.normal(size=model.n_coordinates)
+    if dim == 2:
+        q += 0.3 * rng.normal(size=len(q))
+
+    def Q(x, xd):
+        out = np.zeros((model.n_bodies + 1, model.n_coords_per_body))
+        group.apply(model, 0.0, constraints.frames(model, x, xd, model.charts0), out)
+        return out[:model.n_bodies].ravel()
+
+    def tangent(x, xd, weight):
+        rows, cols, values = group.tangent(model, 0.0, constraints.frames(
+            model, x, xd, model.charts0), weight)
+        n = model.n_coordinates
+        keep = (rows < n) & (cols < n)
+        T = np.zeros((n, n))
+        np.add.at(T, (rows[keep], cols[keep]), values[keep])
+        return T
+    h, eye = 1e-6, 1e-6 * np.eye(len(q))
+    at_rest = np.zeros(len(q)) if dim == 3 else moving
+    K = np.column_stack([-(Q(q + e, at_rest) - Q(q - e, at_rest)) / (2 * h) for e in eye])
+    D = np.column_stack([-(Q(q, moving + e) - Q(q, moving - e)) / (2 * h) for e in eye])
+    scale = np.abs(K).max()
+    assert scale > 0.1 * k
+    np.testing.assert_allclose(tangent(q, at_rest, 0.0), K, rtol=0, atol=1e-8 * scale)
+    np.testing.assert_allclose(tangent(q, moving, w) - tangent(q, moving, 0.0), w * D, rtol=0,
+                               atol=1e-8 * w * scale)
+
+
+@pytest.mark.parametrize("layout", ["dense", "banded"])
+def test_the_compiled_tangent_storage_is_the_sparse_one(layout):
+    """The compiled tangent goes straight into the iteration matrix's storage (scaled, and in
+    the permuted band): against the same tangent assembled as a sparse matrix and placed by
+    the pattern's own SciPy code (``_tangent_storage``), on a chain of springs and forces
+    whose elements reach every distance from the band's middle to past its edge; where an
+    element's tangent leaves the band, both say so."""
+    from mbd3d.analyses.alpha_step import _tangent_storage, force_tangent
+    from mbd3d.joints import Revolute
+    from mbd3d.numerics.compiled import force_tangents
+    n_links = 12 if layout == "banded" else 4
+    rng = np.random.default_rng(3)
+    for reach in range(1, 5):
+        b = mb.ModelBuilder(dim=2)
+        links = [b.ground]
+        for k in range(n_links):
+            links.append(b.add_body(f"link{k}", mass=1.0 + k, inertia=0.1 * (k + 1),
+                                    position=(k + 0.5, 0.0)))
+            b.add(Revolute(f"pin{k}", links[-2], links[-1], at=(float(k), 0.0)))
+        for k in range(1, n_links + 1 - reach, 3):
+            b.add(mb.SpringDamper(f"s{k}", links[k], links[k + reach], stiffness=5.0 * k,
+                                  damping=0.3, point_i=(0.2, 0.1), point_j=(-0.3, 0.05)))
+        b.add(mb.RotationalSpringDamper("torsion", links[2], links[3], stiffness=7.0,
+                                        damping=0.2))
+        b.add(mb.PointForce("pull", links[-1], (0.5, -2.0), point=(0.4, 0.1), frame="body"))
+        b.add(mb.Torque("turn", links[1], 0.3))
+        model = b.build()
+        assert model._penalty_pattern.layout == layout
+        arrays, work = model._core.penalty_arrays(model), model._core.workspace()
+        q = model.q0 + 0.1 * rng.normal(size=model.n_coordinates)
+        qd = rng.normal(size=model.n_coordinates)
+        expected, python_factor = _tangent_storage(
+            model, force_tangent(model, 0.2, q, qd, model.charts0, 40.0))
+        fits = force_tangents.tangent_fits(arrays, work)
+        assert fits == (not python_factor)
+        if fits:
+            extra = np.zeros(len(expected))
+            force_tangents.force_tangent_into(work, arrays, 0.2, q, qd, None, 40.0, extra)
+            np.testing.assert_allclose(extra, expected, rtol=1e-13,
+                                       atol=1e-13 * np.abs(expected).max())
+        if layout == "dense":
+            assert fits
+    if layout == "banded":
+        assert not fits  # the longest reach leaves the band

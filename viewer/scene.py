@@ -17,7 +17,7 @@ from mbd3d.joints import (CamFollower, CoordinateDriver, FlatFaceFollower, GearP
                           RackPinion, RollingDisc, RollingDiscOnPlane, RotationDriver,
                           TranslationDriver)
 from mbd3d.errors import ModelError
-from mbd3d.model.forces import SpringDamper
+from mbd3d.model.springs import SpringDamper
 from mbd3d.io.results import Results
 from mbd3d.model.contacts import Contact, contact_group
 from mbd3d.model.mass_properties import load_mesh

@@ -21,7 +21,7 @@ import trimesh
 from mbd3d.joints import CamFollower, FlatFaceFollower, GearPair, Prismatic, RackPinion
 from mbd3d.joints.base import triad
 from mbd3d.model.body import Body
-from mbd3d.model.forces import SpringDamper
+from mbd3d.model.springs import SpringDamper
 from mbd3d.model.builder import Model
 from mbd3d.model.contacts import contact_group
 from mbd3d.model.shapes import Outline

@@ -16,8 +16,8 @@ import scipy.sparse as sp
 from mbd3d.errors import ModelError
 from mbd3d.model import constraints
 from mbd3d.model.equations import augmented_accelerations, generalized_forces, python_parts
-from mbd3d.numerics.compiled import (alpha_loop as loop, callbacks, generalized_alpha as kernel,
-                                    structures)
+from mbd3d.numerics.compiled import (alpha_loop as loop, callbacks, force_tangents,
+                                    generalized_alpha as kernel, structures)
 
 __all__ = ["GeneralizedAlpha", "NewtonStep", "IterationFactors", "force_tangent"]
 
@@ -56,9 +56,12 @@ def force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_
     joints' friction's ``D``), or None when there are none (gravity does not depend on the
     state; the spatial bodies' quadratic velocity terms are left out of the iteration
     matrix, which only slows convergence): a sparse matrix for a sparse model, else an array.
-    Groups with an analytic tangent (spring-dampers, contacts and joint stops) give it
-    directly; the others are differenced forward, only over the coordinates of the bodies
-    they act on."""
+    Groups with an analytic tangent (spring-dampers, point forces and torques not given as
+    functions of the state, contacts and joint stops) give it directly; the others are
+    differenced forward, only over the coordinates of the bodies they act on. Where the
+    compiled core has every group's tangent, :class:`NewtonStep` takes it from
+    :func:`~mbd3d.numerics.compiled.force_tangents.force_tangent_into` instead, straight
+    into the iteration matrix's storage."""
     if not model.force_groups and model.friction is None:
         return None
     n, nc, nb = model.n_coordinates, model.n_coords_per_body, model.n_bodies
@@ -105,6 +108,15 @@ def force_tangent(model, t: float, q: np.ndarray, qd: np.ndarray, charts, gamma_
     T = np.zeros((n, n))  # summed in place: a sparse matrix's checks cost more than the sum
     np.add.at(T, index, values)
     return T
+
+
+def _compiled_tangent(model, arrays, work) -> bool:
+    """Whether every force element's forces and tangent are compiled (no friction, no force
+    given as a Python function, no element whose tangent is differenced) and the tangent
+    lies inside the iteration matrix's band (a dense or banded layout)."""
+    return (model.friction is None and model._penalty_pattern.layout != "sparse"
+            and all(group.compiled_tangent(model) for group in model.force_groups)
+            and force_tangents.tangent_fits(arrays, work))
 
 
 class IterationFactors:
@@ -177,6 +189,12 @@ class NewtonStep:
                                  else 0),
                         np.empty(n, dtype=np.int64))
         self.counters = np.zeros(2, dtype=np.int64)
+        #: whether the compiled core gives the applied forces' tangent (and their forces), in
+        #: the storage of the iteration matrix (``extra``); else :func:`force_tangent` does
+        self.compiled_tangent = _compiled_tangent(model, self.arrays, self.work)
+        self.extra = np.zeros(0)
+        if self.compiled_tangent and force_tangents.has_tangent(self.work):
+            self.extra = np.zeros(self.buffers[0].size + self.buffers[1].size)
         #: the rigid contacts held at rest (:class:`mbd3d.analyses.resting.HeldRows`), or None,
         #: and the workspace of the compiled arrays that take the forces from Python then
         self.held, self._held_work = None, None
@@ -235,10 +253,17 @@ class NewtonStep:
                                                     shift, q_hat, qd_hat, q)
         lam = lam_n.copy()
         # the applied forces' tangent varies slowly: once per step, at the predictor
-        tangent = force_tangent(model, tt, q, qd_hat + gamma_prime * (q - q_hat), chart,
-                                 gamma_prime)
-        extra, python_factor = _tangent_storage(model, tangent)
-        self.run.tangent = tangent
+        qd = np.empty(len(q))
+        loop.rate_into(gamma_prime, q, q_hat, qd_hat, qd)
+        if self.compiled_tangent and self.held is None:
+            force_tangents.force_tangent_into(self.work, self.arrays, tt, q, qd,
+                                              chart if self.spatial else None, gamma_prime,
+                                              self.extra)
+            extra, python_factor = self.extra, False
+        else:
+            tangent = force_tangent(model, tt, q, qd, chart, gamma_prime)
+            extra, python_factor = _tangent_storage(model, tangent)
+            self.run.tangent = tangent
         # The iteration matrix is factored at every iterate (full Newton): the constraint
         # force p C Cq^T is normal to the free directions only at the configuration where Cq
         # is evaluated, and it is large (p is the penalty ratio times the mass term); with
@@ -264,9 +289,9 @@ class NewtonStep:
         self.singular = outcome == kernel.SINGULAR_MATRIX
         if outcome == kernel.NOT_FINITE and np.all(np.isfinite(q)):
             # a force element or motion that cannot be evaluated there is named
+            loop.rate_into(gamma_prime, q, q_hat, qd_hat, qd)
             constraints.driver_values(model, tt)
-            generalized_forces(model, tt, constraints.frames(
-                model, q, qd_hat + gamma_prime * (q - q_hat), chart))
+            generalized_forces(model, tt, constraints.frames(model, q, qd, chart))
         if outcome != kernel.CONVERGED:
             return None
         qd, qdd, a = (np.empty(len(q)) for _ in range(3))

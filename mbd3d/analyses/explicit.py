@@ -368,7 +368,7 @@ def stiffest_elements(model) -> list[tuple[float, str]]:
     ``(rate [1/s], description)``, the rate being ``sqrt(k / m)`` of a spring and ``c / m`` of a
     damper on the reduced mass (or inertia) of the bodies they join. An explicit method is
     stable for steps up to about 3 / rate."""
-    from mbd3d.model.forces import RotationalSpringDamper, SpringDamper  # noqa: PLC0415
+    from mbd3d.model.springs import RotationalSpringDamper, SpringDamper  # noqa: PLC0415
 
     def reduced(bodies, inertia: bool) -> float:
         values = []

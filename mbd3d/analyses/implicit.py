@@ -19,7 +19,8 @@ Bayo, Garcia de Jalon and Serna; Cuadrado et al.'s ALI3-P): Newton iterations on
     r(q) = M qdd + Cq^T (lam + p C(q)) - Qe = 0,   lam <- lam + p C after each iteration,
 
 with the iteration matrix ``beta' M + gamma' D + K + p Cq^T Cq`` (``D``, ``K`` the tangent of the
-applied forces, by finite differences when the model has force elements). That matrix stays
+applied forces: in closed form for spring-dampers, compiled, by finite differences for the
+elements whose forces are Python functions). That matrix stays
 positive definite where ``Cq`` loses rank, so the method passes singular configurations (the
 IFToMM N-four-bar) and handles redundant constraints (Bricard's mechanism) without special
 cases, and its sparsity is that of the mechanism (banded for a chain). The reported
@@ -33,7 +34,8 @@ or the large constraint forces leak into the free directions. The spectral radiu
 method is second order.
 
 Between output times the steps of a model without compliant contacts, rigid contacts held at
-rest, spatial gear meshes or force elements (whose tangent is built here) run in a compiled
+rest, spatial gear meshes, joint friction or force elements whose forces or tangent are not
+compiled (see :mod:`mbd3d.numerics.compiled.force_tangents`) run in a compiled
 loop (:mod:`mbd3d.numerics.compiled.alpha_loop`), the same steps as this module's
 :meth:`GeneralizedAlphaIntegrator._step` takes; it hands back what needs Python.
 """
@@ -129,8 +131,7 @@ class GeneralizedAlphaIntegrator(Integrator):
             self.stats["contact_retries"] = 0
         self.dissipation = TrapezoidalDissipation(model)
         #: whether the compiled loop takes the steps while nothing is held at rest
-        self.compiled_steps = (COMPILED_STEPS and not model.force_groups and model.friction is None
-                               and model._penalty_pattern.layout != "sparse"
+        self.compiled_steps = (COMPILED_STEPS and self.newton.compiled_tangent
                                and self.contacts.group is None and not self.meshes)
         self._records = None
 

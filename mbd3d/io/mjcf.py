@@ -201,7 +201,7 @@ class _Joints:
             add_driver(self.b, kind == _SLIDE, name, element, axis, self.drive[label], qpos)
         stiffness, damping = float(m.jnt_stiffness[j]), float(m.dof_damping[m.jnt_dofadr[j]])
         if kind == _HINGE and (stiffness or damping):
-            from mbd3d.model.forces import RotationalSpringDamper  # noqa: PLC0415
+            from mbd3d.model.springs import RotationalSpringDamper  # noqa: PLC0415
             # MuJoCo's spring is at rest at qpos_spring; the angle mbd3d measures is the
             # drawing's plus the change of qpos
             rest = float(m.qpos_spring[m.jnt_qposadr[j]])

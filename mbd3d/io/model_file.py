@@ -231,15 +231,16 @@ def _apply_change(reader, data: dict, key: str, value: Any) -> None:
 def _types() -> tuple[dict[str, type], dict[str, type], dict[str, type]]:
     """Joint, force and motion classes by name."""
     import mbd3d.joints as joints  # noqa: PLC0415
-    from mbd3d.model import contact_laws, contacts, forces, friction, motion  # noqa: PLC0415
+    from mbd3d.model import (contact_laws, contacts, forces, friction, motion,  # noqa: PLC0415
+                             springs)
     from mbd3d.model.element import ConstraintElement  # noqa: PLC0415
 
     joint_types = {name: getattr(joints, name) for name in joints.__all__
                    if isinstance(getattr(joints, name), type)
                    and issubclass(getattr(joints, name), ConstraintElement)}
     force_types = {cls.__name__: cls for cls in (forces.PointForce, forces.Torque,
-                                                  forces.SpringDamper,
-                                                  forces.RotationalSpringDamper,
+                                                  springs.SpringDamper,
+                                                  springs.RotationalSpringDamper,
                                                   friction.JointFriction, contacts.Contact,
                                                   contacts.ContactGroup, contacts.JointLimit)}
     motion_types = {cls.__name__: cls for cls in (motion.Constant, motion.Ramp,

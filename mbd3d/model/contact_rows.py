@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mbd3d.errors import ContactWarning, ModelError, user_stacklevel
-from mbd3d.model.forces import _CompiledForces
+from mbd3d.model.forces import _CompiledForces, block_triplets
 from mbd3d.numerics.compiled import contact_groups as groups, contacts as kernel
 from mbd3d.numerics.compiled.contact_groups import empty_shapes
 
@@ -194,10 +194,7 @@ class _Contacts(_CompiledForces):
                                                 self._points, self._curves,
                                                 self._tables(model)[1], velocity_weight, nc)
             bodies, blocks = np.concatenate([bodies, pairs]), np.concatenate([blocks, more])
-        index = (bodies[:, :, None] * nc + np.arange(nc)).reshape(len(bodies), 2 * nc)
-        rows = np.broadcast_to(index[:, :, None], blocks.shape)
-        cols = np.broadcast_to(index[:, None, :], blocks.shape)
-        return rows.ravel(), cols.ravel(), blocks.ravel()
+        return block_triplets(model, bodies, blocks)
 
     def switches(self, model, fr) -> np.ndarray:
         """Each row's switching function at the state of ``fr``: positive exactly while its law

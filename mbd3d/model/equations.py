@@ -179,6 +179,7 @@ class _Core:
                 np.array(pattern.flat if pattern.layout != "sparse" else [], dtype=np.int64),
                 pattern.kl if banded else 0, pattern.ku if banded else 0,
                 np.array(pattern.perm if banded else [], dtype=np.int64),
+                np.array(pattern.inverse if banded else [], dtype=np.int64),
                 np.array(pattern.entry_scale), np.array(pattern.scale),
                 float(pattern.pivot_tolerance), np.array(model.coordinate_scale, dtype=float),
                 float(model.mass_scale * model.length_scale ** 2))

@@ -104,7 +104,7 @@ class SpatialBody(BodyType):
                   else np.require(charts, float, ("C", "W")))
         A, AG, omega, kappa, Gb, omega_bar = spatial_frames(Q, Qd, charts, velocities)
         fr = Frames(Q=Q, A=A, R=Q[:, :3], g=Q[:, 3:6], Gbar=Gb, AG=AG, axes=AG, omega3=omega,
-                    kappa=kappa)
+                    kappa=kappa, charts=charts)
         if velocities:
             fr.Qd, fr.Rd, fr.omega, fr.omega_bar = Qd, Qd[:, :3], omega, omega_bar
         return fr

@@ -191,24 +191,36 @@ def applied_forces_into(model, work, t, q, qd, charts, extra) -> bool:
     False when a force element cannot be evaluated there. ``charts`` as in
     :func:`accelerations_into`."""
     n = q.shape[0]
-    # flags as run-time values: constants would be typed as literals, and every combination
-    # compiled again in each callee
-    yes = n >= 0
-    Q, Qd, rhs, blocks = work.Q, work.Qd, work.rhs, work.blocks
-    A, axes, omega, kappa = work.A, work.axes, work.omega, work.kappa
-    padded_into(q, Q)
-    padded_into(qd, Qd)
+    rhs, blocks = work.rhs, work.blocks
+    frames_into(work, q, qd, charts)
     weight = model.weight
     for i in range(n):
         rhs[i] = weight[i] + extra[i]
     if charts is not None:
-        spatial_frames_into(Q, Qd, charts, yes, A, axes, omega, kappa, work.Gb, work.omega_bar)
         spatial_mass_blocks_into(work.Gb, model.mass, model.inertia, blocks)
-        spatial_quadratic_velocity_into(work.Gb, work.omega_bar, kappa, model.inertia, rhs)
+        spatial_quadratic_velocity_into(work.Gb, work.omega_bar, work.kappa, model.inertia,
+                                        rhs)
     else:
-        planar_frames_into(Q, Qd, yes, A, axes, omega, kappa)
         planar_mass_blocks_into(model.mass, model.inertia, blocks)
     return forces_into(model.forces, work, t, rhs)
+
+
+@jit
+def frames_into(work, q, qd, charts) -> None:
+    """The bodies' padded coordinates and rates at ``(q, qd)`` (``work.Q``, ``work.Qd``) and
+    their frames (``work.A``, ``work.axes``, ``work.omega``, ...). ``charts`` as in
+    :func:`accelerations_into`."""
+    # flags as run-time values: constants would be typed as literals, and every combination
+    # compiled again in each callee
+    yes = q.shape[0] >= 0
+    Q, Qd = work.Q, work.Qd
+    padded_into(q, Q)
+    padded_into(qd, Qd)
+    if charts is not None:
+        spatial_frames_into(Q, Qd, charts, yes, work.A, work.axes, work.omega, work.kappa,
+                            work.Gb, work.omega_bar)
+    else:
+        planar_frames_into(Q, Qd, yes, work.A, work.axes, work.omega, work.kappa)
 
 
 @jit

@@ -1,7 +1,8 @@
 """Generalized-alpha's step loop, compiled, for the models whose steps need nothing from Python:
 no compliant contacts or stops (whose rules shorten the steps), no rigid contacts held at
-rest, no spatial gear meshes, no force elements with a tangent in the iteration matrix and a
-dense or banded iteration matrix. :mod:`mbd3d.analyses.implicit` drives it and takes the
+rest, no spatial gear meshes, no joint friction, no force element given as a Python function
+or whose tangent is not compiled (:mod:`.force_tangents`), and a dense or banded iteration
+matrix. :mod:`mbd3d.analyses.implicit` drives it and takes the
 other models' steps itself; the step is the same (:func:`.generalized_alpha.newton_step`).
 
 A call takes accepted steps until the output time, a budget of steps, or something Python
@@ -20,6 +21,7 @@ import numpy as np
 
 from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.dense import lu_factor
+from mbd3d.numerics.compiled.force_tangents import force_tangent_into, has_tangent
 from mbd3d.numerics.compiled.generalized_alpha import (CONVERGED, log_abs_determinant,
                                                        newton_step)
 
@@ -97,14 +99,22 @@ def predict_into(coefficients, h, q, qd, qdd, a, shift, q_hat, qd_hat, trial) ->
 
 
 @jit
+def rate_into(gamma_prime, q, q_hat, qd_hat, qd) -> None:
+    """The rates ``qd = qd_hat + gamma' (q - q_hat)`` at the step's positions ``q`` (the
+    quantities of :func:`predict_into`)."""
+    for i in range(q.shape[0]):
+        qd[i] = qd_hat[i] + gamma_prime * (q[i] - q_hat[i])
+
+
+@jit
 def rates_into(coefficients, beta_prime, gamma_prime, q, q_hat, qd_hat, shift, qd, qdd,
                a) -> None:
     """The step's new rates ``qd``, accelerations ``qdd`` and ``a`` from its new positions
     ``q`` (the quantities of :func:`predict_into`)."""
     am, af = coefficients[0], coefficients[1]
+    rate_into(gamma_prime, q, q_hat, qd_hat, qd)
     for i in range(q.shape[0]):
         qdd[i] = beta_prime * (q[i] - q_hat[i])
-        qd[i] = qd_hat[i] + gamma_prime * (q[i] - q_hat[i])
         a[i] = shift[i] + (1.0 - af) / (1.0 - am) * qdd[i]
 
 
@@ -134,14 +144,21 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
     t, t_end = times[0], times[1]
     n = q.shape[0]
     nb, nc, dim = work.blocks.shape[0], work.blocks.shape[1], 3 if charts is not None else 2
-    extra = np.zeros(0)
+    # the force elements' tangent (see .force_tangents), in the iteration matrix's storage
+    tangent = has_tangent(work)
+    extra = np.zeros((matrix.size + band.size) if tangent else 0)
     q_hat, qd_hat, trial, shift = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    rate = np.empty(n)
     lam_try = np.empty(lam.shape[0])
     t_old, h_last, smallest, t_step, turn = t, 0.0, np.inf, t, 0.0
     for taken in range(out_t.shape[0]):
         h_try = trial_step(t, h, t_end)
         beta_prime, gamma_prime = predict_into(coefficients, h_try, q, qd, qdd, a, shift,
                                                q_hat, qd_hat, trial)
+        if tangent:  # at the predictor, as the Python step
+            rate_into(gamma_prime, trial, q_hat, qd_hat, rate)
+            force_tangent_into(work, penalty_arrays, t + h_try, trial, rate, charts,
+                               gamma_prime, extra)
         lam_try[:] = lam
         iterations, factorizations = counters[0], counters[1]
         outcome = newton_step(work, penalty_arrays, key, t + h_try, trial, q_hat, qd_hat,

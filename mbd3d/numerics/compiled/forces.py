@@ -80,6 +80,42 @@ def _add_pair(axes, i, j, s_i, s_j, F, out) -> None:
 
 
 @jit
+def spring_line(A, omega, Q, Qd, bodies, points, k, s_i, s_j, d, rate_vector) -> float:
+    """The line of spring ``k`` (of :func:`spring_forces_into`): its points' offsets ``s_i``,
+    ``s_j`` from their bodies' reference points, ``d = p_j - p_i`` and its rate
+    ``rate_vector`` (3, global), and its length [m]."""
+    dim = points.shape[2]
+    i, j = bodies[k, 0], bodies[k, 1]
+    _turn(A, i, points[k, 0], s_i)
+    _turn(A, j, points[k, 1], s_j)
+    length = 0.0
+    for x in range(3):
+        y, z = (x + 1) % 3, (x + 2) % 3
+        Ri = Q[i, x] if x < dim else 0.0
+        Rj = Q[j, x] if x < dim else 0.0
+        d[x] = Rj + s_j[x] - Ri - s_i[x]
+        length += d[x] * d[x]
+        vi = (Qd[i, x] if x < dim else 0.0) + omega[i, y] * s_i[z] - omega[i, z] * s_i[y]
+        vj = (Qd[j, x] if x < dim else 0.0) + omega[j, y] * s_j[z] - omega[j, z] * s_j[y]
+        rate_vector[x] = vj - vi
+    return math.sqrt(length)
+
+
+@jit
+def point_force(A, bodies, points, forces, body_frame, k, s, F) -> None:
+    """Point force ``k`` (of :func:`point_forces_into`): its point's offset ``s`` from its
+    body's reference point and the force ``F`` (3, global)."""
+    b = bodies[k]
+    _turn(A, b, points[k], s)
+    if body_frame[k]:
+        _turn(A, b, forces[k], F)
+    else:
+        F[2] = 0.0
+        for x in range(forces.shape[1]):
+            F[x] = forces[k, x]
+
+
+@jit
 def spring_forces_into(A, axes, omega, Q, Qd, bodies, points, values, actuation, out) -> int:
     """Translational spring-damper-actuators between point ``points[k, 0]`` of body
     ``bodies[k, 0]`` and ``points[k, 1]`` of ``bodies[k, 1]`` (body frames), ``values[k] =
@@ -87,28 +123,13 @@ def spring_forces_into(A, axes, omega, Q, Qd, bodies, points, values, actuation,
     rows of motion values ``(f, f', f'')``): the
     tension ``T = k (l - l0) + c dl/dt + actuation`` pulls the points together. Returns -1,
     or the first element whose points coincide (the force's direction is undefined)."""
-    dim = points.shape[2]
     s_i, s_j = np.zeros(3), np.zeros(3)
     d, rate_vector, F = np.zeros(3), np.zeros(3), np.zeros(3)
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
-        _turn(A, i, points[k, 0], s_i)
-        _turn(A, j, points[k, 1], s_j)
-        wi, wj = omega[i], omega[j]
-        length = 0.0
-        for x in range(3):
-            Ri = Q[i, x] if x < dim else 0.0
-            Rj = Q[j, x] if x < dim else 0.0
-            d[x] = Rj + s_j[x] - Ri - s_i[x]
-            length += d[x] * d[x]
-        length = math.sqrt(length)
+        length = spring_line(A, omega, Q, Qd, bodies, points, k, s_i, s_j, d, rate_vector)
         if length < 1e-12:
             return k
-        for x in range(3):
-            y, z = (x + 1) % 3, (x + 2) % 3
-            vi = (Qd[i, x] if x < dim else 0.0) + wi[y] * s_i[z] - wi[z] * s_i[y]
-            vj = (Qd[j, x] if x < dim else 0.0) + wj[y] * s_j[z] - wj[z] * s_j[y]
-            rate_vector[x] = vj - vi
         rate = (d[0] * rate_vector[0] + d[1] * rate_vector[1] + d[2] * rate_vector[2]) / length
         tension = values[k, 0] * (length - values[k, 2]) + values[k, 1] * rate + actuation[k, 0]
         for x in range(3):
@@ -162,15 +183,8 @@ def point_forces_into(A, axes, bodies, points, forces, body_frame, out) -> None:
     global axes or, where ``body_frame[k]``, in the body's axes."""
     s, F = np.zeros(3), np.zeros(3)
     for k in range(bodies.shape[0]):
-        b = bodies[k]
-        _turn(A, b, points[k], s)
-        if body_frame[k]:
-            _turn(A, b, forces[k], F)
-        else:
-            F[2] = 0.0
-            for x in range(forces.shape[1]):
-                F[x] = forces[k, x]
-        _add_force(axes, b, s, F, out)
+        point_force(A, bodies, points, forces, body_frame, k, s, F)
+        _add_force(axes, bodies[k], s, F, out)
 
 
 @jit

@@ -108,7 +108,7 @@ RANGE_FIELDS = ("slot", "body_start", "positions", "row_position", "bandwidth")
 #: blocks and the products of Jacobian entries go, its layout and scale; see
 #: mbd3d.numerics.compiled.generalized_alpha), and the model's coordinate and mass scales
 PENALTY_FIELDS = ("target", "first", "second", "layout", "rows", "cols", "flat", "kl", "ku",
-                  "perm", "entry_scale", "scale", "pivot_tolerance", "coordinate_scale",
+                  "perm", "inverse", "entry_scale", "scale", "pivot_tolerance", "coordinate_scale",
                   "mass_unit")
 
 #: the force elements of a model as the compiled core evaluates them
