@@ -763,3 +763,53 @@ def test_a_long_step_resolves_an_impact_on_a_stiff_floor(law):
     assert error < 2.5e-3 * G * 0.4
     # in flight the nominal step: a few hundred steps for the impact, not 0.6 s of them
     assert res.stats["steps"] < 400
+
+
+@pytest.mark.parametrize("layout", ["dense", "banded"])
+@pytest.mark.filterwarnings("ignore::mbd3d.ContactWarning")
+def test_the_compiled_contact_tangent_storage_is_the_sparse_one(layout):
+    """The contacts' and joint stops' tangent, compiled into the iteration matrix's storage,
+    against the same tangent as a sparse matrix placed by the pattern's own SciPy code:
+    dense, spheres pressed together in a box (a contact group: its pairs found at the state)
+    beside a fixed contact; banded, a chain whose pins are pressed into their stops. A
+    contact group in a banded model is left to the sparse path (its pairs move)."""
+    from mbd3d.analyses.alpha_step import _tangent_storage, force_tangent
+    from mbd3d.joints import Revolute
+    from mbd3d.mechanisms import spheres_in_box
+    from mbd3d.numerics.compiled import force_tangents
+    rng = np.random.default_rng(5)
+    law = mb.HertzContact(young_modulus=1e7, poisson_ratio=0.3, restitution=0.5)
+    if layout == "dense":
+        model = spheres_in_box(8, dim=2, spacing=1.95, friction=0.3)
+        q = model.q0 + 1e-4 * rng.normal(size=model.n_coordinates)
+    else:
+        b = mb.ModelBuilder(dim=2)
+        links = [b.ground]
+        for k in range(12):
+            links.append(b.add_body(f"link{k}", mass=1.0, inertia=1 / 12,
+                                    position=(k + 0.5, 0.0)))
+            pin = b.add(Revolute(f"pin{k}", links[-2], links[-1], at=(float(k), 0.0)))
+            b.add(mb.JointLimit(f"stop{k}", pin, lower=-0.1, upper=0.1,
+                                law=mb.LinearContact(stiffness=1e4, restitution=0.5)))
+        b.add(mb.Contact("floor", mb.Sphere(links[-1], 0.05, point=(0.5, 0.0)),
+                         mb.Plane(b.ground, normal=(0.0, 1.0), at=(0.0, 0.01)), law=law,
+                         friction=0.2))
+        model = b.build()
+        q = model.q0.copy()
+        for k in range(12):  # every pin 0.02 rad past a stop, alternately
+            q[3 * k + 2:model.n_coordinates:3] += 0.12 * (-1) ** k
+    assert model._penalty_pattern.layout == layout
+    qd = rng.normal(size=model.n_coordinates)
+    arrays, work = model._core.penalty_arrays(model), model._core.workspace()
+    expected, python_factor = _tangent_storage(
+        model, force_tangent(model, 0.1, q, qd, model.charts0, 30.0))
+    assert not python_factor and force_tangents.tangent_fits(arrays, work)
+    extra = np.zeros(len(expected))
+    force_tangents.force_tangent_into(work, arrays, 0.1, q, qd, None, 30.0, extra)
+    assert np.abs(expected).max() > 0
+    np.testing.assert_allclose(extra, expected, rtol=1e-13, atol=1e-13 * np.abs(expected).max())
+    if layout == "banded":
+        grouped = spheres_in_box(40, dim=2)
+        assert grouped._penalty_pattern.layout == "banded"
+        assert not force_tangents.tangent_fits(grouped._core.penalty_arrays(grouped),
+                                               grouped._core.workspace())

@@ -179,6 +179,9 @@ class _Contacts(_CompiledForces):
 
     analytic_tangent = True
 
+    def compiled_tangent(self, model):
+        return True  # the table is always compiled (mbd3d.numerics.compiled.force_tangents)
+
     def tangent(self, model, t, fr, velocity_weight):
         """The laws' slopes through each pair's velocity Jacobian (see
         :func:`~mbd3d.numerics.compiled.contacts.contact_tangents_into`), as COO triplets over

@@ -15,7 +15,11 @@ of :mod:`.forces` whose tangent is known in closed form:
   the body turns with it (``dtau/dg_d = X_d x tau``, and ``dF/dg_d = X_d x F`` on the
   translations); with Rodrigues parameters ``g`` relative to the chart ``A0``,
   ``X = A0 2 (I + [g]x) / (1 + g.g)``, so ``dX_c/dg_d = -2 g_d X_c / (1 + g.g) + 2 A0 (e_d x
-  e_c) / (1 + g.g)`` (zero in the plane).
+  e_c) / (1 + g.g)`` (zero in the plane);
+- the compliant contacts and joint stops: their laws' slopes through each pair's velocity
+  Jacobian (:func:`.contacts.contact_tangents_into`, with what it leaves out), a contact
+  group's for the pairs its broad phase finds at the state
+  (:func:`.contact_groups.group_tangents`).
 
 Left out of the springs' (the iteration that uses the tangent converges without them, a
 little slower): the change of the point Jacobians and of a spatial hinge's axis with the
@@ -31,9 +35,12 @@ import numpy as np
 
 from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.accelerations import frames_into
+from mbd3d.numerics.compiled.contact_groups import group_tangents
+from mbd3d.numerics.compiled.contact_table import GROUP
+from mbd3d.numerics.compiled.contacts import contact_tangents_into
 from mbd3d.numerics.compiled.forces import _turn, point_force, spring_line
 from mbd3d.numerics.compiled.motions import motion_values_into
-from mbd3d.numerics.compiled.structures import DENSE
+from mbd3d.numerics.compiled.structures import DENSE, contact_count
 
 __all__ = ["spring_tangent_blocks", "rotary_tangent_blocks", "point_tangent_blocks",
            "torque_tangent_blocks", "blocks_into", "tangent_fits",
@@ -257,14 +264,16 @@ def has_tangent(work) -> bool:
     """Whether ``work``'s model has compiled force elements (with a tangent)."""
     forces = work.model.forces
     return (forces.spring_bodies.shape[0] + forces.rotary_bodies.shape[0]
-            + forces.point_bodies.shape[0] + forces.torque_bodies.shape[0] > 0)
+            + forces.point_bodies.shape[0] + forces.torque_bodies.shape[0]
+            + contact_count(forces.contacts) > 0)
 
 
 @jit
 def tangent_fits(penalty_arrays, work) -> bool:
     """Whether the tangent of the compiled force elements of ``work``'s model lies inside the
     iteration matrix's band (always, for the dense layout): decided by the elements' bodies
-    alone."""
+    alone; a contact group's pairs are found as the bodies move, so only a dense matrix
+    takes them."""
     forces, nc = work.model.forces, work.Q.shape[1]
     extra = np.zeros(0 if penalty_arrays.layout == DENSE
                      else penalty_arrays.scale.shape[0]
@@ -272,11 +281,47 @@ def tangent_fits(penalty_arrays, work) -> bool:
     if penalty_arrays.layout == DENSE:
         return True
     ones = np.ones((1, 2 * nc, 2 * nc))
-    for bodies in (forces.spring_bodies, forces.rotary_bodies):
+    for bodies in (forces.spring_bodies, forces.rotary_bodies, _contact_bodies(forces.contacts)):
         for k in range(bodies.shape[0]):
-            if not blocks_into(penalty_arrays, bodies[k:k + 1], ones, extra):
+            if bodies[k, 0] < 0 or not blocks_into(penalty_arrays, bodies[k:k + 1], ones,
+                                                   extra):
                 return False
     return True
+
+
+@jit
+def _contact_bodies(contacts):
+    """The body pairs (k, 2) of the contact table's rows, -1 for a contact group's row (its
+    pairs change as the bodies move); none without contacts."""
+    if contacts is None:
+        return np.zeros((0, 2), dtype=np.int64)
+    bodies = contacts.bodies.copy()
+    for k in range(bodies.shape[0]):
+        if contacts.values[k, 0] == GROUP:
+            bodies[k, 0] = -1
+    return bodies
+
+
+@jit
+def _contact_tangents_into(contacts, penalty_arrays, A, axes, omega, Q, Qd, weight,
+                           extra) -> None:
+    """Add the tangent of the contacts and joint stops ``contacts`` (None: none; decided as
+    the caller is compiled, see :mod:`.accelerations`) into ``extra``."""
+    if contacts is None:
+        return
+    nc = Q.shape[1]
+    bodies = contacts.bodies
+    blocks = np.empty((bodies.shape[0], 2 * nc, 2 * nc))
+    contact_tangents_into(A, axes, omega, Q, Qd, bodies, contacts.points, contacts.values,
+                          contacts.curves, weight, blocks)
+    blocks_into(penalty_arrays, bodies, blocks, extra)
+    shapes = (contacts.shape_bodies, contacts.shape_points, contacts.shape_values,
+              contacts.pair_laws)
+    for k in range(bodies.shape[0]):
+        if contacts.values[k, 0] == GROUP:
+            pairs, more = group_tangents(A, axes, omega, Q, Qd, k, contacts.points,
+                                         contacts.curves, shapes, weight, nc)
+            blocks_into(penalty_arrays, pairs, more, extra)
 
 
 @jit
@@ -307,3 +352,5 @@ def force_tangent_into(work, penalty_arrays, t, q, qd, charts, weight, extra) ->
     blocks_into(penalty_arrays, bodies.reshape((bodies.shape[0], 1)),
                 torque_tangent_blocks(A, axes, Q, charts, bodies, forces.torque_values,
                                       forces.torque_body_frame), extra)
+    _contact_tangents_into(forces.contacts, penalty_arrays, A, axes, omega, Q, Qd, weight,
+                           extra)
