@@ -255,7 +255,9 @@ class NewtonStep:
         # the applied forces' tangent varies slowly: once per step, at the predictor
         qd = np.empty(len(q))
         loop.rate_into(gamma_prime, q, q_hat, qd_hat, qd)
-        if self.compiled_tangent and self.held is None:
+        # held rows' forces come from Python, the compiled elements' stay compiled (the held
+        # workspace keeps their tables): the same tangent either way
+        if self.compiled_tangent:
             force_tangents.force_tangent_into(self.work, self.arrays, tt, q, qd,
                                               chart if self.spatial else None, gamma_prime,
                                               self.extra)
