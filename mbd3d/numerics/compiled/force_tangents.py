@@ -37,7 +37,8 @@ from mbd3d.numerics.compiled import jit
 from mbd3d.numerics.compiled.accelerations import frames_into
 from mbd3d.numerics.compiled.contact_groups import group_tangents
 from mbd3d.numerics.compiled.contact_table import GROUP
-from mbd3d.numerics.compiled.contacts import contact_tangents_into
+from mbd3d.numerics.compiled.contacts import (_pair_jacobian, _turn_jacobian,
+                                              contact_tangents_into)
 from mbd3d.numerics.compiled.forces import _turn, point_force, spring_line
 from mbd3d.numerics.compiled.motions import motion_values_into
 from mbd3d.numerics.compiled.structures import DENSE, contact_count
@@ -48,32 +49,15 @@ __all__ = ["spring_tangent_blocks", "rotary_tangent_blocks", "point_tangent_bloc
 
 
 @jit
-def _point_jacobian_into(axes, b, s, dim, J) -> None:
-    """``J`` (3, nc): the derivative of the material point at offset ``s`` (3,) from body
-    ``b``'s reference point with respect to the body's coordinates: the identity on the
-    ``dim`` translations, ``axes[:, c] x s`` on rotation coordinate ``c``."""
-    J[:, :] = 0.0
-    for x in range(dim):
-        J[x, x] = 1.0
-    for c in range(axes.shape[2]):
-        x, y, z = axes[b, 0, c], axes[b, 1, c], axes[b, 2, c]
-        J[0, dim + c] = y * s[2] - z * s[1]
-        J[1, dim + c] = z * s[0] - x * s[2]
-        J[2, dim + c] = x * s[1] - y * s[0]
-
-
-@jit
 def spring_tangent_blocks(A, axes, omega, Q, Qd, bodies, points, values, actuation, weight):
     """The blocks ``G^T H G`` (k, 2 nc, 2 nc) of the translational spring-damper-actuators of
     :func:`.forces.spring_forces_into` (same arguments; ``weight`` the damping's weight), over
     the coordinates of ``(bodies[k, 0], bodies[k, 1])``. An element whose points coincide has
     no direction: its block is zero (its force's evaluation names it)."""
     nc = Q.shape[1]
-    dim = points.shape[2]
     blocks = np.zeros((bodies.shape[0], 2 * nc, 2 * nc))
     s_i, s_j, d, rate_vector = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
-    J_i, J_j, G, HG = (np.empty((3, nc)), np.empty((3, nc)), np.empty((3, 2 * nc)),
-                       np.empty((3, 2 * nc)))
+    G, HG = np.empty((3, 2 * nc)), np.empty((3, 2 * nc))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         length = spring_line(A, omega, Q, Qd, bodies, points, k, s_i, s_j, d, rate_vector)
@@ -85,11 +69,7 @@ def spring_tangent_blocks(A, axes, omega, Q, Qd, bodies, points, values, actuati
             rate += d[x] * rate_vector[x]
         tension = values[k, 0] * (length - values[k, 2]) + values[k, 1] * rate + actuation[k, 0]
         along, across = values[k, 0] + weight * values[k, 1], tension / length
-        _point_jacobian_into(axes, i, s_i, dim, J_i)
-        _point_jacobian_into(axes, j, s_j, dim, J_j)
-        for x in range(3):
-            for c in range(nc):
-                G[x, c], G[x, nc + c] = -J_i[x, c], J_j[x, c]
+        _pair_jacobian(axes, i, j, s_i, s_j, G)
         # H G = (along - across) e (e^T G) + across G
         for c in range(2 * nc):
             projection = d[0] * G[0, c] + d[1] * G[1, c] + d[2] * G[2, c]
@@ -109,6 +89,7 @@ def rotary_tangent_blocks(A, axes, bodies, values, vectors, weight):
     nc = dim + axes.shape[2]
     blocks = np.zeros((bodies.shape[0], 2 * nc, 2 * nc))
     f_i, g_i, axis, G = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(2 * nc)
+    turn = np.zeros((3, 2 * nc))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]
         if dim == 2:
@@ -119,12 +100,9 @@ def rotary_tangent_blocks(A, axes, bodies, values, vectors, weight):
             for x in range(3):
                 y, z = (x + 1) % 3, (x + 2) % 3
                 axis[x] = f_i[y] * g_i[z] - f_i[z] * g_i[y]
-        G[:] = 0.0
-        for c in range(axes.shape[2]):
-            G[dim + c] = -(axis[0] * axes[i, 0, c] + axis[1] * axes[i, 1, c]
-                           + axis[2] * axes[i, 2, c])
-            G[nc + dim + c] = (axis[0] * axes[j, 0, c] + axis[1] * axes[j, 1, c]
-                               + axis[2] * axes[j, 2, c])
+        _turn_jacobian(axes, i, j, turn)
+        for c in range(2 * nc):
+            G[c] = axis[0] * turn[0, c] + axis[1] * turn[1, c] + axis[2] * turn[2, c]
         stiffness = values[k, 0] + weight * values[k, 1]
         for r in range(2 * nc):
             for c in range(2 * nc):
