@@ -32,7 +32,8 @@ def cost_with_and_without(build: Callable[[bool], mb.Model], t: np.ndarray, repe
     and ``build(True)`` (without and with what is measured), by DOP853 at rtol 1e-8 and
     generalized-alpha at h = 1e-3: per run, the median wall time ``wall`` [s] of ``repeat``
     after a first one (which compiles), the right-hand sides or steps ``count`` and the time
-    ``per`` one [s]. ``ignored``: warning classes the runs may give."""
+    ``per`` one [s] (and generalized-alpha's Newton ``iterations``). ``ignored``: warning
+    classes the runs may give."""
     rows = []
     for method, options in (("DOP853", dict(rtol=1e-8)),
                             ("generalized-alpha", dict(step=1e-3))):
@@ -49,6 +50,7 @@ def cost_with_and_without(build: Callable[[bool], mb.Model], t: np.ndarray, repe
             count = res.stats["rhs_evaluations" if method == "DOP853" else "steps"]
             rows.append({"method": method, "variant": variant, "count": count,
                          "per": wall / count, "wall": wall,
+                         "iterations": res.stats.get("newton_iterations", 0),
                          "unit": "right-hand side" if method == "DOP853" else "step"})
     return rows
 

@@ -99,6 +99,36 @@ def sprung_spatial_pair():
     return b.build(), {}, np.linspace(0.0, 2.0, 11), 1e-3
 
 
+def clearance_slider_crank():
+    """Flores' slider-crank with a clearance at the rod-slider pin (Hertz's law): the pin
+    flies and strikes, so steps are limited before touches, retried across them and kept to
+    an impact's step while one lasts; every touch and release hands the loop back."""
+    return load("slider_crank_clearance").build(), {}, np.linspace(0.0, 6e-3, 7), 1e-4
+
+
+def cone_stop():
+    """A bar swinging on a ball joint into a cone limit (Hunt and Crossley's law) and out:
+    a spatial stop, with chart resets between the strikes."""
+    from mbd3d.joints import Spherical
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81))
+    bar = b.add_body("bar", mass=1.0, inertia=(1e-3, 0.08, 0.08), position=(0.0, 0.0, -0.5),
+                     orientation=[[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]],
+                     velocity=(-1.5, -0.3, 0.0), angular_velocity=(-0.6, 3.0, 0.0))
+    ball = b.add(Spherical("ball", b.ground, bar, at=(0.0, 0.0, 0.0)))
+    b.add(mb.JointLimit("cone", ball, upper=0.5, axis=(0.0, 0.0, -1.0),
+                        law=mb.HuntCrossley(stiffness=2e4, restitution=0.6, impact_speed=2.0)))
+    return b.build(), {}, np.linspace(0.0, 2.0, 11), 1e-3
+
+
+def balls_in_a_box():
+    """Three balls thrown into a box, one contact group (its pairs found as they come near)
+    with friction: the group's forces and tangent in the loop, a dense matrix."""
+    from mbd3d.mechanisms import spheres_in_box
+    model = spheres_in_box(3, radius=0.01, density=1000.0, young_modulus=1e7,
+                           restitution=0.5, friction=0.3, speed=0.3, seed=1)
+    return model, {}, np.linspace(0.0, 0.1, 6), 1e-4
+
+
 def run(case, compiled: bool, monkeypatch, **options):
     """The case's generalized-alpha run with the steps in the compiled loop or in Python, and
     how many calls the compiled loop had."""
@@ -121,7 +151,7 @@ def run(case, compiled: bool, monkeypatch, **options):
 
 @pytest.mark.parametrize("case", [
     free_slider_crank, spatial_pendulum, long_chain, four_bars, haug_slider_crank,
-    sprung_chain, sprung_spatial_pair,
+    sprung_chain, sprung_spatial_pair, clearance_slider_crank, cone_stop, balls_in_a_box,
     pytest.param(spatial_chain_falling, marks=pytest.mark.compiled_only)])  # 95 s interpreted
 def test_the_compiled_loop_takes_the_steps_python_takes(case, monkeypatch):
     compiled, calls = run(case, True, monkeypatch)
@@ -140,8 +170,13 @@ def test_the_compiled_loop_takes_the_steps_python_takes(case, monkeypatch):
     # what each case is there for happened
     if case is free_slider_crank:
         assert python.stats["rejected_steps"] > 0
-    if case in (spatial_pendulum, spatial_chain_falling, sprung_spatial_pair):
+    if case in (spatial_pendulum, spatial_chain_falling, sprung_spatial_pair, cone_stop):
         assert python.stats["chart_resets"] > 0
+    if case in (clearance_slider_crank, cone_stop, balls_in_a_box):
+        assert python.contact_dissipation[-1].sum() > 0.0  # the contacts touched
+        np.testing.assert_array_equal(compiled.contact_dissipation, python.contact_dissipation)
+    if case is clearance_slider_crank:
+        assert python.stats["contact_retries"] > 0
     if case is four_bars:
         assert len(python.singular_passages) >= 2
 

@@ -188,7 +188,8 @@ class NewtonStep:
                         np.empty(model._penalty_pattern.band_rows * n if layout == "banded"
                                  else 0),
                         np.empty(n, dtype=np.int64))
-        self.counters = np.zeros(2, dtype=np.int64)
+        #: Newton iterations, factorizations and rejected steps of the run
+        self.counters = np.zeros(3, dtype=np.int64)
         #: whether the compiled core gives the applied forces' tangent (and their forces), in
         #: the storage of the iteration matrix (``extra``); else :func:`force_tangent` does
         self.compiled_tangent = _compiled_tangent(model, self.arrays, self.work)

@@ -20,6 +20,7 @@ import numpy as np
 
 from mbd3d.model import constraints
 from mbd3d.model.contacts import contact_group
+from mbd3d.numerics.compiled.contact_steps import trapezoid_step
 from mbd3d.numerics.compiled.contacts import DISSIPATION
 
 __all__ = ["contact_power", "dissipation_controls", "hermite", "TrapezoidalDissipation"]
@@ -69,7 +70,8 @@ class TrapezoidalDissipation:
         self.model = model
         group = contact_group(model, required=False)
         self.z = np.zeros((4, 0 if group is None else len(group.names)))
-        self.t_old = self.t_new = 0.0
+        #: the last step's start and end [s] (the compiled loop steps them on too)
+        self.times = np.zeros(2)
         #: the rigid contacts held at rest, whose friction dissipates too (None: none held)
         self.held = None
 
@@ -90,22 +92,18 @@ class TrapezoidalDissipation:
         z[0] = self.at(t)
         z[1], z[2] = z[0], self._power(t, q, qd, charts)
         z[3] = z[2]
-        self.t_old = self.t_new = t
+        self.times[:] = t
 
     def step(self, t: float, q: np.ndarray, qd: np.ndarray, charts,
              power: np.ndarray | None = None) -> None:
         """The step from the last end to ``t``, ending at ``(q, qd)`` (``power``: the
         contacts' there, if evaluated already)."""
-        z = self.z
-        if not z.shape[1]:
-            return
-        z[1], z[3] = z[0], z[2]
-        z[2] = self._power(t, q, qd, charts, power)
-        z[0] = z[1] + 0.5 * (t - self.t_new) * (z[2] + z[3])
-        self.t_old, self.t_new = self.t_new, t
+        if self.z.shape[1]:
+            trapezoid_step(self.z, self.times, t, self._power(t, q, qd, charts, power))
 
     def at(self, t: float) -> np.ndarray | None:
         """The energies at ``t`` in the last step, or None without contacts."""
         if not self.z.shape[1]:
             return None
-        return hermite(t, self.t_old, self.t_new - self.t_old, self.z)
+        t_old, t_new = self.times
+        return hermite(t, t_old, t_new - t_old, self.z)

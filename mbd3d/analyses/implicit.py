@@ -33,11 +33,12 @@ or the large constraint forces leak into the free directions. The spectral radiu
 ``rho_inf`` (1: no numerical damping; 0: asymptotic annihilation) sets the coefficients; the
 method is second order.
 
-Between output times the steps of a model without compliant contacts, rigid contacts held at
-rest, spatial gear meshes, joint friction or force elements whose forces or tangent are not
-compiled (see :mod:`mbd3d.numerics.compiled.force_tangents`) run in a compiled
-loop (:mod:`mbd3d.numerics.compiled.alpha_loop`), the same steps as this module's
-:meth:`GeneralizedAlphaIntegrator._step` takes; it hands back what needs Python.
+Between output times the steps of a model without rigid contacts, spatial gear meshes, joint
+friction or force elements whose forces or tangent are not compiled (see
+:mod:`mbd3d.numerics.compiled.force_tangents`) run in a compiled loop
+(:mod:`mbd3d.numerics.compiled.alpha_loop`), compliant contacts' step rules included, the
+same steps as this module's :meth:`GeneralizedAlphaIntegrator._step` takes; it hands back
+what needs Python.
 """
 
 from __future__ import annotations
@@ -126,13 +127,16 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.newton = NewtonStep(model, self.coefficients, self.stats, self.newton_tol,
                                   self.relative_penalty, self.max_newton_iterations,
                                   request.projection_tol)
-        self.contacts = ContactSteps(model)
-        if self.contacts.group is not None:
+        self.contacts = ContactSteps(model, model._core.workspace())
+        group = self.contacts.group
+        if group is not None:
             self.stats["contact_retries"] = 0
         self.dissipation = TrapezoidalDissipation(model)
-        #: whether the compiled loop takes the steps while nothing is held at rest
+        #: whether the compiled loop takes the steps while nothing is held at rest (a rigid
+        #: contact's impacts are events, whose steps the driver takes one by one)
         self.compiled_steps = (COMPILED_STEPS and self.newton.compiled_tangent
-                               and self.contacts.group is None and not self.meshes)
+                               and not self.meshes
+                               and (group is None or not np.any(group.rigid)))
         self._records = None
 
     def chart(self) -> np.ndarray | None:
@@ -233,7 +237,8 @@ class GeneralizedAlphaIntegrator(Integrator):
         """:meth:`advance` with the steps taken by the compiled loop
         (:mod:`mbd3d.numerics.compiled.alpha_loop`); what it hands back is done here: a step
         whose Newton iteration failed is taken by :meth:`_step` (shortened as there), a turn
-        too long is warned of, a chart reset restarts the recursion."""
+        too long is warned of, a chart reset or a contact's touch or release restarts the
+        recursion."""
         newton, stats, c = self.newton, self.stats, self.coefficients
         if self._records is None:
             n = self.model.n_coordinates
@@ -250,20 +255,30 @@ class GeneralizedAlphaIntegrator(Integrator):
             # new arrays: the states handed out before (outputs, segments) stay as they were
             q, qd, qdd, a, lam = (np.array(x, dtype=float)
                                   for x in (self.q, self.qd, self.qdd, self.a, self.lam))
-            status, tt, t_old, h, h_last, smallest, taken, t_step, _ = alpha_loop.alpha_steps(
+            contacts, dissipation = self.contacts, self.dissipation
+            (status, tt, t_old, h, h_last, smallest, taken, t_step, _,
+             switched) = alpha_loop.alpha_steps(
                 newton.work, newton.arrays, newton.run.key, (c.alpha_m, c.alpha_f, c.beta,
                                                              c.gamma),
                 settings, times, float(t_target), float(self.h), q, qd, qdd, a, lam,
                 self.charts, newton.penalty, newton.lam_effective, *newton.buffers,
                 newton.counters, q_old, qd_old, out_t[:budget], out_indicator[:budget],
-                out_q[:budget])
+                out_q[:budget], (contacts.state, contacts.clock, dissipation.z,
+                                 dissipation.times, contacts.power))
             budget -= taken
+            self.h = h  # shortened by retries and rejections even where no step was taken
+            stats["rejected_steps"] = int(newton.counters[2])
+            if contacts.group is not None:
+                stats["contact_retries"] = contacts.retries
             if taken:
                 self._accept_compiled(tt, h, (q, qd, qdd, a, lam), h_last, smallest, taken)
                 last = (t_old, q_old.copy(), qd_old.copy())
                 for k in range(taken):
                     self.passages.step(float(out_t[k]), float(out_indicator[k]), out_q[k],
                                        self.charts)
+            if switched:  # a touch or a release in the step: see _step
+                self.qdd, self.lam, _ = self._consistent(t_step, self.q, self.qd, self.lam)
+                self.a = self.qdd.copy()
             if status == alpha_loop.TURNED:
                 self._check_turn(self.q, q_old, h_last, t_step)
             elif status == alpha_loop.NOT_CONVERGED:
@@ -307,10 +322,12 @@ class GeneralizedAlphaIntegrator(Integrator):
                 shorter = self.contacts.retry(h_try, result[0][0], result[0][1], self.charts)
                 if shorter is None:
                     break
-                self.stats["contact_retries"] += 1  # across a touch or a release: end there
+                # across a touch or a release: end there
+                self.stats["contact_retries"] = self.contacts.retries
                 self.h = shorter
                 continue
-            self.stats["rejected_steps"] += 1
+            self.newton.counters[2] += 1
+            self.stats["rejected_steps"] = int(self.newton.counters[2])
             self.h = 0.25 * h_try
             if self.h < 1e-14 * max(1.0, abs(self.tt)):
                 raise IntegrationError(self._no_convergence(h_try), time=self.tt)
@@ -324,7 +341,7 @@ class GeneralizedAlphaIntegrator(Integrator):
         self.stats["steps"] += 1
         self.stats["smallest_step"] = min(self.stats["smallest_step"], h_try)
         self.dissipation.step(self.tt, q, qd, self.charts,
-                              None if self.contacts.group is None else self.contacts.power())
+                              None if self.contacts.group is None else self.contacts.power)
         self.q, self.qd, self.qdd, self.a, self.lam, self.S = q, qd, qdd, a, lam, S
         t_step = self.tt  # where passages are noted: the step's end before it is snapped
         self.passages.step(t_step, S.indicator, q, self.charts)

@@ -4,7 +4,6 @@
 
 from __future__ import annotations
 
-import math
 import warnings
 from typing import TYPE_CHECKING
 
@@ -206,21 +205,6 @@ class _Contacts(_CompiledForces):
         kernel.switches_into(fr.A, fr.omega3, fr.Q, fr.Qd, self._bodies(model), self._points,
                              self._values, self._curves, out)
         return out
-
-    def impact_periods(self, gap: np.ndarray, gap_rate: np.ndarray) -> np.ndarray:
-        """Per row, the period [s] of the law's oscillation ``2 pi sqrt(m* / k)`` at its
-        stiffest in the impact at ``(gap, gap_rate)``: ``k = n K delta^(n - 1)`` at the
-        deeper of the penetration now and the one the closing speed reaches against the
-        law's spring, ``((n + 1) m* v^2 / (2 K))^(1 / (n + 1))`` (damping only shortens it)."""
-        K, n, m = self._values[:, 3], self._values[:, 4], self.masses
-        # a rigid row (K = 0) has no oscillation: its impact takes no time
-        K = np.where(self.rigid, np.inf, K)
-        closing = np.maximum(-gap_rate, 0.0)
-        deepest = ((n + 1.0) * m * closing ** 2 / (2.0 * K)) ** (1.0 / (n + 1.0))
-        delta = np.maximum(np.maximum(-gap, deepest), 1e-300)
-        # a group's impacts are not followed (see ContactGroup): none heads for one
-        return np.where(self.rigid | (self._values[:, 0] == kernel.GROUP), np.inf,
-                        2.0 * math.pi * np.sqrt(m / (n * K * delta ** (n - 1.0))))
 
     def table(self, model):
         shapes = self._tables(model)[1]

@@ -1,16 +1,19 @@
 """Generalized-alpha's step loop, compiled, for the models whose steps need nothing from Python:
-no compliant contacts or stops (whose rules shorten the steps), no rigid contacts held at
-rest, no spatial gear meshes, no joint friction, no force element given as a Python function
-or whose tangent is not compiled (:mod:`.force_tangents`), and a dense or banded iteration
-matrix. :mod:`mbd3d.analyses.implicit` drives it and takes the
-other models' steps itself; the step is the same (:func:`.generalized_alpha.newton_step`).
+no rigid contacts (their impacts are events) or contacts held at rest, no spatial gear
+meshes, no joint friction, no force element given as a Python function or whose tangent is
+not compiled (:mod:`.force_tangents`), and a dense or banded iteration matrix. The compliant
+contacts' and stops' step rules (:mod:`.contact_steps`) run in it.
+:mod:`mbd3d.analyses.implicit` drives it and takes the other models' steps itself; the step
+is the same (:func:`.generalized_alpha.newton_step`).
 
 A call takes accepted steps until the output time, a budget of steps, or something Python
-must do: a step whose Newton iteration fails (Python retries it shorter and names why none
-converges; an iterate that is not finite fails it), a body that turned too far in a step
-(Python warns) or a chart to re-reference (Python restarts the recursion from
-consistent accelerations in the new chart). Every accepted step's end time, positions and
-singular-position indicator are recorded for :class:`~mbd3d.analyses.passages.PassageWatch`.
+must do: a step whose Newton iteration fails with an iterate that is not finite or with the
+step already at its floor (Python names what cannot be evaluated or why no step converges;
+other failures are retried at a quarter of the step here, as Python would), a body that turned too far in a step
+(Python warns), a chart to re-reference or a contact that touched or released (Python
+restarts the recursion from consistent accelerations). Every accepted step's end time,
+positions and singular-position indicator are recorded for
+:class:`~mbd3d.analyses.passages.PassageWatch`.
 """
 
 from __future__ import annotations
@@ -20,10 +23,11 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.contact_steps import accept, retry, step_limit, trapezoid_step
 from mbd3d.numerics.compiled.dense import lu_factor
 from mbd3d.numerics.compiled.force_tangents import force_tangent_into, has_tangent
-from mbd3d.numerics.compiled.generalized_alpha import (CONVERGED, log_abs_determinant,
-                                                       newton_step)
+from mbd3d.numerics.compiled.generalized_alpha import (CONVERGED, NOT_FINITE,
+                                                       log_abs_determinant, newton_step)
 
 #: why :func:`alpha_steps` returned: the output time reached, the budget of steps spent, a
 #: step that did not converge (not taken: the state is the last accepted one), a body that
@@ -121,26 +125,34 @@ def rates_into(coefficients, beta_prime, gamma_prime, q, q_hat, qd_hat, shift, q
 @jit
 def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_target, h, q, qd,
                 qdd, a, lam, charts, penalty, lam_effective, matrix, band, piv, counters,
-                q_old, qd_old, out_t, out_indicator, out_q):
+                q_old, qd_old, out_t, out_indicator, out_q, contact):
     """Accepted steps from ``(times[0], q, qd, qdd, a, lam)`` (updated in place) towards
     ``t_target``, at most ``out_t.shape[0]`` of them.
 
     ``coefficients``: ``(alpha_m, alpha_f, beta, gamma)``. ``settings``: ``(step, max_step,
     relative_penalty, newton_tol, projection_tol, max_iterations, chart_limit, largest_turn,
     check_turns, steps_before, turn_sample)``. ``times``: ``(t, t_end)`` [s]. ``h``: the next
-    step [s]. ``charts``: None for a planar model. ``counters``: Newton iterations and
-    factorizations (a failed step's are not counted: Python takes that step again).
+    step [s]. ``charts``: None for a planar model. ``counters``: Newton iterations,
+    factorizations and rejected steps (a step handed back is not counted: Python takes it
+    again).
     ``q_old``, ``qd_old``: the last accepted step's start. ``out_t``, ``out_indicator``,
     ``out_q``: per accepted step its end (before it is snapped to ``t_target``), its
-    indicator and positions.
+    indicator and positions. ``contact``: the compliant contacts' and stops' rules
+    ``(state, clock)`` (:mod:`.contact_steps`, no columns without contacts), their dissipated
+    energies and the last step's times (:func:`.contact_steps.trapezoid_step`) and the rows'
+    powers there.
 
-    Returns ``(status, t, t_old, h, h_last, smallest, taken, t_step, turn)``: why it returned
-    (see the constants), the time reached, the last step's start, the next step, the last
-    step, the shortest step, the steps taken, the last step's end before snapping and its
-    largest turn [rad] (where it was checked).
+    Returns ``(status, t, t_old, h, h_last, smallest, taken, t_step, turn, switched)``: why
+    it returned (see the constants), the time reached, the last step's start, the next
+    step, the last step, the shortest step, the steps taken, the last step's end before
+    snapping, its largest turn [rad] (where it was checked), and whether a contact row
+    touched or released in it (it returns after such a step: Python starts the recursion
+    again from consistent accelerations).
     """
     (step, max_step, relative_penalty, newton_tol, projection_tol, max_iterations,
      chart_limit, largest_turn, check_turns, steps_before, turn_sample) = settings
+    state, clock, dissipated, dissipated_times, power = contact
+    rows = state.shape[1]
     t, t_end = times[0], times[1]
     n = q.shape[0]
     nb, nc, dim = work.blocks.shape[0], work.blocks.shape[1], 3 if charts is not None else 2
@@ -151,8 +163,9 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
     rate = np.empty(n)
     lam_try = np.empty(lam.shape[0])
     t_old, h_last, smallest, t_step, turn = t, 0.0, np.inf, t, 0.0
-    for taken in range(out_t.shape[0]):
-        h_try = trial_step(t, h, t_end)
+    taken = 0
+    while taken < out_t.shape[0]:
+        h_try = trial_step(t, min(h, step_limit(state, t)), t_end)
         beta_prime, gamma_prime = predict_into(coefficients, h_try, q, qd, qdd, a, shift,
                                                q_hat, qd_hat, trial)
         if tangent:  # at the predictor, as the Python step
@@ -166,8 +179,19 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
                               relative_penalty, newton_tol, projection_tol, max_iterations,
                               penalty, lam_effective, matrix, band, piv, counters)
         if outcome != CONVERGED:
-            counters[0], counters[1] = iterations, factorizations
-            return NOT_CONVERGED, t, t_old, h, h_last, smallest, taken, t_step, turn
+            if outcome == NOT_FINITE or 0.25 * h_try < 1e-14 * max(1.0, abs(t)):
+                # Python names what cannot be evaluated, or why no step converges
+                counters[0], counters[1] = iterations, factorizations
+                return NOT_CONVERGED, t, t_old, h, h_last, smallest, taken, t_step, turn, False
+            counters[2] += 1  # a rejected step: a quarter of it next (see the Python loop)
+            h = 0.25 * h_try
+            continue
+        if rows > 0:  # across a touch or a release: end there (see .contact_steps)
+            rate_into(gamma_prime, trial, q_hat, qd_hat, rate)
+            shorter = retry(work, state, clock, h_try, trial, rate, charts)
+            if shorter > 0.0:
+                h = shorter
+                continue
         q_old[:] = q
         qd_old[:] = qd
         t_old, h_last, smallest = t, h_try, min(smallest, h_try)
@@ -176,11 +200,16 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
         lam[:] = lam_effective
         t += h_try
         t_step = t
+        switched = False
+        if rows > 0:
+            switched = accept(work, state, clock, t, q, qd, charts, power)
+            trapezoid_step(dissipated, dissipated_times, t, power)
         out_t[taken], out_q[taken] = t, q
         out_indicator[taken] = (log_abs_determinant(penalty_arrays, matrix, band)
                                 - nb * nc * math.log(beta_prime)
                                 - _log_abs_det_blocks(work.blocks))
-        steps = steps_before + taken + 1
+        taken += 1
+        steps = steps_before + taken
         status = PAUSED
         if check_turns and (steps <= turn_sample or steps % turn_sample == 0):
             turn = _largest_turn(q, q_old, nb, nc, dim)
@@ -194,6 +223,6 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
             status = REACHED
         elif charts is not None and status == PAUSED and _charts_due(q, nb, chart_limit):
             status = CHARTS
-        if status != PAUSED or taken + 1 == out_t.shape[0]:
-            return status, t, t_old, h, h_last, smallest, taken + 1, t_step, turn
-    return PAUSED, t, t_old, h, h_last, smallest, 0, t_step, turn
+        if status != PAUSED or switched or taken == out_t.shape[0]:
+            return status, t, t_old, h, h_last, smallest, taken, t_step, turn, switched
+    return PAUSED, t, t_old, h, h_last, smallest, taken, t_step, turn, False
