@@ -86,6 +86,18 @@ def ours(model, method: str, rtol: float):
     return run
 
 
+def ours_alpha(model, step: float):
+    """mbd3d's generalized-alpha at ``step`` [s] (shortened into each impact by the contact
+    rules, as Exudyn's is not)."""
+    def run():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", mb.InitialStateWarning)
+            res = mb.forward_dynamics(model, [0.0, DURATION], method="generalized-alpha",
+                                      step=step)
+        return centres(res, CRADLE["n_balls"]), res.stats["wall_time"]
+    return run
+
+
 def compare(young_modulus: float, repeat: int) -> list[dict]:
     model = newtons_cradle(young_modulus=young_modulus, **CRADLE)
     cradle = derived(CRADLE, young_modulus)
@@ -99,6 +111,9 @@ def compare(young_modulus: float, repeat: int) -> list[dict]:
     engines = {f"mbd3d {m}": ([(f"rtol {rtol:.1g}", ours(model, m, rtol))
                                for rtol in 10.0 ** -np.arange(3.0, 12.5, 0.5)], error)
                for m in ("DOP853", "RK45")}
+    ours_alpha(model, 1e-3)()  # compiled before any timing
+    engines["mbd3d generalized-alpha"] = ([(f"h {h:.3g}", ours_alpha(model, h))
+                                           for h in 1e-3 * 0.5 ** np.arange(0, 8)], error)
     steps = 1e-4 * 0.5 ** np.arange(0, 10)
     if peers.available("exudyn"):
         engines["Exudyn generalized-alpha"] = ([
@@ -109,13 +124,17 @@ def compare(young_modulus: float, repeat: int) -> list[dict]:
               f"reference by {error(tightest):.1e} m")
     if peers.available("mujoco"):
         T = cradle["impact_duration"]
-        def mujoco(h):
-            return lambda: peers.mujoco_cradle(cradle, h, DURATION, T)
+        def mujoco(h, integrator="RK4"):
+            return lambda: peers.mujoco_cradle(cradle, h, DURATION, T, integrator)
         own = mujoco(steps[-1] / 4)()[0]
         print(f"MuJoCo's linear law (impacts of {T * 1e6:.0f} us) differs from the Hertz law by "
-              f"{error(own):.1e} m: it is compared with its own run at h {steps[-1] / 4:.3g}")
-        engines["MuJoCo RK4"] = ([(f"h {h:.3g}", mujoco(h)) for h in steps], error_from(own))
-    if len(engines) == 2:
+              f"{error(own):.1e} m: it is compared with its own run (RK4) at "
+              f"h {steps[-1] / 4:.3g}")
+        # each of its integrators, so that the ratio published is against its best
+        for integrator in ("RK4", "Euler", "implicitfast"):
+            engines[f"MuJoCo {integrator}"] = ([(f"h {h:.3g}", mujoco(h, integrator))
+                                                for h in steps], error_from(own))
+    if len(engines) == 3:
         print("no peers installed: pip install -e '.[peers]' for Exudyn and MuJoCo")
     rows = compare_at_equal_accuracy(engines, TOLERANCE, "m", "centres'", repeat)
     print(f"({CRADLE['n_balls']} balls, E = {young_modulus:.3g} Pa, impacts of "

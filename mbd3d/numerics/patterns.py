@@ -59,7 +59,10 @@ class _FixedPattern:
                 np.broadcast_to(base + np.arange(nc)[None, None, :], (nb, nc, nc)).ravel())
 
     def _lay_out(self, rows: np.ndarray, cols: np.ndarray, size: int, sparse: bool,
-                 scale: np.ndarray) -> None:
+                 scale: np.ndarray, coupled: tuple | None = None) -> None:
+        """Choose the layout of the entries ``(rows, cols)``; ``coupled``: more ``(rows,
+        cols)`` whose values are not among them but added to the matrix later (the applied
+        forces' tangent), which the ordering and the band take in."""
         self.rows, self.cols, self.size = rows.astype(np.int64), cols.astype(np.int64), size
         # the matrix is factored as D A D with the model's fixed powers of two D = diag(scale)
         # (see the module doc); entry_scale multiplies the values in the pattern's order
@@ -69,20 +72,26 @@ class _FixedPattern:
             self.layout = "dense"
             self.flat = rows + cols * size  # Fortran order, as LAPACK takes it
             return
-        structure = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(size, size))
+        every_row, every_col = rows, cols
+        if coupled is not None:
+            every_row = np.concatenate([rows, coupled[0]])
+            every_col = np.concatenate([cols, coupled[1]])
+        structure = sp.csr_matrix((np.ones(len(every_row)), (every_row, every_col)),
+                                  shape=(size, size))
         self.perm = reverse_cuthill_mckee(structure, symmetric_mode=True).astype(np.int64)
         inverse = np.empty_like(self.perm)
         inverse[self.perm] = np.arange(size)
         self.inverse = inverse
         prow, pcol = inverse[rows], inverse[cols]
+        reach = inverse[every_row] - inverse[every_col]  # the band holds the coupled too
         # CSC structure of the permuted matrix: SuperLU's input, also for a banded pattern
         # whose matrix gets entries outside the band (see factor)
         self.order = np.lexsort((prow, pcol))
         self.indices = prow[self.order].astype(np.int32)
         counts = np.bincount(pcol, minlength=size)
         self.indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
-        kl = int(np.max(prow - pcol, initial=0))
-        ku = int(np.max(pcol - prow, initial=0))
+        kl = int(np.max(reach, initial=0))
+        ku = int(np.max(-reach, initial=0))
         if kl * (kl + ku) > BANDED_WORK_LIMIT:
             self.layout = "sparse"
             return
@@ -340,6 +349,28 @@ class RangeSpacePattern:
         self.slot = (rank[pair_of_entry.ravel()] * nc + self.cols % nc).astype(np.int64)
 
 
+def force_couplings(model) -> tuple[np.ndarray, np.ndarray]:
+    """The coordinates ``(rows, cols)`` that the force elements of ``model`` couple across
+    bodies (a spring, a contact, a stop between two bodies: every coordinate of each with
+    every one of the other), where their tangent enters generalized-alpha's iteration
+    matrix. A contact group's pairs change as its bodies move: it couples none here (its
+    tangent takes a dense matrix)."""
+    nc, pairs = model.n_coords_per_body, set()
+    for element in model.forces:
+        if getattr(element, "is_group", False):
+            continue
+        bodies = sorted({body.index for _, body in element.bodies() if not body.is_ground})
+        pairs.update((a, b) for a in bodies for b in bodies if a != b)
+    if not pairs:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    a, b = np.array(sorted(pairs)).T
+    block = np.arange(nc)
+    shape = (len(a), nc, nc)
+    rows = np.broadcast_to(a[:, None, None] * nc + block[None, :, None], shape)
+    cols = np.broadcast_to(b[:, None, None] * nc + block[None, None, :], shape)
+    return rows.ravel().astype(np.int64), cols.ravel().astype(np.int64)
+
+
 class PenaltyPattern(_FixedPattern):
     """Where the mass blocks and the products of Jacobian values go in ``a M + p Cq^T Cq``,
     fixed per model, so that the iteration matrix of the implicit integrator is filled by one
@@ -370,4 +401,4 @@ class PenaltyPattern(_FixedPattern):
         all_cols = np.concatenate([block_cols, cols[self.second]])
         linear, self.target = np.unique(all_rows * n + all_cols, return_inverse=True)
         self._lay_out(linear // n, linear % n, n, model.sparse,
-                      augmented_scaling(model)[:n])
+                      augmented_scaling(model)[:n], force_couplings(model))
