@@ -9,10 +9,10 @@ is the same (:func:`.generalized_alpha.newton_step`).
 A call takes accepted steps until the output time, a budget of steps, or something Python
 must do: a step whose Newton iteration fails with an iterate that is not finite or with the
 step already at its floor (Python names what cannot be evaluated or why no step converges;
-other failures are retried at a quarter of the step here, as Python would), a body that turned too far in a step
-(Python warns), a chart to re-reference or a contact that touched or released (Python
-restarts the recursion from consistent accelerations). Every accepted step's end time,
-positions and singular-position indicator are recorded for
+other failures are retried at a quarter of the step here, as Python would), a body that
+turned too far in a step (Python warns), a chart to re-reference or a contact that touched
+or released (Python restarts the recursion from consistent accelerations). Every accepted
+step's end time, positions and singular-position indicator are recorded for
 :class:`~mbd3d.analyses.passages.PassageWatch`.
 """
 
