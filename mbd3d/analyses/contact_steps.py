@@ -20,7 +20,7 @@ class ContactSteps:
     """The contact rules of one integration: ``state`` and ``clock`` (see
     :mod:`mbd3d.numerics.compiled.contact_steps`), and each row's dissipated power [W] at
     the last state measured (``power``); ``work``: the compiled workspace the kernels
-    evaluate the frames in (None: the model has no contacts)."""
+    evaluate the frames in."""
 
     def __init__(self, model, work):
         self.model = model
