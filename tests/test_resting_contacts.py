@@ -3,8 +3,9 @@ held closed by the force it needs, through the joints, until that force would pu
 go. Checked against closed forms derived here from Newton's second law alone: a ball on a table
 shaken up and down (the table's push, where it lets go and where it lands again), a ball
 resting under a ball dropped on it, a box settling flat on its four corners, a rod resting on
-its hinge's stop (generalized-alpha holding them as the explicit methods do); and the stop
-of joint friction, which does not see a held contact's force."""
+its hinge's stop (generalized-alpha holding them as the explicit methods do); and a ball on a
+carriage sliding on a rail with friction, whose force (resting) and impulses (bouncing) the
+rail's friction takes, by Coulomb's law alone."""
 
 from __future__ import annotations
 
@@ -129,23 +130,100 @@ def test_a_ball_dropped_on_a_resting_ball_bounces_off_it_as_off_the_floor():
     np.testing.assert_allclose(np.diff(times), 2 * speeds / G, rtol=0, atol=2e-9)
 
 
-def test_a_block_sliding_onto_a_rigid_stop_with_joint_friction_stops_the_run_there():
-    """Joint friction would not see a held contact's force: the run ends where the block comes
-    to rest against the stop, naming why, with the results up to there."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -G), name="incline")
-    down = np.array([math.cos(0.5), -math.sin(0.5)])
-    block = b.add_body("block", mass=2.0, inertia=0.1, position=(0.0, 0.0), angle=-0.5,
-                       velocity=0.5 * down)
-    slide = b.add(Prismatic("slide", b.ground, block, axis=down))
-    b.add(mb.JointFriction("friction", slide, 0.2))
-    b.add(mb.JointLimit("stop", slide, upper=0.1, law=mb.RigidImpact(restitution=0.0)))
-    res = mb.forward_dynamics(b.build(), np.linspace(0.0, 1.0, 101), **TIGHT)
-    assert res.status == "stopped" and "'stop' came to rest" in res.message
-    assert "not held with joint friction" in res.message
-    # it slid 0.1 m from 0.5 m/s at g (sin a - mu cos a)
-    a = G * (math.sin(0.5) - 0.2 * math.cos(0.5))
-    slid = (math.sqrt(0.25 + 2 * a * 0.1) - 0.5) / a
-    np.testing.assert_allclose(res.stats["impacts"][0]["time"], slid, rtol=1e-6)
+def carriage_under_a_ball(dim: int, mu: float, drop: float = 0.0, restitution: float = 0.0,
+                          speed: float = 1.0) -> mb.Model:
+    """A carriage (2 kg) sliding at ``speed`` along a level rail with Coulomb friction ``mu``,
+    a 1 kg ball (frictionless) resting on its top or dropped from ``drop`` above it."""
+    b = mb.ModelBuilder(dim=dim, gravity=(0.0, -G) + (0.0,) * (dim - 2), name="carriage")
+    zero = (0.0,) * (dim - 2)
+    inertia = 0.1 if dim == 2 else 0.1 * np.eye(3)
+    carriage = b.add_body("carriage", mass=2.0, inertia=inertia, position=(0.0, 0.0) + zero,
+                          velocity=(speed, 0.0) + zero)
+    rail = b.add(Prismatic("rail", b.ground, carriage, axis=(1.0, 0.0) + zero,
+                           at=(0.0, 0.0) + zero))
+    b.add(mb.JointFriction("friction", rail, mu))
+    ball = b.add_body("ball", mass=1.0, inertia=0.004 if dim == 2 else 0.004 * np.eye(3),
+                      position=(0.3, R + drop) + zero)
+    b.add(mb.Contact("top", mb.Sphere(ball, R), mb.Plane(carriage, normal=(0.0, 1.0) + zero),
+                     law=mb.RigidImpact(restitution=restitution, rest_speed=0.05)))
+    return b.build()
+
+
+@pytest.mark.parametrize("method", [TIGHT, GA], ids=["DOP853", "generalized-alpha"])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_ball_resting_on_a_sliding_carriage_loads_its_rail_friction(method, dim):
+    """The ball, held on the carriage from the start, presses the carriage onto its rail with
+    its weight: the rail's friction is mu (M + m) g, so the carriage slows at
+    mu (M + m) g / M (not mu g, what the carriage alone would), while the frictionless ball
+    stays where it is, carried by its weight m g. The joint's friction and the held
+    contact's force are solved together (either changes the other's reaction)."""
+    mu, M, m = 0.3, 2.0, 1.0
+    t = np.linspace(0.0, 0.2, 41)  # it stops at 1 / a = 0.227 s
+    res = mb.forward_dynamics(carriage_under_a_ball(dim, mu), t, **method)
+    assert res.status == "complete"
+    assert res.stats["rests"] == [{"time": 0.0, "event": "rest", "contacts": ["top"],
+                                   "energy_lost": 0.0}]
+    a = mu * (M + m) * G / M
+    np.testing.assert_allclose(res.body("carriage").position[:, 0], t - a * t * t / 2,
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.contacts().normal_force[:, 0], m * G, rtol=1e-9)
+    np.testing.assert_allclose(res.body("ball").position[:, :2] - [0.3, R], 0.0, rtol=0,
+                               atol=1e-9)
+    np.testing.assert_allclose(res.friction("friction"), -mu * (M + m) * G, rtol=1e-9)
+
+
+@pytest.mark.parametrize("method", [TIGHT, GA], ids=["DOP853", "generalized-alpha"])
+def test_a_ball_dropped_on_a_sliding_carriage_bounces_to_rest_and_loads_its_friction(method):
+    """Dropped onto the sliding carriage, the ball bounces to rest on it (its flights and
+    impacts as on a floor: the impulses are normal to the rail). The rail carries each
+    impulse P and, sliding, its friction takes mu P from the carriage's momentum at once (as
+    a stiff contact's force would over its short duration), and mu m v for the last bounce,
+    of speed v, that coming to rest takes away; from the rest on the ball's weight loads the
+    friction too: the carriage slows at mu g until then, at mu (M + m) g / M after."""
+    mu, M, m, e, drop = 0.1, 2.0, 1.0, 0.5, 0.05
+    t = np.linspace(0.0, 0.5, 101)
+    res = mb.forward_dynamics(carriage_under_a_ball(2, mu, drop, e), t, **method)
+    assert res.status == "complete"
+    # the ball's impacts: falling from drop, rebounding at e times its speed until below
+    # its rest speed (0.05 m/s: the fifth impact)
+    speeds = math.sqrt(2 * G * drop) * e ** np.arange(5)
+    times = math.sqrt(2 * drop / G) + np.concatenate([[0.0], np.cumsum(2 * e * speeds[:-1] / G)])
+    impacts = res.stats["impacts"]
+    np.testing.assert_allclose([i["time"] for i in impacts], times, rtol=0, atol=1e-9)
+    np.testing.assert_allclose([i["impulse"] for i in impacts], m * (1 + e) * speeds,
+                               rtol=1e-9)
+    rest = res.stats["rests"][-1]
+    assert rest["event"] == "rest" and rest["contacts"] == ["top"]
+    np.testing.assert_allclose(rest["time"], times[-1], rtol=0, atol=1e-9)
+    # the carriage's speed drops by mu P / M at each impact, by mu m e v / M at the rest
+    drops = mu * m * (1 + e) * speeds / M
+    drops[-1] += mu * m * e * speeds[-1] / M
+    held = np.maximum(t - rest["time"], 0.0)
+    x = t - mu * G * t ** 2 / 2 - mu * m * G / M * held ** 2 / 2
+    x -= np.sum(drops * np.maximum(t[:, None] - times, 0.0), axis=1)
+    np.testing.assert_allclose(res.body("carriage").position[:, 0], x, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(res.friction("friction")[t > rest["time"]],
+                               -mu * (M + m) * G, rtol=1e-9)
+
+
+def test_a_strike_whose_rail_friction_outweighs_the_carriages_momentum_stops_it():
+    """A carriage slowing on its rail is struck from above: the friction mu P that the
+    strike's impulse P allows exceeds what stops it (M v), so the rail sticks (its friction
+    impulse M v, within the cone) and the carriage stays where it was struck, the ball
+    bouncing on it as on a floor."""
+    mu, M, m, e, drop, v0 = 0.3, 2.0, 1.0, 0.5, 0.05, 0.4
+    t = np.linspace(0.0, 0.3, 61)
+    res = mb.forward_dynamics(carriage_under_a_ball(2, mu, drop, e, v0), t, **TIGHT)
+    assert res.status == "complete"
+    strike = res.stats["impacts"][0]["time"]
+    v = v0 - mu * G * strike  # sliding until then against mu M g
+    assert 0.0 < M * v < mu * res.stats["impacts"][0]["impulse"]
+    x = v0 * strike - mu * G * strike ** 2 / 2
+    struck = res.t >= strike
+    np.testing.assert_allclose(res.body("carriage").position[struck, 0], x, rtol=0,
+                               atol=1e-9)
+    np.testing.assert_allclose(res.body("carriage").velocity[struck, 0], 0.0, rtol=0,
+                               atol=1e-9)
 
 
 @pytest.mark.parametrize("method", [

@@ -220,9 +220,11 @@ class NewtonStep:
         """What an iterate takes from Python: joint friction at the multipliers of its own
         state (consistent with the reactions there, see mbd3d.model.friction), neither a
         previous step's nor the iteration's penalty estimates, which are noisy at 1e-4; and so
-        the held rows' forces, which hold their gaps' accelerations at zero there."""
-        extra, drivers, phi = python_parts(self.model, tt, q, qd, charts, friction=True)
-        if self.held is not None:
+        the held rows' forces, which hold their gaps' accelerations at zero there (with the
+        joints' friction of the reactions they change: :meth:`HeldRows.applied`)."""
+        held = self.held is not None
+        extra, drivers, phi = python_parts(self.model, tt, q, qd, charts, friction=not held)
+        if held:
             extra = extra + self.held.applied(tt, q.copy(), qd.copy())
         return extra, drivers, phi
 

@@ -31,7 +31,7 @@ from mbd3d.errors import ModelError
 from mbd3d.io.observers import Observer, Watch
 from mbd3d.io.results import Results
 from mbd3d.io.store import ResultsBuffer, run_keeping_results
-from mbd3d.analyses.impacts import RigidContacts, RunStopped
+from mbd3d.analyses.impacts import RigidContacts
 from mbd3d.analyses.initial import consistent_initial_state
 from mbd3d.analyses.kinematics import check_times, project_state
 from mbd3d.analyses.lift_off import warn_lift_off
@@ -195,9 +195,9 @@ class Integrator:
 
     stats: dict
     redundant: bool = False
-    #: whether the method holds rigid contacts at rest (:mod:`mbd3d.analyses.resting`): its
-    #: accelerations then take ``held``'s forces, its steps project the held rows
-    holds_contacts: bool = False
+    #: the rigid contacts held at rest (:class:`mbd3d.analyses.resting.HeldRows`), or None
+    #: without rigid contacts: the method's accelerations take their forces, its steps
+    #: project the held rows
     held: Any = None
 
     @property
@@ -420,7 +420,7 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
     stats = integrator.stats
     out = ResultsBuffer(model, "forward dynamics", t, stats)
     rigid = RigidContacts(model, integrator.chart, lambda: integrator.redundant, stats)
-    if len(rigid) and integrator.holds_contacts and model.friction is None:
+    if len(rigid):
         rigid.holding = integrator.held = HeldRows(rigid, request.constraint_tol, stats)
     events = _Events(request.events + _impact_events(rigid), stats, len(request.events))
 
@@ -470,11 +470,7 @@ def drive(request: DynamicsRequest, integrator: Integrator) -> Results:
         # cubic interpolant leaves a driven joint's rate off by O(h^3) inside a step)
         q, qd = project_state(model, te, q, qd, request.projection_tol, integrator.chart(),
                               integrator.redundant)
-        try:
-            given = event.action(te, q.copy(), qd.copy())
-        except RunStopped as stop:
-            events.found.append({"name": event.name, "time": te})
-            return "stopped", str(stop)
+        given = event.action(te, q.copy(), qd.copy())
         q, qd = _new_state(event, te, given, len(q))
         q, qd = project_state(model, te, q, qd, request.projection_tol, integrator.chart(),
                               integrator.redundant)

@@ -147,12 +147,11 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         ``impulse`` [N s; a turning stop's N m s], ``friction_impulse`` (the friction's on
         the second shape, global axes [N s]), ``rate_before`` and ``rate_after`` (the
         gap's, [m/s or rad/s]), ``energy_lost`` [J] and ``point`` (global [m]: midway
-        between the shapes; a stop's, its joint's point on body j); and where the method
-        holds rigid contacts at rest (:mod:`mbd3d.analyses.resting`), ``rests``: one
-        dict per rest or release, its ``time`` [s], ``event`` ("rest" or "release"),
-        ``contacts`` (names) and ``energy_lost`` [J] (the bounces no longer made). ``status``
-        is "stopped" when an event stopped the run, or a rigid contact came to rest in a
-        model with joint friction, which does not hold it (the message names it).
+        between the shapes; a stop's, its joint's point on body j); and, for the rigid
+        contacts held at rest (:mod:`mbd3d.analyses.resting`), ``rests``: one dict per rest
+        or release, its ``time`` [s], ``event`` ("rest" or "release"), ``contacts`` (names)
+        and ``energy_lost`` [J] (the bounces no longer made). ``status`` is "stopped" when
+        an event stopped the run (the message names it).
 
     Raises
     ------

@@ -44,7 +44,6 @@ class ExplicitRungeKutta(Integrator):
     """A compiled explicit pair (``request.method``, one of
     :data:`mbd3d.numerics.compiled.runge_kutta.TABLEAUS`) as the driver runs it."""
 
-    holds_contacts = True
 
     def __init__(self, request: DynamicsRequest):
         model = self.model = request.model

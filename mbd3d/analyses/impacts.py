@@ -25,13 +25,14 @@ against the slip it leaves with. Each row's energy lost, the work of its impulse
 ``-(lam (v- + v+) + P_t . (s- + s+)) / 2`` (without friction ``-(1 - e) lam v- / 2`` >= 0),
 adds up to the kinetic energy lost where no driver moves; an impact whose rows would give
 the motion energy (Newton's law and Coulomb's together can, where a row's friction turns
-its normal rate: Kane's paradox) is refused, naming it.
+its normal rate: Kane's paradox) is refused, naming it. The joints' friction takes its
+impulses from the impulses the joints carry (:mod:`mbd3d.analyses.joint_impulses`); a
+row's ``energy_lost`` is its own impulses' work, not theirs.
 
 A row that is left touching, opening slower than its ``rest_speed`` while the free motion
 presses it closed, would bounce ever shorter (infinitely many impacts
 in a finite time): it has come to rest. The integrators then hold it closed until it lets go
-(:mod:`mbd3d.analyses.resting`); in a model with joint friction (which would not see its
-force) the run stops there instead (:class:`RunStopped`), naming it.
+(:mod:`mbd3d.analyses.resting`), the joints' friction seeing its force.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from typing import Callable
 
 import numpy as np
 
+from mbd3d.analyses.joint_impulses import joint_friction_impulses
 from mbd3d.analyses.sticking import impact_with_friction
 from mbd3d.errors import ModelError
 from mbd3d.io.history import contact_history
@@ -49,7 +51,7 @@ from mbd3d.model.equations import augmented_accelerations, mass_matrix
 from mbd3d.numerics.linalg import (SingularMatrix, augmented_scaling, factor_model_augmented,
                                    solve_augmented_lagrangian)
 
-__all__ = ["RigidContacts", "RunStopped", "impulses", "CLOSED", "PAST"]
+__all__ = ["RigidContacts", "impulses", "CLOSED", "PAST"]
 
 #: a row touches within CLOSED of zero gap; its event fires PAST beyond the touch, or beyond
 #: where an impact left it touching: PAST if idle there, so that rows resting against each
@@ -63,10 +65,6 @@ CLOSING, PRESSED = 1e-9, 1e-9
 ROUNDS = 1000
 
 
-class RunStopped(Exception):
-    """Raised by an event's action: the run ends at the event, its message says why."""
-
-
 class RigidContacts:
     """The rigid rows of a model's contacts and stops in one run: their gaps (the events'
     functions), the impact at a touch and the rest check. ``chart()`` gives the integrator's
@@ -75,8 +73,8 @@ class RigidContacts:
 
     def __init__(self, model, chart: Callable, redundant: Callable[[], bool], stats: dict):
         self.model, self.chart, self.redundant = model, chart, redundant
-        #: the rows held at rest (:class:`mbd3d.analyses.resting.HeldRows`), where the
-        #: integrator holds them; else a row at rest stops the run
+        #: the rows held at rest (:class:`mbd3d.analyses.resting.HeldRows`), set by the
+        #: integrators' driver where the model has rigid rows
         self.holding = None
         self.group = contact_group(model, required=False)
         rigid = self.group.rigid if self.group is not None else np.zeros(0, dtype=bool)
@@ -101,13 +99,13 @@ class RigidContacts:
     def gap(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
         """The event function of rigid row ``index``: its gap [m or rad] beyond the depth
         at which it fires (1 while it is held at rest)."""
-        if self.holding is not None and self.holding.mask[index]:
+        if self.holding.mask[index]:
             return 1.0
         return float(self.states(q, qd)[0][index] - self.floor[index])
 
     def gap_rate(self, index: int, t: float, q: np.ndarray, qd: np.ndarray) -> float:
         """The rate [m/s or rad/s] of :meth:`gap` (0 while it is held at rest)."""
-        if self.holding is not None and self.holding.mask[index]:
+        if self.holding.mask[index]:
             return 0.0
         return float(self.states(q, qd)[1][index])
 
@@ -144,7 +142,7 @@ class RigidContacts:
                 f"at t = {t:.9g} s: rigid shapes (and stops) must start apart or touching; "
                 "move the bodies (or give q0) so that they do not overlap")
         resting = (gap <= CLOSED * self.scale) & (np.abs(rate) < self.rest_speed)
-        if self.holding is not None and np.any(resting):
+        if np.any(resting):
             q, qd = self.holding.hold(t, q, qd, resting)
         self.watch(q, qd)
         return q, qd
@@ -158,18 +156,15 @@ class RigidContacts:
         sunk = gap <= self.floor + 0.5 * PAST * self.scale
         back = self.idle & sunk & (rate > -self.rest_speed)
         if np.any(back):
-            if self.holding is None:
-                self._stop_at_rest(np.flatnonzero(back)[0], t, 0.0)
             q, qd = self.holding.hold(t, q, qd, back)
         for _ in range(ROUNDS):
             gap, rate = self.states(q, qd)
             active = (gap <= CLOSED * self.scale) & (rate < -CLOSING * self.rest_speed)
             if not np.any(active):
                 break
-            if self.holding is not None:
-                # rows at rest take part in the impact at once (at zero rate): their bodies
-                # press together, so an impulse passes through them as through a joint
-                active |= self.holding.mask
+            # rows at rest take part in the impact at once (at zero rate): their bodies
+            # press together, so an impulse passes through them as through a joint
+            active |= self.holding.mask
             qd = self._impact(t, q, qd, active, rate[active])
         else:
             closing = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
@@ -184,23 +179,25 @@ class RigidContacts:
     def _impact(self, t, q, qd, active: np.ndarray, before: np.ndarray) -> np.ndarray:
         """One round: Newton's law on the ``active`` rows closing at ``before``, with
         Coulomb's friction where they have it
-        (:func:`~mbd3d.analyses.sticking.impact_with_friction`); recorded."""
-        n, e = self.model.n_coordinates, self.e[active]
+        (:func:`~mbd3d.analyses.sticking.impact_with_friction`) and in the joints
+        (:func:`~mbd3d.analyses.joint_impulses.joint_friction_impulses`); recorded."""
+        e = self.e[active]
         G, T = self.rate_rows(q, active)
+        slip = T @ qd
+        if self.model.friction is None:
+            after, lam, P_t = self._contact_impulses(t, q, qd, active, before, G, T)
+        else:
+            after, lam, P_t = self._with_joint_friction(t, q, qd, active, before, G, T)
         if np.any(self.mu_static[active] > 0.0):
-            slip = T @ qd
-            qd, lam, P_t = self._with_friction(t, q, qd, active, e, G, T)
             # each row's impulses' work: what it takes from the motion, or gives (Kane's)
-            lost = -0.5 * (lam * (before + G @ qd)
-                           + np.einsum("ki,ki->k", P_t, slip + T @ qd))
+            lost = -0.5 * (lam * (before + G @ after)
+                           + np.einsum("ki,ki->k", P_t, slip + T @ after))
             self._refuse_gain(t, active, lost, lam * np.abs(before)
                               + np.linalg.norm(P_t, axis=1) * np.linalg.norm(slip, axis=1))
         else:
-            X = self.response(t, q, G)[:n]
-            lam = impulses(G @ X, (1.0 + e) * before)
-            qd, P_t = qd + X @ lam, np.zeros((len(lam), 3))
             # >= 0 (a row at rest enters at zero rate, to rounding)
             lost = np.maximum(-0.5 * (1.0 - e) * lam * before, 0.0)
+        qd = after
         after = G @ qd
         self.states(q, qd)
         for a, k in enumerate(np.flatnonzero(active)):
@@ -212,19 +209,44 @@ class RigidContacts:
                     "point": self._points[k].tolist()})
         return qd
 
-    def _with_friction(self, t, q, qd, active, e, G, T) -> tuple:
-        """:func:`~mbd3d.analyses.sticking.impact_with_friction` on the ``active`` rows; where
-        it fails, the run is refused naming the rows and the time."""
-        n = self.model.n_coordinates
+    def _contact_impulses(self, t, q, qd, active, before, G, T, kick=None) -> tuple:
+        """``(qd+, p, P_t)`` of the ``active`` rows' impact (normal impulses ``p``, friction
+        ``P_t``) with the velocities changed by ``kick`` (n,; the joints' friction) besides:
+        Newton's law on the rates ``before``, Coulomb's where rows have friction (where it
+        fails, the run is refused naming the rows and the time)."""
+        n, e = self.model.n_coordinates, self.e[active]
+        kick = np.zeros(n) if kick is None else kick
+        if not np.any(self.mu_static[active] > 0.0):
+            X = self.response(t, q, G)[:n]
+            lam = impulses(G @ X, (1.0 + e) * before + G @ kick)
+            return qd + kick + X @ lam, lam, np.zeros((len(lam), 3))
         try:
             return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e,
                                         qd, lambda R: self.response(t, q, R)[:n],
                                         self.model.n_coords_per_body == 3,
-                                        self.mu_static[active])
+                                        self.mu_static[active], kick)
         except ModelError as error:
-            names = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
-            raise ModelError(f"forward dynamics of '{self.model.name}': at the impact at t = "
-                             f"{t:.9g} s on {names}, {error}") from None
+            raise ModelError(f"{self._what(t, active)}, {error}") from None
+
+    def _with_joint_friction(self, t, q, qd, active, before, G, T) -> tuple:
+        """:meth:`_contact_impulses` with the joints' friction impulses
+        (:func:`~mbd3d.analyses.joint_impulses.joint_friction_impulses`)."""
+        n = self.model.n_coordinates
+
+        def contact(kick: np.ndarray, lam: np.ndarray) -> tuple:
+            after, p, P_t = self._contact_impulses(t, q, qd, active, before, G, T, kick)
+            impulse = G.T @ p + np.einsum("kin,ki->n", T, P_t)  # generalized, of the rows
+            return after, p, P_t, lam + self.response(t, q, impulse[None])[n:, 0]
+
+        fr = constraints.frames(self.model, q, qd, self.chart())
+        return joint_friction_impulses(self.model, fr, qd, contact,
+                                       lambda R: self.response(t, q, R),
+                                       self._what(t, active))[:3]
+
+    def _what(self, t: float, active: np.ndarray) -> str:
+        """The impact at ``t`` on the ``active`` rows, for errors."""
+        names = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
+        return f"forward dynamics of '{self.model.name}': at the impact at t = {t:.9g} s on {names}"
 
     def _refuse_gain(self, t: float, active: np.ndarray, lost: np.ndarray,
                      size: np.ndarray) -> None:
@@ -304,28 +326,14 @@ class RigidContacts:
     def _check_rest(self, t: float, q: np.ndarray, qd: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:
         """The rows left touching, opening slower than their rest speed while the free motion
-        presses them closed, are held (:mod:`mbd3d.analyses.resting`), or stop the run
-        (:class:`RunStopped`) where the integrator does not hold rows."""
+        presses them closed, are held (:mod:`mbd3d.analyses.resting`)."""
         gap, rate = self.states(q, qd)
         slow = (gap <= CLOSED * self.scale) & (rate < self.rest_speed)
-        if self.holding is not None:
-            # a held row that the impact leaves opening faster than its rest speed flies off
-            self.holding.let_go(t, (rate >= self.rest_speed) & self.holding.mask)
-            # the rows held with friction that the impact left slipping slide on along it
-            self.holding.follow(t, q, qd)
-            return self.holding.hold(t, q, qd, slow) if np.any(slow) else (q, qd)
-        if not np.any(slow):
-            return q, qd
-        model = self.model
-        qdd = augmented_accelerations(model, t, q, qd, self.chart())[:model.n_coordinates]
-        # g'' = G qdd + (dG/dq qd) qd, the first by the rates' linearity
-        gdd = self.states(q, qdd)[1] + self.convective(q, qd)
-        scale = self.acceleration_scale(t, q, qd, qdd)
-        pressed = [k for k in np.flatnonzero(slow)
-                   if gdd[k] < -PRESSED * scale * self.scale[k]]
-        if pressed:
-            self._stop_at_rest(pressed[0], t, max(rate[pressed[0]], 0.0))
-        return q, qd
+        # a held row that the impact leaves opening faster than its rest speed flies off
+        self.holding.let_go(t, (rate >= self.rest_speed) & self.holding.mask)
+        # the rows held with friction that the impact left slipping slide on along it
+        self.holding.follow(t, q, qd)
+        return self.holding.hold(t, q, qd, slow) if np.any(slow) else (q, qd)
 
     def convective(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """``(dG/dq qd) qd`` of every row [m/s^2 or rad/s^2]: the part of the gaps'
@@ -390,18 +398,6 @@ class RigidContacts:
         gravity = float(np.linalg.norm(model.gravity)) / model.length_scale
         return max(gravity, np.max(np.abs(qdd) / model.coordinate_scale, initial=0.0),
                    speed * speed)
-
-    def _stop_at_rest(self, k: int, t: float, opening: float) -> None:
-        """End the run: rigid row ``k`` has come to rest at ``t``, opening at ``opening``."""
-        count = sum(r["contact"] == self.names[k] for r in self.records)
-        unit = f"{self.units[k]}/s"
-        raise RunStopped(
-            f"rigid contact '{self.names[k]}' came to rest at t = {t:.9g} s after {count} "
-            f"impacts: it opens at {opening:.3g} {unit}, below its rest speed "
-            f"{self.rest_speed[k]:g} {unit}, while its bodies press together. "
-            "A rigid contact at rest is not held with joint friction yet (the friction would "
-            "not see its force): the results end here; give it a compliant law "
-            "(mb.HertzContact, mb.LinearContact)")
 
     def watch(self, q: np.ndarray, qd: np.ndarray) -> None:
         """Where each row fires from now on, below its gap now: an event's function is then

@@ -97,7 +97,6 @@ class GeneralizedAlphaIntegrator(Integrator):
 
     #: Newton's tolerance on the residual, the penalty ratio and the iterations per step
     newton_tol, relative_penalty, max_newton_iterations = 1e-10, 1e8, 30
-    holds_contacts = True
 
     def __init__(self, request: DynamicsRequest):
         model = self.model = request.model

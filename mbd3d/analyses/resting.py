@@ -37,6 +37,15 @@ flight from. Held rows are evaluated in Python at each right-hand side (the expl
 callback) and at each Newton iterate of generalized-alpha, which adds their forces
 (:meth:`HeldRows.applied`) to the applied forces of the iterate's own state; its
 recursion goes on through the projections (each of the tolerance's size).
+
+In a model with joint friction (:mod:`mbd3d.model.friction`), a held row's force loads the
+joints, and their friction changes the force: the frictions ``e`` solve
+``e = -mu load(lam(e)) tanh(v / v_s)`` with ``lam(e)`` the multipliers with the held rows'
+forces at those frictions (the complementarity problem above, its right-hand side moved by
+the joints' response to ``e``), by Newton's method
+(:func:`~mbd3d.model.friction.solve_frictions`). A row coming to rest takes its last
+bounce away with the joints' friction impulses that bounce would have given
+(:mod:`mbd3d.analyses.joint_impulses`).
 """
 
 from __future__ import annotations
@@ -45,10 +54,13 @@ import numpy as np
 
 from mbd3d.analyses.accelerations import consistent_accelerations
 from mbd3d.analyses.impacts import CLOSING, PRESSED, RigidContacts, impulses
+from mbd3d.analyses.joint_impulses import joint_friction_impulses
 from mbd3d.analyses.kinematics import project_state
 from mbd3d.analyses.sticking import (direction, mixed_complementarity, share_by_capacity,
                                      tangents)
 from mbd3d.io.history import energies
+from mbd3d.model import constraints
+from mbd3d.model.friction import solve_frictions
 
 __all__ = ["HeldRows"]
 
@@ -57,6 +69,8 @@ _ROUNDS = 4
 #: a sliding row whose slip along its direction is below _STOPPED of its rest speed has
 #: stopped sliding (the friction event fires there)
 _STOPPED = 1e-6
+#: the step of the frictions' difference quotient, relative to the largest friction
+_FRICTION_STEP = 1e-6
 
 
 class HeldRows:
@@ -96,7 +110,7 @@ class HeldRows:
         """The generalized forces (n,) of the held rows' normal forces and friction at ``(t,
         q, qd)``: what generalized-alpha adds to the applied forces of each Newton iterate
         (the rows' constraint on their gaps' accelerations, held at the iterate's own state
-        as the joints' friction is)."""
+        as the joints' friction is), and the joints' friction of the reactions with them."""
         self._solve(t, q, qd, self.mask)
         return self._applied
 
@@ -233,7 +247,7 @@ class HeldRows:
         slow = new & (self.mu_static > 0.0) & (speed <= rigid.rest_speed)
         moving = new & (speed > 0.0)
         self.along[moving] = slip[moving] / speed[moving, None]
-        q, qd = self.settle(t, q, qd, held, force=True)
+        q, qd = self.settle(t, q, qd, held, force=True, rubbing=True)
         # what the settling takes (>= 0 but for rounding): the bounces' energy, less what a
         # sliding row's friction gives back where its bounce is pulled down (its bounces
         # would have rubbed less than the force that replaces them will)
@@ -261,11 +275,13 @@ class HeldRows:
                                  "energy_lost": float(energy_lost)})
 
     def settle(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray | None = None,
-               force: bool = False, tol: float | None = None
+               force: bool = False, tol: float | None = None, rubbing: bool = False
                ) -> tuple[np.ndarray, np.ndarray] | None:
         """The state with the held ``rows`` (default all held) closed and idle, the joints
         holding (mass-weighted least change); None when they have not drifted beyond ``tol``
-        (default the run's; relative to the model's length scale) unless ``force``."""
+        (default the run's; relative to the model's length scale) unless ``force``. With
+        ``rubbing`` (rows coming to rest: the impulses take their bounces), the joints' friction
+        takes its impulses too; a drift's correction is not a motion, and takes none."""
         rows = self.mask if rows is None else rows
         tol = self.tol if tol is None else tol
         rigid, model = self.rigid, self.model
@@ -299,8 +315,28 @@ class HeldRows:
             if self.stuck[k]:
                 rates.append(tangents(normals[k], self.planar) @ T[a])
                 columns.append(rates[-1])
-        R = np.vstack(rates)
-        return q, qd + self._correction(t, q, R, -(R @ qd), np.vstack(columns))
+        return q, self._stopped(t, q, qd, np.vstack(rates), np.vstack(columns), rubbing)
+
+    def _stopped(self, t: float, q: np.ndarray, qd: np.ndarray, R: np.ndarray,
+                 columns: np.ndarray, rubbing: bool) -> np.ndarray:
+        """The velocities with ``R qd`` zero by impulses along ``columns``, the joints holding
+        (:meth:`_correction`); with ``rubbing``, with their friction's impulses where they have
+        friction, as at an impact (:mod:`mbd3d.analyses.joint_impulses`): the bounces a row
+        coming to rest no longer makes would have rubbed in the joints too."""
+        model, n = self.model, self.model.n_coordinates
+        XY = self.rigid.response(t, q, columns)
+
+        def stop(kick: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            impulse = np.linalg.lstsq(R @ XY[:n], -(R @ (qd + kick)), rcond=1e-12)[0]
+            return qd + kick + XY[:n] @ impulse, lam + XY[n:] @ impulse
+
+        if model.friction is None or not rubbing:
+            return stop(np.zeros(n), np.zeros(model.n_constraints))[0]
+        fr = constraints.frames(model, q, qd, self.rigid.chart())
+        return joint_friction_impulses(
+            model, fr, qd, stop, lambda G: self.rigid.response(t, q, G),
+            f"forward dynamics of '{model.name}': rigid contacts coming to rest at "
+            f"t = {t:.9g} s")[0]
 
     def _correction(self, t: float, q: np.ndarray, R: np.ndarray, change: np.ndarray,
                     columns: np.ndarray | None = None) -> np.ndarray:
@@ -320,7 +356,8 @@ class HeldRows:
 
     def _solve(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray,
                qdd0: np.ndarray | None = None, lam0: np.ndarray | None = None) -> tuple:
-        """``(qdd, lam, f, w, W_kk)`` with the ``rows`` held (module doc); ``f``, ``w`` and
+        """``(qdd, lam, f, w, W_kk, friction, margin)`` with the ``rows`` held (module doc),
+        from the joints' ``qdd0`` and ``lam0`` (default solved here); ``f``, ``w`` and
         ``W_kk`` over every rigid row (zero, and one, where not held). The last is kept: the
         right-hand side, the outputs and every release event ask at the same states."""
         rigid, model = self.rigid, self.model
@@ -332,29 +369,76 @@ class HeldRows:
         if qdd0 is None:
             qdd0, lam0, _ = consistent_accelerations(model, t, q, qd, chart,
                                                      redundant=rigid.redundant())
-        r, n = len(rigid), model.n_coordinates
+        if model.friction is None:
+            solution, applied = self._held(t, q, qd, rows, qdd0, lam0)
+        else:
+            solution, applied = self._with_joint_friction(t, q, qd, rows, qdd0, lam0)
+        self._key, self._solution, self._applied = key, solution, applied
+        return solution
+
+    def _with_joint_friction(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray,
+                             qdd0: np.ndarray, lam0: np.ndarray) -> tuple[tuple, np.ndarray]:
+        """:meth:`_held` where the joints have friction: the frictions ``e`` that the joints'
+        reactions with the held rows' forces give (:func:`~mbd3d.model.friction.solve_frictions`;
+        ``qdd0`` and ``lam0`` carry the frictions of the reactions without those forces, taken
+        out by the joints' response to them). The reactions are piecewise affine in ``e``
+        (the held rows' active set), so their slope is a difference quotient, exact within a
+        piece; the generalized forces returned include the frictions (generalized-alpha
+        adds them to each iterate's applied forces in place of those without the rows)."""
+        rigid, model, n = self.rigid, self.model, self.model.n_coordinates
+        group = model.friction
+        fr = constraints.frames(model, q, qd, rigid.chart())
+        G, speed = group.directions(model, fr)
+        factor = group.mu * np.tanh(speed / group.v_s)
+        efforts = -factor * group.loads(model, fr, lam0)
+        response = rigid.response(t, q, G)  # (n + m, k): the joints' to a unit of each
+        free = np.concatenate([qdd0, lam0]) - response @ efforts
+        solved = {}
+
+        def held(e: np.ndarray) -> tuple[tuple, np.ndarray]:
+            if e.tobytes() not in solved:
+                x = free + response @ e
+                solved[e.tobytes()] = self._held(t, q, qd, rows, x[:n], x[n:])
+            return solved[e.tobytes()]
+
+        def slope(e: np.ndarray) -> np.ndarray:
+            size = np.max(np.abs(factor * group.loads(model, fr, held(e)[0][1])))
+            step = _FRICTION_STEP * max(float(np.max(np.abs(e))), float(size), 1e-300)
+            return np.column_stack([(held(e + step * u)[0][1] - held(e)[0][1]) / step
+                                    for u in np.eye(len(e))])
+
+        if np.any(rows):
+            efforts = solve_frictions(model, t, fr, factor, lambda e: held(e)[0][1], slope,
+                                      efforts)
+        solution, applied = held(efforts)
+        return solution, applied + G.T @ efforts
+
+    def _held(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray,
+              qdd0: np.ndarray, lam0: np.ndarray) -> tuple[tuple, np.ndarray]:
+        """The solution :meth:`_solve` returns, from the joints' ``qdd0`` and ``lam0`` with
+        the applied forces fixed, and the held rows' generalized forces (n,)."""
+        rigid, n = self.rigid, self.model.n_coordinates
+        r = len(rigid)
         f, w, diag = np.zeros(r), np.zeros(r), np.ones(r)
         friction, margin = np.zeros((r, 3)), np.ones(r)
-        qdd, lam, applied = qdd0, lam0, np.zeros(n)
-        if np.any(rows):
-            a = int(np.sum(rows))
-            G, T = rigid.rate_rows(q, rows, qd)  # the convective terms in the same call
-            b = G @ qdd0 + rigid.convective(q, qd)[rows]
-            if np.any(self.mu_static[rows] > 0.0):
-                z, XY, W, columns = self._with_friction(t, q, qd, rows, G, T, qdd0, b,
-                                                        friction, margin)
-            else:
-                columns = G
-                XY = rigid.response(t, q, G)
-                W = G @ XY[:n]
-                z = _spread(W, b, impulses(W, b))
-            f[rows] = z[:a]
-            w[rows] = W[:a] @ z + b
-            diag[rows] = np.diag(W)[:a]
-            qdd, lam, applied = qdd0 + XY[:n] @ z, lam0 + XY[n:] @ z, columns.T @ z
-        self._key, self._solution = key, (qdd, lam, f, w, diag, friction, margin)
-        self._applied = applied
-        return self._solution
+        if not np.any(rows):
+            return (qdd0, lam0, f, w, diag, friction, margin), np.zeros(n)
+        a = int(np.sum(rows))
+        G, T = rigid.rate_rows(q, rows, qd)  # the convective terms in the same call
+        b = G @ qdd0 + rigid.convective(q, qd)[rows]
+        if np.any(self.mu_static[rows] > 0.0):
+            z, XY, W, columns = self._with_friction(t, q, qd, rows, G, T, qdd0, b,
+                                                    friction, margin)
+        else:
+            columns = G
+            XY = rigid.response(t, q, G)
+            W = G @ XY[:n]
+            z = _spread(W, b, impulses(W, b))
+        f[rows] = z[:a]
+        w[rows] = W[:a] @ z + b
+        diag[rows] = np.diag(W)[:a]
+        return ((qdd0 + XY[:n] @ z, lam0 + XY[n:] @ z, f, w, diag, friction, margin),
+                columns.T @ z)
 
     def _with_friction(self, t, q, qd, rows, G, T, qdd0, b, friction, margin) -> tuple:
         """``(z, [X; Y], A, columns)`` of the held ``rows`` with friction (:mod:`.sticking`):

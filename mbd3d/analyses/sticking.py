@@ -119,7 +119,7 @@ def share_by_capacity(A: np.ndarray, s: np.ndarray, capacity: np.ndarray) -> np.
 
 def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: np.ndarray,
                          e: np.ndarray, qd: np.ndarray, response, planar: bool,
-                         mu_static: np.ndarray | None = None
+                         mu_static: np.ndarray | None = None, kick: np.ndarray | None = None
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An impact on rigid rows with Coulomb's friction: ``(qd+, P_n (a,) [N s], P_t (a, 3)
     [N s])``, the velocities after it and each row's normal and friction impulses (the
@@ -136,16 +136,19 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
     sticking; a row that cannot stick (its slip tied to its normal rate) or whose impulse
     leaves its cone slides, away from that impulse, and a planar row whose slip turned back
     slides the other way, until the modes hold; in space the sliding rows' directions are
-    those their slips come out along (:func:`_settle_directions`)."""
+    those their slips come out along (:func:`_settle_directions`). ``kick`` (n,): a change
+    of the velocities by other impulses at the same impact (the joints' friction), which
+    Newton's law does not restore (it acts on ``G qd`` before any impulse)."""
     a = len(G)
+    kick = np.zeros_like(qd) if kick is None else kick
     mu_s = mu if mu_static is None else mu_static
     bases = [tangents(normal[k], planar) for k in range(a)]
     stuck, phi = mu_s > 0.0, np.zeros(a)
     before = max(float(np.max(np.abs(G @ qd), initial=0.0)),
                  float(np.max(np.abs(T @ qd), initial=0.0)), np.finfo(float).tiny)
     for _ in range(_TRIALS):
-        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, mu_s, e, qd, response,
-                                                    stuck, phi, before)
+        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, mu_s, e, qd, kick,
+                                                    response, stuck, phi, before)
         slip = T @ after
         speed = np.linalg.norm(slip, axis=1)
         # a row that cannot stick with the others (a pendulum's tip bouncing off a floor:
@@ -184,7 +187,8 @@ def _directions(bases: list, phi: np.ndarray) -> np.ndarray:
                      for B, p in zip(bases, phi)]).reshape(len(phi), 3)
 
 
-def _settle_directions(G, T, bases, mu, mu_s, e, qd, response, stuck, phi, before) -> tuple:
+def _settle_directions(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, phi,
+                       before) -> tuple:
     """``((qd+, P_n, P_t), phi)`` with the sliding rows' directions those of their slips
     after the impact: in the plane as given; in space, each row's angle ``phi`` solved by
     Newton's method (a difference Jacobian, the step halved until the mismatch falls), since
@@ -192,7 +196,7 @@ def _settle_directions(G, T, bases, mu, mu_s, e, qd, response, stuck, phi, befor
     sliding = np.flatnonzero((mu_s > 0.0) & ~stuck)
 
     def mismatch(angles):
-        out = _impact_trial(G, T, bases, mu, mu_s, e, qd, response, stuck,
+        out = _impact_trial(G, T, bases, mu, mu_s, e, qd, kick, response, stuck,
                             _directions(bases, angles))
         slip = T[sliding] @ out[0]
         moving = np.linalg.norm(slip, axis=1) > 1e-12 * before
@@ -224,9 +228,10 @@ def _settle_directions(G, T, bases, mu, mu_s, e, qd, response, stuck, phi, befor
                      "coefficients or give the contacts compliant laws")
 
 
-def _impact_trial(G, T, bases, mu, mu_s, e, qd, response, stuck, along) -> tuple:
+def _impact_trial(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, along) -> tuple:
     """``(qd+, P_n, P_t)`` of an impact with the rows ``stuck`` sticking and the others
-    with friction sliding ``along`` (:func:`impact_with_friction`)."""
+    with friction sliding ``along`` (:func:`impact_with_friction`; ``kick`` the velocities'
+    change by the joints' friction)."""
     a, n = G.shape
     sliding = (mu > 0.0) & ~stuck
     columns = G - (mu * sliding)[:, None] * np.einsum("ki,kin->kn", along, T)
@@ -234,7 +239,7 @@ def _impact_trial(G, T, bases, mu, mu_s, e, qd, response, stuck, along) -> tuple
     Ts = np.vstack([bases[k] @ T[k] for k in sticking] or [np.zeros((0, n))])
     X = response(np.vstack([columns, Ts]))
     A = np.vstack([G, Ts]) @ X
-    c = np.concatenate([(1.0 + e) * (G @ qd), Ts @ qd])
+    c = np.concatenate([(1.0 + e) * (G @ qd) + G @ kick, Ts @ (qd + kick)])
     z = mixed_complementarity(A, c, a, "impulses of an impact with friction")
     d = len(bases[0]) if a else 1
     z[a:] = share_by_capacity(A[a:, a:], z[a:], np.repeat(mu_s[stuck] * z[:a][stuck], d))
@@ -242,4 +247,4 @@ def _impact_trial(G, T, bases, mu, mu_s, e, qd, response, stuck, along) -> tuple
     for i, k in enumerate(sticking):
         P_t[k] = bases[k].T @ z[a + d * i:a + d * (i + 1)]
     P_t[sliding] = -(mu * z[:a])[sliding, None] * along[sliding]
-    return qd + X @ z, z[:a], P_t
+    return qd + kick + X @ z, z[:a], P_t

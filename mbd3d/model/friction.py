@@ -26,7 +26,7 @@ from mbd3d.model.body import Body
 from mbd3d.model.forces import ForceElement
 from mbd3d.numerics.compiled import forces as kernel
 
-__all__ = ["JointFriction", "FrictionGroup", "consistent_multipliers",
+__all__ = ["JointFriction", "FrictionGroup", "consistent_multipliers", "solve_frictions",
            "raise_friction_with_redundancy"]
 
 #: Newton iterations allowed to make friction and reactions consistent, and the residual of
@@ -257,14 +257,8 @@ def consistent_multipliers(model, t: float, fr, solve, lam0: np.ndarray, x0=None
     ones; it is affine in ``extra``, and ``(lam0, x0)`` is its value without friction. The
     frictions ``e`` (k,) then satisfy ``e = -mu load(lam0 + W e) tanh(v / v_s)``, ``W`` the
     multipliers' response to each unit friction (k more solves), which Newton's method
-    solves in k unknowns. Returns ``(lam, x)`` with the frictions applied.
-
-    Raises
-    ------
-    IntegrationError
-        Where no consistent friction is found: the joint is at or near self-locking (its
-        friction arm too long for its geometry).
-    """
+    solves in k unknowns (:func:`solve_frictions`, which raises where there is none).
+    Returns ``(lam, x)`` with the frictions applied."""
     group: FrictionGroup = model.friction
     G, speed = group.directions(model, fr)
     k = len(group.elements)
@@ -277,31 +271,44 @@ def consistent_multipliers(model, t: float, fr, solve, lam0: np.ndarray, x0=None
         W[:, n] = lam_n - lam0
         responses.append(None if x_n is None else x_n - x0)
     factor = group.mu * np.tanh(speed / group.v_s)
-    efforts = -factor * group.loads(model, fr, lam0)
-    scale = float(np.max(np.abs(efforts), initial=0.0))
-    residual = np.inf
-    for _ in range(MAX_FRICTION_ITERATIONS):
-        load, grad = group.loads(model, fr, lam0 + W @ efforts, jacobian=True)
-        error = efforts + factor * load
-        residual = float(np.max(np.abs(error)))
-        scale = max(scale, float(np.max(np.abs(efforts))))
-        if residual <= FRICTION_TOLERANCE * max(scale, 1e-300):
-            break
-        jacobian = np.eye(k) + factor[:, None] * (grad @ W)
-        try:
-            efforts = efforts - np.linalg.solve(jacobian, error)
-        except np.linalg.LinAlgError:
-            residual = np.inf
-            break
-    if not residual <= FRICTION_TOLERANCE * max(scale, 1e-300):
-        raise IntegrationError(
-            f"'{model.name}': the friction in {', '.join(repr(n) for n in group.names)} and "
-            f"the reactions it depends on have no consistent solution at t = {t:.6g} s: the "
-            "joint is at or near self-locking, its friction coefficient too high for its "
-            "geometry", time=t)
+    efforts = solve_frictions(model, t, fr, factor, lambda e: lam0 + W @ e, lambda e: W,
+                              -factor * group.loads(model, fr, lam0))
     lam = lam0 + W @ efforts
     x = None if x0 is None else x0 + sum(e * r for e, r in zip(efforts, responses))
     return lam, x
+
+
+def solve_frictions(model, t: float, fr, factor: np.ndarray, multipliers, slope,
+                    efforts: np.ndarray) -> np.ndarray:
+    """The frictions ``e`` (k,) consistent with the multipliers they give rise to, by
+    Newton's method from ``efforts``: ``e = -factor load(lam(e))``, ``factor`` (k,) being
+    ``mu tanh(v / v_s)`` and ``load`` :meth:`FrictionGroup.loads`. ``multipliers(e)`` gives
+    ``lam`` (m,), ``slope(e)`` its derivative ``dlam/de`` (m, k) there.
+
+    Raises
+    ------
+    IntegrationError
+        Where no consistent friction is found: the joint is at or near self-locking (its
+        friction arm too long for its geometry).
+    """
+    group: FrictionGroup = model.friction
+    scale = float(np.max(np.abs(efforts), initial=0.0))
+    for _ in range(MAX_FRICTION_ITERATIONS):
+        load, grad = group.loads(model, fr, multipliers(efforts), jacobian=True)
+        error = efforts + factor * load
+        scale = max(scale, float(np.max(np.abs(efforts))))
+        if float(np.max(np.abs(error))) <= FRICTION_TOLERANCE * max(scale, 1e-300):
+            return efforts
+        jacobian = np.eye(len(efforts)) + factor[:, None] * (grad @ slope(efforts))
+        try:
+            efforts = efforts - np.linalg.solve(jacobian, error)
+        except np.linalg.LinAlgError:
+            break
+    raise IntegrationError(
+        f"'{model.name}': the friction in {', '.join(repr(n) for n in group.names)} and "
+        f"the reactions it depends on have no consistent solution at t = {t:.6g} s: the "
+        "joint is at or near self-locking, its friction coefficient too high for its "
+        "geometry", time=t)
 
 
 def raise_friction_with_redundancy(model, t: float) -> None:
