@@ -20,6 +20,8 @@ G = 9.81
 TIGHT = dict(method="DOP853", rtol=1e-10, atol=1e-12)
 #: the rods: length [m], mass [kg], the radius of the circle at their end [m]
 ROD, ROD_MASS, END = 1.0, 2.0, 0.01
+#: the radius of the pendulum's pin [m] (the friction in its hinge)
+PIN = 0.1
 #: the spatial rod's inertia about every axis [kg m^2]
 SPATIAL_INERTIA = 0.3
 
@@ -199,17 +201,21 @@ def test_an_impact_that_would_give_energy_is_refused_naming_it():
         mb.forward_dynamics(model, np.linspace(0.0, 0.5, 3), **TIGHT)
 
 
-def pendulum_striking_floor(phi: float, omega: float, mu: float, e: float) -> mb.Model:
+def pendulum_striking_floor(phi: float, omega: float, mu: float, e: float,
+                            hinge_friction: float = 0.0) -> mb.Model:
     """A rod (1 m, 2 kg) hinged at the origin, swinging down at ``omega`` [rad/s] without
     gravity 0.2 rad before its tip (a 1 mm circle) strikes a floor at ``phi`` below the
-    hinge's horizontal."""
+    hinge's horizontal; with ``hinge_friction``, the hinge's Coulomb coefficient on a pin
+    of radius :data:`PIN`."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, 0.0))
     a = phi - 0.2
     centre = np.array([np.cos(a), -np.sin(a)]) * ROD / 2
     rod = b.add_body("rod", mass=ROD_MASS, inertia=ROD_MASS * ROD ** 2 / 12,
                      position=tuple(centre), angle=-a, angular_velocity=omega,
                      velocity=(-omega * centre[1], omega * centre[0]))
-    b.add(Revolute("hinge", b.ground, rod, at=(0.0, 0.0)))
+    hinge = b.add(Revolute("hinge", b.ground, rod, at=(0.0, 0.0)))
+    if hinge_friction:
+        b.add(mb.JointFriction("rub", hinge, hinge_friction, pin_radius=PIN))
     b.add(mb.Contact("tip", mb.Sphere(rod, 1e-3, point=(ROD / 2, 0.0)),
                      mb.Plane(b.ground, normal=(0.0, 1.0), point=(0.0, -ROD * np.sin(phi) - 1e-3)),
                      law=mb.RigidImpact(e), friction=mu))
@@ -235,6 +241,40 @@ def test_a_pendulum_striking_a_floor_as_its_angular_momentum_says(phi, mu):
     normal = hinged * (1.0 + e) * abs(omega) / (x - mu * y)
     np.testing.assert_allclose(impact["impulse"], normal, rtol=1e-9)
     np.testing.assert_allclose(impact["friction_impulse"], [mu * normal, 0.0, 0.0], rtol=1e-9)
+
+
+@pytest.mark.parametrize("phi, e", [(0.5, 0.5), (0.0, 0.0), (1.2, 1.0)])
+def test_a_pendulum_striking_a_floor_takes_its_hinges_friction_impulse(phi, e):
+    """With Coulomb friction in the hinge (mu_j on a pin of radius r) and none at the tip,
+    the impact's impulses load the pin, whose friction impulse mu_j r |R| opposes the swing
+    while the tip closes (compression: dw = |omega| about the hinge) and the swing back
+    while it opens again (restitution: dw = e |omega|, Newton's law at the tip). In each
+    phase about the hinge I dw = x P -+ mu_j r |R|, x = L cos phi the tip's arm, omega the
+    swing at the strike (the pin's friction has slowed it from its start) and the pin's
+    impulse R = m dv_G - (0, P), the centre's velocity change dv_G = dw (L/2)(sin phi,
+    cos phi). The pin's impulse depends on the friction's: each phase solved here by SciPy's
+    brentq, the impulse their sum."""
+    from scipy.optimize import brentq
+
+    omega, mu_j = -2.0, 0.5
+    res = mb.forward_dynamics(pendulum_striking_floor(phi, omega, 0.0, e, mu_j),
+                              np.linspace(0.0, 0.2, 3), **TIGHT)
+    (impact,) = res.stats["impacts"]
+    x, hinged = ROD * np.cos(phi), ROD_MASS * ROD ** 2 / 3
+    swing = -impact["rate_before"] / x
+
+    def phase(dw: float, sense: float) -> float:
+        def balance(P: float) -> float:
+            pin = ROD_MASS * dw * ROD / 2 * np.array([np.sin(phi), np.cos(phi)]) - [0.0, P]
+            return x * P + sense * mu_j * PIN * np.linalg.norm(pin) - hinged * dw
+        return brentq(balance, 0.0, 2 * hinged * dw / x + 1.0, xtol=1e-15, rtol=1e-15)
+
+    normal = phase(swing, 1.0) + (phase(e * swing, -1.0) if e else 0.0)
+    frictionless = hinged * (1 + e) * swing / x
+    assert abs(normal / frictionless - 1.0) > 0.01  # the friction takes a visible part
+    np.testing.assert_allclose(impact["impulse"], normal, rtol=1e-9)
+    np.testing.assert_allclose(impact["rate_after"], -e * impact["rate_before"], rtol=0,
+                               atol=1e-12)
 
 
 def test_a_pendulum_that_would_jam_is_refused():

@@ -180,24 +180,30 @@ class RigidContacts:
         """One round: Newton's law on the ``active`` rows closing at ``before``, with
         Coulomb's friction where they have it
         (:func:`~mbd3d.analyses.sticking.impact_with_friction`) and in the joints
-        (:func:`~mbd3d.analyses.joint_impulses.joint_friction_impulses`); recorded."""
-        e = self.e[active]
+        (:func:`~mbd3d.analyses.joint_impulses.joint_friction_impulses`: in two phases,
+        the rows brought to rest then to ``-e`` times ``before``, since a joint's slide may
+        turn back between them, as a pendulum's hinge does, and its friction with it);
+        recorded."""
+        e, a = self.e[active], int(np.sum(active))
         G, T = self.rate_rows(q, active)
         slip = T @ qd
-        if self.model.friction is None:
-            after, lam, P_t = self._contact_impulses(t, q, qd, active, before, G, T)
-        else:
-            after, lam, P_t = self._with_joint_friction(t, q, qd, active, before, G, T)
-        if np.any(self.mu_static[active] > 0.0):
+        phases = 1 if self.model.friction is None else 2
+        lam, P_t, lost = np.zeros(a), np.zeros((a, 3)), np.zeros(a)
+        for k in range(phases):
+            rates, slips = G @ qd, T @ qd
+            # the least change of the rates: to -e times those before at once, or to rest
+            # and from there to -e times those before
+            closing = ((1.0 + e) * before if phases == 1
+                       else rates if k == 0 else rates + e * before)
+            qd, p, P = self._phase(t, q, qd, active, G, T, closing)
+            lam, P_t = lam + p, P_t + P
             # each row's impulses' work: what it takes from the motion, or gives (Kane's)
-            lost = -0.5 * (lam * (before + G @ after)
-                           + np.einsum("ki,ki->k", P_t, slip + T @ after))
+            lost += -0.5 * (p * (rates + G @ qd) + np.einsum("ki,ki->k", P, slips + T @ qd))
+        if np.any(self.mu_static[active] > 0.0):
             self._refuse_gain(t, active, lost, lam * np.abs(before)
                               + np.linalg.norm(P_t, axis=1) * np.linalg.norm(slip, axis=1))
         else:
-            # >= 0 (a row at rest enters at zero rate, to rounding)
-            lost = np.maximum(-0.5 * (1.0 - e) * lam * before, 0.0)
-        qd = after
+            lost = np.maximum(lost, 0.0)  # a row at rest enters at zero rate, to rounding
         after = G @ qd
         self.states(q, qd)
         for a, k in enumerate(np.flatnonzero(active)):
@@ -209,32 +215,35 @@ class RigidContacts:
                     "point": self._points[k].tolist()})
         return qd
 
-    def _contact_impulses(self, t, q, qd, active, before, G, T, kick=None) -> tuple:
+    def _contact_impulses(self, t, q, qd, active, G, T, closing, kick=None) -> tuple:
         """``(qd+, p, P_t)`` of the ``active`` rows' impact (normal impulses ``p``, friction
         ``P_t``) with the velocities changed by ``kick`` (n,; the joints' friction) besides:
-        Newton's law on the rates ``before``, Coulomb's where rows have friction (where it
-        fails, the run is refused naming the rows and the time)."""
-        n, e = self.model.n_coordinates, self.e[active]
+        Newton's law, the rates' change at least ``closing`` (without ``kick``'s), Coulomb's
+        where rows have friction (where it fails, the run is refused naming the rows and the
+        time)."""
+        n = self.model.n_coordinates
         kick = np.zeros(n) if kick is None else kick
         if not np.any(self.mu_static[active] > 0.0):
             X = self.response(t, q, G)[:n]
-            lam = impulses(G @ X, (1.0 + e) * before + G @ kick)
+            lam = impulses(G @ X, closing + G @ kick)
             return qd + kick + X @ lam, lam, np.zeros((len(lam), 3))
         try:
-            return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active], e,
-                                        qd, lambda R: self.response(t, q, R)[:n],
+            return impact_with_friction(G, T, self.slips(q, qd)[1][active], self.mu[active],
+                                        closing, qd, lambda R: self.response(t, q, R)[:n],
                                         self.model.n_coords_per_body == 3,
                                         self.mu_static[active], kick)
         except ModelError as error:
             raise ModelError(f"{self._what(t, active)}, {error}") from None
 
-    def _with_joint_friction(self, t, q, qd, active, before, G, T) -> tuple:
-        """:meth:`_contact_impulses` with the joints' friction impulses
-        (:func:`~mbd3d.analyses.joint_impulses.joint_friction_impulses`)."""
+    def _phase(self, t, q, qd, active, G, T, closing) -> tuple:
+        """:meth:`_contact_impulses`, with the joints' friction impulses where the model has
+        joint friction (:func:`~mbd3d.analyses.joint_impulses.joint_friction_impulses`)."""
+        if self.model.friction is None:
+            return self._contact_impulses(t, q, qd, active, G, T, closing)
         n = self.model.n_coordinates
 
         def contact(kick: np.ndarray, lam: np.ndarray) -> tuple:
-            after, p, P_t = self._contact_impulses(t, q, qd, active, before, G, T, kick)
+            after, p, P_t = self._contact_impulses(t, q, qd, active, G, T, closing, kick)
             impulse = G.T @ p + np.einsum("kin,ki->n", T, P_t)  # generalized, of the rows
             return after, p, P_t, lam + self.response(t, q, impulse[None])[n:, 0]
 
@@ -246,7 +255,8 @@ class RigidContacts:
     def _what(self, t: float, active: np.ndarray) -> str:
         """The impact at ``t`` on the ``active`` rows, for errors."""
         names = ", ".join(f"'{self.names[k]}'" for k in np.flatnonzero(active)[:6])
-        return f"forward dynamics of '{self.model.name}': at the impact at t = {t:.9g} s on {names}"
+        return (f"forward dynamics of '{self.model.name}': at the impact at t = {t:.9g} s on "
+                f"{names}")
 
     def _refuse_gain(self, t: float, active: np.ndarray, lost: np.ndarray,
                      size: np.ndarray) -> None:

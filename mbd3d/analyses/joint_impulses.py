@@ -15,6 +15,11 @@ a piece: the impulses are piecewise affine in ``E``, by the contacts' active set
 joint whose slide the impact turned back sticks, one whose sticking impulse leaves its cone
 slides (away from that impulse), until the modes hold.
 
+The impact is taken in two phases (:meth:`mbd3d.analyses.impacts.RigidContacts._impact`):
+the contact rows brought to rest, then to ``-e`` times their rates before, so that a joint
+whose slide the impact turns back (a pendulum's hinge as its tip bounces) rubs against each
+sense in turn, as through a stiff contact's compression and restitution.
+
 A carriage sliding on a rail with friction, struck from above by a ball, slows by
 ``mu P / M`` at the strike (``P`` the ball's impulse): what a stiff compliant contact's
 force would take through the rail's friction over its short duration.

@@ -118,15 +118,17 @@ def share_by_capacity(A: np.ndarray, s: np.ndarray, capacity: np.ndarray) -> np.
 
 
 def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: np.ndarray,
-                         e: np.ndarray, qd: np.ndarray, response, planar: bool,
+                         closing: np.ndarray, qd: np.ndarray, response, planar: bool,
                          mu_static: np.ndarray | None = None, kick: np.ndarray | None = None
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An impact on rigid rows with Coulomb's friction: ``(qd+, P_n (a,) [N s], P_t (a, 3)
     [N s])``, the velocities after it and each row's normal and friction impulses (the
     friction on the second shape, global axes).
 
-    Newton's law holds the normal rates as without friction (``G qd+ + e G qd- >= 0``,
-    complementary to ``P_n >= 0``) and Coulomb's the slips after the impact, as a held row's
+    Newton's law holds the normal rates as without friction (``G qd+ - G qd- + closing >= 0``,
+    complementary to ``P_n >= 0``; ``closing`` (a,) is ``(1 + e) G qd-`` for a whole impact,
+    ``G qd- - target`` for a phase that brings the rates to ``target``) and Coulomb's the
+    slips after the impact, as a held row's
     (Moreau's law, the tangential restitution zero): a row *sticks*, ``T qd+ = 0`` with
     ``|P_t| <= mu_s P_n`` (``mu_static``, default ``mu``), or *slides*, ``P_t = -mu P_n u``
     with ``u`` the direction of its slip ``T qd+`` after the impact. ``G`` (a, n) and ``T``
@@ -138,7 +140,7 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
     slides the other way, until the modes hold; in space the sliding rows' directions are
     those their slips come out along (:func:`_settle_directions`). ``kick`` (n,): a change
     of the velocities by other impulses at the same impact (the joints' friction), which
-    Newton's law does not restore (it acts on ``G qd`` before any impulse)."""
+    Newton's law does not restore (``closing`` is of the rates before any impulse)."""
     a = len(G)
     kick = np.zeros_like(qd) if kick is None else kick
     mu_s = mu if mu_static is None else mu_static
@@ -147,7 +149,7 @@ def impact_with_friction(G: np.ndarray, T: np.ndarray, normal: np.ndarray, mu: n
     before = max(float(np.max(np.abs(G @ qd), initial=0.0)),
                  float(np.max(np.abs(T @ qd), initial=0.0)), np.finfo(float).tiny)
     for _ in range(_TRIALS):
-        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, mu_s, e, qd, kick,
+        (after, P_n, P_t), phi = _settle_directions(G, T, bases, mu, mu_s, closing, qd, kick,
                                                     response, stuck, phi, before)
         slip = T @ after
         speed = np.linalg.norm(slip, axis=1)
@@ -187,7 +189,7 @@ def _directions(bases: list, phi: np.ndarray) -> np.ndarray:
                      for B, p in zip(bases, phi)]).reshape(len(phi), 3)
 
 
-def _settle_directions(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, phi,
+def _settle_directions(G, T, bases, mu, mu_s, closing, qd, kick, response, stuck, phi,
                        before) -> tuple:
     """``((qd+, P_n, P_t), phi)`` with the sliding rows' directions those of their slips
     after the impact: in the plane as given; in space, each row's angle ``phi`` solved by
@@ -196,7 +198,7 @@ def _settle_directions(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, phi,
     sliding = np.flatnonzero((mu_s > 0.0) & ~stuck)
 
     def mismatch(angles):
-        out = _impact_trial(G, T, bases, mu, mu_s, e, qd, kick, response, stuck,
+        out = _impact_trial(G, T, bases, mu, mu_s, closing, qd, kick, response, stuck,
                             _directions(bases, angles))
         slip = T[sliding] @ out[0]
         moving = np.linalg.norm(slip, axis=1) > 1e-12 * before
@@ -228,7 +230,7 @@ def _settle_directions(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, phi,
                      "coefficients or give the contacts compliant laws")
 
 
-def _impact_trial(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, along) -> tuple:
+def _impact_trial(G, T, bases, mu, mu_s, closing, qd, kick, response, stuck, along) -> tuple:
     """``(qd+, P_n, P_t)`` of an impact with the rows ``stuck`` sticking and the others
     with friction sliding ``along`` (:func:`impact_with_friction`; ``kick`` the velocities'
     change by the joints' friction)."""
@@ -239,7 +241,7 @@ def _impact_trial(G, T, bases, mu, mu_s, e, qd, kick, response, stuck, along) ->
     Ts = np.vstack([bases[k] @ T[k] for k in sticking] or [np.zeros((0, n))])
     X = response(np.vstack([columns, Ts]))
     A = np.vstack([G, Ts]) @ X
-    c = np.concatenate([(1.0 + e) * (G @ qd) + G @ kick, Ts @ (qd + kick)])
+    c = np.concatenate([closing + G @ kick, Ts @ (qd + kick)])
     z = mixed_complementarity(A, c, a, "impulses of an impact with friction")
     d = len(bases[0]) if a else 1
     z[a:] = share_by_capacity(A[a:, a:], z[a:], np.repeat(mu_s[stuck] * z[:a][stuck], d))
