@@ -393,12 +393,13 @@ class HeldRows:
         efforts = -factor * group.loads(model, fr, lam0)
         response = rigid.response(t, q, G)  # (n + m, k): the joints' to a unit of each
         free = np.concatenate([qdd0, lam0]) - response @ efforts
+        parts = self._parts(t, q, qd, rows) if np.any(rows) else None
         solved = {}
 
         def held(e: np.ndarray) -> tuple[tuple, np.ndarray]:
             if e.tobytes() not in solved:
                 x = free + response @ e
-                solved[e.tobytes()] = self._held(t, q, qd, rows, x[:n], x[n:])
+                solved[e.tobytes()] = self._held(t, q, qd, rows, x[:n], x[n:], parts)
             return solved[e.tobytes()]
 
         def slope(e: np.ndarray) -> np.ndarray:
@@ -414,9 +415,11 @@ class HeldRows:
         return solution, applied + G.T @ efforts
 
     def _held(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray,
-              qdd0: np.ndarray, lam0: np.ndarray) -> tuple[tuple, np.ndarray]:
+              qdd0: np.ndarray, lam0: np.ndarray, parts: tuple | None = None
+              ) -> tuple[tuple, np.ndarray]:
         """The solution :meth:`_solve` returns, from the joints' ``qdd0`` and ``lam0`` with
-        the applied forces fixed, and the held rows' generalized forces (n,)."""
+        the applied forces fixed, and the held rows' generalized forces (n,); ``parts``:
+        :meth:`_parts` of the same state and rows (default evaluated here)."""
         rigid, n = self.rigid, self.model.n_coordinates
         r = len(rigid)
         f, w, diag = np.zeros(r), np.zeros(r), np.ones(r)
@@ -424,14 +427,13 @@ class HeldRows:
         if not np.any(rows):
             return (qdd0, lam0, f, w, diag, friction, margin), np.zeros(n)
         a = int(np.sum(rows))
-        G, T = rigid.rate_rows(q, rows, qd)  # the convective terms in the same call
-        b = G @ qdd0 + rigid.convective(q, qd)[rows]
-        if np.any(self.mu_static[rows] > 0.0):
+        G, T, convective, XY = self._parts(t, q, qd, rows) if parts is None else parts
+        b = G @ qdd0 + convective
+        if XY is None:
             z, XY, W, columns = self._with_friction(t, q, qd, rows, G, T, qdd0, b,
                                                     friction, margin)
         else:
             columns = G
-            XY = rigid.response(t, q, G)
             W = G @ XY[:n]
             z = _spread(W, b, impulses(W, b))
         f[rows] = z[:a]
@@ -439,6 +441,17 @@ class HeldRows:
         diag[rows] = np.diag(W)[:a]
         return ((qdd0 + XY[:n] @ z, lam0 + XY[n:] @ z, f, w, diag, friction, margin),
                 columns.T @ z)
+
+    def _parts(self, t: float, q: np.ndarray, qd: np.ndarray, rows: np.ndarray) -> tuple:
+        """What :meth:`_held` takes of the state alone, whatever the joints' accelerations:
+        the held ``rows``' gap and slip rows ``G``, ``T``, their gaps' convective terms and,
+        where none has friction, the joints' response ``[X; Y]`` to a unit force on each
+        (None with friction: it depends on how they stick or slide)."""
+        rigid = self.rigid
+        G, T = rigid.rate_rows(q, rows, qd)  # the convective terms in the same call
+        convective = rigid.convective(q, qd)[rows]
+        rubbing = np.any(self.mu_static[rows] > 0.0)
+        return G, T, convective, None if rubbing else rigid.response(t, q, G)
 
     def _with_friction(self, t, q, qd, rows, G, T, qdd0, b, friction, margin) -> tuple:
         """``(z, [X; Y], A, columns)`` of the held ``rows`` with friction (:mod:`.sticking`):
