@@ -1,12 +1,16 @@
 """What a time point of inverse dynamics costs (positions by Newton-Raphson from the last point,
 velocities, accelerations, multipliers), solved in one compiled call, through LAPACK with the
-Jacobian factored densely, and through SuperLU with it sparse.
+Jacobian factored densely, and through SuperLU with it sparse; and that cost against one
+``mb.forward_accelerations`` call at the model's initial state (issue #34's target for the
+1000-link chain: at most 10 times).
 
 Models: the PUMA 560 of tests/data driven by a harmonic motion at each joint (36 coordinates),
-and planar chains driven at every pin (60 to 600 coordinates). Medians of a few runs of 201
-points in one process. mbd3d.model.constraints.KINEMATIC_DENSE_LIMIT is where the library
-switches to sparse factors; below it the compiled call is used where the model allows
-(mbd3d.analyses.kinematics.COMPILED_POINTS): the compiled column is measured only there.
+and planar chains driven at every pin (60 to 3000 coordinates). Medians of a few runs of 201
+points in one process. The compiled call is what the library uses where the model allows
+(mbd3d.analyses.kinematics.COMPILED_POINTS), with the Jacobian dense or, ordered along the
+chain, banded (mbd3d.numerics.patterns.jacobian_layout); otherwise it factors densely up to
+mbd3d.model.constraints.KINEMATIC_DENSE_LIMIT coordinates and sparse above. The dense column
+is left out above 600 coordinates.
 
 Run: python benchmarks/kinematics.py [--repeat N]
 """
@@ -67,17 +71,28 @@ def per_point(model: mb.Model, path: str, repeat: int, points: int = 201) -> flo
         constraints.KINEMATIC_DENSE_LIMIT, kinematics.COMPILED_POINTS = limit, compiled
 
 
-def main(repeat: int = 3, links: tuple = (20, 33, 50, 100, 200), points: int = 201
+def accelerations_call(model: mb.Model, repeat: int) -> float:
+    """Median cost [s] of one ``mb.forward_accelerations`` call at the initial state."""
+    q, qd = model.q0, np.zeros(model.n_coordinates)
+    mb.forward_accelerations(model, 0.0, q, qd)  # compiles
+    calls = 200
+    return median_time(lambda: [mb.forward_accelerations(model, 0.0, q, qd)
+                                for _ in range(calls)], repeat) / calls
+
+
+def main(repeat: int = 3, links: tuple = (20, 33, 50, 100, 200, 1000), points: int = 201
          ) -> list[dict]:
     print(machine())
     rows = []
     for label, build in [("PUMA 560", puma)] + [
             (f"{n}-link chain", lambda n=n: driven_chain(n)) for n in links]:
         model = build()
-        small = model.n_coordinates <= constraints.KINEMATIC_DENSE_LIMIT
         row = {"model": label, "n": model.n_coordinates,
-               "compiled": per_point(model, "compiled", repeat, points) if small else math.nan}
-        row.update({path: per_point(model, path, repeat, points) for path in ("dense", "sparse")})
+               "compiled": per_point(model, "compiled", repeat, points),
+               "dense": (per_point(model, "dense", repeat, points)
+                         if model.n_coordinates <= 600 else math.nan),
+               "sparse": per_point(model, "sparse", repeat, points),
+               "accelerations": accelerations_call(model, repeat)}
         rows.append(row)
     print(mb.format_table({
         "model": [r["model"] for r in rows],
@@ -87,9 +102,14 @@ def main(repeat: int = 3, links: tuple = (20, 33, 50, 100, 200), points: int = 2
         "sparse [us/point]": [r["sparse"] * 1e6 for r in rows],
         "dense / compiled": [r["dense"] / r["compiled"] for r in rows],
         "sparse / dense": [r["sparse"] / r["dense"] for r in rows],
+        "forward_accelerations [us]": [r["accelerations"] * 1e6 for r in rows],
+        "compiled / forward_accelerations": [r["compiled"] / r["accelerations"] for r in rows],
     }, precision=4))
-    print(f"the library factors densely up to {constraints.KINEMATIC_DENSE_LIMIT} coordinates, "
-          "in the compiled call where the model allows")
+    print("the compiled call factors the Jacobian in a band where an ordering makes it narrow; "
+          f"the library factors densely up to {constraints.KINEMATIC_DENSE_LIMIT} coordinates "
+          "where the compiled call does not apply")
+    print("issue #34's target: a time point of the 1000-link chain at most 10 times one "
+          "forward_accelerations call, its cost linear in the size")
     return rows
 
 

@@ -10,17 +10,20 @@ import warnings
 
 import numpy as np
 import pytest
-from scipy.linalg.lapack import dgecon, dgetrf
+from scipy.linalg.lapack import dgbcon, dgbtrf, dgecon, dgetrf
 
 import mbd3d as mb
 from mbd3d.analyses import kinematics
 from mbd3d.joints import Distance, Prismatic, Revolute, RotationDriver
 from mbd3d.mechanisms import four_bar, slider_crank, spatial_slider_crank
 from mbd3d.model import constraints
-from mbd3d.numerics.compiled.kinematics import kinematic_point
-from mbd3d.numerics.linalg import Factorization, jacobian_scaling
-from mbd3d.numerics.compiled.dense import (lu_factor, lu_solve_transpose_into,
+from mbd3d.numerics.compiled.kinematics import jacobian_storage, kinematic_point
+from mbd3d.numerics.linalg import Factorization, jacobian_factors, jacobian_scaling
+from mbd3d.numerics.compiled.dense import (band_factor, band_reciprocal_condition,
+                                           band_solve_into, band_solve_transpose_into,
+                                           lu_factor, lu_solve_transpose_into,
                                            reciprocal_condition)
+from mbd3d.numerics.patterns import jacobian_layout
 from test_gears import gear_train, planetary
 
 DATA = pathlib.Path(__file__).parent / "data"
@@ -47,6 +50,77 @@ def test_the_condition_estimate_is_lapacks(n):
         # a backward-stable solve: the residual at the rounding of the products it sums
         size = np.abs(A.T) @ np.abs(x) + np.abs(b)
         assert np.all(np.abs(A.T @ x - b) <= 1e-13 * n * size)
+
+
+def _lapack_band(A: np.ndarray, kl: int, ku: int) -> np.ndarray:
+    """``A`` in LAPACK's band storage with room for fill-in, ``ab[kl + ku + i - j, j]``."""
+    n = A.shape[0]
+    ab = np.zeros((2 * kl + ku + 1, n))
+    for i, j in zip(*np.nonzero(A)):
+        ab[kl + ku + i - j, j] = A[i, j]
+    return ab
+
+
+@pytest.mark.parametrize("n, kl, ku", [(1, 0, 0), (2, 1, 0), (3, 0, 2), (7, 2, 3),
+                                       (36, 5, 11), (80, 11, 5), (80, 3, 3)])
+def test_the_band_condition_estimate_is_lapacks(n, kl, ku):
+    """LAPACK's gbcon on gbtrf's factors, and the banded solves with and without the
+    transpose, on band matrices whose conditioning spans ten orders: the interchanges of a
+    band LU interleave with L, so its estimate is not gecon's."""
+    rng = np.random.default_rng(100 * n + kl)
+    i, j = np.indices((n, n))
+    inside = (i - j <= kl) & (j - i <= ku)
+    for trial in range(30):
+        A = rng.standard_normal((n, n)) if trial < 6 else rng.standard_cauchy((n, n))
+        A *= inside
+        A[:, trial % n] *= 10.0 ** (-2 * (trial % 6))
+        norm = float(np.abs(A).sum(axis=0).max())
+        lu, ipiv, info = dgbtrf(_lapack_band(A, kl, ku), kl, ku)
+        expected = dgbcon(kl, ku, lu, ipiv, norm)[0]
+        ab = _lapack_band(A, kl, ku).ravel(order="F")
+        piv, regular = band_factor(ab, n, kl, ku, 0.0)
+        assert info == 0 and regular
+        assert band_reciprocal_condition(ab, n, kl, ku, piv, norm) == pytest.approx(
+            expected, rel=1e-10)
+        for solve, matrix in ((band_solve_into, A), (band_solve_transpose_into, A.T)):
+            b = rng.standard_normal(n)
+            x = b.copy()
+            solve(ab, n, kl, ku, piv, x)
+            # backward stable in norm (LU with partial pivoting is not componentwise: a
+            # column scaled down makes x large, and L^T's sums cancel)
+            size = np.abs(matrix).sum(axis=1).max() * np.abs(x).max() + np.abs(b).max()
+            assert np.abs(matrix @ x - b).max() <= 1e-14 * n * size
+
+
+def test_a_chain_s_jacobian_is_factored_in_a_band_as_narrow_at_any_length():
+    """A driven chain's rows and columns ordered along it: the same bandwidths at 10 and 40
+    links (the cost of a time point linear in the length), the PUMA's narrow too; a slider-
+    crank's Jacobian is factored dense."""
+    def bands(model):
+        return tuple(jacobian_layout(model._jac_rows, model._jac_cols, model.n_coordinates)[3])
+
+    assert bands(_driven_chain(10)) == bands(_driven_chain(40))
+    kl, ku = bands(_driven_chain(40))
+    # a pin's two rows and its driver's share the six columns of two bodies: in any order
+    # the three rows and six columns span kl + ku >= 2 + 5, and the LU's work, kl (kl + ku)
+    # a column, is least with the two on the side of kl
+    assert (kl, ku) == (2, 5)
+    kl, ku = bands(_puma())
+    assert 0 <= kl * (kl + ku) <= 36 ** 2 / 12
+    assert bands(slider_crank()) == (-1, -1)
+
+
+def _driven_chain(links: int) -> mb.Model:
+    """A hanging planar chain of 1 m bars, every pin driven at its own rate."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name=f"driven {links}-link chain")
+    previous = b.ground
+    for k in range(links):
+        body = b.add_body(f"link{k + 1}", mass=1.0, inertia=1.0 / 12,
+                          position=(0.0, -(k + 0.5)), angle=-np.pi / 2)
+        pin = b.add(Revolute(f"pin{k + 1}", previous, body, at=(0.0, -float(k))))
+        b.add(RotationDriver(f"drive{k + 1}", pin, motion=mb.Harmonic(0.2, 1.0 + 0.1 * k)))
+        previous = body
+    return b.build()
 
 
 def _puma() -> mb.Model:
@@ -82,6 +156,7 @@ MODELS = {
     "planetary": lambda: planetary(carrier_load=1.5),
     "spatial slider-crank": spatial_slider_crank,
     "PUMA 560": _puma,
+    "40-link driven chain (sparse, banded)": lambda: _driven_chain(40),
 }
 
 
@@ -111,15 +186,24 @@ def test_compiled_time_points_are_the_lapack_path_s(name, monkeypatch):
                                    err_msg=field)
     np.testing.assert_allclose(res.lam, expected.lam, rtol=0,
                                atol=1e-11 * np.abs(expected.lam).max())
-    if model.dim == 2:
-        # the conditioning the singular positions are judged by: LAPACK's estimate
-        q = res.q[-1].copy()
-        solver = kinematics._PointSolver(model, 1e-12, False, None, "inverse dynamics")
-        status, conditioning = kinematic_point(
-            model._core.workspace(), t[-1], q, None, solver.scales, 1e-12, model.length_scale,
-            50, True, *np.empty((3, model.n_coordinates)))
-        Cq = constraints.jacobian(model, t[-1], q, sparse=False)
+    # the conditioning the singular positions are judged by: LAPACK's estimate, gecon's of
+    # the dense factors or gbcon's of the band ones, the rows and columns in the layout's order
+    q = res.q[-1].copy()
+    charts = None if model.dim == 2 else np.array(res.charts[-1])
+    solver = kinematics._PointSolver(model, 1e-12, False, None, "inverse dynamics")
+    status, conditioning = kinematic_point(
+        model._core.workspace(), t[-1], q, charts, solver.scales, 1e-12, model.length_scale,
+        50, True, *np.empty((3, model.n_coordinates)),
+        jacobian_storage(model.n_coordinates, solver.scales[7]))
+    fr = constraints.frames(model, q, charts=charts)
+    Cq = constraints.jacobian(model, t[-1], q, fr, sparse=False)
+    row_at, col_at, _, (kl, ku) = solver.scales[4:]
+    if kl < 0:
         lapack = Factorization(Cq, scaling=jacobian_scaling(model)).reciprocal_condition()
-        assert status == 0 and conditioning == pytest.approx(lapack, rel=1e-10)
-
-
+    else:
+        r, c = jacobian_factors(model)
+        ordered = np.zeros_like(Cq)
+        ordered[np.ix_(row_at, col_at)] = r[:, None] * Cq * c[None, :]
+        lu, ipiv, _ = dgbtrf(_lapack_band(ordered, kl, ku), kl, ku)
+        lapack = dgbcon(kl, ku, lu, ipiv, np.abs(ordered).sum(axis=0).max())[0]
+    assert status == 0 and conditioning == pytest.approx(lapack, rel=1e-10)

@@ -24,9 +24,11 @@ from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDri
 from mbd3d.numerics import compiled
 from mbd3d.model.spatial import CHART_LIMIT
 from mbd3d.numerics.compiled.kinematics import VELOCITY_TOLERANCE, kinematic_points
-from mbd3d.numerics.linalg import (Factorization, SingularMatrix, augmented_scaling, dependent_rows,
-                                   jacobian_factors, jacobian_scaling, ranked_rows, solve_augmented,
+from mbd3d.numerics.linalg import (Factorization, SingularMatrix,
+                                   augmented_scaling, dependent_rows, jacobian_factors,
+                                   jacobian_scaling, ranked_rows, solve_augmented,
                                    solve_augmented_lagrangian, solve_model_augmented, summarize)
+from mbd3d.numerics.patterns import jacobian_layout
 from mbd3d.analyses.position import (MAX_AUGMENTED_LAGRANGIAN, MAX_NEWTON_ITERATIONS,
                                      hold_indices, singular_error, solve_position)
 from mbd3d.io.observers import Observer, Watch
@@ -319,19 +321,23 @@ def _mesh_pieces(model, q: np.ndarray, qd: np.ndarray, chart, h: float) -> int:
 #: time points solved in one compiled call at most (a few milliseconds)
 POINTS_PER_CALL = 100
 #: solve the time points of a kinematic sweep in one compiled call where the model allows
-#: (:func:`_compiled_points`); interpreted (``NUMBA_DISABLE_JIT=1``) the LAPACK path is
+#: (:func:`_compiled_layout`); interpreted (``NUMBA_DISABLE_JIT=1``) the LAPACK path is
 #: faster, and the tests set this to compare the two
 COMPILED_POINTS = not compiled.DISABLED
 
 
-def _compiled_points(model, surplus: bool) -> bool:
-    """Whether the time points of ``model`` are solved by
-    :func:`mbd3d.numerics.compiled.kinematics.kinematic_points`: its motions and forces are
-    in the compiled core (no joint friction, no Python functions), its rows as many as its
-    coordinates, its Jacobian factored densely."""
-    return (COMPILED_POINTS and not surplus and constraints.motions_compiled(model)
-            and model.n_constraints == model.n_coordinates
-            and not constraints.kinematic_sparse(model))
+def _compiled_layout(model, surplus: bool) -> tuple | None:
+    """How :func:`mbd3d.numerics.compiled.kinematics.kinematic_points` factors the Jacobian
+    of ``model`` (:func:`mbd3d.numerics.patterns.jacobian_layout`), or None where its time
+    points are solved in Python: its motions or forces not in the compiled core (joint
+    friction, Python functions), its rows not as many as its coordinates, or a large model
+    whose Jacobian has no narrow band."""
+    if not (COMPILED_POINTS and not surplus and constraints.motions_compiled(model)
+            and model.n_constraints == model.n_coordinates):
+        return None
+    layout = jacobian_layout(model._jac_rows, model._jac_cols, model.n_coordinates)
+    dense = layout[3][0] < 0
+    return None if dense and constraints.kinematic_sparse(model) else layout
 
 
 class _PointSolver:
@@ -344,9 +350,10 @@ class _PointSolver:
         self.analysis, self.what = analysis, f"{analysis} of '{model.name}'"
         self.reference = 1.0  # the Jacobian's conditioning at the first time point
         self.scales = None
-        if _compiled_points(model, surplus):
+        layout = _compiled_layout(model, surplus)
+        if layout is not None:
             self.scales = (*jacobian_factors(model), np.asarray(model.length_rows, dtype=bool),
-                           np.asarray(model.position_coordinates, dtype=bool))
+                           np.asarray(model.position_coordinates, dtype=bool), *layout)
 
     def batch(self, t: np.ndarray, start: int, stop: int, q: np.ndarray, chart, turns,
               out: ResultsBuffer, forces: bool):

@@ -19,7 +19,7 @@ from mbd3d.numerics.linalg import (PIVOT_TOLERANCE, BandedFactorization, Factori
                                    SingularMatrix, _power_of_two, augmented_scaling)
 
 __all__ = ["AugmentedPattern", "RangeSpacePattern", "RangeSpaceFactorization", "PenaltyPattern",
-           "penalty_scale", "BANDED_WORK_LIMIT", "RANGE_SPACE_WORK_LIMIT"]
+           "penalty_scale", "jacobian_layout", "BANDED_WORK_LIMIT", "RANGE_SPACE_WORK_LIMIT"]
 
 
 #: banded LU is used for a sparse pattern when ``kl (kl + ku)``, its work per unknown, is at
@@ -29,6 +29,44 @@ BANDED_WORK_LIMIT = 4096
 #: the range-space solve (:class:`RangeSpacePattern`) is used for a banded pattern when
 #: ``k^2``, its work per constraint row for ``S``'s half-bandwidth ``k``, is at most this
 RANGE_SPACE_WORK_LIMIT = 1024
+
+
+def jacobian_layout(rows: np.ndarray, cols: np.ndarray, n: int
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """How the square Jacobian (n, n) with entries at ``(rows, cols)`` is factored by the
+    compiled kinematics (:mod:`mbd3d.numerics.compiled.kinematics`): ``(row_at, col_at, flat,
+    (kl, ku))``, each row's and column's place, each entry's place in LAPACK's band storage
+    and the bandwidths; ``kl`` is -1 where the matrix is best factored dense.
+
+    The columns are tried in their own order, in reverse Cuthill-McKee order of the columns
+    that share a row, and each reversed; the rows are then sorted by the last and first
+    places of their columns, which puts a chain's joint rows beside the columns of the
+    bodies they join. The order whose band LU costs least, ``kl (kl + ku)`` a column, is
+    taken where that is below a twelfth of the dense LU's ``n^2 / 3`` (and within
+    :data:`BANDED_WORK_LIMIT`)."""
+    rows, cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
+    shared = sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    shared = (shared.T @ shared).tocsr()
+    ordering = np.asarray(reverse_cuthill_mckee(shared, symmetric_mode=True), dtype=np.int64)
+    best = None
+    for order in (np.arange(n), ordering, np.arange(n)[::-1], ordering[::-1]):
+        col_at = np.empty(n, dtype=np.int64)
+        col_at[order] = np.arange(n)
+        last, first = np.full(n, -1), np.full(n, n)
+        np.maximum.at(last, rows, col_at[cols])
+        np.minimum.at(first, rows, col_at[cols])
+        row_at = np.empty(n, dtype=np.int64)
+        row_at[np.lexsort((first, last))] = np.arange(n)
+        reach = row_at[rows] - col_at[cols]
+        kl, ku = int(max(reach.max(initial=0), 0)), int(max(-reach.min(initial=0), 0))
+        if best is None or kl * (kl + ku) < best[2] * (best[2] + best[3]):
+            best = (row_at, col_at, kl, ku)
+    row_at, col_at, kl, ku = best
+    if n == 0 or 12 * kl * (kl + ku) > n * n or kl * (kl + ku) > BANDED_WORK_LIMIT:
+        return (np.arange(n, dtype=np.int64), np.arange(n, dtype=np.int64),
+                np.zeros(0, dtype=np.int64), np.array([-1, -1], dtype=np.int64))
+    flat = (kl + ku + row_at[rows] - col_at[cols]) + col_at[cols] * (2 * kl + ku + 1)
+    return row_at, col_at, flat.astype(np.int64), np.array([kl, ku], dtype=np.int64)
 
 
 class _FixedPattern:

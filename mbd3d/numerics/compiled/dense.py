@@ -147,44 +147,79 @@ def _largest_entry(x: np.ndarray) -> int:
 
 
 @jit
+def _inverse_into(LU: np.ndarray, ab: np.ndarray, kl: int, ku: int, piv: np.ndarray,
+                  x: np.ndarray, transpose: bool) -> None:
+    """``x <- U^-1 L^-1 x`` (``transpose``: ``x <- L^-T U^-T x``) from dense factors ``LU``
+    without their interchanges (as ``gecon`` applies them), or, where ``ab`` is not empty,
+    from band factors with theirs, which interleave with ``L`` (as ``gbcon``)."""
+    if ab.shape[0] == 0:
+        _triangular_solves(LU, x, transpose)
+    elif transpose:
+        band_solve_transpose_into(ab, x.shape[0], kl, ku, piv, x)
+    else:
+        band_solve_into(ab, x.shape[0], kl, ku, piv, x)
+
+
+@jit
+def _inverse_norm(LU: np.ndarray, ab: np.ndarray, kl: int, ku: int, piv: np.ndarray,
+                  n: int) -> float:
+    """Hager's and Higham's estimate of ``|A^-1|_1`` from the factors of :func:`_inverse_into`
+    (Higham, ACM TOMS 14, 1988, Algorithm 4.1): LAPACK's ``lacn2`` with the same start and
+    stopping rules."""
+    x = np.full(n, 1.0 / n)
+    _inverse_into(LU, ab, kl, ku, piv, x, False)
+    estimate = _absolute_sum(x)
+    if n == 1:
+        return estimate
+    signs = np.zeros(n)
+    _signs_into(x, signs)
+    _inverse_into(LU, ab, kl, ku, piv, x, True)
+    j = _largest_entry(x)
+    for iteration in range(2, 6):
+        x[:] = 0.0
+        x[j] = 1.0
+        _inverse_into(LU, ab, kl, ku, piv, x, False)
+        last = estimate
+        estimate = _absolute_sum(x)
+        # a repeated sign vector, or no growth: converged
+        if _signs_into(x, signs) or estimate <= last:
+            break
+        _inverse_into(LU, ab, kl, ku, piv, x, True)
+        j_last, j = j, _largest_entry(x)
+        if x[j_last] == abs(x[j]) or iteration == 5:
+            break
+    # an alternating vector catches what the power iteration misses
+    sign = 1.0
+    for i in range(n):
+        x[i] = sign * (1.0 + i / (n - 1))
+        sign = -sign
+    _inverse_into(LU, ab, kl, ku, piv, x, False)
+    return max(estimate, 2.0 * _absolute_sum(x) / (3.0 * n))
+
+
+@jit
 def reciprocal_condition(LU: np.ndarray, norm: float) -> float:
     """Estimate of ``1 / (|A|_1 |A^-1|_1)`` from the factors of :func:`lu_factor` of ``A``,
-    whose 1-norm is ``norm``: Hager's and Higham's estimate of ``|A^-1|_1`` (Higham, ACM TOMS
-    14, 1988, Algorithm 4.1), the algorithm of LAPACK's ``gecon`` and ``lacn2`` with the
-    same start and stopping rules, so that it agrees with the estimate of the dense
-    Factorization (SciPy's LAPACK) in :mod:`mbd3d.numerics.linalg`. ``|A^-1|_1`` is that of
-    ``U^-1 L^-1``: the interchanges permute its columns only."""
+    whose 1-norm is ``norm``: the algorithm of LAPACK's ``gecon``, so that it agrees with the
+    estimate of the dense Factorization (SciPy's LAPACK) in :mod:`mbd3d.numerics.linalg`.
+    ``|A^-1|_1`` is that of ``U^-1 L^-1``: the interchanges permute its columns only."""
     n = LU.shape[0]
     if norm == 0.0 or n == 0:
         return 0.0
-    x = np.full(n, 1.0 / n)
-    _triangular_solves(LU, x, False)
-    estimate = _absolute_sum(x)
-    if n > 1:
-        signs = np.zeros(n)
-        _signs_into(x, signs)
-        _triangular_solves(LU, x, True)
-        j = _largest_entry(x)
-        for iteration in range(2, 6):
-            x[:] = 0.0
-            x[j] = 1.0
-            _triangular_solves(LU, x, False)
-            last = estimate
-            estimate = _absolute_sum(x)
-            # a repeated sign vector, or no growth: converged
-            if _signs_into(x, signs) or estimate <= last:
-                break
-            _triangular_solves(LU, x, True)
-            j_last, j = j, _largest_entry(x)
-            if x[j_last] == abs(x[j]) or iteration == 5:
-                break
-        # an alternating vector catches what the power iteration misses
-        sign = 1.0
-        for i in range(n):
-            x[i] = sign * (1.0 + i / (n - 1))
-            sign = -sign
-        _triangular_solves(LU, x, False)
-        estimate = max(estimate, 2.0 * _absolute_sum(x) / (3.0 * n))
+    estimate = _inverse_norm(LU, np.empty(0), 0, 0, np.empty(0, dtype=np.int64), n)
+    if not estimate > 0.0:
+        return 0.0
+    return (1.0 / estimate) / norm
+
+
+@jit
+def band_reciprocal_condition(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray,
+                              norm: float) -> float:
+    """As :func:`reciprocal_condition` from the factors of :func:`band_factor`: the algorithm
+    of LAPACK's ``gbcon``."""
+    if norm == 0.0 or n == 0:
+        return 0.0
+    estimate = _inverse_norm(np.empty((0, 0)), ab, kl, ku, piv, n)
     if not estimate > 0.0:
         return 0.0
     return (1.0 / estimate) / norm
@@ -284,6 +319,29 @@ def band_solve_into(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray,
         x[j] /= ab[j * rows + kv]
         for i in range(max(0, j - kv), j):
             x[i] -= ab[j * rows + kv + i - j] * x[j]
+
+
+@jit
+def band_solve_transpose_into(ab: np.ndarray, n: int, kl: int, ku: int, piv: np.ndarray,
+                              x: np.ndarray) -> None:
+    """Overwrite ``x`` (holding ``b``) with the solution of ``A^T x = b`` from the factors of
+    :func:`band_factor` (LAPACK's ``gbtrs`` with ``trans``): ``U^T``, then ``L^T`` with the
+    interchanges undone in reverse."""
+    rows = 2 * kl + ku + 1
+    kv = kl + ku
+    for j in range(n):
+        total = x[j]
+        for i in range(max(0, j - kv), j):
+            total -= ab[j * rows + kv + i - j] * x[i]
+        x[j] = total / ab[j * rows + kv]
+    for j in range(n - 2, -1, -1):
+        total = x[j]
+        for i in range(1, min(kl, n - 1 - j) + 1):
+            total -= ab[j * rows + kv + i] * x[j + i]
+        x[j] = total
+        p = piv[j]
+        if p != j:
+            x[p], x[j] = x[j], x[p]
 
 
 @jit

@@ -2,12 +2,15 @@
 
 For a fully driven mechanism (as many independent rows as coordinates): positions by
 Newton-Raphson with backtracking from a guess, then ``Cq qd = -Ct``, ``Cq qdd = Qd`` and
-(inverse dynamics) ``Cq^T lam = Qe + Qv - M qdd``, all with one dense LU of the Jacobian at
-the solved positions, scaled to the model's units as :mod:`mbd3d.numerics.linalg` scales it.
+(inverse dynamics) ``Cq^T lam = Qe + Qv - M qdd``, all with one LU of the Jacobian at the
+solved positions (dense, or banded with the rows and columns ordered along the mechanism:
+:func:`mbd3d.numerics.patterns.jacobian_layout`), scaled to the model's units as
+:mod:`mbd3d.numerics.linalg` scales it.
 The tests and limits are those of the analyses in Python
 (:func:`mbd3d.analyses.position.solve_position`, :mod:`mbd3d.analyses.kinematics`): the
 residual of each row against its own limit, the half-turn branches of ``L sin(e)`` rows, the
-pivot test, the reciprocal condition number of LAPACK's ``gecon`` and the velocity guard.
+pivot test, the reciprocal condition number of LAPACK's ``gecon`` (banded: ``gbcon``) and
+the velocity guard.
 A point that fails any of them returns :data:`FAILED`, and the caller solves it again in
 Python, whose errors name the joints and rows. :func:`kinematic_points` runs a stretch of
 time points, each from the second-order Taylor prediction of the last.
@@ -24,7 +27,9 @@ from mbd3d.numerics.compiled.accelerations import (applied_forces_into, motions_
                                                    padded_into)
 from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
                                             spatial_frames_into, spatial_reset_charts)
-from mbd3d.numerics.compiled.dense import (lu_factor, lu_solve_into, lu_solve_transpose_into,
+from mbd3d.numerics.compiled.dense import (band_factor, band_reciprocal_condition,
+                                           band_solve_into, band_solve_transpose_into,
+                                           lu_factor, lu_solve_into, lu_solve_transpose_into,
                                            reciprocal_condition)
 from mbd3d.numerics.compiled.rows import (GEAR, GEAR_MESH, ROTATION, constraint_rows_into,
                                           mesh_phase)
@@ -152,43 +157,98 @@ def _converged(C, q, row_scale, length_rows, positions, tol, length_scale) -> bo
 
 
 @jit
-def _factor_jacobian(model, data, sign, row_factor, column_factor, matrix):
-    """``diag(r) (sign Cq) diag(c)`` into ``matrix`` (n, n), factored in place: ``(piv,
-    regular, |.|_1)`` (``sign`` per row: -1 flips a branch row's Newton direction)."""
-    matrix[:, :] = 0.0
+def jacobian_storage(n: int, bands: np.ndarray) -> tuple:
+    """Room for the factors of a Jacobian (n, n): ``(matrix, band, piv)``, the matrix dense
+    where ``bands`` (the layout's ``(kl, ku)``) is negative, else in LAPACK's band storage."""
+    kl, ku = bands[0], bands[1]
+    if kl < 0:
+        return np.empty((n, n)), np.empty(0), np.empty(n, dtype=np.int64)
+    return np.empty((0, 0)), np.empty((2 * kl + ku + 1) * n), np.empty(n, dtype=np.int64)
+
+
+@jit
+def _factor_jacobian(model, data, sign, scales, factors):
+    """``diag(r) (sign Cq) diag(c)`` factored into ``factors`` (``sign`` per row: -1 flips a
+    branch row's Newton direction; ``r``, ``c``: the first two ``scales``), densely or, with
+    the rows and columns in the order of the layout of ``scales`` (see
+    :func:`mbd3d.numerics.patterns.jacobian_layout`), in band storage. Returns ``(regular,
+    |.|_1)``."""
+    row_factor, column_factor, flat, bands = scales[0], scales[1], scales[6], scales[7]
+    matrix, band, piv = factors
+    n = piv.shape[0]
+    banded = band.shape[0] > 0
+    if banded:
+        band[:] = 0.0
+    else:
+        matrix[:, :] = 0.0
+    sums = np.zeros(n)
     rows, cols = model.jac_rows, model.jac_cols
     for p in range(rows.shape[0]):
         r, c = rows[p], cols[p]
-        matrix[r, c] = sign[r] * data[p] * row_factor[r] * column_factor[c]
-    norm = 0.0
-    for c in range(matrix.shape[1]):
-        norm = max(norm, np.sum(np.abs(matrix[:, c])))
-    piv, regular = lu_factor(matrix, model.pivot_tolerance)
-    return piv, regular, norm
-
-
-@jit
-def _solve_scaled(matrix, piv, row_factor, column_factor, b, x, transpose) -> None:
-    """``x`` of ``A x = b`` (``transpose``: ``A^T x = b``) from the factors of the scaled
-    ``S = R A C``: ``x = C S^-1 R b``, or ``R S^-T C b``."""
-    inner, outer = (column_factor, row_factor) if transpose else (row_factor, column_factor)
-    for i in range(x.shape[0]):
-        x[i] = inner[i] * b[i]
-    if transpose:
-        lu_solve_transpose_into(matrix, piv, x)
+        value = sign[r] * data[p] * row_factor[r] * column_factor[c]
+        sums[c] += abs(value)
+        if banded:
+            band[flat[p]] = value
+        else:
+            matrix[r, c] = value
+    if banded:
+        pivots, regular = band_factor(band, n, bands[0], bands[1], model.pivot_tolerance)
     else:
-        lu_solve_into(matrix, piv, x)
-    for i in range(x.shape[0]):
-        x[i] *= outer[i]
+        pivots, regular = lu_factor(matrix, model.pivot_tolerance)
+    piv[:] = pivots
+    return regular, (sums.max() if n else 0.0)
 
 
 @jit
-def newton_into(model, work, q, charts, scales, tol, length_scale, max_iterations, matrix):
+def _conditioning(scales, factors, norm) -> float:
+    """The reciprocal condition number of the factored matrix (``gecon``'s or ``gbcon``'s
+    estimate)."""
+    matrix, band, piv = factors
+    if band.shape[0] == 0:
+        return reciprocal_condition(matrix, norm)
+    bands = scales[7]
+    return band_reciprocal_condition(band, piv.shape[0], bands[0], bands[1], piv, norm)
+
+
+@jit
+def _solve_scaled(scales, factors, b, x, transpose) -> None:
+    """``x`` of ``A x = b`` (``transpose``: ``A^T x = b``) from the factors of the scaled
+    ``S = R A C``: ``x = C S^-1 R b``, or ``R S^-T C b``; banded, ``S``'s rows and columns
+    are taken in the layout's order (``row_at``, ``col_at``: each one's place)."""
+    row_factor, column_factor, row_at, col_at = scales[0], scales[1], scales[4], scales[5]
+    matrix, band, piv = factors
+    inner, outer = (column_factor, row_factor) if transpose else (row_factor, column_factor)
+    n = x.shape[0]
+    if band.shape[0] == 0:
+        for i in range(n):
+            x[i] = inner[i] * b[i]
+        if transpose:
+            lu_solve_transpose_into(matrix, piv, x)
+        else:
+            lu_solve_into(matrix, piv, x)
+        for i in range(n):
+            x[i] *= outer[i]
+        return
+    into, back = (col_at, row_at) if transpose else (row_at, col_at)
+    y = np.empty(n)
+    for i in range(n):
+        y[into[i]] = inner[i] * b[i]
+    kl, ku = scales[7][0], scales[7][1]
+    if transpose:
+        band_solve_transpose_into(band, n, kl, ku, piv, y)
+    else:
+        band_solve_into(band, n, kl, ku, piv, y)
+    for i in range(n):
+        x[i] = outer[i] * y[back[i]]
+
+
+@jit
+def newton_into(model, work, q, charts, scales, tol, length_scale, max_iterations, factors):
     """Solve ``C(q, t) = 0`` from ``q`` (overwritten), the motions already in ``work``:
     Newton steps shortened by halving until the rows' norm decreases (the iteration of
-    :func:`mbd3d.solve_position`). Returns whether it converged; ``work.data`` and
-    ``work.nu`` then hold ``Cq`` and ``-Ct`` at the solution."""
-    row_factor, column_factor, length_rows, positions = scales
+    :func:`mbd3d.solve_position`), each factoring the Jacobian into ``factors``. Returns
+    whether it converged; ``work.data`` and ``work.nu`` then hold ``Cq`` and ``-Ct`` at the
+    solution."""
     n, m = q.shape[0], model.n_rows
     cosine, amplitude, sign = np.empty(m), np.empty(m), np.empty(m)
     C, C_try, dq, q_try = np.empty(m), np.empty(m), np.empty(n), np.empty(n)
@@ -196,18 +256,17 @@ def newton_into(model, work, q, charts, scales, tol, length_scale, max_iteration
     _position_rows_into(model, work, q, charts, cosine, amplitude, C)
     norm = _relative_norm(C, row_scale)
     for iteration in range(max_iterations + 1):
-        if _converged(C, q, row_scale, length_rows, positions, tol, length_scale):
+        if _converged(C, q, row_scale, scales[2], scales[3], tol, length_scale):
             return True
         if iteration == max_iterations:
             return False
         for r in range(m):
             sign[r] = -1.0 if cosine[r] < 0.0 else 1.0
             C_try[r] = -C[r]
-        piv, regular, _ = _factor_jacobian(model, work.data, sign, row_factor, column_factor,
-                                           matrix)
+        regular, _ = _factor_jacobian(model, work.data, sign, scales, factors)
         if not regular:
             return False
-        _solve_scaled(matrix, piv, row_factor, column_factor, C_try, dq, False)
+        _solve_scaled(scales, factors, C_try, dq, False)
         step = 1.0
         while True:
             for c in range(n):
@@ -276,35 +335,35 @@ def _accelerations_into(model, work, t, q, qd, charts, forces, extra) -> bool:
 
 @jit
 def kinematic_point(work, t, q, charts, scales, tol, length_scale, max_iterations, forces,
-                    qd, qdd, lam):
+                    qd, qdd, lam, factors):
     """Positions (``q``: the guess, overwritten), velocities ``qd``, accelerations ``qdd``
     and, with ``forces``, the multipliers ``lam`` of the fully driven model of ``work`` at
-    ``t``. ``scales``: ``(row factors, column factors, length rows, position coordinates)``
-    of the model (see :func:`mbd3d.numerics.linalg.jacobian_scaling`); ``tol``, the Newton
-    tolerance relative to ``length_scale`` [m]. Returns ``(status, reciprocal condition
-    number of the scaled Jacobian)``: :data:`FAILED` when the motions are not finite, Newton
-    does not converge, the Jacobian is singular, the velocities fail their guard or a force
-    cannot be evaluated."""
+    ``t``. ``scales``: ``(row factors, column factors, length rows, position coordinates,
+    row places, column places, band entries, (kl, ku))`` of the model (see
+    :func:`mbd3d.numerics.linalg.jacobian_scaling` and
+    :func:`mbd3d.numerics.patterns.jacobian_layout`); ``tol``, the Newton tolerance relative
+    to ``length_scale`` [m]; ``factors``: room for the Jacobian's factors
+    (:func:`jacobian_storage`). Returns ``(status,
+    reciprocal condition number of the scaled Jacobian)``: :data:`FAILED` when the motions
+    are not finite, Newton does not converge, the Jacobian is singular, the velocities fail
+    their guard or a force cannot be evaluated."""
     model = work.model
     n = q.shape[0]
-    row_factor, column_factor = scales[0], scales[1]
-    matrix = np.empty((n, n))
     if not motions_at(model, work, t):
         return FAILED, 0.0
     if not newton_into(model, work, q, charts, scales, tol, length_scale, max_iterations,
-                       matrix):
+                       factors):
         return FAILED, 0.0
-    piv, regular, norm = _factor_jacobian(model, work.data, np.ones(n), row_factor,
-                                          column_factor, matrix)
+    regular, norm = _factor_jacobian(model, work.data, np.ones(n), scales, factors)
     if not regular:
         return FAILED, 0.0
-    conditioning = reciprocal_condition(matrix, norm)
-    _solve_scaled(matrix, piv, row_factor, column_factor, work.nu, qd, False)
+    conditioning = _conditioning(scales, factors, norm)
+    _solve_scaled(scales, factors, work.nu, qd, False)
     if not velocities_regular(model, work.data, work.nu, qd):
         return FAILED, conditioning
     if not _accelerations_into(model, work, t, q, qd, charts, forces, np.zeros(n)):
         return FAILED, conditioning
-    _solve_scaled(matrix, piv, row_factor, column_factor, work.gamma, qdd, False)
+    _solve_scaled(scales, factors, work.gamma, qdd, False)
     if forces:
         # first block row of the augmented equations: Cq^T lam = Qe + Qv - M qdd
         nc = work.Q.shape[1]
@@ -314,7 +373,7 @@ def kinematic_point(work, t, q, charts, scales, tol, length_scale, max_iteration
             for i in range(nc):
                 for j in range(nc):
                     b[k * nc + i] -= blocks[k, i, j] * qdd[k * nc + j]
-        _solve_scaled(matrix, piv, row_factor, column_factor, b, lam, True)
+        _solve_scaled(scales, factors, b, lam, True)
     return SOLVED, conditioning
 
 
@@ -363,6 +422,7 @@ def kinematic_points(work, t, start, stop, q, charts, turns, settings, forces, r
     n = q.shape[0]
     guess, qd, qdd, lam = q.copy(), np.empty(n), np.empty(n), np.empty(n)
     saved_charts, saved_turns = np.empty((0, 3, 3)), turns.copy()
+    factors = jacobian_storage(n, scales[7])
     for k in range(start, stop):
         if k > start:
             _predict_into(t, k, out_q, out_qd, out_qdd, out_charts, guess)
@@ -372,7 +432,7 @@ def kinematic_points(work, t, start, stop, q, charts, turns, settings, forces, r
             spatial_reset_charts(guess, np.zeros(0), charts, chart_limit, turns)
         status, conditioning = kinematic_point(work, t[k], guess, charts, scales, tol,
                                                length_scale, max_iterations, forces, qd, qdd,
-                                               lam)
+                                               lam, factors)
         if status == SOLVED and k == 0:
             reference = conditioning
         if status != SOLVED or conditioning < singular * reference:
