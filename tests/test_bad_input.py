@@ -416,8 +416,9 @@ def test_a_huge_but_finite_state_is_not_called_diverged():
     assert lam.size == 0
 
 
-def parallelogram_with_two_motors() -> mb.Model:
-    """A four-bar (unit parallelogram) driven at both ground pivots: one motor too many."""
+def parallelogram_with_two_motors(free_slider: bool = False) -> mb.Model:
+    """A four-bar (unit parallelogram) driven at both ground pivots: one motor too many
+    (``free_slider``: and a slider on a rail that no driver moves)."""
     b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="four-bar with two motors")
     rod = {"mass": 1.0, "inertia": 1.0 / 12}
     crank = b.add_body("crank", position=(0.0, 0.5), angle=math.pi / 2, **rod)
@@ -429,6 +430,9 @@ def parallelogram_with_two_motors() -> mb.Model:
     o4 = b.add(Revolute("O4", b.ground, rocker, at=(1.0, 0.0)))
     b.add(RotationDriver("motor", o2, motion=mb.Ramp(0.0, 1.0)))
     b.add(RotationDriver("rocker motor", o4, motion=mb.Ramp(0.0, 1.0)))
+    if free_slider:  # a freedom no driver moves
+        slider = b.add_body("slider", position=(3.0, 0.0), **rod)
+        b.add(Prismatic("rail", b.ground, slider, at=(3.0, 0.0), axis=(1.0, 0.0)))
     return b.build()
 
 
@@ -458,6 +462,17 @@ def test_an_over_driven_mechanism_is_called_so_naming_its_drivers():
             rows = [row for group in re.findall(r"\{([^{}]+)\}", message)
                     for row in group.split(", ")]
             assert drivers <= {row.split(".")[0] for row in rows}
+
+
+def test_an_over_driven_mechanism_with_as_many_rows_as_coordinates_is_named():
+    """The parallelogram's two motors beside a free slider that no driver moves: the rows are
+    as many as the coordinates, but two of them depend on each other (the check that the
+    rows are independent must still find the drivers, not report a singular position)."""
+    model = parallelogram_with_two_motors(free_slider=True)
+    assert model.n_constraints == model.n_coordinates
+    with pytest.raises(mb.OverDrivenError, match="is over-driven") as info:
+        mb.inverse_dynamics(model, [0.0, 0.1])
+    assert set(info.value.drivers) == {"motor", "rocker motor"}
 
 
 @pytest.mark.parametrize("start", [0.0, 100.0])

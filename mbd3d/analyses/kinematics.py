@@ -13,6 +13,7 @@ import math
 from typing import Sequence
 
 import numpy as np
+import scipy.linalg as la
 import scipy.sparse as sp
 
 from mbd3d.model import constraints
@@ -24,7 +25,7 @@ from mbd3d.errors import AnalysisError, ModelError, NotFullyDrivenError, OverDri
 from mbd3d.numerics import compiled
 from mbd3d.model.spatial import CHART_LIMIT
 from mbd3d.numerics.compiled.kinematics import VELOCITY_TOLERANCE, kinematic_points
-from mbd3d.numerics.linalg import (Factorization, SingularMatrix,
+from mbd3d.numerics.linalg import (RANK_TOLERANCE, Factorization, SingularMatrix,
                                    augmented_scaling, dependent_rows, jacobian_factors,
                                    jacobian_scaling, ranked_rows, solve_augmented,
                                    solve_augmented_lagrangian, solve_model_augmented, summarize)
@@ -184,8 +185,8 @@ def initial_guess(model, t0: float, guess, chart, what: str, name: str) -> np.nd
     return q
 
 
-#: largest Jacobian (rows x columns) checked for over-driving before an analysis (three dense
-#: SVDs, about 0.1 s each at this size)
+#: largest Jacobian (rows x columns) checked for over-driving before an analysis (a dense SVD
+#: where its rows are independent, three more where not: about 0.1 s each at this size)
 _LARGEST_RANK_CHECK = 250_000
 
 
@@ -204,6 +205,13 @@ def require_not_over_driven(model, t: float, q: np.ndarray, chart, what: str) ->
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=chart),
                               sparse=False)
     rows, columns = jacobian_scaling(model)
+    # Rows independent together are independent in any subset (a subset's singular values
+    # lie within the whole's), so the common case needs one SVD without its vectors
+    scaled = rows[:, None] * Cq * columns[None, :]
+    if model.n_constraints <= model.n_coordinates and np.all(np.isfinite(scaled)):
+        singular = la.svdvals(scaled)
+        if singular[-1] > RANK_TOLERANCE * singular[0]:
+            return
 
     def rank_and_groups(selected):
         if not np.any(selected):

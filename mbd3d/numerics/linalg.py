@@ -29,6 +29,7 @@ import scipy.sparse.linalg as spla
 from mbd3d.numerics.compiled.dense import penalty_scale, pivots_regular
 
 __all__ = ["SingularMatrix", "Factorization", "BandedFactorization", "dependent_rows",
+           "RANK_TOLERANCE",
            "jacobian_scaling", "jacobian_factors", "augmented_scaling",
            "ranked_rows", "summarize", "augmented_matrix", "solve_augmented", "solve_model_augmented",
            "factor_model_augmented", "penalty_matrix", "solve_augmented_lagrangian"]
@@ -188,7 +189,11 @@ def augmented_scaling(model, held: np.ndarray | None = None) -> np.ndarray:
     return np.concatenate([model.coordinate_scale / size, size / rows])
 
 
-def dependent_rows(Cq, relative_tolerance: float = 1e-9, scaling: tuple | None = None
+#: singular values at most this fraction of the largest count as zero in a Jacobian's rank
+RANK_TOLERANCE = 1e-9
+
+
+def dependent_rows(Cq, relative_tolerance: float = RANK_TOLERANCE, scaling: tuple | None = None
                    ) -> tuple[int, list[np.ndarray]]:
     """Numerical rank of ``Cq`` and, for each redundant equation, a smallest set of rows that
     depend on each other, most involved first.
