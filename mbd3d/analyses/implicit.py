@@ -16,7 +16,8 @@ q_hat)`` are affine in the new positions. The one unknown is ``q_{n+1}``; the co
 enforced at position level by the method of multipliers (the index-3 augmented Lagrangian of
 Bayo, Garcia de Jalon and Serna; Cuadrado et al.'s ALI3-P): Newton iterations on
 
-    r(q) = M qdd + Cq^T (lam + p C(q)) - Qe = 0,   lam <- lam + p C after each iteration,
+    r(q) = M qdd + Cq^T (lam + p C(q)) - Qe = 0,   lam <- lam + p (C + Cq dq) after each
+                                                  Newton step dq,
 
 with the iteration matrix ``beta' M + gamma' D + K + p Cq^T Cq`` (``D``, ``K`` the tangent of the
 applied forces: in closed form for spring-dampers, compiled, by finite differences for the
@@ -27,7 +28,11 @@ cases, and its sparsity is that of the mechanism (banded for a chain). The repor
 velocities are projected onto ``Cq qd = -Ct`` with the same factors (mass-orthogonal), so
 position and velocity drift stay at the Newton tolerance however long the run.
 
-The iteration matrix is factored at every Newton iterate (two per step are typical): its
+(the constraints linearised at the iterate: the multipliers' own Newton step, so that the
+next step closes the constraints' quadratic remainder instead of flipping its sign). A step
+has converged when Newton's last step was below the tolerance and the constraints hold at
+the iterate it reached, tested before another factorization. The iteration matrix is
+factored at every Newton iterate (two per step are typical): its
 penalty part outweighs the mass matrix by the penalty ratio and must follow the configuration,
 or the large constraint forces leak into the free directions. The spectral radius at infinity
 ``rho_inf`` (1: no numerical damping; 0: asymptotic annihilation) sets the coefficients; the
