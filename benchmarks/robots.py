@@ -1,7 +1,8 @@
-"""Inverse dynamics along a 1000-point joint trajectory of real robots (the UR5 and the Panda of
-the example-robot-data collection): mbd3d's inverse dynamics against a loop of Pinocchio's
-recursive Newton-Euler algorithm (RNEA) over the same joint positions, rates and accelerations,
-timed in turn in one process; the efforts agree to 1e-10 of their size (checked here).
+"""Inverse dynamics along a 1000-point joint trajectory of real robots (the UR5, the Panda and
+Solo12 of the example-robot-data collection): mbd3d's inverse dynamics against a loop of
+Pinocchio's recursive Newton-Euler algorithm (RNEA) over the same joint positions, rates and
+accelerations, timed in turn in one process; the efforts agree to 1e-10 of their size
+(checked here).
 
 Needs the test extra (``pip install -e ".[test]"``: ``pin``, ``example-robot-data``).
 
@@ -20,8 +21,11 @@ import numpy as np
 import mbd3d as mb
 from measure import machine, median_time
 
+#: the robots of issue #34, as Pinocchio builds them from the URDF (a fixed base: Solo12's
+#: trunk welded to the ground, its four legs moving)
 ROBOTS = {"UR5": "ur_description/urdf/ur5_robot.urdf",
-          "Panda": "panda_description/urdf/panda.urdf"}
+          "Panda": "panda_description/urdf/panda.urdf",
+          "Solo12": "solo_description/robots/solo12.urdf"}
 
 
 def _path(relative: str) -> pathlib.Path:

@@ -105,7 +105,7 @@ def test_kinematics_benchmark_runs(capsys, monkeypatch):
 
 
 def test_robots_benchmark_runs(capsys, monkeypatch):
-    """Inverse dynamics of the UR5 and the Panda against Pinocchio's RNEA at their smallest
+    """Inverse dynamics of the UR5, the Panda and Solo12 against Pinocchio's RNEA at their smallest
     (the script itself checks that the efforts agree)."""
     pytest.importorskip("pinocchio")
     try:
@@ -114,7 +114,7 @@ def test_robots_benchmark_runs(capsys, monkeypatch):
         pytest.skip("example-robot-data is not installed")
     monkeypatch.syspath_prepend(str(BENCHMARKS))
     rows = _load("robots").main(repeat=1, points=5)
-    assert [r["robot"] for r in rows] == ["UR5", "Panda"]
+    assert [r["robot"] for r in rows] == ["UR5", "Panda", "Solo12"]
     assert all(r["error"] < 1e-10 and r["mbd3d"] > 0 for r in rows)
     assert "Pinocchio's RNEA loop" in capsys.readouterr().out
 

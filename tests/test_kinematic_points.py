@@ -17,7 +17,7 @@ from mbd3d.analyses import kinematics
 from mbd3d.joints import Distance, Prismatic, Revolute, RotationDriver
 from mbd3d.mechanisms import four_bar, slider_crank, spatial_slider_crank
 from mbd3d.model import constraints
-from mbd3d.numerics.compiled.kinematics import jacobian_storage, kinematic_point
+from mbd3d.numerics.compiled.kinematics import _predict_into, jacobian_storage, kinematic_point
 from mbd3d.numerics.linalg import Factorization, jacobian_factors, jacobian_scaling
 from mbd3d.numerics.compiled.dense import (band_factor, band_reciprocal_condition,
                                            band_solve_into, band_solve_transpose_into,
@@ -207,3 +207,27 @@ def test_compiled_time_points_are_the_lapack_path_s(name, monkeypatch):
         lu, ipiv, _ = dgbtrf(_lapack_band(ordered, kl, ku), kl, ku)
         lapack = dgbcon(kl, ku, lu, ipiv, np.abs(ordered).sum(axis=0).max())[0]
     assert status == 0 and conditioning == pytest.approx(lapack, rel=1e-10)
+
+
+def test_the_next_point_is_predicted_exactly_for_a_quartic_motion():
+    """The guess of a time point integrates the polynomial through the last three points'
+    accelerations twice from the last point: exact (to rounding) for positions of degree 4,
+    whatever the spacing; for degree 3 where only two points share their charts, 2 where the
+    last point's chart is its own (the others' accelerations are in other coordinates)."""
+    t = np.array([0.0, 0.3, 0.45, 0.5, 0.62])
+    c = np.array([0.7, -1.3, 2.1])  # three coordinates, each its own polynomial
+    for degree, back in ((4, 3), (3, 2), (2, 1)):
+        q = c[None, :] * t[:, None] ** degree + 0.2 * t[:, None] ** 2 - 0.4
+        qd = c[None, :] * degree * t[:, None] ** (degree - 1) + 0.4 * t[:, None]
+        qdd = c[None, :] * degree * (degree - 1) * t[:, None] ** (degree - 2) + 0.4
+        charts = np.zeros((len(t), 1, 3, 3))  # one spatial body's charts, by point
+        charts[:4 - back] = 1.0  # the points before the last `back` in another chart,
+        qdd[:4 - back] = 1e3  # their coordinates meaningless in this one
+        guess = np.empty(3)
+        _predict_into(t, 4, q, qd, qdd, charts, guess)
+        np.testing.assert_allclose(guess, q[4], rtol=0.0, atol=1e-14)
+    # a degree more is missed by the next term of the series: order h^5 (h = 0.12 s)
+    q, qd, qdd = t ** 5, 5 * t ** 4, 20 * t ** 3
+    guess = np.empty(1)
+    _predict_into(t, 4, q[:, None], qd[:, None], qdd[:, None], np.zeros((0, 0, 3, 3)), guess)
+    assert 1e-6 < abs(guess[0] - q[4]) < 10 * 0.12 ** 5
