@@ -25,8 +25,8 @@ import warnings
 import numpy as np
 
 import mbd3d as mb
-from mbd3d.joints import Revolute, RotationDriver
 from mbd3d.analyses import kinematics
+from mbd3d.mechanisms import driven_chain
 from mbd3d.model import constraints
 from measure import machine, median_time
 
@@ -42,19 +42,6 @@ def puma() -> mb.Model:
         warnings.simplefilter("ignore", mb.UrdfWarning)
         return mb.load_urdf(ROOT / "tests" / "data" / "puma560.urdf", drive={
             f"joint{i + 1}": mb.Harmonic(amplitude[i], rate[i], 0.0, start[i]) for i in range(6)})
-
-
-def driven_chain(n_links: int) -> mb.Model:
-    """A hanging planar chain of 1 m, 1 kg bars with every pin driven at its own rate."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name=f"driven {n_links}-link chain")
-    previous = b.ground
-    for k in range(n_links):
-        body = b.add_body(f"link{k + 1}", mass=1.0, inertia=1.0 / 12,
-                          position=(0.0, -(k + 0.5)), angle=-math.pi / 2)
-        pin = b.add(Revolute(f"pin{k + 1}", previous, body, at=(0.0, -float(k))))
-        b.add(RotationDriver(f"drive{k + 1}", pin, motion=mb.Harmonic(0.2, 1.0 + 0.1 * k)))
-        previous = body
-    return b.build()
 
 
 def per_point(model: mb.Model, path: str, repeat: int, points: int = 201) -> float:

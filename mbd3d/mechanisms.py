@@ -17,7 +17,7 @@ from mbd3d.model.builder import Model, ModelBuilder
 from mbd3d.model.motion import Motion, Ramp
 from mbd3d.numerics.rotations import frame_along
 
-__all__ = ["slider_crank", "four_bar", "pendulum_chain", "slider_crank_positions",
+__all__ = ["slider_crank", "four_bar", "pendulum_chain", "driven_chain", "slider_crank_positions",
            "spatial_slider_crank", "spatial_four_bar", "spatial_chain", "newtons_cradle", "spheres_in_box",
            "frame_along"]
 
@@ -149,6 +149,24 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
     return builder.build()
 
 
+def _chain(n_links: int, L: float, m: float, angle: float, gravity: float, name: str
+           ) -> tuple[ModelBuilder, list]:
+    """The builder of :func:`pendulum_chain` and its pins."""
+    from mbd3d.joints import Revolute
+
+    b = ModelBuilder(dim=2, gravity=(0.0, -gravity), name=name)
+    direction = np.array([math.cos(angle), math.sin(angle)])
+    previous, pins = b.ground, []
+    for k in range(n_links):
+        body = b.add_body(f"link{k + 1}", mass=m, inertia=m * L * L / 12,
+                          position=(k + 0.5) * L * direction, angle=angle)
+        point_i = (0.0, 0.0) if k == 0 else (L / 2, 0.0)
+        pins.append(b.add(Revolute(f"pin{k + 1}", previous, body, point_i=point_i,
+                                   point_j=(-L / 2, 0.0))))
+        previous = body
+    return b, pins
+
+
 def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float = 1.0,
                    angle: float = 0.0, gravity: float = 9.81, sparse: bool | None = None) -> Model:
     """A chain of ``n_links`` uniform bars pinned end to end, the first to the ground at the
@@ -156,19 +174,28 @@ def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float =
 
     Bodies ``link1`` ... ``linkN``; revolutes ``pin1`` (ground) ... ``pinN``.
     """
-    from mbd3d.joints import Revolute
-
-    L, m = link_length, link_mass
-    b = ModelBuilder(dim=2, gravity=(0.0, -gravity), name=f"{n_links}-link chain")
-    direction = np.array([math.cos(angle), math.sin(angle)])
-    previous = b.ground
-    for k in range(n_links):
-        body = b.add_body(f"link{k + 1}", mass=m, inertia=m * L * L / 12,
-                          position=(k + 0.5) * L * direction, angle=angle)
-        point_i = (0.0, 0.0) if k == 0 else (L / 2, 0.0)
-        b.add(Revolute(f"pin{k + 1}", previous, body, point_i=point_i, point_j=(-L / 2, 0.0)))
-        previous = body
+    b, _ = _chain(n_links, link_length, link_mass, angle, gravity, f"{n_links}-link chain")
     return b.build(sparse=sparse)
+
+
+def driven_chain(n_links: int, *, amplitude: float = 0.2, frequency: float = 1.0,
+                 frequency_step: float = 0.1) -> Model:
+    """A hanging chain of ``n_links`` 1 m, 1 kg bars (as :func:`pendulum_chain` at ``angle =
+    -pi/2``) with every pin driven: a fully driven mechanism of any size, for kinematics and
+    inverse dynamics.
+
+    Pin ``k`` (1-based) turns its link relative to the one above by ``amplitude sin((frequency
+    + (k - 1) frequency_step) t)`` [rad, rad/s]. Bodies ``link1`` ... ``linkN``; revolutes
+    ``pin1`` ... ``pinN``; drivers ``drive1`` ... ``driveN``.
+    """
+    from mbd3d.joints import RotationDriver
+    from mbd3d.model.motion import Harmonic
+
+    b, pins = _chain(n_links, 1.0, 1.0, -math.pi / 2, 9.81, f"driven {n_links}-link chain")
+    for k, pin in enumerate(pins):
+        b.add(RotationDriver(f"drive{k + 1}", pin,
+                             motion=Harmonic(amplitude, frequency + frequency_step * k)))
+    return b.build()
 
 
 def spatial_slider_crank(*, crank_length: float = 0.10, rod_length: float = 0.30,

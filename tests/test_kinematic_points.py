@@ -15,7 +15,7 @@ from scipy.linalg.lapack import dgbcon, dgbtrf, dgecon, dgetrf
 import mbd3d as mb
 from mbd3d.analyses import kinematics
 from mbd3d.joints import Distance, Prismatic, Revolute, RotationDriver
-from mbd3d.mechanisms import four_bar, slider_crank, spatial_slider_crank
+from mbd3d.mechanisms import driven_chain, four_bar, slider_crank, spatial_slider_crank
 from mbd3d.model import constraints
 from mbd3d.numerics.compiled.kinematics import _predict_into, jacobian_storage, kinematic_point
 from mbd3d.numerics.linalg import Factorization, jacobian_factors, jacobian_scaling
@@ -99,8 +99,8 @@ def test_a_chain_s_jacobian_is_factored_in_a_band_as_narrow_at_any_length():
     def bands(model):
         return tuple(jacobian_layout(model._jac_rows, model._jac_cols, model.n_coordinates)[3])
 
-    assert bands(_driven_chain(10)) == bands(_driven_chain(40))
-    kl, ku = bands(_driven_chain(40))
+    assert bands(driven_chain(10)) == bands(driven_chain(40))
+    kl, ku = bands(driven_chain(40))
     # a pin's two rows and its driver's share the six columns of two bodies: in any order
     # the three rows and six columns span kl + ku >= 2 + 5, and the LU's work, kl (kl + ku)
     # a column, is least with the two on the side of kl
@@ -108,19 +108,6 @@ def test_a_chain_s_jacobian_is_factored_in_a_band_as_narrow_at_any_length():
     kl, ku = bands(_puma())
     assert 0 <= kl * (kl + ku) <= 36 ** 2 / 12
     assert bands(slider_crank()) == (-1, -1)
-
-
-def _driven_chain(links: int) -> mb.Model:
-    """A hanging planar chain of 1 m bars, every pin driven at its own rate."""
-    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name=f"driven {links}-link chain")
-    previous = b.ground
-    for k in range(links):
-        body = b.add_body(f"link{k + 1}", mass=1.0, inertia=1.0 / 12,
-                          position=(0.0, -(k + 0.5)), angle=-np.pi / 2)
-        pin = b.add(Revolute(f"pin{k + 1}", previous, body, at=(0.0, -float(k))))
-        b.add(RotationDriver(f"drive{k + 1}", pin, motion=mb.Harmonic(0.2, 1.0 + 0.1 * k)))
-        previous = body
-    return b.build()
 
 
 def _puma() -> mb.Model:
@@ -156,7 +143,7 @@ MODELS = {
     "planetary": lambda: planetary(carrier_load=1.5),
     "spatial slider-crank": spatial_slider_crank,
     "PUMA 560": _puma,
-    "40-link driven chain (sparse, banded)": lambda: _driven_chain(40),
+    "40-link driven chain (sparse, banded)": lambda: driven_chain(40),
 }
 
 
