@@ -211,7 +211,7 @@ def test_a_strike_whose_rail_friction_outweighs_the_carriages_momentum_stops_it(
     strike's impulse P allows exceeds what stops it (M v), so the rail sticks (its friction
     impulse M v, within the cone) and the carriage stays where it was struck, the ball
     bouncing on it as on a floor."""
-    mu, M, m, e, drop, v0 = 0.3, 2.0, 1.0, 0.5, 0.05, 0.4
+    mu, M, e, drop, v0 = 0.3, 2.0, 0.5, 0.05, 0.4
     t = np.linspace(0.0, 0.3, 61)
     res = mb.forward_dynamics(carriage_under_a_ball(2, mu, drop, e, v0), t, **TIGHT)
     assert res.status == "complete"

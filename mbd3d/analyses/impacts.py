@@ -215,16 +215,17 @@ class RigidContacts:
                     "point": self._points[k].tolist()})
         return qd
 
-    def _contact_impulses(self, t, q, qd, active, G, T, closing, kick=None) -> tuple:
+    def _contact_impulses(self, t, q, qd, active, G, T, closing, kick=None,
+                          XG=None) -> tuple:
         """``(qd+, p, P_t)`` of the ``active`` rows' impact (normal impulses ``p``, friction
         ``P_t``) with the velocities changed by ``kick`` (n,; the joints' friction) besides:
         Newton's law, the rates' change at least ``closing`` (without ``kick``'s), Coulomb's
         where rows have friction (where it fails, the run is refused naming the rows and the
-        time)."""
+        time). ``XG``: the response to the rows ``G`` where already known."""
         n = self.model.n_coordinates
         kick = np.zeros(n) if kick is None else kick
         if not np.any(self.mu_static[active] > 0.0):
-            X = self.response(t, q, G)[:n]
+            X = (self.response(t, q, G) if XG is None else XG)[:n]
             lam = impulses(G @ X, closing + G @ kick)
             return qd + kick + X @ lam, lam, np.zeros((len(lam), 3))
         try:
@@ -241,9 +242,14 @@ class RigidContacts:
         if self.model.friction is None:
             return self._contact_impulses(t, q, qd, active, G, T, closing)
         n = self.model.n_coordinates
+        # without the rows' friction their impulses act along G alone: its response (one
+        # factorization of the augmented matrix) serves every trial of the joints' friction
+        XG = None if np.any(self.mu_static[active] > 0.0) else self.response(t, q, G)
 
         def contact(kick: np.ndarray, lam: np.ndarray) -> tuple:
-            after, p, P_t = self._contact_impulses(t, q, qd, active, G, T, closing, kick)
+            after, p, P_t = self._contact_impulses(t, q, qd, active, G, T, closing, kick, XG)
+            if XG is not None:
+                return after, p, P_t, lam + XG[n:] @ p
             impulse = G.T @ p + np.einsum("kin,ki->n", T, P_t)  # generalized, of the rows
             return after, p, P_t, lam + self.response(t, q, impulse[None])[n:, 0]
 

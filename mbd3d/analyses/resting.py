@@ -340,10 +340,10 @@ class HeldRows:
 
     def _correction(self, t: float, q: np.ndarray, R: np.ndarray, change: np.ndarray,
                     columns: np.ndarray | None = None) -> np.ndarray:
-        """The change ``X mu`` of the coordinates (or rates) that changes ``R q`` (or
-        ``R qd``; ``R`` rows of gap rates or slips) by ``change``, the joints holding to first
-        order, ``X`` the response to generalized impulses along ``columns`` (default ``R``:
-        the mass-weighted least change)."""
+        """The change ``X mu`` of the coordinates that changes ``R q`` (``R``: rows of the
+        gaps) by ``change``, the joints holding to first order, ``X`` the response to
+        generalized impulses along ``columns`` (default ``R``: the mass-weighted least
+        change). The rates are corrected by :meth:`_stopped`."""
         X = self.rigid.response(t, q, R if columns is None else columns)
         X = X[:self.model.n_coordinates]
         return X @ np.linalg.lstsq(R @ X, change, rcond=1e-12)[0]
