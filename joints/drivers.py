@@ -138,7 +138,7 @@ class RotationDriver(ConstraintElement):
 
 
 class TranslationDriver(ConstraintElement):
-    """Prescribes the sliding of a prismatic joint: ``h_i . (r_Pj - r_Pi) = f(t)``.
+    """Prescribes the sliding of a prismatic joint: ``dot(h_i, r_Pj - r_Pi) = f(t)`` [m].
 
     ``f`` is the position [m] of the prismatic's point on body j along the axis, measured from its
     point on body i (zero in the drawing when the joint was given with ``at``), less ``offset``

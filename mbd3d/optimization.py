@@ -13,7 +13,7 @@
 Every gradient is exact, from the analysis' own sensitivities (:func:`mbd3d.sensitivities`, or
 :func:`mbd3d.forward_sensitivities` for forward dynamics): one analysis and its sensitivities
 per iteration, whatever the number of parameters' differences would cost. Each start is one
-run of a sweep (:func:`mbd3d.sweep`): on Dask when it is installed, kept in ``folder`` as it
+run of a sweep (:func:`mbd3d.sweeps.sweep`): on Dask when it is installed, kept in ``folder`` as it
 finishes, resumed when run again. The first start is the model's own values (clipped into the
 bounds), the others are spread over the bounds by a seeded Latin hypercube.
 """
@@ -133,6 +133,9 @@ class LocalOptimization:
         self.bounds = np.array([bounds[name] for name in self.names], dtype=float)
 
     def sweep_identity(self) -> str:
+        """What a stored start's outcome was computed from (the analysis, the parameters,
+        their bounds and the objective): an optimisation resumed with any of them changed
+        computes it again."""
         described = [self.analysis.kind, list(self.analysis.t), repr(sorted(
             self.analysis.options.items())), self.names, self.bounds.tolist(),
             repr(self.objective)]
@@ -228,7 +231,7 @@ def optimize(model, analysis: Analysis, bounds: Mapping[str, tuple[float, float]
     starts, seed : int
         How many starts (the model's own values first) and the seed of the others.
     folder, client, backend, progress
-        As :func:`mbd3d.sweep` takes them: where each start's outcome is kept, the Dask
+        As :func:`mbd3d.sweeps.sweep` takes them: where each start's outcome is kept, the Dask
         cluster, "auto", "dask" or "serial".
     factory : callable, optional
         ``factory(**values) -> Model`` with the starts' values as keywords (default:

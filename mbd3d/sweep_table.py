@@ -61,6 +61,8 @@ class SweepTable:
 
     @property
     def columns(self) -> list[str]:
+        """The table's columns, in order: the run's key, the parameters, the metrics, and its
+        status, error and wall time [s]."""
         return ["key", *self.parameters, *self.metrics, "status", "error", "wall_time"]
 
     @property

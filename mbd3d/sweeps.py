@@ -501,7 +501,7 @@ class _Progress:
 
 
 def default_metrics(model) -> dict:
-    """A file's sweep's metrics (``mbd3d sweep``): the peak |effort| of every driver and the
+    """A file's sweep's metrics (``mbd3d sweep``): the peak ``|effort|`` of every driver and the
     final position of every body (up to 12)."""
     metrics = {}
     for element in model.joints:

@@ -1,7 +1,7 @@
 """The energy the compliant contacts and joint stops of a model dissipate over a forward
 dynamics run, per contact row [J]: the integral of the power each dissipates (its damper's,
-its force clipped at zero, its friction's; :func:`mbd3d.numerics.compiled.contact_laws.
-dissipated_power`).
+its force clipped at zero, its friction's;
+:func:`~mbd3d.numerics.compiled.contact_laws.dissipated_power`).
 
 The explicit methods integrate it in their compiled loop as they would the energy as a
 state of its own: by their weights on the stages' powers

@@ -86,6 +86,8 @@ class ExplicitRungeKutta(Integrator):
             yield
 
     def _python_accelerations(self, tt, q, qd, charts_now):
+        """``(qdd, lam)`` at ``(tt, q, qd)`` solved in Python, for a stage the compiled
+        right-hand side does not cover (see below)."""
         # redundant constraints (the augmented Lagrangian), joint friction (consistent with
         # its reactions) or rigid contacts held at rest: solved in Python. A stage that
         # cannot be solved is reported to the loop as the compiled solve reports it (None:
@@ -457,7 +459,7 @@ def _constraints_at(model, t, q, charts) -> tuple:
 #: accepted steps the compiled loop takes before it returns to Python anyway, so that an
 #: interrupt (Ctrl-C) and the progress bar are seen during a long stretch without outputs
 _STEPS_PER_CALL = 2000
-#: |g| above which the explicit integrators move a body's chart between steps: zero, so that
+#: ``|g|`` above which the explicit integrators move a body's chart between steps: zero, so that
 #: every step starts from g = 0, where the Rodrigues parameters are nearly linear in the
 #: rotation. With the usual limit (a quarter turn) a tumbling body's g grew through each chart
 #: in three steps whose error estimates grew faster than the step control predicts, and one

@@ -92,7 +92,7 @@ class GeneralizedAlphaIntegrator(Integrator):
     the step, then projected onto the constraints), and shortened only to land on the run's
     end, for one step to a quarter when Newton does not converge (near a singular
     configuration), and at compliant contacts and stops: to end just past each touch and
-    release, and to resolve each impact while it lasts (see :mod:`.contact_steps`). Rigid
+    release, and to resolve each impact while it lasts (see :mod:`~.compiled.contact_steps`). Rigid
     contacts at rest are held as in the explicit methods (:mod:`.resting`): their forces join
     each Newton iterate's applied forces, their drift is projected after each step. Changing
     the step disturbs the recursion (its ``a_n`` lags ``qdd`` by (alpha_m - alpha_f) h): a

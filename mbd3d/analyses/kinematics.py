@@ -368,7 +368,7 @@ class _PointSolver:
         """Solve the points ``t[start:stop]`` in one compiled call
         (:func:`~mbd3d.numerics.compiled.kinematics.kinematic_points`) into ``out``, from the
         guess ``q`` of the first; returns ``(the first point not solved, its chart)``: that
-        point (failed, or singular) is for :meth:`__call__` to solve, which names the
+        point (failed, or singular) is for the solver's call to solve, which names the
         cause."""
         model, spatial = self.model, chart is not None
         chart = np.array(chart, dtype=float) if spatial else None  # updated in place

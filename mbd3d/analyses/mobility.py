@@ -66,10 +66,15 @@ class MobilityReport:
 
     @property
     def fully_driven(self) -> bool:
+        """Whether the drivers fix every degree of freedom, with no row depending on others
+        (a kinematic analysis can run)."""
         return self.dof == 0 and self.redundant == 0
 
     @property
     def message(self) -> str:
+        """What the report found, in words: over-driven or redundant (with the sets of rows
+        that depend on each other), the degrees of freedom left (nonholonomic ones said so),
+        or fully driven."""
         if self.over_driven:
             sets = "; ".join("{" + summarize(group, 8) + "}" for group in self.dependent)
             return (f"over-driven: the driver(s) {summarize(self.over_driven)} prescribe motions "

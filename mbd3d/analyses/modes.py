@@ -74,7 +74,7 @@ class Modes:
         Parameters
         ----------
         mode : int
-            Index into :attr:`frequencies` (0: the lowest).
+            Index into ``frequencies`` (0: the lowest).
         amplitude : float, optional
             Multiplies the shape (largest entry 1); default a tenth of the model's length
             for a shape led by a position [m], a tenth of a radian for one led by an angle.

@@ -222,7 +222,7 @@ class JointHistory:
 
     def _row_vectors(self) -> np.ndarray:
         """The body-frame vectors of the joint's first primitive row, in its class's order
-        (see :attr:`mbd3d.model.primitives.RowTable.slots`)."""
+        (see ``RowTable.slots``, :class:`mbd3d.model.primitives.RowTable`)."""
         table = self._results.model.row_table
         slots = table.slots[self._results.model._instances_of[self.name][0]]
         return table.vector_local[slots[slots >= 0]]

@@ -61,7 +61,7 @@ def with_parameters(model, values: Mapping[str, float]):
 
 
 class ModelVariants:
-    """A parameter sweep's factory (:func:`mbd3d.sweep`): ``ModelVariants(model)(**values)``
+    """A parameter sweep's factory (:func:`mbd3d.sweeps.sweep`): ``ModelVariants(model)(**values)``
     is ``with_parameters(model, values)``, the points' keys being parameter names (e.g.
     ``mb.grid(**{"forces.spring.stiffness": [10.0, 20.0]})``). It holds the model as its
     file's plain data, which Dask ships to its workers, and names itself to the sweep's store
@@ -83,6 +83,8 @@ class ModelVariants:
         self.digest = hashlib.sha1(text.encode()).hexdigest()
 
     def sweep_identity(self) -> str:
+        """What a sweep's stored results were computed from (the model file's name and
+        digest): a sweep resumed with another model computes them again."""
         return f"model {self.data.get('name')!r} {self.digest}"
 
     def __call__(self, **values: float):

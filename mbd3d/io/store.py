@@ -66,6 +66,8 @@ class ResultsBuffer:
         self.done = k + 1
 
     def partial(self, status: str, message: str) -> Results:
+        """The :class:`~mbd3d.Results` of the points stored so far, marked ``status`` with
+        ``message`` (why the analysis stopped)."""
         self.stats["wall_time"] = self._clock() - self._start
         k = self.done
         return Results(self.model, self.analysis, self.t[:k], self.q[:k], self.qd[:k],

@@ -6,7 +6,7 @@ all its instances at once), fixes the sparsity pattern of the Jacobian and retur
 :class:`Model`. Solvers take the model and plain arrays ``(t, q, qd)`` and never modify it.
 
 Coordinates: body ``k`` owns ``q[k * n_coords:(k + 1) * n_coords]``; constraint rows are numbered
-primitive type by primitive type, and :attr:`Model.row_labels` and :meth:`Model.rows_of` map rows
+primitive type by primitive type, and ``Model.row_labels`` and :meth:`Model.rows_of` map rows
 back to joints.
 """
 

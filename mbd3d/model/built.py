@@ -298,6 +298,8 @@ class Model:
         return self._joint_by_name[self._check_joint(name)][1]
 
     def force(self, name: str) -> Any:
+        """The force element called ``name``; a :class:`~mbd3d.ModelError` naming the
+        model's forces if there is none."""
         try:
             return self._force_by_name[name]
         except KeyError:

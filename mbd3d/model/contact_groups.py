@@ -5,8 +5,7 @@ touch, by one law.
 A group is found pair by pair at each evaluation by a broad phase on a uniform grid
 (:mod:`mbd3d.numerics.compiled.contact_grid`), so that its cost grows with the shapes and the
 pairs near each other, not with all pairs; each pair near enough is then the contact
-:class:`~mbd3d.Contact` would be between the two shapes (:mod:`mbd3d.numerics.compiled.
-contact_groups`).
+:class:`~mbd3d.Contact` would be between the two shapes (:mod:`mbd3d.numerics.compiled.contact_groups`).
 """
 
 from __future__ import annotations
@@ -155,6 +154,7 @@ class ContactGroup(ForceElement):
         return points, np.array(values, dtype=float), laws, np.array(masses or [math.inf])
 
     def outlines(self, ctx: "BuildContext") -> list:
+        """The group's shapes as the viewer draws them, one outline per shape."""
         return [outline(ctx, shape, f"{self.what}: shape {k}")
                 for k, shape in enumerate(self.shapes)]
 

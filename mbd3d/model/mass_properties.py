@@ -74,6 +74,8 @@ def load_mesh(shape: Any, what: str) -> Any:
 
 
 def _primitive(shape: dict, what: str) -> Any:
+    """The trimesh primitive of ``shape`` (``{"box": ...}``, ``"cylinder"`` or ``"sphere"``),
+    refused naming ``what`` where it is none of them."""
     import trimesh
 
     if len(shape) != 1 or next(iter(shape)) not in ("box", "cylinder", "sphere"):

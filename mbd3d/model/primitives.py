@@ -119,6 +119,8 @@ class Coordinate:
 
     @staticmethod
     def row_is_length(params: dict, dim: int) -> bool:
+        """Whether the row, of a coordinate of ``params`` in a ``dim``-dimensional model, is
+        a length (a translation) rather than an angle."""
         return int(params["coordinate"]) < dim
 
     @staticmethod
@@ -300,7 +302,7 @@ class CamPoint:
     ``d = r_j - r_i``. Its gradient in ``r_j`` is the pitch curve's outward normal
     ``u - r'(phi) w / |d|`` (``u`` along ``d``, ``w`` turned from it by 90 degrees), so the
     force on the follower is ``-lam`` times that: compressive while ``lam < 0``.
-    ``real = (offset, intervals)`` of the curve in :attr:`RowTable.curves`.
+    ``real = (offset, intervals)`` of the curve in ``RowTable.curves``.
     """
 
     kind = "cam"
@@ -338,6 +340,7 @@ class CamFace:
         return 1
 
 
+#: every primitive class by its ``kind``, as the model file and the element specs name them
 PRIMITIVES = {cls.kind: cls for cls in
               (PointCoincidence, Dot1, Dot2, Distance, Coordinate, RelativeAngle, Rotation, Gear,
                Rack, CamPoint, CamFace, GearMesh, DiscOnPlane)}

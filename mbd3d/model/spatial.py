@@ -33,7 +33,7 @@ from mbd3d.numerics.compiled.bodies import (spatial_frames, spatial_mass_blocks,
 from mbd3d.numerics.checks import finite_vector
 from mbd3d.errors import ModelError
 
-#: |g| above which a body's chart is moved (90 degrees from the reference orientation)
+#: ``|g|`` above which a body's chart is moved (90 degrees from the reference orientation)
 CHART_LIMIT = 1.0
 
 

@@ -2,7 +2,7 @@
 no rigid contacts (their impacts are events) or contacts held at rest, no spatial gear
 meshes, no joint friction, no force element given as a Python function or whose tangent is
 not compiled (:mod:`.force_tangents`), and a dense or banded iteration matrix. The compliant
-contacts' and stops' step rules (:mod:`.contact_steps`) run in it.
+contacts' and stops' step rules (:mod:`~.compiled.contact_steps`) run in it.
 :mod:`mbd3d.analyses.implicit` drives it and takes the other models' steps itself; the step
 is the same (:func:`.generalized_alpha.newton_step`).
 
@@ -138,9 +138,9 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
     ``q_old``, ``qd_old``: the last accepted step's start. ``out_t``, ``out_indicator``,
     ``out_q``: per accepted step its end (before it is snapped to ``t_target``), its
     indicator and positions. ``contact``: the compliant contacts' and stops' rules
-    ``(state, clock)`` (:mod:`.contact_steps`, no columns without contacts), their dissipated
-    energies and the last step's times (:func:`.contact_steps.trapezoid_step`) and the rows'
-    powers there.
+    ``(state, clock)`` (:mod:`~.compiled.contact_steps`, no columns without contacts), their
+    dissipated energies and the last step's times (:func:`.contact_steps.trapezoid_step`) and
+    the rows' powers there.
 
     Returns ``(status, t, t_old, h, h_last, smallest, taken, t_step, turn, switched)``: why
     it returned (see the constants), the time reached, the last step's start, the next

@@ -1,14 +1,14 @@
 """Contact groups, compiled: many shapes of which every pair may touch, evaluated as the
 pairs the broad phase (:mod:`.contact_grid`) finds near each other, each as a row of
-:mod:`.contacts` built on the fly.
+:mod:`~.compiled.contacts` built on the fly.
 
 A group is one row ``k`` of the contact table with ``values[k, 0] = GROUP``; its shapes are
 rows ``first ... first + count`` of the shape table ``shapes = (bodies, points, values,
 laws)`` (:mod:`.contact_grid`), ``(first, count) = points[k, 3, :2]``, and the law of a pair
 of shapes of classes ``a``, ``b`` is the row ``laws[offset + a * classes + b]`` of
-:mod:`.contact_laws`, ``(offset, classes) = points[k, 2, :2]`` (the laws' constants depend on
-the pair's radii and masses: shapes alike share a class). The pair of a capsule and a sphere
-is the capsule's row (body i), of a box and a sphere or a capsule the box's, of a sphere,
+:mod:`~.compiled.contact_laws`, ``(offset, classes) = points[k, 2, :2]`` (the laws' constants
+depend on the pair's radii and masses: shapes alike share a class). The pair of a capsule and a
+sphere is the capsule's row (body i), of a box and a sphere or a capsule the box's, of a sphere,
 capsule or box and a plane the plane's half-space (body j); a capsule meets a plane at its
 two ends, two rows, a box at its corners, and two boxes meet at each corner of either
 against the other, rows of their own (as :class:`~mbd3d.Contact` makes them).

@@ -1,7 +1,7 @@
 """The normal force laws of compliant contacts and joint stops, compiled (see
 :mod:`mbd3d.model.contact_laws` for the laws and their constants). Contact ``k``'s law is the
 row ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu, v_slip, d)`` of
-:mod:`.contacts`::
+:mod:`~.compiled.contacts`::
 
     F_n = max(0, K delta^n_K + c(delta) delta')          while delta > 0, else 0
     c(delta) = D delta^n_D                  (d = 0)

@@ -59,6 +59,7 @@ PER_PERIOD, IMPACT_PERIODS = 100, 3
 BAND, TRIES = 1e-3, 12
 #: the rows of ``state`` (see the module's text)
 BEFORE, AFTER, TOUCH, PERIOD, GAP_NOW, RATE_NOW, RATE_RATE, WAS_APART, MASS, RIGID = range(10)
+#: the number of rows of ``state``
 STATE_ROWS = 10
 #: the entries of ``clock``
 MEASURED, STEP_TRIES, RETRIES = 0, 1, 2
@@ -71,7 +72,7 @@ def impact_period(values, state, k: int, gap: float, gap_rate: float) -> float:
     penetration now and the one the closing speed reaches against the law's spring, ``((n +
     1) m* v^2 / (2 K))^(1 / (n + 1))`` (damping only shortens it). A rigid row has no
     oscillation, and a group's impacts are not followed (see
-    :mod:`.contact_groups`): inf."""
+    :mod:`~.compiled.contact_groups`): inf."""
     if state[RIGID, k] != 0.0 or values[k, 0] == GROUP:
         return np.inf
     K, n, m = values[k, 3], values[k, 4], state[MASS, k]

@@ -1,5 +1,5 @@
-"""The layout of the compiled contact table (:mod:`.contacts`): the kinds of its rows and the
-columns of a row's report."""
+"""The layout of the compiled contact table (:mod:`~.compiled.contacts`): the kinds of its rows
+and the columns of a row's report."""
 
 from __future__ import annotations
 

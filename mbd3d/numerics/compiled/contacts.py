@@ -36,7 +36,7 @@ and its body points ``points[k]`` (body frames):
   ``-m`` as against a plane.
 
 Between sphere, capsule and box cores the gap is ``|c_j - c_i| - r_i - r_j`` at the cores'
-closest points ``c_i``, ``c_j`` (:mod:`.shapes`; inside a box, minus the depth below its
+closest points ``c_i``, ``c_j`` (:mod:`~.compiled.shapes`; inside a box, minus the depth below its
 nearest face; of a segment running through a box, minus the least translation that parts
 them).
 
@@ -49,12 +49,12 @@ X`` and ``r_i = 0``), each at its own material point there, so that the pair
 exerts no net moment. The penetration is ``delta = -g`` and its rate ``delta' = -n . (v_j -
 v_i)`` (the material points' velocities at ``x``: the gap's rate by the envelope rule). The
 normal force ``F_n`` is that of the law ``values[k] = (kind, r_i, r_j, K, n_K, D, n_D, mu,
-v_slip, d)`` (:mod:`.contact_laws`); the friction force on ``j`` is ``-mu F_n tanh(|v_t| /
+v_slip, d)`` (:mod:`~.compiled.contact_laws`); the friction force on ``j`` is ``-mu F_n tanh(|v_t| /
 v_slip) v_t / |v_t|`` with ``v_t`` the tangential part of ``v_j - v_i`` (the opposite on
 ``i``), which dissipates ``mu F_n tanh(|v_t| / v_slip) |v_t|`` [W].
 
 A contact group's row (``GROUP``) stands for the pairs of its many shapes that are near each
-other at the state, each evaluated as one of the rows above (:mod:`.contact_groups`).
+other at the state, each evaluated as one of the rows above (:mod:`~.compiled.contact_groups`).
 
 Joint stops keep a joint coordinate ``x`` in ``[lower, upper] = values[k, 1:3]`` by the same
 law, ``delta = x - upper`` or ``lower - x``, pushing back along the coordinate (no friction;
@@ -286,7 +286,7 @@ def contact_forces_into(A, axes, omega, Q, Qd, bodies, points, values, curves, o
     and, where ``report`` has a row per contact, fill it (see ``REPORT_COLUMNS``); where
     ``power`` has one, the power each dissipates [W] (:func:`dissipated_power`). Returns -1, or
     the first contact whose normal is undefined. Group rows are left to
-    :func:`.contact_groups.group_forces_into`."""
+    :func:`mbd3d.numerics.compiled.contact_groups.groups_into`."""
     vectors, work = np.zeros((7, 3)), np.zeros((6, 3))
     for k in range(bodies.shape[0]):
         i, j = bodies[k, 0], bodies[k, 1]

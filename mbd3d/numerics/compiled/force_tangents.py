@@ -1,6 +1,6 @@
 """The applied forces' tangent ``K + w D`` (``K = -dQe/dq``, ``D = -dQe/dqd``, ``w`` the
 integrator's velocity weight, generalized-alpha's ``gamma'``), compiled, for the force elements
-of :mod:`.forces` whose tangent is known in closed form:
+of :mod:`~.compiled.forces` whose tangent is known in closed form:
 
 - a spring-damper-actuator between points ``p_i``, ``p_j`` with ``d = p_j - p_i = l e`` and
   tension ``T``: ``G^T H G`` with ``G = [-J_i, J_j]`` (``J`` the points' Jacobians) and
@@ -284,7 +284,7 @@ def _contact_bodies(contacts):
 def _contact_tangents_into(contacts, penalty_arrays, A, axes, omega, Q, Qd, weight,
                            extra) -> None:
     """Add the tangent of the contacts and joint stops ``contacts`` (None: none; decided as
-    the caller is compiled, see :mod:`.accelerations`) into ``extra``."""
+    the caller is compiled, see :mod:`~.compiled.accelerations`) into ``extra``."""
     if contacts is None:
         return
     nc = Q.shape[1]

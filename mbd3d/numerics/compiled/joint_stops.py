@@ -1,5 +1,6 @@
-"""Joint stops, compiled: the law of a row of the contact table (:mod:`.contacts`) pushing a
-joint coordinate back into ``[lower, upper]`` (see :mod:`.contacts` for the kinds)."""
+"""Joint stops, compiled: the law of a row of the contact table (:mod:`~.compiled.contacts`)
+pushing a joint coordinate back into ``[lower, upper]`` (see :mod:`~.compiled.contacts` for the
+kinds)."""
 
 from __future__ import annotations
 

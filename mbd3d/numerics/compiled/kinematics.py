@@ -11,7 +11,7 @@ The tests and limits are those of the analyses in Python
 residual of each row against its own limit, the half-turn branches of ``L sin(e)`` rows, the
 pivot test, the reciprocal condition number of LAPACK's ``gecon`` (banded: ``gbcon``) and
 the velocity guard.
-A point that fails any of them returns :data:`FAILED`, and the caller solves it again in
+A point that fails any of them returns ``FAILED``, and the caller solves it again in
 Python, whose errors name the joints and rows. :func:`kinematic_points` runs a stretch of
 time points, each from the second-order Taylor prediction of the last.
 """
@@ -344,7 +344,7 @@ def kinematic_point(work, t, q, charts, scales, tol, length_scale, max_iteration
     :func:`mbd3d.numerics.patterns.jacobian_layout`); ``tol``, the Newton tolerance relative
     to ``length_scale`` [m]; ``factors``: room for the Jacobian's factors
     (:func:`jacobian_storage`). Returns ``(status,
-    reciprocal condition number of the scaled Jacobian)``: :data:`FAILED` when the motions
+    reciprocal condition number of the scaled Jacobian)``: ``FAILED`` when the motions
     are not finite, Newton does not converge, the Jacobian is singular, the velocities fail
     their guard or a force cannot be evaluated."""
     model = work.model
