@@ -1,4 +1,5 @@
-"""The README's quick start runs as printed and means what it says."""
+"""The README's quick start and the user guide's snippets run as printed and mean what they
+say."""
 
 from __future__ import annotations
 
@@ -11,7 +12,9 @@ import pytest
 
 from conftest import stop_process, with_default_sigint
 
-README = pathlib.Path(__file__).resolve().parent.parent / "README.md"
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+DOCS = ROOT / "docs"
 
 
 def test_quick_start_runs(tmp_path, monkeypatch, capsys):
@@ -31,7 +34,7 @@ def test_quick_start_runs(tmp_path, monkeypatch, capsys):
 
 
 def test_spatial_snippet_runs(capsys):
-    text = README.read_text()
+    text = (DOCS / "getting_started.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, re.S)
     spatial = [b for b in blocks if "dim=3" in b]
     assert spatial
@@ -51,8 +54,7 @@ def test_first_two_commands_are_install_and_test():
 
 
 def test_sweep_snippet_runs_on_a_local_cluster(tmp_path, monkeypatch, capsys):
-    text = README.read_text()
-    section = text.split("## Parameter sweeps", 1)[1]
+    section = (DOCS / "guide" / "sweeps.md").read_text()
     block = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     monkeypatch.chdir(tmp_path)
     namespace = {"__name__": "__main__"}
@@ -64,7 +66,7 @@ def test_sweep_snippet_runs_on_a_local_cluster(tmp_path, monkeypatch, capsys):
 
 
 def viewer_blocks() -> list[str]:
-    section = README.read_text().split("## Viewer", 1)[1].split("\n## ", 1)[0]
+    section = (DOCS / "guide" / "viewer.md").read_text().split("\n## ", 1)[0]
     return re.findall(r"```python\n(.*?)```", section, re.S)
 
 
@@ -134,8 +136,7 @@ def test_viewer_snippets_run_as_written(tmp_path, monkeypatch):
 def test_model_file_snippet_loads_runs_and_reports_mistakes_as_shown(tmp_path):
     import mbd3d as mb
     from mbd3d.io.model_file import read
-    text = README.read_text()
-    section = text.split("## Model files and the command line", 1)[1]
+    section = (DOCS / "guide" / "model_files.md").read_text()
     block = re.search(r"```yaml\n(.*?)```", section, re.S).group(1)
     path = tmp_path / "pendulum.yaml"
     path.write_text(block)
