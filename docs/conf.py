@@ -14,9 +14,17 @@ import importlib.metadata
 import inspect
 import os
 import pathlib
+import sys
 
 from sphinx.util import logging
 from sphinx.util.nodes import make_refnode
+
+#: the repository: the site documents the tree it is built from, and its examples and
+#: notebooks, run in processes of their own, import that tree too
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+os.environ["PYTHONPATH"] = os.pathsep.join(
+    part for part in (str(ROOT), os.environ.get("PYTHONPATH")) if part)
 
 
 project = "mbd3d"
@@ -30,14 +38,21 @@ extensions = [
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "numpydoc",
-    "myst_parser",
+    "myst_nb",  # Markdown pages, and the tutorials: notebooks executed as the site is built
 ]
 
 templates_path = ["_templates"]
-source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb"}
 exclude_patterns = ["_build", "api/generated/*.md"]
 myst_enable_extensions = ["dollarmath", "colon_fence"]
 myst_heading_anchors = 3
+# every notebook runs at every build, in a folder of its own (what it writes stays there), and
+# an error in any cell fails the build
+nb_execution_mode = "force"
+nb_execution_in_temp = True
+nb_execution_raise_on_error = True
+nb_execution_timeout = 600
+nb_merge_streams = True
 
 html_theme = "pydata_sphinx_theme"
 html_title = "mbd3d"
@@ -238,8 +253,18 @@ def _resolve(app, env, node, contnode):
                         found[0])
 
 
+def _gallery(app) -> None:
+    """Run the examples and write the gallery's pages (:mod:`gallery`, beside this file)."""
+    sys.path.insert(0, str(app.srcdir))
+    import gallery
+
+    gallery.build(ROOT, pathlib.Path(app.srcdir) / "gallery",
+                  pathlib.Path(app.doctreedir) / "gallery", logger.warning)
+
+
 def setup(app) -> None:
     _PUBLIC_NAMES.update(_public_names())
     app.connect("missing-reference", _resolve)
     app.connect("builder-inited", _api_pages, priority=100)
     app.connect("builder-inited", _internals_pages, priority=100)  # before autosummary
+    app.connect("builder-inited", _gallery)
