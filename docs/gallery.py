@@ -89,9 +89,11 @@ def _run(script: pathlib.Path, folder: pathlib.Path, package: str, warn) -> str 
         tail = "\n".join(done.stderr.strip().splitlines()[-15:])
         warn(f"gallery: examples/{script.name} failed (exit {done.returncode}):\n{tail}")
         return None
-    kept.write_text(done.stdout)
+    # the files it wrote are named as a user who ran it there would see them
+    output = done.stdout.replace(str(folder) + os.sep, "")
+    kept.write_text(output)
     stamp.write_text(key)
-    return done.stdout
+    return output
 
 
 def _plot(rrd: pathlib.Path, png: pathlib.Path) -> str | None:
