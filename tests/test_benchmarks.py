@@ -119,6 +119,20 @@ def test_robots_benchmark_runs(capsys, monkeypatch):
     assert "Pinocchio's RNEA loop" in capsys.readouterr().out
 
 
+def test_robot_fall_benchmark_runs(capsys, monkeypatch):
+    """The UR5 falling for a tenth of a second against Pinocchio's ABA under SciPy's DOP853
+    (the script checks that the final joint angles agree with a tight run of the latter)."""
+    pytest.importorskip("pinocchio")
+    try:
+        importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("example-robot-data is not installed")
+    monkeypatch.syspath_prepend(str(BENCHMARKS))
+    row = _load("robots").fall(repeat=1, duration=0.1)
+    assert row["mbd3d error [rad]"] < 1e-6 and row["their error [rad]"] < 1e-6
+    assert row["mbd3d [s]"] > 0 and "Pinocchio ABA + SciPy" in capsys.readouterr().out
+
+
 def test_cradle_benchmark_runs_without_peers(capsys, monkeypatch):
     """The contact scenario at its smallest (three balls, peers hidden); the impact duration
     it gives MuJoCo against Hertz's closed form ``2.94 delta_max / v``."""

@@ -69,7 +69,7 @@ def place_joints(model, t: float, q: np.ndarray, chart, positions: Mapping[str, 
                  tol: float, what: str) -> np.ndarray:
     """The assembled configuration nearest ``q`` (least change) in which the joints and
     coordinates named in ``positions`` have those values: a revolute's angle [rad] and a
-    prismatic's displacement [m] as ``results.joint(name)`` reads them (from the drawing),
+    prismatic's displacement [m] as ``results.joint(name)`` reads them,
     ``"name.angle"``/``"name.displacement"`` of a cylindrical joint, ``"body.coordinate"``.
 
     Newton's method on the constraints and ``p(q) = value``, whose rows are the joint
