@@ -55,6 +55,7 @@ nb_execution_timeout = 600
 nb_merge_streams = True
 
 html_theme = "pydata_sphinx_theme"
+html_static_path = ["_static"]
 html_title = "mbd3d"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 

@@ -18,6 +18,8 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
+
 #: the viewer's plot groups, by tab: (panel title, entity prefix under /plots)
 PANELS = {
     "kinematic screen": [("joint coordinates", "joints"), ("positions", "position"),
@@ -31,6 +33,9 @@ PANELS = {
 MAX_LINES = 12
 #: seconds an example may run (the slowest take about a minute warm)
 TIMEOUT = 900
+#: instants of a still of the 3D view, and the triangles drawn in it at most (beyond them, the
+#: last instant only)
+INSTANTS, MAX_TRIANGLES = 5, 60000
 
 
 def build(root: pathlib.Path, pages: pathlib.Path, runs: pathlib.Path, warn) -> list[str]:
@@ -49,7 +54,10 @@ def build(root: pathlib.Path, pages: pathlib.Path, runs: pathlib.Path, warn) -> 
         images = pages / "images" / name
         shutil.rmtree(images, ignore_errors=True)
         images.mkdir(parents=True)
-        figures = [_plot(rrd, images / f"{rrd.name}.png") for rrd in sorted(folder.glob("*.rrd"))]
+        figures = []
+        for rrd in sorted(folder.glob("*.rrd")):
+            figures += [_still(rrd, images / f"{rrd.name}.still.png"),
+                        _plot(rrd, images / f"{rrd.name}.png")]
         for image in sorted(folder.glob("*.png")):  # pictures the script drew itself
             shutil.copyfile(image, images / image.name)
             figures.append(image.name)
@@ -144,6 +152,75 @@ def _plot(rrd: pathlib.Path, png: pathlib.Path) -> str | None:
     return png.name
 
 
+def _still(rrd: pathlib.Path, png: pathlib.Path) -> str | None:
+    """A still of the recording's 3D view, drawn from what it logged (each body's shape and
+    its poses over time): the bodies at a few instants, the latest the darkest; planar models
+    seen from above their plane. None if it has no bodies (a recording of plots only)."""
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from scipy.spatial.transform import Rotation
+
+    from mbd3d.viewer import entity_paths, read_component
+
+    paths = entity_paths(rrd)
+    bodies = sorted(p[:-len("/shape")] for p in paths
+                    if p.startswith("/world/bodies/") and p.endswith("/shape"))
+    if not bodies:
+        return None
+    shapes, poses = [], []
+    for body in bodies:
+        _, vertices = read_component(rrd, f"{body}/shape", "Mesh3D:vertex_positions", None)
+        _, faces = read_component(rrd, f"{body}/shape", "Mesh3D:triangle_indices", None)
+        _, colour = read_component(rrd, f"{body}/shape", "Mesh3D:albedo_factor", None)
+        _, position = read_component(rrd, body, "Transform3D:translation", "sim_time")
+        _, quaternion = read_component(rrd, body, "Transform3D:quaternion", "sim_time")
+        rgba = int(np.asarray(colour).reshape(-1)[0])
+        shapes.append((vertices.reshape(-1, 3), faces.reshape(-1, 3),
+                       [(rgba >> shift & 255) / 255 for shift in (24, 16, 8)]))
+        poses.append((position.reshape(-1, 3), quaternion.reshape(-1, 4)))
+    k = min(len(p[0]) for p in poses)
+    triangles = sum(len(faces) for _, faces, _ in shapes)
+    instants = INSTANTS if triangles * INSTANTS <= MAX_TRIANGLES else 1
+    chosen = np.unique(np.linspace(0, k - 1, instants).round().astype(int))
+    fig = plt.figure(figsize=(7, 5))
+    ax = fig.add_subplot(projection="3d")
+    every = []
+    for order, i in enumerate(chosen):
+        alpha = 0.25 + 0.75 * (order + 1) / len(chosen)
+        for (vertices, faces, rgb), (position, quaternion) in zip(shapes, poses):
+            moved = Rotation.from_quat(quaternion[i]).apply(vertices) + position[i]
+            every.append(moved)
+            ax.add_collection3d(Poly3DCollection(moved[faces], facecolors=(*rgb, alpha),
+                                                 edgecolor="none", shade=True))
+    points = np.vstack(every)
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre, half = (low + high) / 2, max(float(np.max(high - low)) / 2, 1e-9)
+    for axis, c in zip("xyz", centre):
+        getattr(ax, f"set_{axis}lim")(c - half, c + half)
+        getattr(ax, f"set_{axis}label")(f"{axis} [m]")
+    ax.set_box_aspect((1, 1, 1))
+    # a planar model's bodies turn about z and stay at z = 0: seen from above, x to the right
+    planar = all(not np.any(position[:, 2]) and not np.any(quaternion[:, :2])
+                 for position, quaternion in poses)
+    if planar:
+        ax.view_init(elev=90, azim=-90)
+        ax.set_zticks([])
+        ax.set_zlabel("")
+    else:  # up as the viewer has it (its view coordinates: 1 is up)
+        try:
+            _, codes = read_component(rrd, "/world", "ViewCoordinates:xyz", None)
+            up = "xyz"[list(np.asarray(codes).reshape(-1)).index(1)]
+        except (KeyError, ValueError, IndexError):
+            up = "z"
+        ax.view_init(elev=20, azim=-60, vertical_axis=up)
+    ax.set_title(f"{rrd.name}: the bodies at {len(chosen)} instants"
+                 + (", seen from above the plane" if planar else ""), fontsize=10)
+    fig.tight_layout()
+    fig.savefig(png, dpi=80)
+    plt.close(fig)
+    return png.name
+
+
 def _names(rrd: pathlib.Path, entity: str, count: int) -> list[str]:
     """The series' names the recording gives ``entity``, or its path's last part."""
     from mbd3d.viewer import read_component
@@ -171,8 +248,9 @@ def _page(script: pathlib.Path, output: str, figures: list[str]) -> str:
              "", "## What it prints", "", "```text", output.rstrip() or "(nothing)", "```", ""]
     if figures:
         lines += ["## The recordings", "",
-                  "The plots the viewer shows of each recording the script wrote, read back "
-                  "from the `.rrd` file.", ""]
+                  "Each recording the script wrote, read back from its `.rrd` file: a still "
+                  "of the viewer's 3D view (the bodies at a few instants, the latest the "
+                  "darkest) and the plots of its tabs.", ""]
         lines += [f"![{pathlib.PurePath(figure).name}]({figure})" for figure in figures]
     return "\n".join(lines) + "\n"
 
