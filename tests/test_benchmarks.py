@@ -104,16 +104,21 @@ def test_kinematics_benchmark_runs(capsys, monkeypatch):
     assert "factors densely up to" in out and "forward_accelerations" in out
 
 
-def test_robots_benchmark_runs(capsys, monkeypatch):
-    """Inverse dynamics of the UR5, the Panda and Solo12 against Pinocchio's RNEA at their smallest
-    (the script itself checks that the efforts agree)."""
+def _robots(monkeypatch):
+    """benchmarks/robots.py, or a skip where Pinocchio or the robots are not installed."""
     pytest.importorskip("pinocchio")
     try:
         importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:
         pytest.skip("example-robot-data is not installed")
     monkeypatch.syspath_prepend(str(BENCHMARKS))
-    rows = _load("robots").main(repeat=1, points=5)
+    return _load("robots")
+
+
+def test_robots_benchmark_runs(capsys, monkeypatch):
+    """Inverse dynamics of the UR5, the Panda and Solo12 against Pinocchio's RNEA at their smallest
+    (the script itself checks that the efforts agree)."""
+    rows = _robots(monkeypatch).main(repeat=1, points=5)
     assert [r["robot"] for r in rows] == ["UR5", "Panda", "Solo12"]
     assert all(r["error"] < 1e-10 and r["mbd3d"] > 0 for r in rows)
     assert "Pinocchio's RNEA loop" in capsys.readouterr().out
@@ -122,13 +127,7 @@ def test_robots_benchmark_runs(capsys, monkeypatch):
 def test_robot_fall_benchmark_runs(capsys, monkeypatch):
     """The UR5 falling for a tenth of a second against Pinocchio's ABA under SciPy's DOP853
     (the script checks that the final joint angles agree with a tight run of the latter)."""
-    pytest.importorskip("pinocchio")
-    try:
-        importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        pytest.skip("example-robot-data is not installed")
-    monkeypatch.syspath_prepend(str(BENCHMARKS))
-    row = _load("robots").fall(repeat=1, duration=0.1)
+    row = _robots(monkeypatch).fall(repeat=1, duration=0.1)
     assert row["mbd3d error [rad]"] < 1e-6 and row["their error [rad]"] < 1e-6
     assert row["mbd3d [s]"] > 0 and "Pinocchio ABA + SciPy" in capsys.readouterr().out
 
