@@ -144,6 +144,35 @@ def test_initial_position_of_a_spatial_hinge():
     assert res.joint("hinge").angle[0] == pytest.approx(1.0, abs=1e-12)
 
 
+def test_initial_positions_past_a_half_turn_from_the_drawing():
+    """Three links on parallel hinges (about y), drawn along x, each put at 1.2 rad: the last
+    turns 3.6 rad from the drawing, past the half turn where its Rodrigues parameters in the
+    model's charts are infinite. Every link where the rotations about y take it."""
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, -9.81), name="folded chain")
+    length, angle, previous, links = 0.4, 1.2, b.ground, []
+    for k in range(3):
+        links.append(b.add_body(f"link{k}", mass=1.0, inertia=(1e-4, 0.013, 0.013),
+                                position=((k + 0.5) * length, 0.0, 0.0)))
+        b.add(Revolute(f"hinge{k}", previous, links[-1], at=(k * length, 0.0, 0.0),
+                       axis=(0.0, 1.0, 0.0)))
+        previous = links[-1]
+    res = mb.forward_dynamics(b.build(), [0.0, 1e-3], method="DOP853", rtol=1e-10,
+                              initial_positions={f"hinge{k}": angle for k in range(3)})
+    hinge = np.zeros(3)
+    for k in range(3):
+        turn = mb.rotations.axis_angle((0.0, 1.0, 0.0), (k + 1) * angle)
+        centre = hinge + turn @ (0.5 * length, 0.0, 0.0)
+        hinge = hinge + turn @ (length, 0.0, 0.0)
+        np.testing.assert_allclose(res.body(f"link{k}").position[0], centre, rtol=0,
+                                   atol=1e-12)
+        np.testing.assert_allclose(res.body(f"link{k}").rotation[0], turn, rtol=0, atol=1e-12)
+        assert res.joint(f"hinge{k}").angle[0] == pytest.approx(angle, abs=1e-12)
+    # the last link exactly a half turn from its drawing: no coordinates start there
+    with pytest.raises(mb.AssemblyError, match="turn link2 a half turn"):
+        mb.forward_dynamics(res.model, [0.0, 1e-3],
+                            initial_positions={f"hinge{k}": math.pi / 3 for k in range(3)})
+
+
 def test_initial_positions_that_cannot_hold_together_are_named():
     from mbd3d.mechanisms import slider_crank
     with pytest.raises(mb.AssemblyError, match="O = 2, rail = 0.5"):

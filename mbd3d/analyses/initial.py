@@ -75,7 +75,11 @@ def place_joints(model, t: float, q: np.ndarray, chart, positions: Mapping[str, 
     Newton's method on the constraints and ``p(q) = value``, whose rows are the joint
     coordinates' rates (:func:`rate_rows`: ``dp/dq`` is the row that gives ``p'`` from
     ``q'``). A planar angle is a coordinate, reached with its turns; a spatial one is read
-    within half a turn, so a target of several turns gives the same configuration.
+    within half a turn, so a target of several turns gives the same configuration. Spatial
+    bodies' charts move as they turn past the chart limit during the iteration, as the
+    integrators move them (a pose near a half turn from the drawing, such as a robot's wrist
+    turned by two parallel joints, left Newton converging linearly towards the Rodrigues
+    parameters' singularity), and the result is given in the caller's ``chart``.
     """
     from mbd3d.errors import AssemblyError  # noqa: PLC0415
     from mbd3d.io.results import Results  # noqa: PLC0415
@@ -86,11 +90,12 @@ def place_joints(model, t: float, q: np.ndarray, chart, positions: Mapping[str, 
         raise ModelError(f"{what}: initial_positions must be finite numbers, got {positions}")
     angular = np.zeros(len(names), dtype=bool)
     q = np.array(q, dtype=float)
+    work = None if chart is None else np.array(chart, dtype=float)  # the iteration's charts
     for _ in range(50):
-        H, _, _ = rate_rows(model, t, q, chart, {name: 1.0 for name in names}, what,
+        H, _, _ = rate_rows(model, t, q, work, {name: 1.0 for name in names}, what,
                             "initial_positions")
         sample = Results(model, "positions", np.array([t]), q[None], np.zeros((1, len(q))),
-                         np.zeros((1, len(q))), charts=None if chart is None else chart[None])
+                         np.zeros((1, len(q))), charts=None if work is None else work[None])
         values = np.empty(len(names))
         for k, name in enumerate(names):
             values[k], angular[k] = _coordinate_value(model, sample, q, name)
@@ -98,20 +103,45 @@ def place_joints(model, t: float, q: np.ndarray, chart, positions: Mapping[str, 
         if model.dim == 3:
             # a spatial angle is read within half a turn: no turn count to reach
             error[angular] = np.angle(np.exp(1j * error[angular]))
-        fr = constraints.frames(model, q, charts=chart)
+        fr = constraints.frames(model, q, charts=work)
         C, jac_data, _ = constraints.evaluate(model, t, fr)
         Cq = constraints.jacobian_matrix(model, jac_data, sparse=False)
         largest = max(constraints.largest_relative(model, C),
                       float(np.max(np.abs(error) / np.where(angular, 1.0, model.length_scale),
                                    initial=0.0)))
         if largest <= tol:
-            return q
+            return q if work is None else _in_charts(model, q, work, chart, what)
         step = np.linalg.lstsq(np.vstack([Cq, H]), -np.concatenate([C, error]), rcond=None)[0]
         q = q + step
+        if work is not None:
+            q, _, work, _ = model.body_type.reset_charts(q, None, work)
     raise AssemblyError(f"{what}: the mechanism cannot be assembled with "
                         f"{', '.join(f'{n} = {v:g}' for n, v in zip(names, targets))} (the "
                         "joints cannot reach them together, or they over-determine the "
                         "positions)", time=t)
+
+
+def _in_charts(model, q: np.ndarray, charts: np.ndarray, target: np.ndarray, what: str
+               ) -> np.ndarray:
+    """Spatial ``q`` in ``charts`` given in the charts ``target`` instead: each body's
+    rotation ``A = A0 A(g)`` kept; refused for a body a half turn from its target chart,
+    where no Rodrigues parameters give it."""
+    from mbd3d.errors import AssemblyError  # noqa: PLC0415
+    from mbd3d.numerics.rotations import from_rodrigues, to_rodrigues  # noqa: PLC0415
+
+    nb = model.n_bodies
+    out = np.array(q, dtype=float)
+    g = out.reshape(nb, 6)[:, 3:]  # a view into out
+    rotation = charts[:nb] @ from_rodrigues(g)
+    g[:] = to_rodrigues(np.swapaxes(target[:nb], 1, 2) @ rotation)
+    far = ~np.all(np.abs(g) < 1e8, axis=1)
+    if np.any(far):
+        raise AssemblyError(f"{what}: initial_positions turn "
+                            f"{', '.join(model.bodies[k].name for k in np.flatnonzero(far))} "
+                            "a half turn from the model's drawing, which its coordinates "
+                            "cannot start from: draw the model nearer that pose (or give "
+                            "positions a little apart from it)")
+    return out
 
 
 def _coordinate_value(model, sample, q: np.ndarray, name: str) -> tuple[float, bool]:
