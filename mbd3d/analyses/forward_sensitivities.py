@@ -7,15 +7,20 @@ every accepted step of the state takes the same step of the sensitivities (the f
 1.1 and 1.2; SUNDIALS calls this the *staggered direct* method):
 
 - the sensitivities ``S = dy/dp`` of the integrated state ``y = (q, v)`` go through the step's
-  own stages with the method's own weights (the compiled :func:`stage_state`), each stage's
-  derivative being the change of the right-hand side ``f(t, y)`` along the parameter with the
-  stage state moving by its sensitivity, ``d/dh f_{p+h}(t, Y + h S)``: the compiled
-  right-hand side of the model's variants (:class:`mbd3d.model.tangents.ModelTangent`, a
-  fourth-order difference, about 1e-12 of its size). With the step sizes the state's error
-  control chose (not differentiated, so the sensitivities stay out of the error norm), the
-  result is the derivative of the computed solution itself, to that precision;
+  own stages with the method's own weights, each stage's derivative being the change of the
+  right-hand side ``f(t, y)`` along the parameter with the stage state moving by its
+  sensitivity, ``d/dh f_{p+h}(t, Y + h S)``: the compiled right-hand side of the model's
+  variants (:class:`mbd3d.model.tangents.ModelTangent`, a fourth-order difference, about
+  1e-12 of its size). All stages of all parameters are one compiled call per step
+  (:func:`~mbd3d.numerics.compiled.sensitivity_steps.sensitivity_stages_into`), which asks
+  for the variants at a shorter step where a sensitivity is large and they are not made yet.
+  With the step sizes the state's error control chose (not differentiated, so the
+  sensitivities stay out of the error norm), the result is the derivative of the computed
+  solution itself, to that precision;
 - the integrals ``G = int g(t, q, qd) dt`` the user names are carried along as states of
-  their own, with their sensitivities ``int (g_q s + g_qd s' + g_p) dt``;
+  their own, with their sensitivities ``int (g_q s + g_qd s' + g_p) dt``: ``g`` is a Python
+  function, evaluated here at the stages the compiled call kept (the integrals do not feed
+  back into the motion, so they follow it);
 - the dense output of the sensitivities is the method's own interpolant of their stages, so
   output times need no extra steps;
 - where the state is projected onto the constraints (after a drifting step, at every output)
@@ -40,6 +45,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 import scipy.linalg
+from numba.typed import List
 
 from mbd3d.errors import IntegrationError, ModelError
 from mbd3d.io.observers import Observer
@@ -49,10 +55,10 @@ from mbd3d.model import constraints
 from mbd3d.model.contacts import contact_group
 from mbd3d.model.equations import mass_matrix
 from mbd3d.model.tangents import OFFSETS, ModelTangent, reach, slope, state_scale
-from mbd3d.numerics.compiled import integration as stepping
 from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, TABLEAUS,
                                                  dop853_coefficients, interpolate,
                                                  polynomial_coefficients, stage_state)
+from mbd3d.numerics.compiled.sensitivity_steps import LEVELS, REFINE, sensitivity_stages_into
 from mbd3d.numerics.compiled.structures import workspace
 from mbd3d.numerics.linalg import factor_model_augmented
 from mbd3d.analyses.accelerations import consistent_accelerations
@@ -150,10 +156,7 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
                                  f"'{name}' must be callable as g(model, t, q, qd) -> float")
         self.m, self.n2 = len(self.integrands), 2 * self.n
         self.width = self.n2 + self.m
-        # the compiled right-hand sides of the model and its variants, by the model's id
-        # (each kept alive by its tangent), each with a workspace of its own (the run's
-        # holds its contacts' power); made as they are first evaluated
-        self.compiled: dict = {}
+        self.sets = _VariantSets(model, self.tangents, self.spatial)
         self.z = self.z_old = self.z_dense = self._k0 = None
         self.outputs: list[tuple] = []  # per output: (dq, dqd, dqdd, dlam, G, dG)
         self.stats["sensitivity_evaluations"] = 0
@@ -230,63 +233,55 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         return slice(start, start + self.m)
 
     def _step(self, segment: Segment) -> None:
-        """``z`` through the step just accepted, with its stages and its dense output."""
+        """``z`` through the step just accepted, with its stages and its dense output: the
+        sensitivities' stages in one compiled call (:func:`sensitivity_stages_into`, which
+        asks for finer variants as it needs them), then the integrals' stages here."""
         tab, step, t_old = self.tableau, segment.info["step"], segment.t_start
-        if self._k0 is None:  # after a projection, a chart reset or a restart
-            self._k0 = self._rates(t_old, self.y_old, self.z)
-        stages = len(tab.B)
-        weights = ([(tab.A[i], t_old + tab.C[i] * step) for i in range(1, stages)]
-                   + [(tab.B, segment.t_new)]
-                   + [(a, t_old + c * step) for a, c in zip(tab.A_extra, tab.C_extra)])
+        W, C = self.sets.weights(tab)
+        stages, first = len(tab.B), self._k0 is None
         L = np.zeros((tab.n_stored, self.z.size))
-        L[0] = self._k0
-        ys, zs, z_new = np.empty(self.n2), np.empty(self.z.size), None
-        for i, (a, ti) in enumerate(weights, start=1):
-            # the state's stage exactly as the compiled step formed it, and the same
-            # combination of the sensitivities' stages
-            stage_state(self.y_old, self.K, a, i, step, ys)
-            stage_state(self.z, L, a, i, step, zs)
-            if i == stages:
-                z_new = zs.copy()
-            L[i] = self._rates(ti, ys, zs)
+        if not first:
+            L[0] = self._k0
+        stage_y, stage_z = np.empty((len(W) + 1, self.n2)), np.empty((len(W) + 1, self.z.size))
+        counts = np.zeros(1, dtype=np.int64)
+        status = -1
+        while status < 0:  # until the finer variants the stages need are all made
+            status = sensitivity_stages_into(
+                *self.sets.own, self.key, self.sets.variants, self.sets.works, self.sets.steps,
+                self.sets.have, self.sets.refine, self.model.coordinate_scale, self.m,
+                self.width, W, C, t_old, step, self.y_old, self.K, self.z, L, self.charts,
+                first, stage_y, stage_z, counts)
+            if status < 0:
+                self.sets.make(-status - 1)
+        self.stats["sensitivity_evaluations"] += int(counts[0])
+        if status != 0:
+            raise IntegrationError(
+                f"forward sensitivities of '{self.model.name}': the model or one of its "
+                f"variants (a parameter moved) could not be evaluated in the step from t = "
+                f"{t_old:.6g} s beside the motion (a singular or non-finite state)", time=t_old)
+        if self.m:
+            for i in range(0 if first else 1, len(W) + 1):
+                t = t_old + (C[i - 1] if i else 0.0) * step
+                self._integral_rates(t, stage_y[i], stage_z[i], L[i])
+            z_new = stage_state(self.z, L, W[stages - 1], stages, step, np.empty(self.z.size))
+        else:
+            z_new = stage_z[stages].copy()
         if tab.dense_kind == DOP853_INTERPOLANT:
             self.z_dense = dop853_coefficients(L, tab.D, self.z, z_new, L[0], L[stages], step)
         else:
             self.z_dense = polynomial_coefficients(L, tab.P, stages + 1)
         self.z_old, self.z, self._k0 = self.z, z_new, L[stages].copy()
 
-    def _rates(self, t: float, y: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """``dz/dt`` at the stage ``(t, y)`` with ``z`` the stage's sensitivities: the
-        integrands, and per parameter the change of ``(f, g)`` along it."""
-        out = np.empty_like(z)
-        if self.m:
-            out[:self.m] = self._integrals(self.model, t, *self._split(y))
+    def _integral_rates(self, t: float, y: np.ndarray, z: np.ndarray, out: np.ndarray) -> None:
+        """The integrals' part of ``dz/dt`` at the stage ``(t, y)``, ``z`` the stage's
+        sensitivities: the integrands, and per parameter their change along it."""
+        out[:self.m] = self._integrals(self.model, t, *self._split(y))
         scale = state_scale(self.model, y[self.n:])
         for j, tangent in enumerate(self.tangents):
             S = z[self._s(j)]
-            out[self._s(j).start:self._g(j).stop] = tangent.along(
-                lambda model, h: self._f_and_g(model, t, y + h * S), reach(scale, S))
-        return out
-
-    def _f_and_g(self, model, t: float, y: np.ndarray) -> np.ndarray:
-        """``(f, g)`` of ``model`` (the model or one of its variants) at ``(t, y)``: the
-        compiled right-hand side and the integrands."""
-        if id(model) not in self.compiled:  # variants at a shorter step, made as needed
-            arrays = model._core.arrays()
-            self.compiled[id(model)] = (arrays, workspace(self.spatial, arrays))
-        arrays, work = self.compiled[id(model)]
-        f = np.empty(self.n2)
-        status = stepping.derivative(arrays, self.key, t, y, self.charts, f, work)
-        self.stats["sensitivity_evaluations"] += 1
-        if status != 0:
-            raise IntegrationError(
-                f"forward sensitivities of '{self.model.name}': the model "
-                f"{'' if model is self.model else 'with a parameter moved '}could not be "
-                f"evaluated at t = {t:.6g} s beside the motion (a singular or non-finite "
-                "state)", time=t)
-        if not self.m:
-            return f
-        return np.concatenate([f, self._integrals(model, t, *self._split(y))])
+            out[self._g(j)] = tangent.along(
+                lambda model, h: self._integrals(model, t, *self._split(y + h * S)),
+                reach(scale, S))
 
     def _integrals(self, model, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         out = np.empty(self.m)
@@ -362,6 +357,58 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         integrals = {name: (G[:, i], dG[:, i, :]) for i, name in enumerate(self.integrands)}
         return Sensitivities(results, parameters, self.tangents, dq, dqd, dqdd, dlam,
                              integrals=integrals)
+
+
+class _VariantSets:
+    """The compiled right-hand sides the sensitivities' stages evaluate: the model's own (with
+    a workspace of its own: the run's holds its contacts' power) and, per parameter, its
+    variants, four per level (level ``l`` at a step ``2**-(REFINE l)`` of the first), in the
+    typed lists :func:`sensitivity_stages_into` takes; level 0 made with the tangent, finer
+    ones as the stages ask for them (:meth:`make`)."""
+
+    def __init__(self, model, tangents: Sequence[ModelTangent], spatial: bool):
+        self.spatial, self.tangents = spatial, tuple(tangents)
+        self.own = self._compiled(model)
+        p = len(self.tangents)
+        self.steps = np.ones((p, LEVELS))
+        self.have = np.zeros((p, LEVELS), dtype=bool)
+        self.refine = np.array([tangent.can_refine for tangent in self.tangents], dtype=bool)
+        self.variants, self.works = List(), List()
+        for _ in range(p * LEVELS * 4):  # placeholders: levels not made are never read
+            self.variants.append(self.own[0])
+            self.works.append(self.own[1])
+        for j, tangent in enumerate(self.tangents):
+            self._install(j, 0, tangent.variants, tangent.step)
+        self._weights = None
+
+    def _compiled(self, model) -> tuple:
+        arrays = model._core.arrays()
+        return arrays, workspace(self.spatial, arrays)
+
+    def _install(self, j: int, level: int, variants: Sequence, step: float) -> None:
+        for o, variant in enumerate(variants):
+            arrays, work = self._compiled(variant)
+            self.variants[(j * LEVELS + level) * 4 + o] = arrays
+            self.works[(j * LEVELS + level) * 4 + o] = work
+        self.steps[j, level], self.have[j, level] = step, True
+
+    def make(self, code: int) -> None:
+        """Make the variants the stages asked for: ``code = j LEVELS + level``."""
+        j, level = divmod(code, LEVELS)
+        self._install(j, level, *self.tangents[j].finer(REFINE * level))
+
+    def weights(self, tab) -> tuple[np.ndarray, np.ndarray]:
+        """``(W, C)``: each stage's weights after the first (padded to the stored stages) and
+        its time in steps, in the compiled step's order: the method's stages, the solution's
+        (``B``, at the step's end) and the dense output's extra stages."""
+        if self._weights is None:
+            rows = ([(tab.A[i], tab.C[i]) for i in range(1, len(tab.B))] + [(tab.B, 1.0)]
+                    + list(zip(tab.A_extra, tab.C_extra)))
+            W = np.zeros((len(rows), tab.n_stored))
+            for r, (a, _) in enumerate(rows):
+                W[r, :len(a)] = a
+            self._weights = W, np.array([c for _, c in rows], dtype=float)
+        return self._weights
 
 
 def _refuse(model, request: DynamicsRequest) -> None:

@@ -26,22 +26,23 @@ import numpy as np
 from mbd3d.errors import ModelError
 from mbd3d.model import constraints
 from mbd3d.model.primitives import evaluate_rows, rows_along_vectors
+from mbd3d.numerics.compiled.sensitivity_steps import LEVELS, OFFSETS, REACH, REFINE
 
 __all__ = ["ModelTangent", "OFFSETS", "REACH", "reach", "slope", "state_scale"]
 
-#: the stencil's offsets, in steps, of the fourth-order central difference :func:`slope`
-OFFSETS = (-2.0, -1.0, 1.0, 2.0)
-#: the largest move of the state, relative to its scale, per step of :meth:`ModelTangent.along`
-#: (its stencil's error, about this to the fourth power, stays near rounding)
-REACH = 1e-3
-#: the variants at a shorter step are made at steps ``2**-k`` shorter, ``k`` a multiple of
-#: ``_REFINE`` up to ``_MOST_REFINED``
-_REFINE, _MOST_REFINED = 4, 16
+# OFFSETS: the stencil's offsets, in steps, of the fourth-order central difference
+# :func:`slope`; REACH: the largest move of the state, relative to its scale, per step of
+# :meth:`ModelTangent.along` (its stencil's error, about this to the fourth power, stays near
+# rounding); the variants at a shorter step are made at steps ``2**-k`` shorter, ``k`` a
+# multiple of ``REFINE`` up to ``_MOST_REFINED``. One definition, the compiled stages' (the
+# forward sensitivities apply the same rule in compiled code).
+_MOST_REFINED = REFINE * (LEVELS - 1)
 
 
 def slope(values: Sequence[Any], step: float) -> np.ndarray:
-    """The fourth-order central difference of ``values`` (at :data:`OFFSETS` steps):
-    differences first, so that what does not change gives exactly zero."""
+    """The fourth-order central difference of ``values`` (at
+    :data:`~mbd3d.numerics.compiled.sensitivity_steps.OFFSETS` steps): differences first, so
+    that what does not change gives exactly zero."""
     return (8.0 * (np.asarray(values[2]) - values[1]) - (np.asarray(values[3]) - values[0])
             ) / (12.0 * step)
 
@@ -101,27 +102,39 @@ class ModelTangent:
 
         ``reach``: how far the state moves per unit of ``offset``, relative to its scale (the
         largest ``|s_i| / scale_i``). Where a step of the variants would move it further than
-        :data:`REACH`, the stencil's error (the fourth power of that move) would show: a crank
-        whose angle changes by 16 rad per N m of its torque, differenced with steps of 2e-3
-        N m, was off by 4e-4. The change is then the parameter's alone (the variants with the
-        state held, ``offset`` 0) plus the state's alone (``quantity(model, offset)``, the
-        model itself with the state moved by a shorter step); or, where the tangent can make
-        variants at a shorter step (``finer``), those, at a step short enough (four
+        :data:`~mbd3d.numerics.compiled.sensitivity_steps.REACH`, the stencil's error (the
+        fourth power of that move) would show: a crank whose angle changes by 16 rad per N m
+        of its torque, differenced with steps of 2e-3 N m, was off by 4e-4. The change is
+        then the parameter's alone (the variants with the state held, ``offset`` 0) plus
+        the state's alone (``quantity(model, offset)``, the model itself with the state moved
+        by a shorter step); or, where the tangent can make variants at a shorter step
+        (:meth:`finer`), those, at a step short enough (four
         evaluations instead of eight: the rounding of a shorter step is the same as the
         state's alone, ``eps / REACH`` of the change)."""
         if reach * self.step <= REACH:
             return slope([quantity(v, o * self.step) for o, v in zip(OFFSETS, self.variants)],
                          self.step)
         # halvings of the step, by fours (at most four sets of variants made per parameter)
-        k = _REFINE * math.ceil(math.log2(reach * self.step / REACH) / _REFINE)
-        if self._finer is not None and k <= _MOST_REFINED:
-            if k not in self._refined:
-                self._refined[k] = self._finer(k)
-            variants, step = self._refined[k]
+        k = REFINE * math.ceil(math.log2(reach * self.step / REACH) / REFINE)
+        if self.can_refine and k <= _MOST_REFINED:
+            variants, step = self.finer(k)
             return slope([quantity(v, o * step) for o, v in zip(OFFSETS, variants)], step)
         h = REACH / reach
         return (slope([quantity(self.model, o * h) for o in OFFSETS], h)
                 + slope([quantity(v, 0.0) for v in self.variants], self.step))
+
+    @property
+    def can_refine(self) -> bool:
+        """Whether the tangent can make its variants at a shorter step (:meth:`finer`)."""
+        return self._finer is not None
+
+    def finer(self, k: int) -> tuple[tuple, float]:
+        """``(variants, step)``: the variants at a step ``2**-k`` of the first [the
+        parameter's unit], made when first asked for and kept."""
+        if k not in self._refined:
+            variants, step = self._finer(k)
+            self._refined[k] = (tuple(variants), float(step))
+        return self._refined[k]
 
     def constraint_rows(self, t: float, fr) -> np.ndarray:
         """``C_p`` (m,) at time ``t`` [s] and the frames ``fr`` of a state [row units per

@@ -1,0 +1,183 @@
+"""The stages of forward sensitivities in one compiled call per step.
+
+After the compiled Runge-Kutta step of the state
+(:func:`mbd3d.numerics.compiled.integration.advance`) has been accepted,
+:func:`sensitivity_stages_into` takes the same step of the sensitivities ``S = dy/dp`` of every
+parameter: at each stage, with the stage's state ``Y`` formed exactly as the step formed it,
+the derivative of ``S`` is the change of the right-hand side along the parameter with the state
+moving by its sensitivity, ``d/dh f_{p+h}(t, Y + h S)``, the fourth-order central difference
+(:data:`OFFSETS`) of the compiled right-hand sides of the model's variants (the model built
+with the parameter at ``OFFSETS`` steps from its value; see
+:class:`mbd3d.model.tangents.ModelTangent`, whose
+:meth:`~mbd3d.model.tangents.ModelTangent.along` is the same rule for any quantity evaluated
+in Python).
+
+Where a step of the variants would move the state further than :data:`REACH` of its scale (a
+large sensitivity), the stencil's error would show: the variants at a step ``2**-k`` shorter
+are used (``k`` a multiple of 4 up to 16), which the caller makes when the kernel asks for them
+(a negative status), or, beyond those or where the parameter has none, the state's change
+alone from the model itself plus the parameter's alone from the variants with the state held.
+
+Everything here evaluates right-hand sides the integrator already compiled; the loop over
+stages and parameters is what was Python (four calls from Python per stage and parameter, 60 us
+of overhead for 4 us of work on the slider-crank).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mbd3d.numerics.compiled import jit
+from mbd3d.numerics.compiled.integration import derivative
+from mbd3d.numerics.compiled.runge_kutta import stage_state
+
+__all__ = ["sensitivity_stages_into", "OFFSETS", "REACH", "REFINE", "LEVELS", "SOLVED"]
+
+#: the stencil's offsets, in steps, of the fourth-order central difference
+OFFSETS = (-2.0, -1.0, 1.0, 2.0)
+#: the largest move of the state, relative to its scale, per step of the variants
+REACH = 1e-3
+#: levels of variants per parameter: level ``l`` at a step ``2**-(REFINE l)`` of the first
+REFINE, LEVELS = 4, 5
+SOLVED = 0
+
+
+@jit
+def _reach(coordinate_scale: np.ndarray, y: np.ndarray, S: np.ndarray) -> float:
+    """The largest ``|S_i| / scale_i``: positions against the model's scale, velocities
+    against that scale per second plus their own size."""
+    n = coordinate_scale.shape[0]
+    largest = 0.0
+    for i in range(2 * n):
+        scale = coordinate_scale[i] if i < n else coordinate_scale[i - n] + abs(y[i])
+        largest = max(largest, abs(S[i]) / scale)
+    return largest
+
+
+@jit
+def _stencil_into(model, work, key, variants, works, first, use_variants, state_step, step, t,
+                  y, S, charts, values, moved, counts, out) -> int:
+    """``out += `` the fourth-order difference, divided by ``step``, of ``f(t, y + o h S)`` at
+    the offsets ``o`` (``h = state_step``; 0 holds the state) of the variants ``first`` to
+    ``first + 3`` (``use_variants``) or of the model itself; returns the first failing
+    evaluation's status."""
+    n2 = y.shape[0]
+    for o in range(4):
+        h = OFFSETS[o] * state_step
+        for i in range(n2):
+            moved[i] = y[i] + h * S[i]
+        if use_variants:
+            status = derivative(variants[first + o], key, t, moved, charts, values[o],
+                                works[first + o])
+        else:
+            status = derivative(model, key, t, moved, charts, values[o], work)
+        counts[0] += 1
+        if status != SOLVED:
+            return status
+    for i in range(n2):
+        out[i] += (8.0 * (values[2, i] - values[1, i]) - (values[3, i] - values[0, i])
+                   ) / (12.0 * step)
+    return SOLVED
+
+
+@jit
+def _tangent_into(model, work, key, variants, works, steps, have, refine, j, t, y, S, charts,
+                  reach, values, moved, counts, out) -> int:
+    """``out = d/dh f_{p+h}(t, y + h S)`` for parameter ``j`` (see the module doc); a negative
+    status ``-(1 + j LEVELS + level)`` asks for that level's variants."""
+    out[:] = 0.0
+    step = steps[j, 0]
+    if reach * step <= REACH:
+        return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, step,
+                             step, t, y, S, charts, values, moved, counts, out)
+    k = REFINE * math.ceil(math.log2(reach * step / REACH) / REFINE)
+    level = k // REFINE
+    if refine[j] and level < LEVELS:
+        if not have[j, level]:
+            return -(1 + j * LEVELS + level)
+        finer = steps[j, level]
+        return _stencil_into(model, work, key, variants, works, (j * LEVELS + level) * 4,
+                             True, finer, finer, t, y, S, charts, values, moved, counts, out)
+    # the state's change alone (the model, a shorter step), then the parameter's alone
+    h = REACH / reach
+    status = _stencil_into(model, work, key, variants, works, 0, False, h, h, t, y, S,
+                           charts, values, moved, counts, out)
+    if status != SOLVED:
+        return status
+    return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, 0.0, step,
+                         t, y, S, charts, values, moved, counts, out)
+
+
+@jit
+def _rates_into(model, work, key, variants, works, steps, have, refine, coordinate_scale,
+                m, width, t, y, z, charts, values, moved, counts, out) -> int:
+    """The sensitivities' part of ``dz/dt`` at the stage ``(t, y)``, ``z`` the stage's
+    sensitivities: per parameter ``j`` its columns ``m + j width`` on, ``2n`` of them (the
+    integrals' columns are the caller's)."""
+    n2 = y.shape[0]
+    for j in range(steps.shape[0]):
+        start = m + j * width
+        S = z[start:start + n2]
+        status = _tangent_into(model, work, key, variants, works, steps, have, refine, j, t,
+                               y, S, charts, _reach(coordinate_scale, y, S), values, moved,
+                               counts, out[start:start + n2])
+        if status != SOLVED:
+            return status
+    return SOLVED
+
+
+@jit
+def sensitivity_stages_into(model, work, key, variants, works, steps, have, refine,
+                            coordinate_scale, m, width, W, C, t_old, step, y_old, K, z, L,
+                            charts, first, stage_y, stage_z, counts) -> int:
+    """The stages ``L`` of the sensitivities ``z`` through the step ``t_old -> t_old + step``
+    the state took from ``y_old`` with its stages ``K``; returns the status (0; a
+    right-hand side's failing status; a negative request for finer variants, see
+    :func:`_tangent_into`).
+
+    Parameters
+    ----------
+    model, work, key
+        The model's compiled arrays, a workspace of its own and the integrator's key.
+    variants, works
+        Typed lists of the variants' arrays and workspaces, four per level, ``LEVELS`` levels
+        per parameter (levels not made yet: any record, ``have`` False).
+    steps : (p, LEVELS) ndarray
+        The variants' steps [the parameter's unit]; ``have`` (p, LEVELS) which are made,
+        ``refine`` (p,) whether a parameter can have finer levels at all.
+    coordinate_scale : (n,) ndarray
+        What a change of each coordinate is measured against.
+    m, width
+        The integrals' count (their columns are the caller's) and each parameter's columns.
+    W : (rows, n_stored) ndarray
+        Each stage's weights after the first, ``C`` (rows,) its time [in steps].
+    L : (n_stored, z.size) ndarray
+        The stages; ``L[0]`` is computed where ``first``, kept otherwise (the last stage of
+        the step before).
+    stage_y, stage_z : (rows + 1, ...) ndarray
+        Each stage's state and sensitivities, for the caller's integrals.
+    counts : (1,) int64 ndarray
+        Right-hand side evaluations, added to.
+    """
+    n2 = y_old.shape[0]
+    values = np.empty((4, n2))
+    moved = np.empty(n2)
+    stage_y[0, :] = y_old
+    stage_z[0, :] = z
+    if first:
+        status = _rates_into(model, work, key, variants, works, steps, have, refine,
+                             coordinate_scale, m, width, t_old, y_old, z, charts, values, moved,
+                             counts, L[0])
+        if status != SOLVED:
+            return status
+    for i in range(1, W.shape[0] + 1):
+        stage_state(y_old, K, W[i - 1], i, step, stage_y[i])
+        stage_state(z, L, W[i - 1], i, step, stage_z[i])
+        status = _rates_into(model, work, key, variants, works, steps, have, refine,
+                             coordinate_scale, m, width, t_old + C[i - 1] * step, stage_y[i],
+                             stage_z[i], charts, values, moved, counts, L[i])
+        if status != SOLVED:
+            return status
+    return SOLVED
