@@ -8,7 +8,8 @@ by Coulomb's law on the impulsive load ``L_n(Lam)`` (the regularised law's limit
 being fast against its stiction velocity throughout): the joint either *slides* on in the
 sense ``d_n`` it slid before, ``E_n = -mu_n L_n d_n``, or *sticks*, the impact stopping its
 slide (``G_n qd+ = 0``) with ``|E_n| <= mu_n L_n``. A joint that did not slide before starts
-sticking. The contact rows' impulses are solved with the velocities ``E`` gives (Newton's
+sticking; where the contacts' rates move it whatever its impulse (the restitution phase of a
+hinged pendulum's bounce starts at rest and must swing it back), it slides that way. The contact rows' impulses are solved with the velocities ``E`` gives (Newton's
 law still on their rates before the impact), so ``Lam`` depends on ``E`` and ``E`` on
 ``Lam``: Newton's method on the modes' equations, with a difference Jacobian (exact within
 a piece: the impulses are piecewise affine in ``E``, by the contacts' active set), then a
@@ -82,18 +83,27 @@ def joint_friction_impulses(model, fr, qd: np.ndarray, contact: Callable,
     if size == 0.0:  # the impact loads no joint with friction
         return free
     E = -capacity * mode
-    speed = max(float(np.max(np.abs(G @ qd), initial=0.0)), np.finfo(float).tiny)
+    # the joints' slides before the impact and without friction through it: a joint at rest
+    # before (the restitution phase starts so) may be made to slide by the contacts
+    speed = max(float(np.max(np.abs(G @ qd), initial=0.0)),
+                float(np.max(np.abs(G @ free[0]), initial=0.0)), np.finfo(float).tiny)
     for _ in range(2 * len(G) + 2):
         E = _newton(residual, E, size, what)
         out = solve(E)
         after, capacity = out[0], group.mu * group.loads(model, fr, out[-1])
-        back = np.flatnonzero((mode != 0.0) & (mode * (G @ after) < -1e-12 * speed))
+        slide = G @ after
+        back = np.flatnonzero((mode != 0.0) & (mode * slide < -1e-12 * speed))
+        # a joint cannot stick where the contacts' rates move it whatever its impulse (no
+        # friction impulse zeroes its slide): it slides that way
+        moved = np.flatnonzero((mode == 0.0) & (np.abs(slide) > 1e-9 * speed))
         over = np.flatnonzero((mode == 0.0) & (np.abs(E) > (1.0 + 1e-9) * capacity
                                                + 1e-12 * size))
-        if not len(back) and not len(over):
+        if not len(back) and not len(moved) and not len(over):
             return out
         if len(back):
             mode[back[0]] = 0.0
+        elif len(moved):
+            mode[moved[0]] = np.sign(slide[moved[0]])
         else:
             mode[over[0]] = -np.sign(E[over[0]])
     raise ModelError(f"{what}: the joints' friction impulses were not found, their joints "
