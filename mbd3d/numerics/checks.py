@@ -37,7 +37,7 @@ def finite_vector(value: Any, size: int, what: str) -> np.ndarray:
         raise ModelError(f"{what} must be {size} numbers, got {value!r}") from None
     if arr.size != size:
         raise ModelError(f"{what} must have {size} components, got {arr.size}: {value!r}")
-    if not np.all(np.isfinite(arr)):
+    if not all(map(math.isfinite, arr.tolist())):  # a tenth of np.all's time on 3 numbers
         raise ModelError(f"{what} must be finite, got {value!r}")
     return arr
 
