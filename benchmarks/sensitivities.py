@@ -11,12 +11,13 @@ the dynamic equations along the parameter: the ratio per parameter is what to ex
 study of p parameters, p times it.
 
 Forward sensitivities take, at every stage of every step, the change of the right-hand side
-along each parameter from four evaluations of the model's variants (at a shorter step, made
-when first needed, where the state's sensitivities are large), all stages of a step in one
-compiled call: four right-hand sides per stage and parameter, plus building the variants
-through the model's file (four models per parameter and level of step), is several analyses
-per parameter, not the issue's target of half of one, which needs the right-hand side's own
-tangent compiled (one residual and one back-substitution per parameter).
+along each parameter from four evaluations of the model's variants (at a shorter step where
+the state's sensitivities are large: interpolated from the first variants' compiled arrays
+where the parameter enters them affinely, built otherwise), all stages of a step in one
+compiled call: four right-hand sides per stage and parameter, plus building the four variants
+through the model's file, is several analyses per parameter, not the issue's target of half of
+one, which needs the right-hand side's own tangent compiled (one residual and one
+back-substitution per parameter).
 
 Run: python benchmarks/sensitivities.py [--repeat N]
 """

@@ -16,7 +16,9 @@ from scipy.integrate import simpson
 
 import mbd3d as mb
 from mbd3d import mechanisms
-from mbd3d.io.parameters import parameter_value
+from mbd3d.io.parameters import parameter_tangent, parameter_value
+from mbd3d.numerics.compiled.accelerations import accelerations_with_parts
+from mbd3d.numerics.compiled.structures import workspace
 
 EXAMPLES = pathlib.Path(__file__).parent.parent / "examples"
 sys.path.insert(0, str(EXAMPLES))
@@ -191,6 +193,47 @@ def test_spatial_top_against_differences():
         centre = sens.dq[:, :3, j]
         assert np.max(np.abs(centre - reference[:, 3:])) <= 1e-8 * np.max(
             np.abs(reference[:, 3:])), name
+
+
+@pytest.mark.parametrize("maker, name, affine", [
+    (lambda: mechanisms.slider_crank(crank_angle=1.134, crank_speed=None, crank_torque=2.0),
+     "bodies.slider.mass", True),
+    (lambda: mechanisms.slider_crank(crank_angle=1.134, crank_speed=None, crank_torque=2.0),
+     "joints.A.point_i[0]", True),
+    (lambda: mechanisms.slider_crank(crank_angle=1.134, crank_speed=None, crank_torque=2.0),
+     "forces.torque.torque", True),
+    # a hinge's axis is normalised: not affine in its component, so its variants are built
+    (lambda: mechanisms.spatial_four_bar(crank_speed=None), "joints.O2.axis[0]", False)])
+def test_variants_at_a_shorter_step_without_building_them(maker, name, affine):
+    # where a sensitivity is large the forward sensitivities' stages ask for the variants at a
+    # step 2**-8 of the first; a parameter the compiled arrays are affine in gets them
+    # interpolated from the first variants, and their accelerations and multipliers must be
+    # those of the models built at those values
+    model = maker()
+    tangent = parameter_tangent(model, name, "")
+    made, step = tangent.finer_arrays(8)
+    assert (8 not in tangent._refined) == affine  # built only where not affine
+    built, built_step = tangent.finer(8)
+    assert step == built_step == tangent.step / 256
+    rng = np.random.default_rng(3)
+    q, qd = model.q0, rng.normal(size=model.n_coordinates)
+    charts = np.array(model.charts0) if model.dim == 3 else None
+    core = model._core
+
+    def solved(arrays):
+        x, status = accelerations_with_parts(workspace(model.dim == 3, arrays), 0.3, q, qd,
+                                             charts, core.no_forces, core.no_motions,
+                                             core.no_motions)
+        assert status == 0
+        return x
+    for arrays, variant in zip(made, built):
+        expected = solved(variant._core.arrays())
+        assert np.allclose(solved(arrays), expected, rtol=1e-13,
+                           atol=1e-13 * np.max(np.abs(expected)))
+    # and the interpolated variants do move: their difference is the parameter's effect
+    if affine:
+        x = [solved(arrays) for arrays in made]
+        assert np.max(np.abs(x[3] - x[0])) > 1e-9 * np.max(np.abs(x[0]))
 
 
 def test_integrals_read_like_results(tmp_path):

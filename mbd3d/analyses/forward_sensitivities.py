@@ -281,7 +281,7 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
             S = z[self._s(j)]
             out[self._g(j)] = tangent.along(
                 lambda model, h: self._integrals(model, t, *self._split(y + h * S)),
-                reach(scale, S))
+                reach(scale, S), make_finer=False)
 
     def _integrals(self, model, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         out = np.empty(self.m)
@@ -343,7 +343,8 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
                 a, multipliers, _ = consistent_accelerations(variant, t, q + h * s, qd + h * sd,
                                                              charts, fallback=False)
                 return np.concatenate([a, multipliers])
-            change = tangent.along(moved, reach(state_scale(self.model, qd), s, sd))
+            change = tangent.along(moved, reach(state_scale(self.model, qd), s, sd),
+                                   make_finer=False)
             out[0][:, j], out[1][:, j] = s, sd
             out[2][:, j], out[3][:, j] = change[:self.n], change[self.n:]
             out[5][:, j] = z[self._g(j)]
@@ -378,24 +379,25 @@ class _VariantSets:
             self.variants.append(self.own[0])
             self.works.append(self.own[1])
         for j, tangent in enumerate(self.tangents):
-            self._install(j, 0, tangent.variants, tangent.step)
+            self._install(j, 0, [v._core.arrays() for v in tangent.variants], tangent.step)
         self._weights = None
 
     def _compiled(self, model) -> tuple:
         arrays = model._core.arrays()
         return arrays, workspace(self.spatial, arrays)
 
-    def _install(self, j: int, level: int, variants: Sequence, step: float) -> None:
-        for o, variant in enumerate(variants):
-            arrays, work = self._compiled(variant)
-            self.variants[(j * LEVELS + level) * 4 + o] = arrays
-            self.works[(j * LEVELS + level) * 4 + o] = work
+    def _install(self, j: int, level: int, arrays: Sequence, step: float) -> None:
+        for o, record in enumerate(arrays):
+            self.variants[(j * LEVELS + level) * 4 + o] = record
+            self.works[(j * LEVELS + level) * 4 + o] = workspace(self.spatial, record)
         self.steps[j, level], self.have[j, level] = step, True
 
     def make(self, code: int) -> None:
-        """Make the variants the stages asked for: ``code = j LEVELS + level``."""
+        """Make the variants the stages asked for, ``code = j LEVELS + level``: interpolated
+        where the parameter enters the compiled arrays affinely, else built
+        (:meth:`~mbd3d.model.tangents.ModelTangent.finer_arrays`)."""
         j, level = divmod(code, LEVELS)
-        self._install(j, level, *self.tangents[j].finer(REFINE * level))
+        self._install(j, level, *self.tangents[j].finer_arrays(REFINE * level))
 
     def weights(self, tab) -> tuple[np.ndarray, np.ndarray]:
         """``(W, C)``: each stage's weights after the first (padded to the stored stages) and
@@ -441,7 +443,7 @@ def _projected(model, tangent: ModelTangent, t: float, q: np.ndarray, qd: np.nda
                        + tangent.constraint_rows(t, fr))
     velocity = tangent.along(lambda v, h: _velocity_residual(v, t, q + h * s, qd + h * sd,
                                                              charts),
-                             reach(state_scale(model, qd), s, sd))
+                             reach(state_scale(model, qd), s, sd), make_finer=False)
     return s, sd + correction(velocity)
 
 

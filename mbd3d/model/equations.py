@@ -4,6 +4,7 @@ quadratic velocity forces, energies."""
 from __future__ import annotations
 
 import threading
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -153,15 +154,42 @@ class _Core:
         (generalized-alpha adds the forces of rigid contacts held at rest to them)."""
         key = (bool(python_accelerations), bool(python_parts) or self.python_parts)
         if key not in self._records:
-            forces, range_space = self._forces, self._range_space
-            fields = dict(self._fields, python_accelerations=key[0], python_parts=key[1],
-                          forces=structures.force_arrays(*(forces[name] for name in
-                                                           structures.FORCE_FIELDS)),
-                          range_space=structures.range_space_arrays(
-                              *(range_space[name] for name in structures.RANGE_FIELDS)))
-            self._records[key] = structures.model_arrays(
-                *(fields[name] for name in structures.MODEL_FIELDS))
+            self._records[key] = _record((self._fields, self._forces, self._range_space),
+                                         *key)
         return self._records[key]
+
+    def slopes(self, others: Sequence["_Core"], offsets: Sequence[float]) -> tuple | None:
+        """How this model's compiled arrays change per unit of offset, where ``others`` are
+        its variants at ``offsets`` (one of them 1) and every floating-point field is affine
+        in the offset to rounding (a mass, a spring's stiffness, a joint's point): the
+        tables ``(fields, forces, range space)`` of slopes (integer fields must agree, and
+        are taken as they are); None where any is not (a normalised axis, a count, contacts),
+        or the model has parts in Python."""
+        mine = (self._fields, self._forces, self._range_space)
+        theirs = [(o._fields, o._forces, o._range_space) for o in others]
+        if self.python_parts or any(o.python_parts for o in others):
+            return None
+        unit = list(offsets).index(1.0)
+        slopes = []
+        for part, table in enumerate(mine):
+            slope = {}
+            for name, value in table.items():
+                values = [t[part][name] for t in theirs]
+                slope[name] = _affine_slope(value, values, offsets, values[unit] if
+                                            isinstance(value, (np.ndarray, float)) else None)
+                if slope[name] is _NOT_AFFINE:
+                    return None
+            slopes.append(slope)
+        return tuple(slopes)
+
+    def moved_arrays(self, slopes: tuple, offset: float) -> "structures.ModelArrays":
+        """The compiled arrays of this model moved by ``offset`` along ``slopes``
+        (:meth:`slopes`): the variant at that offset, without building it."""
+        tables = tuple({name: value if slope[name] is None else value + offset * slope[name]
+                        for name, value in table.items()}
+                       for table, slope in zip((self._fields, self._forces,
+                                                self._range_space), slopes))
+        return _record(tables, False, self.python_parts)
 
     def penalty_arrays(self, model) -> "structures.PenaltyArrays":
         """Generalized-alpha's iteration matrix pattern as the compiled Newton iteration takes
@@ -204,6 +232,46 @@ class _Core:
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state, _records={}, _penalty=None, _scratch=threading.local())
+
+
+#: a field that is not affine in a parameter (see _Core.slopes)
+_NOT_AFFINE = object()
+
+
+def _affine_slope(value: Any, values: Sequence[Any], offsets: Sequence[float], unit: Any):
+    """The slope per unit of offset of a field whose variants at ``offsets`` are ``values``
+    (``unit`` the one at offset 1): None for a field that must not change (integers, flags,
+    records: equal in every variant), :data:`_NOT_AFFINE` where it changes otherwise."""
+    if isinstance(value, float) or (isinstance(value, np.ndarray) and value.dtype.kind == "f"):
+        if any(np.shape(v) != np.shape(value) for v in values):
+            return _NOT_AFFINE
+        slope = np.asarray(unit, dtype=float) - value
+        # rounding: the variants' own and the slope's, a few units of the largest
+        tolerance = 32.0 * np.finfo(float).eps * (np.abs(value) + np.abs(unit))
+        for o, v in zip(offsets, values):
+            if np.any(np.abs(v - value - o * slope) > abs(o) * tolerance + 1e-300):
+                return _NOT_AFFINE
+        return slope
+    if isinstance(value, np.ndarray):
+        same = all(isinstance(v, np.ndarray) and np.array_equal(v, value) for v in values)
+    elif value is None or isinstance(value, (bool, int, str, np.integer)):
+        same = all(type(v) is type(value) and v == value for v in values)
+    else:  # a record (the contacts): not compared, not interpolated
+        same = all(v is value for v in values)
+    return None if same else _NOT_AFFINE
+
+
+def _record(tables: tuple, python_accelerations: bool, python_parts: bool
+            ) -> "structures.ModelArrays":
+    """The :class:`~mbd3d.numerics.compiled.structures.ModelArrays` of the tables ``(fields,
+    forces, range space)`` of :class:`_Core`."""
+    fields, forces, range_space = tables
+    fields = dict(fields, python_accelerations=python_accelerations, python_parts=python_parts,
+                  forces=structures.force_arrays(*(forces[name] for name in
+                                                   structures.FORCE_FIELDS)),
+                  range_space=structures.range_space_arrays(
+                      *(range_space[name] for name in structures.RANGE_FIELDS)))
+    return structures.model_arrays(*(fields[name] for name in structures.MODEL_FIELDS))
 
 
 def _range_space_fields(pattern) -> dict:

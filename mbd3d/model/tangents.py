@@ -80,6 +80,7 @@ class ModelTangent:
         #: ``finer(k) -> (variants, step / 2**k)``: the variants at a shorter step (see
         #: :meth:`along`), made when first needed and kept
         self._finer, self._refined = finer, {}
+        self._slopes = None  # the compiled arrays' slopes (finer_arrays), () where not affine
         table = model.row_table
         for variant in variants:
             other = variant.row_table
@@ -95,7 +96,8 @@ class ModelTangent:
             np.array_equal(v.row_table.real, table.real)
             and np.array_equal(v.row_table.curves, table.curves) for v in variants)
 
-    def along(self, quantity: Callable[[Any, float], Any], reach: float = 0.0) -> np.ndarray:
+    def along(self, quantity: Callable[[Any, float], Any], reach: float = 0.0,
+              make_finer: bool = True) -> np.ndarray:
         """``d quantity/dp``: the central difference of ``quantity(variant, offset)`` over the
         variants, ``offset`` the parameter's change [its unit] at which each is (move the
         state by its sensitivity times ``offset``).
@@ -110,13 +112,14 @@ class ModelTangent:
         by a shorter step); or, where the tangent can make variants at a shorter step
         (:meth:`finer`), those, at a step short enough (four
         evaluations instead of eight: the rounding of a shorter step is the same as the
-        state's alone, ``eps / REACH`` of the change)."""
+        state's alone, ``eps / REACH`` of the change). Without ``make_finer`` only variants
+        already made are used (building them costs more than a few evaluations saved)."""
         if reach * self.step <= REACH:
             return slope([quantity(v, o * self.step) for o, v in zip(OFFSETS, self.variants)],
                          self.step)
         # halvings of the step, by fours (at most four sets of variants made per parameter)
         k = REFINE * math.ceil(math.log2(reach * self.step / REACH) / REFINE)
-        if self.can_refine and k <= _MOST_REFINED:
+        if self.can_refine and k <= _MOST_REFINED and (make_finer or k in self._refined):
             variants, step = self.finer(k)
             return slope([quantity(v, o * step) for o, v in zip(OFFSETS, variants)], step)
         h = REACH / reach
@@ -135,6 +138,21 @@ class ModelTangent:
             variants, step = self._finer(k)
             self._refined[k] = (tuple(variants), float(step))
         return self._refined[k]
+
+    def finer_arrays(self, k: int) -> tuple[list, float]:
+        """``(arrays, step)``: the compiled arrays of the variants at a step ``2**-k`` of the
+        first, interpolated from the model's and its variants' where every number of them is
+        affine in the parameter (checked on the variants, to rounding: a mass, a stiffness, a
+        joint's point), else those of the variants built (:meth:`finer`)."""
+        if self._slopes is None:
+            self._slopes = self.model._core.slopes([v._core for v in self.variants],
+                                                   OFFSETS) or ()
+        if self._slopes and k not in self._refined:
+            fraction = 2.0 ** -k  # the slopes are per step of the first variants
+            return ([self.model._core.moved_arrays(self._slopes, o * fraction)
+                     for o in OFFSETS], self.step * fraction)
+        variants, step = self.finer(k)
+        return [v._core.arrays() for v in variants], step
 
     def constraint_rows(self, t: float, fr) -> np.ndarray:
         """``C_p`` (m,) at time ``t`` [s] and the frames ``fr`` of a state [row units per
