@@ -125,6 +125,30 @@ def test_closed_loop_against_differences(constraint_tol):
 
 
 @pytest.mark.compiled_only
+def test_without_finer_variants_against_differences(monkeypatch):
+    # parameters whose tangents cannot make variants at a shorter step: where a sensitivity is
+    # large the stages take the state's change from the model itself (a shorter step) and the
+    # parameter's from the variants with the state held, eight right-hand sides for four
+    from mbd3d.analyses import forward_sensitivities as module
+    from mbd3d.io.parameters import parameter_variants
+    from mbd3d.model.tangents import ModelTangent
+    model = _closed_loop()
+    t = np.linspace(0.0, 1.0, 6)
+    names = ["bodies.slider.mass", "forces.torque.torque"]
+    options = dict(method="DOP853", rtol=1e-12, atol=1e-14)
+    finer = mb.forward_sensitivities(model, t, names, **options)
+    monkeypatch.setattr(module, "parameter_tangent", lambda m, name, what: ModelTangent(
+        m, *parameter_variants(m, name, OFFSETS), what))
+    sens = mb.forward_sensitivities(model, t, names, **options)
+    assert (sens.results.stats["sensitivity_evaluations"]
+            > finer.results.stats["sensitivity_evaluations"])  # the other rule was taken
+    tight = dict(options, rtol=1e-13, atol=1e-15)
+    for j, name in enumerate(names):
+        got, reference = sensitivity_and_difference(model, sens, j, name, tight)
+        assert np.max(np.abs(got - reference)) <= 1e-8 * np.max(np.abs(reference)), name
+
+
+@pytest.mark.compiled_only
 def test_a_held_start_against_differences():
     # the crank's angle held while the start is assembled: a parameter that moves the loop's
     # closure moves the slider and rod, never the crank (the sheet's 1.3 with held rows), as
