@@ -9,8 +9,9 @@ being fast against its stiction velocity throughout): the joint either *slides* 
 sense ``d_n`` it slid before, ``E_n = -mu_n L_n d_n``, or *sticks*, the impact stopping its
 slide (``G_n qd+ = 0``) with ``|E_n| <= mu_n L_n``. A joint that did not slide before starts
 sticking; where the contacts' rates move it whatever its impulse (the restitution phase of a
-hinged pendulum's bounce starts at rest and must swing it back), it slides that way. The contact rows' impulses are solved with the velocities ``E`` gives (Newton's
-law still on their rates before the impact), so ``Lam`` depends on ``E`` and ``E`` on
+hinged pendulum's bounce starts at rest and must swing it back), it slides that way. The
+contact rows' impulses are solved with the velocities ``E`` gives (Newton's law still on
+their rates before the impact), so ``Lam`` depends on ``E`` and ``E`` on
 ``Lam``: Newton's method on the modes' equations, with a difference Jacobian (exact within
 a piece: the impulses are piecewise affine in ``E``, by the contacts' active set), then a
 joint whose slide the impact turned back sticks, one whose sticking impulse leaves its cone
