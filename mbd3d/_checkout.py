@@ -39,4 +39,6 @@ def map_siblings(package_folder: str) -> None:
     if not all(os.path.isfile(os.path.join(root, name, "__init__.py")) for name in SIBLINGS):
         return
     if not any(isinstance(f, _SiblingFinder) for f in sys.meta_path):
-        sys.meta_path.append(_SiblingFinder(root))
+        # first: an editable install of another checkout has its own finder for these names,
+        # which would pair this checkout's mbd3d with that one's joints
+        sys.meta_path.insert(0, _SiblingFinder(root))
