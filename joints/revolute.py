@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
+from mbd3d.errors import ModelError
 from mbd3d.model.body import Body
 from mbd3d.model.element import PrimitiveSpec
 from mbd3d.model.builder import BuildContext
@@ -36,6 +38,15 @@ class Revolute(Joint):
         The pin in the frames of body i and body j [m] (see :class:`joints.base.Joint`).
     axis : (3,) array_like
         Spatial models: the hinge axis in the drawing (global axes). Ignored in 2D.
+    drawn_angle : float, optional
+        Spatial models: the angle the hinge reads in the drawing [rad] (its
+        ``results.joint(name).angle``, what a RotationDriver, a JointLimit and a
+        RotationalSpringDamper across it take as its angle): body j's reference direction
+        is the one at this angle from body i's in the drawing. Default: the angle from
+        body i's to body j's x axis, projected on the plane normal to the axis (see
+        :func:`reference_direction`). Robot files' importers give it their joint
+        coordinate, so that the angle reads as the file's. Refused in 2D, where the angle
+        is ``theta_j - theta_i`` of the bodies' own angles.
 
     Examples
     --------
@@ -51,9 +62,11 @@ class Revolute(Joint):
     limit_coordinates = ("angle",)
 
     def __init__(self, name: str, body_i: Body, body_j: Body, *, at: Any = None,
-                 point_i: Any = None, point_j: Any = None, axis: Any = None):
+                 point_i: Any = None, point_j: Any = None, axis: Any = None,
+                 drawn_angle: float | None = None):
         super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
         self.axis = axis
+        self.drawn_angle = drawn_angle
 
     def hinge_directions(self, ctx: BuildContext, what: str
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,6 +77,7 @@ class Revolute(Joint):
         point = PrimitiveSpec("point", self.body_i, self.body_j, {"u_i": u_i, "u_j": u_j},
                               ("x", "y", "z")[:ctx.dim])
         if ctx.dim == 2:
+            planar_angle(ctx, self)
             return [point]
         return [point, *perpendicular_rows(self, Axes(ctx, self, self.axis))]
 
@@ -78,11 +92,25 @@ def hinge_directions(ctx: BuildContext, joint: Joint
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(f_i, g_i, f_j)``: the directions a spatial hinge's angle about ``joint.axis`` is
     measured from, in body i's frame (``g_i = h x f_i``), and body j's reference direction in
-    its own frame (see :func:`reference_direction`)."""
+    its own frame: :func:`reference_direction`, or where the joint's ``drawn_angle`` is
+    given, the direction at that angle from ``f_i`` in the drawing."""
     axes = Axes(ctx, joint, joint.axis)
     h_i, h_j = axes.i[2], axes.j[2]
     f_i = reference_direction(h_i)
-    return f_i, np.cross(h_i, f_i), reference_direction(h_j)
+    g_i = np.cross(h_i, f_i)
+    if joint.drawn_angle is None:
+        return f_i, g_i, reference_direction(h_j)
+    angle = ctx.scalar(joint.drawn_angle, f"joint '{joint.name}': drawn_angle")
+    drawn = ctx.rotation(joint.body_i) @ (math.cos(angle) * f_i + math.sin(angle) * g_i)
+    return f_i, g_i, ctx.to_local_vector(joint.body_j, drawn)
+
+
+def planar_angle(ctx: BuildContext, joint: Joint) -> None:
+    """Refuse a hinge's ``drawn_angle`` in a planar model, naming the joint."""
+    if joint.drawn_angle is not None:
+        raise ModelError(f"joint '{joint.name}': drawn_angle is for spatial hinges; in a plane "
+                         "a hinge's angle is theta_j - theta_i of the bodies' own angles (give "
+                         "the bodies' angles, or a RotationDriver's offset)")
 
 
 def reference_direction(h: np.ndarray) -> np.ndarray:

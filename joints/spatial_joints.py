@@ -72,16 +72,30 @@ class _AxisJoint(Joint):
         return u_i, u_j, Axes(ctx, self, self.axis).reaction_axes(along_x=True)
 
 
-class Cylindrical(_AxisJoint):
-    """Body j slides along and turns about an axis of body i: axes aligned (``axis_f``,
-    ``axis_g``) and the point of j on the line (``normal_f``, ``normal_g``); 4 rows."""
+class _Hinge(_AxisJoint):
+    """An axis joint that turns about its axis, from the angle ``drawn_angle`` [rad] it reads
+    in the drawing (see :class:`~mbd3d.joints.Revolute`)."""
 
-    #: the coordinates a :class:`~mbd3d.JointLimit` may stop
-    limit_coordinates = ("angle", "displacement")
+    def __init__(self, name: str, body_i: Body, body_j: Body, *, axis: Any, at: Any = None,
+                 point_i: Any = None, point_j: Any = None, drawn_angle: float | None = None):
+        super().__init__(name, body_i, body_j, axis=axis, at=at, point_i=point_i,
+                         point_j=point_j)
+        self.drawn_angle = drawn_angle
 
     def hinge_directions(self, ctx: BuildContext, what: str
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return hinge_directions(ctx, self)
+
+
+class Cylindrical(_Hinge):
+    """Body j slides along and turns about an axis of body i: axes aligned (``axis_f``,
+    ``axis_g``) and the point of j on the line (``normal_f``, ``normal_g``); 4 rows.
+
+    Its angle reads ``drawn_angle`` [rad] in the drawing where given (see
+    :class:`~mbd3d.joints.Revolute`)."""
+
+    #: the coordinates a :class:`~mbd3d.JointLimit` may stop
+    limit_coordinates = ("angle", "displacement")
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         require_spatial(ctx, self.name)
@@ -94,17 +108,16 @@ class Cylindrical(_AxisJoint):
                 PrimitiveSpec("dot2", bi, bj, {"v_i": g, "u_i": u_i, "u_j": u_j}, ("normal_g",))]
 
 
-class Planar(_AxisJoint):
+class Planar(_Hinge):
     """Body j slides on a plane of body i and turns about its normal ``axis``: normals aligned
-    (``axis_f``, ``axis_g``) and the point of j in the plane (``plane``); 3 rows."""
+    (``axis_f``, ``axis_g``) and the point of j in the plane (``plane``); 3 rows.
+
+    Its angle reads ``drawn_angle`` [rad] in the drawing where given (see
+    :class:`~mbd3d.joints.Revolute`)."""
 
     #: the coordinates a :class:`~mbd3d.JointLimit` may stop: the turn about the normal and
     #: the two components of ``results.joint(name).plane_position``
     limit_coordinates = ("angle", "plane_position[0]", "plane_position[1]")
-
-    def hinge_directions(self, ctx: BuildContext, what: str
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return hinge_directions(ctx, self)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         require_spatial(ctx, self.name)

@@ -1,7 +1,7 @@
 """Joint coordinates against closed forms: the four-bar's joint angles, rates and accelerations
 from its loop equations solved by hand (Freudenstein's positions), the slider-crank's slider
-travel, a spatial hinge through many turns between coarse outputs, planar == spatial in the
-plane, a spherical joint's rotation against its own angular velocity, and body-axes angular
+travel, a spatial hinge through many turns between coarse outputs (and from its drawn
+angle), planar == spatial in the plane, a spherical joint's rotation against its own angular velocity, and body-axes angular
 velocities against Euler's torque-free solution."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import mbd3d as mb
-from mbd3d.joints import Revolute, RotationDriver, Spherical
+from mbd3d.joints import Cylindrical, Revolute, RotationDriver, Spherical
 from mbd3d.mechanisms import four_bar, slider_crank
 from four_bar_loop import four_bar_by_hand
 from test_spatial_dynamics import spatial_four_bar_in_plane
@@ -90,6 +90,47 @@ def test_a_spatial_hinge_keeps_count_of_turns_between_coarse_outputs():
     np.testing.assert_allclose(res.joint("axle").angle_rate, expected[:, 1], rtol=0, atol=1e-8)
     np.testing.assert_allclose(res.joint("axle").angle_acceleration, expected[:, 2],
                                rtol=0, atol=1e-6)
+
+
+def test_a_hinge_given_its_drawn_angle_reads_it_and_turns_from_it(tmp_path):
+    """A wheel on a skew axis drawn at 0.9 rad (its x axis leaning on the axis): it reads
+    0.9 + what it turned, a driver of that angle turns it by the motion less 0.9 about the
+    axis from the drawing (Rodrigues' rotation composed by SciPy), and a model file keeps it.
+    Planar models refuse it (their angle is theta_j - theta_i), naming the joint."""
+    from scipy.spatial.transform import Rotation
+
+    axis = np.array([1.0, 2.0, 2.0]) / 3.0
+    drawing = Rotation.from_euler("xyz", [0.3, -0.5, 1.1])
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    wheel = b.add_body("wheel", mass=2.0, inertia=(0.02, 0.03, 0.04), position=0.1 * axis,
+                       orientation=drawing.as_matrix())
+    pin = b.add(Revolute("axle", b.ground, wheel, at=(0.0, 0.0, 0.0), axis=axis,
+                         drawn_angle=0.9))
+    motion = mb.Ramp(0.9, 7.0) + mb.Harmonic(0.5, 3.0)
+    b.add(RotationDriver("motor", pin, motion=motion))
+    model = b.build()
+    mb.save(model, tmp_path / "wheel.yaml")
+    for built in (model, mb.load(tmp_path / "wheel.yaml")):
+        res = mb.kinematic_analysis(built, np.linspace(0.0, 1.5, 7))
+        angle = np.array([motion.evaluate(t)[0] for t in res.t])
+        np.testing.assert_allclose(res.joint("axle").angle, angle, rtol=0, atol=1e-10)
+        turned = [(Rotation.from_rotvec((a - 0.9) * axis) * drawing).as_matrix() for a in angle]
+        np.testing.assert_allclose(res.body("wheel").rotation, turned, rtol=0, atol=1e-10)
+    with pytest.raises(mb.ModelError, match="'motor' of model .* is not a spatial hinge"):
+        model.hinge_directions("motor")
+    # a cylindrical joint reads it too
+    b = mb.ModelBuilder(dim=3, gravity=(0.0, 0.0, 0.0))
+    wheel = b.add_body("wheel", mass=2.0, inertia=(0.02, 0.03, 0.04), position=0.1 * axis,
+                       orientation=drawing.as_matrix())
+    b.add(Cylindrical("axle", b.ground, wheel, at=(0.0, 0.0, 0.0), axis=axis, drawn_angle=-2.5))
+    res = mb.forward_dynamics(b.build(), [0.0, 1.0], initial_rates={"axle.angle": 0.5},
+                              method="DOP853", rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(res.joint("axle").angle, [-2.5, -2.0], rtol=0, atol=1e-9)
+    flat = mb.ModelBuilder(dim=2)
+    crank = flat.add_body("crank", mass=1.0, inertia=0.01, position=(0.1, 0.0))
+    flat.add(Revolute("O", flat.ground, crank, at=(0.0, 0.0), drawn_angle=0.9))
+    with pytest.raises(mb.ModelError, match="joint 'O': drawn_angle is for spatial hinges"):
+        flat.build()
 
 
 def test_a_ball_joints_rotation_follows_its_relative_angular_velocity():

@@ -340,7 +340,7 @@ def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
     """A pendulum on a skew hinge with a reference angle, released at rest beside its range
     [-30, 40] degrees: it swings into the upper end and rebounds; at the deepest point of the
     stop (rate zero) its centre of mass is where MuJoCo places it at qpos = 40 degrees, to
-    the stop's dent (a stiff law: about 1e-4 rad)."""
+    the stop's dent (a stiff law: about 1e-4 rad), and its angle reads qpos."""
     text = """<mujoco model="limited"><compiler angle="degree"/>
   <worldbody><body name="bob" pos="0 0 1" euler="10 -20 5">
     <joint name="swing" type="hinge" axis="1 0.2 0.1" ref="15" range="-30 40"/>
@@ -352,9 +352,12 @@ def test_a_limited_hinge_stops_at_mujocos_range(tmp_path):
     assert "swing_limit" in [force.name for force in model.forces]
     times = np.linspace(0.0, 1.0, 4001)
     res = mb.forward_dynamics(model, times, method="DOP853", rtol=1e-10, atol=1e-12)
-    rate = res.joint("swing").angle_rate
-    deepest = np.argmax(res.joint("swing").angle)
+    rate, angle = res.joint("swing").angle_rate, res.joint("swing").angle
+    deepest = np.argmax(angle)
     assert rate[deepest - 1] > 0 > rate[deepest + 1]  # the turn, not the end of the run
+    # the hinge reads MuJoCo's qpos: drawn at -25 degrees, stopped just past 40
+    assert angle[0] == pytest.approx(np.radians(-25.0), abs=1e-12)
+    assert 0 < angle[deepest] - np.radians(40.0) < 5e-4
     m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
     d.qpos[0] = np.radians(40.0)

@@ -6,8 +6,10 @@ one formula serves both:
 
 - a hinge (revolute, cylindrical) turns body j about the axis ``h = A_i h_i`` by the angle from
   body i's reference direction ``f_i`` to body j's ``f_j`` (their x axes projected on the plane
-  normal to ``h``, y where x lies along it: what a :class:`~mbd3d.joints.RotationDriver`
-  reads), ``theta = atan2(h . (f_i x f_j), f_i . f_j)``, kept continuous over any number of
+  normal to ``h``, y where x lies along it; or, where the joint has a ``drawn_angle``, ``f_j``
+  the direction at that angle from ``f_i`` in the drawing: what a
+  :class:`~mbd3d.joints.RotationDriver` reads, :meth:`mbd3d.Model.hinge_directions`),
+  ``theta = atan2(h . (f_i x f_j), f_i . f_j)``, kept continuous over any number of
   turns; its rate is ``h . (omega_j - omega_i)`` and its acceleration ``h . (alpha_j -
   alpha_i)`` (exact: the relative angular velocity of a hinge lies along ``h``, which turns with
   body i). Planar revolutes give ``theta_j - theta_i`` of the bodies' own angles.
@@ -67,21 +69,18 @@ class BodyMotion:
                 _lift_points(history.acceleration))
 
 
-def hinge(results, body_i, body_j, axis_i: np.ndarray):
+def hinge(results, body_i, body_j, axis_i: np.ndarray, directions=None):
     """``(angle [rad], rate [rad/s], acceleration [rad/s^2])`` (k,) of a hinge whose axis is
-    ``axis_i`` in body i's frame (see the module doc)."""
-    from mbd3d.joints.revolute import reference_direction  # noqa: PLC0415
-
+    ``axis_i`` in body i's frame, measured in space from ``directions`` (``(f_i, g_i, f_j)``
+    of :meth:`mbd3d.Model.hinge_directions`; see the module doc)."""
     i, j = BodyMotion(results, body_i), BodyMotion(results, body_j)
-    h_i = _lift_vector(axis_i)
-    h = np.einsum("kab,b->ka", i.rotation, h_i)
+    h = np.einsum("kab,b->ka", i.rotation, _lift_vector(axis_i))
     rate = np.einsum("ka,ka->k", h, j.omega - i.omega)
     acceleration = np.einsum("ka,ka->k", h, j.alpha - i.alpha)
     if results.model.dim == 2:
         return j.angle - i.angle, rate, acceleration
-    h_j = j.rotation[0].T @ h[0] if len(h) else h_i
-    f_i = np.einsum("kab,b->ka", i.rotation, reference_direction(h_i))
-    f_j = np.einsum("kab,b->ka", j.rotation, reference_direction(h_j / np.linalg.norm(h_j)))
+    f_i = np.einsum("kab,b->ka", i.rotation, directions[0])
+    f_j = np.einsum("kab,b->ka", j.rotation, directions[2])
     wrapped = np.arctan2(np.einsum("ka,ka->k", h, np.cross(f_i, f_j)),
                          np.einsum("ka,ka->k", f_i, f_j))
     return _unwrap(wrapped, results.t, rate, acceleration), rate, acceleration

@@ -107,7 +107,8 @@ class JointHistory:
                 planar and element.is_driver and joint is None)):
             axis = axes[:, 0] if isinstance(source, (Cylindrical, Planar)) else (
                 np.array([0.0, 0.0, 1.0]) if planar else axes[:, 2])
-            value = jc.hinge(self._results, source.body_i, source.body_j, axis)
+            value = jc.hinge(self._results, source.body_i, source.body_j, axis,
+                             None if planar else model.hinge_directions(source.name))
         elif kind == "slide" and isinstance(source, (Prismatic, Cylindrical)):
             value = jc.slide(self._results, source.body_i, source.body_j, axes[:, 0], u_i, u_j)
         elif kind == "plane" and isinstance(source, Planar):

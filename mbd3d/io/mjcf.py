@@ -9,9 +9,10 @@ means here what it means in MuJoCo. In the drawing at ``joint_positions`` (defau
 - each body that a joint carries, together with the bodies welded to it (nested without a
   joint), becomes one spatial body named after it: their summed mass and inertia at their
   common centre of mass, with the body's axes; bodies welded to the world are the ground;
-- a ``hinge`` joint is a :class:`~mbd3d.joints.Revolute` about its axis through its anchor, a
-  ``slide`` a :class:`~mbd3d.joints.Prismatic`, a ``ball`` a :class:`~mbd3d.joints.Spherical`,
-  and a ``free`` joint leaves its body free;
+- a ``hinge`` joint is a :class:`~mbd3d.joints.Revolute` about its axis through its anchor
+  (drawn at its ``qpos``: ``results.joint(name).angle`` reads MuJoCo's ``qpos`` [rad]), a
+  ``slide`` a :class:`~mbd3d.joints.Prismatic` (its displacement measured from the drawing),
+  a ``ball`` a :class:`~mbd3d.joints.Spherical`, and a ``free`` joint leaves its body free;
 - a limited hinge's or slide's ``range`` becomes a :class:`~mbd3d.JointLimit` (as URDF's
   ``<limit>``: ``joint_limits``);
 - ``drive={"joint": motion}`` adds a driver named ``"<joint>_drive"`` whose coordinate is
@@ -47,7 +48,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from mbd3d.errors import ModelError, user_stacklevel
-from mbd3d.io.robot_parts import (add_driver, add_limit, composite, drive_offset, joint_names,
+from mbd3d.io.robot_parts import (add_driver, add_limit, composite, joint_names,
                                   limit_law, physical)
 from mbd3d.model.motion import Motion, as_motion
 
@@ -187,28 +188,27 @@ class _Joints:
         """Joint ``j`` (hinge, slide or ball), its range, drive and spring-damper."""
         m, d, kind = self.m, self.d, int(self.m.jnt_type[j])
         axis = d.xaxis[j].copy()
-        element = _add_joint(self.b, kind, name, parent, child, d.xanchor[j].copy(), axis)
         qpos = float(d.qpos[m.jnt_qposadr[j]])
+        element = _add_joint(self.b, kind, name, parent, child, d.xanchor[j].copy(), axis,
+                             qpos)
         if m.jnt_limited[j] and kind == _BALL:
             self.left_out.append(f"the range of ball joint '{label}'")
-        elif m.jnt_limited[j] and not add_limit(self.b, kind == _SLIDE, name, element, axis,
-                                                qpos, tuple(m.jnt_range[j]), self.law):
+        elif m.jnt_limited[j] and not add_limit(self.b, kind == _SLIDE, name, element, qpos,
+                                                tuple(m.jnt_range[j]), self.law):
             lower, upper = m.jnt_range[j]
             unit = "m" if kind == _SLIDE else "rad"
             self.left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint "
                                  f"'{label}'")
         if label in self.drive:
-            add_driver(self.b, kind == _SLIDE, name, element, axis, self.drive[label], qpos)
+            add_driver(self.b, kind == _SLIDE, name, element, self.drive[label], qpos)
         stiffness, damping = float(m.jnt_stiffness[j]), float(m.dof_damping[m.jnt_dofadr[j]])
         if kind == _HINGE and (stiffness or damping):
             from mbd3d.model.springs import RotationalSpringDamper  # noqa: PLC0415
-            # MuJoCo's spring is at rest at qpos_spring; the angle mbd3d measures is the
-            # drawing's plus the change of qpos
+            # MuJoCo's spring is at rest at qpos_spring; the hinge reads qpos (drawn_angle)
             rest = float(m.qpos_spring[m.jnt_qposadr[j]])
-            free = drive_offset(parent, child, axis) + rest - qpos
             self.b.add(RotationalSpringDamper(f"{name}_spring", joint=element,
                                               stiffness=stiffness, damping=damping,
-                                              free_angle=free))
+                                              free_angle=rest))
             self.sprung.add(j)
 
     def connect(self, name: str, k: int, bodies: dict, owner: dict) -> None:
@@ -471,14 +471,17 @@ def _add_joint_set(b, m, name: str, parent, child, d, js: list) -> str:
     return kind
 
 
-def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis: np.ndarray):
-    """The hinge, slide or ball joint ``name`` at ``anchor`` (global) along ``axis``."""
+def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis: np.ndarray,
+               qpos: float):
+    """The hinge, slide or ball joint ``name`` at ``anchor`` (global) along ``axis``, drawn at
+    ``qpos`` (a hinge reads its angle as MuJoCo's ``qpos``)."""
     from mbd3d.joints import Prismatic, Revolute, Spherical  # noqa: PLC0415
 
     if kind == _BALL:
         return b.add(Spherical(name, parent, child, at=anchor))
-    joint = Prismatic if kind == _SLIDE else Revolute
-    return b.add(joint(name, parent, child, at=anchor, axis=axis))
+    if kind == _SLIDE:
+        return b.add(Prismatic(name, parent, child, at=anchor, axis=axis))
+    return b.add(Revolute(name, parent, child, at=anchor, axis=axis, drawn_angle=qpos))
 
 
 def _equalities(mujoco, m) -> dict[tuple[str, str], int]:

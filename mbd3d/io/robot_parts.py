@@ -4,8 +4,6 @@ driver and stops in the file's joint coordinate."""
 
 from __future__ import annotations
 
-import math
-
 import warnings
 from typing import Any, Iterable
 
@@ -76,32 +74,29 @@ def joint_names(names: Iterable[str], taken: set, what: str, warning: type) -> d
     return out
 
 
-def add_driver(b, slides: bool, name: str, element, axis: np.ndarray, motion: Motion,
-               q0: float) -> None:
+def add_driver(b, slides: bool, name: str, element, motion: Motion, q0: float) -> None:
     """Drive a hinge's (``slides``: a slide's) coordinate of the file, ``q0`` in the drawing,
-    by ``motion``: a driver named ``"<name>_drive"`` whose offset makes its coordinate the
-    file's (see :func:`mbd3d.inverse_dynamics_at`)."""
+    by ``motion``: a driver named ``"<name>_drive"`` whose coordinate is the file's (a hinge
+    reads it, its ``drawn_angle`` being ``q0``; a slide's offset makes it so; see
+    :func:`mbd3d.inverse_dynamics_at`)."""
     from mbd3d.joints import RotationDriver, TranslationDriver  # noqa: PLC0415
 
     if slides:
         b.add(TranslationDriver(f"{name}_drive", element, motion=motion, offset=-q0))
     else:
-        offset = drive_offset(element.body_i, element.body_j, axis) - q0
-        b.add(RotationDriver(f"{name}_drive", element, motion=motion, offset=offset))
+        b.add(RotationDriver(f"{name}_drive", element, motion=motion))
 
 
-def add_limit(b, slides: bool, name: str, element, axis: np.ndarray, q0: float,
+def add_limit(b, slides: bool, name: str, element, q0: float,
               ends: tuple[float | None, float | None], law) -> bool:
     """Add a hinge's (``slides``: a slide's) range ``ends`` in the file's coordinate (``q0`` in
-    the drawing) as a JointLimit ``"<name>_limit"`` on ``element``, its ends moved to the
-    angle or slide mbd3d measures; False when it is not added (no law, equal ends, or a
-    hinge's ends beyond half a turn of the drawing)."""
+    the drawing) as a JointLimit ``"<name>_limit"`` on ``element``, a slide's ends moved to the
+    displacement mbd3d measures (a hinge reads the file's angle, its ``drawn_angle`` being
+    ``q0``); False when it is not added (no law, equal ends, or a hinge's ends beyond half a
+    turn, where a spatial hinge's angle is measured)."""
     from mbd3d.model.contacts import JointLimit  # noqa: PLC0415
 
-    # a hinge's offset is an angle: wrapped to (-pi, pi], so that a drawing at half a turn,
-    # measured as pi or -pi by the rounding of its axes, moves the ends alike
-    offset = (-q0 if slides else
-              math.remainder(drive_offset(element.body_i, element.body_j, axis) - q0, 2 * np.pi))
+    offset = -q0 if slides else 0.0
     ends = [None if end is None else float(end) + offset for end in ends]
     if law is None or (not slides and any(end is not None and not -np.pi < end < np.pi
                                           for end in ends)):
@@ -124,21 +119,3 @@ def limit_law(joint_limits: Any, what: str):
         return None
     raise ModelError(f"{what}: joint_limits must be 'stop', 'ignore' or a contact law "
                      f"(mbd3d.LinearContact, ...), got {joint_limits!r}")
-
-
-def drive_offset(body_i, body_j, axis: np.ndarray) -> float:
-    """The angle a RotationDriver reads in the drawing: from body i's to body j's x axis (y
-    where x lies along the axis), projected on the plane normal to the axis."""
-    from mbd3d.numerics.rotations import from_rodrigues  # noqa: PLC0415
-
-    def reference(body) -> np.ndarray:
-        R = np.eye(3) if body.is_ground else body.chart @ from_rodrigues(
-            np.asarray(body.q0[3:], dtype=float))
-        for column in (0, 1):
-            v = R[:, column] - (R[:, column] @ axis) * axis
-            if np.linalg.norm(v) >= 1e-6:
-                return v / np.linalg.norm(v)
-        raise AssertionError("a body's x and y axes cannot both lie along one axis")
-
-    f_i, f_j = reference(body_i), reference(body_j)
-    return float(np.arctan2(np.cross(f_i, f_j) @ axis, f_i @ f_j))

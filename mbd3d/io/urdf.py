@@ -3,14 +3,17 @@
 The file is parsed by yourdfpy (``pip install "mbd3d[urdf]"``). Each link that a moving joint
 carries, together with the links fixed joints weld to it (a tool flange, a sensor, a
 massless frame), becomes one spatial body named after that link: its mass the sum of theirs,
-its frame at their common centre of mass with the link's axes (so a joint's angle is
-measured between link axes, as in the URDF), its inertia theirs about that centre (each
-turned from its inertial frame, by the parallel-axis theorem), its shape theirs joined.
+its frame at their common centre of mass with the link's axes, its inertia theirs about that
+centre (each turned from its inertial frame, by the parallel-axis theorem), its shape theirs
+joined.
 Joints become constraints between those bodies, given in the drawing of the robot at
 ``joint_positions`` (default all zero):
 
-- ``revolute`` and ``continuous``: :class:`~mbd3d.joints.Revolute` about the joint axis;
-- ``prismatic``: :class:`~mbd3d.joints.Prismatic` along it;
+- ``revolute`` and ``continuous``: :class:`~mbd3d.joints.Revolute` about the joint axis,
+  whose ``drawn_angle`` is the joint's position, so that ``results.joint(name).angle``,
+  ``initial_positions``, drivers and stops are in the file's joint coordinate [rad];
+- ``prismatic``: :class:`~mbd3d.joints.Prismatic` along it (its displacement is measured
+  from the drawing: the file's coordinate less its ``joint_positions`` entry);
 - ``fixed``: nothing (its child is part of its parent's body; its axis is not read);
 - ``floating``: nothing either, its child is free (a floating base);
 - ``planar``: :class:`~mbd3d.joints.Planar`, its axis the plane's normal.
@@ -219,22 +222,22 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
     for joint in order:
         if joint.type == "fixed":
             continue  # its child is part of its parent's body
-        element, axis = _add_joint(b, joint, names[joint.name], bodies[owner[joint.parent]],
-                                   bodies[joint.child], frames[joint.child], what)
+        q0 = float(positions.get(joint.name, 0.0))
+        element = _add_joint(b, joint, names[joint.name], bodies[owner[joint.parent]],
+                             bodies[joint.child], frames[joint.child], q0, what)
         if element is None:
             continue  # floating: its child is free
         if joint.limit is not None and joint.type in ("revolute", "prismatic") and (
                 joint.limit.lower is not None or joint.limit.upper is not None):
-            q0 = float(positions.get(joint.name, 0.0))
-            if not add_limit(b, joint.type == "prismatic", names[joint.name], element, axis, q0,
+            if not add_limit(b, joint.type == "prismatic", names[joint.name], element, q0,
                              (joint.limit.lower, joint.limit.upper), law):
                 limited.append(f"{joint.name} [{joint.limit.lower}, {joint.limit.upper}]")
         if joint.mimic is not None:
             mimic.append(f"{joint.name} = {joint.mimic.multiplier or 1.0} x "
                          f"{joint.mimic.joint} + {joint.mimic.offset or 0.0}")
         if joint.name in drive:
-            add_driver(b, joint.type == "prismatic", names[joint.name], element, axis,
-                       drive[joint.name], float(positions.get(joint.name, 0.0)))
+            add_driver(b, joint.type == "prismatic", names[joint.name], element,
+                       drive[joint.name], q0)
     if limited:
         why = ("joint_limits='ignore'" if law is None
                else "a spatial hinge's angle is measured within half a turn of the drawing, "
@@ -344,18 +347,20 @@ def _joined(shapes: list):
     return trimesh.util.concatenate(shapes) if shapes else None
 
 
-def _add_joint(b, joint, name: str, parent, child, frame: np.ndarray, what: str) -> tuple:
+def _add_joint(b, joint, name: str, parent, child, frame: np.ndarray, q0: float, what: str):
     """The moving joint ``joint`` between two bodies, at its child's frame ``frame`` of the
-    drawing; returns it and its axis (drawing), or None for a floating joint (nothing joins
-    its child to its parent)."""
+    drawing, where its coordinate is ``q0`` (a hinge reads its angle as the file's); None for
+    a floating joint (nothing joins its child to its parent)."""
     from mbd3d.joints import Planar, Prismatic, Revolute  # noqa: PLC0415
 
     point, axis = frame[:3, 3], frame[:3, :3] @ _axis(joint, what)
     if joint.type == "floating":
-        return None, axis
-    # a planar joint's axis is the normal of the plane its child moves in
-    kind = {"prismatic": Prismatic, "planar": Planar}.get(joint.type, Revolute)
-    return b.add(kind(name, parent, child, at=point, axis=axis)), axis
+        return None
+    if joint.type == "prismatic":
+        return b.add(Prismatic(name, parent, child, at=point, axis=axis))
+    if joint.type == "planar":  # its axis is the normal of the plane its child moves in
+        return b.add(Planar(name, parent, child, at=point, axis=axis))
+    return b.add(Revolute(name, parent, child, at=point, axis=axis, drawn_angle=q0))
 
 
 def _check_tree(joints: list, links: dict, what: str) -> None:

@@ -141,6 +141,9 @@ class Model:
         self._rows_of = {e.name: np.flatnonzero(self.row_element == i)
                          for i, e in enumerate(self.joints)}
         self._reaction_frames = {e.name: e.reaction_frame(ctx) for e in self.joints}
+        self._hinge_directions = {e.name: e.hinge_directions(ctx, f"joint '{e.name}'")
+                                  for e in self.joints if self.dim == 3 and "angle" in
+                                  getattr(e, "limit_coordinates", ())}
         self._build_jacobian_pattern()
         if sparse is None:
             sparse = self.n_coordinates + self.n_constraints > SPARSE_THRESHOLD
@@ -321,6 +324,16 @@ class Model:
         body i and body j [m] and its axes as columns in body i's frame (what reactions are
         reported about and in)."""
         return self._reaction_frames[self._check_joint(name)]
+
+    def hinge_directions(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where spatial hinge ``name`` (revolute, cylindrical, planar) measures its angle
+        from: ``(f_i, g_i, f_j)``, unit vectors normal to its axis, ``f_i`` and ``g_i`` in body
+        i's frame, ``f_j`` in body j's (the angle is that of ``f_j`` from ``f_i`` towards
+        ``g_i``, see :mod:`mbd3d.io.joint_coordinates`)."""
+        if self._check_joint(name) not in self._hinge_directions:
+            raise ModelError(f"'{name}' of model '{self.name}' is not a spatial hinge "
+                             "(revolute, cylindrical or planar joint of a spatial model)")
+        return self._hinge_directions[name]
 
     def padded_index(self, body: Body) -> int:
         """Row of ``body`` in the per-body arrays of the solvers (the ground is the last row)."""
