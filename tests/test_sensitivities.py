@@ -14,7 +14,7 @@ import pytest
 import mbd3d as mb
 from mbd3d import mechanisms
 from mbd3d.io.parameters import parameter_value
-from mbd3d.joints import Prismatic, Revolute, RotationDriver
+from mbd3d.joints import Prismatic, Revolute, RotationDriver, TranslationDriver
 from mbd3d.model import constraints
 
 TIMES = np.array([0.0, 0.13, 0.41])
@@ -221,6 +221,73 @@ def test_inverse_dynamics_against_differences(make):
     derived = sens.derivative(reaction)
     for j, name in enumerate(names):
         _agree(sens.effort(driver, name), model, name, lambda r: r.joint(driver).effort,
+               mb.inverse_dynamics)
+        _agree(derived[..., j], model, name, reaction, mb.inverse_dynamics)
+
+
+def _driven_block(slope: float, mu: float, stiction: float, m: float, motion):
+    """A block driven along a rail down a slope, with friction in the rail."""
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="driven block")
+    down = np.array([np.cos(slope), -np.sin(slope)])
+    block = b.add_body("block", mass=m, inertia=0.1, position=(0.0, 0.0), angle=-slope)
+    rail = b.add(Prismatic("rail", b.ground, block, axis=down, at=(0.0, 0.0)))
+    b.add(TranslationDriver("push", rail, motion=motion))
+    b.add(mb.JointFriction("friction", rail, mu, stiction_velocity=stiction))
+    return b.build()
+
+
+def test_inverse_dynamics_with_joint_friction_closed_form():
+    # along the rail m s'' = F + m g sin(a) - mu m g cos(a) tanh(s' / v_s): the push F and
+    # its derivatives in the friction's coefficient and stiction speed and in the mass
+    slope, mu, v_s, m, g = 0.4, 0.3, 0.05, 2.0, 9.81
+    motion = mb.Harmonic(0.1, 3.0, phase=0.2)
+    res = mb.inverse_dynamics(_driven_block(slope, mu, v_s, m, motion), TIMES, tol=1e-14)
+    names = ["forces.friction.coefficient", "forces.friction.stiction_velocity",
+             "bodies.block.mass"]
+    sens = mb.sensitivities(res, names)
+    _, v, acc = np.array([motion.evaluate(t) for t in TIMES]).T
+    normal, th = g * np.cos(slope), np.tanh(v / v_s)
+    assert np.all(np.abs(v / v_s) > 0.3)  # on the law's slope, not its ends
+    np.testing.assert_allclose(res.joint("push").effort,
+                               m * acc - m * g * np.sin(slope) + mu * m * normal * th,
+                               rtol=1e-12)
+    expected = [m * normal * th, -mu * m * normal * (1 - th**2) * v / v_s**2,
+                acc - g * np.sin(slope) + mu * normal * th]
+    for name, value in zip(names, expected):
+        # the stiction speed's to the differences' accuracy (3e-10 measured: tanh is steep)
+        np.testing.assert_allclose(sens.effort("push", name), value, rtol=1e-8, atol=1e-12)
+    # held at rest the regularised friction is zero, and so are its derivatives
+    rest = mb.static_equilibrium(res.model)
+    held = mb.sensitivities(rest, names)
+    assert held.effort("push", names[0])[0] == 0.0
+    assert held.effort("push", names[2])[0] == pytest.approx(-g * np.sin(slope), rel=1e-12)
+
+
+def test_inverse_dynamics_with_joint_friction_against_differences():
+    # a slider-crank with friction in its pins and rail: the frictions follow the reactions
+    # they change, so each parameter moves both; efforts and a pin's reaction
+    a, rod_angle, pin_b = mechanisms.slider_crank_positions(1.1, 0.12, 0.26)
+    b = mb.ModelBuilder(dim=2, gravity=(0.0, -9.81), name="slider-crank with friction")
+    crank = b.add_body("crank", mass=1.0, inertia=0.001, position=a / 2, angle=1.1)
+    rod = b.add_body("rod", mass=2.0, inertia=0.01, position=(a + pin_b) / 2, angle=rod_angle)
+    slider = b.add_body("slider", mass=4.0, inertia=0.02, position=pin_b)
+    pins = [b.add(Revolute("O", b.ground, crank, at=(0.0, 0.0))),
+            b.add(Revolute("A", crank, rod, at=a)),
+            b.add(Revolute("B", rod, slider, at=pin_b))]
+    rail = b.add(Prismatic("rail", b.ground, slider, axis=(1.0, 0.0)))
+    b.add(RotationDriver("motor", pins[0], motion=mb.Ramp(1.1, 3.0)))
+    for pin, mu in zip(pins, (0.1, 0.2, 0.15)):
+        b.add(mb.JointFriction(f"{pin.name} friction", pin, mu, pin_radius=0.01,
+                               stiction_velocity=0.02))
+    b.add(mb.JointFriction("rail friction", rail, 0.25, stiction_velocity=0.5))
+    model = b.build()
+    names = _parameters(model, "forces") + ["bodies.slider.mass", "joints.B.at[0]"]
+    res = mb.inverse_dynamics(model, TIMES, tol=1e-14)
+    sens = mb.sensitivities(res, names)
+    reaction = lambda r: r.joint("B").reaction(on="slider").force  # noqa: E731
+    derived = sens.derivative(reaction)
+    for j, name in enumerate(names):
+        _agree(sens.effort("motor", name), model, name, lambda r: r.joint("motor").effort,
                mb.inverse_dynamics)
         _agree(derived[..., j], model, name, reaction, mb.inverse_dynamics)
 

@@ -12,7 +12,9 @@ each time point:
   gamma)``, the change of the rows along the parameter with the state moving by its
   sensitivity;
 - inverse dynamics: ``Cq^T mu = -d(M qdd + Cq^T lam - Q)`` with ``lam`` held (``mu =
-  dlam/dp``; a driver's effort changes by ``-mu``);
+  dlam/dp``; a driver's effort changes by ``-mu``); with joint friction ``Q`` includes the
+  frictions of the reactions held, which follow the reactions: ``Cq^T`` gains their
+  derivative in ``lam``;
 
 and those of a static equilibrium (2.2) with its Newton matrix, ``[K Cq^T; Cq 0] [s; mu] =
 -[d(Cq^T lam - Qe); C_p]``; vibration modes' frequencies and damping ratios (5.1, 5.2) are
@@ -75,7 +77,7 @@ def sensitivities(results: Results | Modes | ModesAlong, parameters: Sequence[st
         Results of another analysis, or not complete; a name that is not a parameter (with
         the nearest ones); a parameter the model is not valid without changing others too (a
         universal joint's axis component) or whose change changes the model's rows; a model
-        with rolling (velocity-only) rows or, beyond kinematics, joint friction.
+        with rolling (velocity-only) rows.
     SingularJacobianError
         At a singular position, naming the joints and the time, as the analysis does.
     """
@@ -105,7 +107,9 @@ def _kinematic(results: Results, parameters: Sequence[str], tangents: list) -> S
         state = _State(results, k)
         scale, n = state_scale(model, state.qd, state.qdd), model.n_coordinates
         fr = constraints.frames(model, state.q, charts=state.charts)
-        solve = _solver(model, constraints.jacobian(model, t, state.q, fr, sparse=False), t)
+        Cq = constraints.jacobian(model, t, state.q, fr, sparse=False)
+        solve = _solver(model, Cq, t)
+        solve_lam = _multiplier_solver(model, t, state, Cq, solve) if forces else None
         for j, tangent in enumerate(tangents):
             s = solve(-tangent.constraint_rows(t, fr))
             s_dot = solve(-tangent.along(lambda v, h: _velocity_rows(v, t, state, s, h),
@@ -115,10 +119,25 @@ def _kinematic(results: Results, parameters: Sequence[str], tangents: list) -> S
                 reach(scale[:2 * n], s, s_dot)))
             dq[k, :, j], dqd[k, :, j], dqdd[k, :, j] = s, s_dot, s_ddot
             if forces:
-                dlam[k, :, j] = solve(-tangent.along(lambda v, h: _dynamic_residual(
-                    v, t, state, (s, s_dot, s_ddot), h), reach(scale, s, s_dot, s_ddot)),
-                    transpose=True)
+                dlam[k, :, j] = solve_lam(-tangent.along(lambda v, h: _dynamic_residual(
+                    v, t, state, (s, s_dot, s_ddot), h), reach(scale, s, s_dot, s_ddot)))
     return Sensitivities(results, parameters, tangents, dq, dqd, dqdd, dlam)
+
+
+def _multiplier_solver(model, t: float, state: _State, Cq: np.ndarray, solve):
+    """``mu = solve_lam(b)`` of ``d(residual)/d(lam) mu = b`` (the dynamic residual's, see
+    :func:`_dynamic_residual`): ``Cq^T`` alone, or with joint friction, whose forces
+    ``G^T e`` follow the reactions, ``e = -mu_f load(lam) tanh(v / v_s)``: ``Cq^T + G^T
+    diag(mu_f tanh(v / v_s)) dload/dlam``."""
+    if model.friction is None:
+        return lambda b: solve(b, transpose=True)
+    group = model.friction
+    fr = constraints.frames(model, state.q, state.qd, state.charts)
+    G, speed = group.directions(model, fr)
+    _, grad = group.loads(model, fr, state.lam, jacobian=True)
+    A = Cq.T + G.T @ ((group.mu * np.tanh(speed / group.v_s))[:, None] * grad)
+    solve_A = _solver(model, A.T, t)
+    return lambda b: solve_A(b, transpose=True)
 
 
 def _static(results: Results, tangents: list) -> tuple[np.ndarray, np.ndarray]:
@@ -202,8 +221,6 @@ def _check(model, results: Results, what: str) -> None:
         raise ModelError(f"{what}: its multipliers are the minimum-norm ones of dependent "
                          f"rows (at t = {results.stats['singular_outputs'][0]:g} s), one of "
                          "many that balance it: their derivatives are not the model's")
-    if results.analysis != "kinematic analysis" and model.friction is not None:
-        raise ModelError(f"{what}: joint friction's sensitivities are not available yet")
 
 
 class _State:
@@ -233,13 +250,18 @@ def _acceleration_rows(variant, t: float, state: _State, s: np.ndarray, s_dot: n
 
 def _dynamic_residual(variant, t: float, state: _State, rates: tuple, h: float) -> np.ndarray:
     """``M qdd + Cq^T lam - Q`` of ``variant`` at the state moved by ``h (s, s', s'')``,
-    ``lam`` held."""
+    ``lam`` held (``Q`` with the joints' friction of those reactions)."""
     s, s_dot, s_ddot = rates
     fr = constraints.frames(variant, state.q + h * s, state.qd + h * s_dot, state.charts)
     data = constraints.evaluate(variant, t, fr, False, True)[1]
-    return (mass_matrix(variant, fr, sparse=False) @ (state.qdd + h * s_ddot)
-            + constraints.jacobian_transpose_times(variant, data, state.lam)
-            - generalized_forces(variant, t, fr))
+    residual = (mass_matrix(variant, fr, sparse=False) @ (state.qdd + h * s_ddot)
+                + constraints.jacobian_transpose_times(variant, data, state.lam)
+                - generalized_forces(variant, t, fr))
+    if variant.friction is not None:
+        # the frictions of the reactions held
+        G, speed = variant.friction.directions(variant, fr)
+        residual -= variant.friction.efforts(variant, fr, state.lam, speed) @ G
+    return residual
 
 
 def _solver(model, Cq: np.ndarray, t: float):
