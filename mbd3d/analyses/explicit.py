@@ -229,9 +229,12 @@ class ExplicitRungeKutta(Integrator):
             self.recent[:] = 0.0
 
     def output(self, t: float, segment: Segment) -> tuple:
-        tol = self.request.projection_tol
-        q, qd = project_state(self.model, t, *segment.state_at(t), tol, self.chart(),
-                              self.redundant)
+        tol, (q, qd) = self.request.projection_tol, segment.state_at(t)
+        # the dense output drifts as little as a step: one factorization projects it
+        projected = None if self.redundant else _project_with_one_factorization(
+            self.model, t, q, qd, tol, self.chart())
+        q, qd = projected or project_state(self.model, t, q, qd, tol, self.chart(),
+                                           self.redundant)
         if self.holding:
             q, qd = self.held.settle(t, q, qd, tol=tol) or (q, qd)  # rows held at rest too
         return (q, qd) + self._accelerations(t, q, qd)
