@@ -143,6 +143,25 @@ def test_planar_against_differences(make):
             _agree(got[:, :, j], model, name, lambda res: getattr(res, of))
 
 
+@pytest.mark.parametrize("flat", [False, True], ids=["roller", "flat face"])
+def test_cam_positions_against_differences(flat):
+    # a cam's positions follow its spline profile, smooth to its second derivative: their
+    # derivatives (the profile's slope) agree with differences like any joint's. Rates and
+    # accelerations take the profile's second and third derivatives, which at a knot of the
+    # spline (t = 0 here) have a kink and a jump: the variants' differences, a thousandth of
+    # the size apart, err there by that step times the jump (5e-6 of the rates measured)
+    from test_cams import cam_and_follower
+
+    model = cam_and_follower(flat=flat, spring=50.0)
+    # the bodies' positions and the joints' points must agree with the drawn contact
+    names = [n for n in _parameters(model) if not any(
+        part in n for part in ("position", "axis", ".at", "profile"))]
+    assert "joints.motor.motion.initial" in names
+    sens = mb.sensitivities(mb.kinematic_analysis(model, TIMES, tol=1e-14), names)
+    for j, name in enumerate(names):
+        _agree(sens.dq[:, :, j], model, name, lambda res: res.q)
+
+
 @pytest.mark.parametrize("make", [mechanisms.spatial_slider_crank, mechanisms.spatial_four_bar],
                          ids=["spatial slider-crank", "spatial four-bar"])
 def test_spatial_against_differences(make):
