@@ -3,8 +3,8 @@
 Build: ``python -m sphinx -W --keep-going -n -b html docs docs/_build/html`` from the
 repository root (``pip install -e ".[docs]"`` first). ``-W`` makes every warning an error,
 ``-n`` every reference to a name that is not documented: the API pages are generated from
-the public modules' ``__all__``, so a public name without a docstring, or a link to one that
-does not exist, fails the build.
+the public modules' ``__all__``, so a public name without a docstring, a parameter its
+docstring does not give, or a link to one that does not exist, fails the build.
 """
 
 from __future__ import annotations
@@ -118,6 +118,8 @@ def _api_pages(app) -> None:
             lines.append(f"   {attribute}")
             for missing in _undocumented(f"{name}.{attribute}", obj):
                 logger.warning(f"{missing} is public but has no docstring: write one")
+            for gap in _parameter_gaps(f"{name}.{attribute}", obj):
+                logger.warning(gap)
         _write(folder / f"{name}.rst", "\n".join(lines) + "\n")
     _write(folder / "index.rst", "\n".join(index) + "\n")
 
@@ -184,6 +186,45 @@ def _undocumented(name: str, obj) -> list[str]:
                     and not inspect.getdoc(getattr(obj, attribute)):
                 missing.append(f"{name}.{attribute}")
     return missing
+
+
+def _parameter_gaps(name: str, obj) -> list[str]:
+    """What ``name`` and its public methods' docstrings leave out of their signatures, or
+    give that they do not have (numpydoc's PR01 and PR02); exceptions, which mbd3d raises
+    and users do not build, and constants are not checked."""
+    from numpydoc.validate import validate  # noqa: PLC0415
+
+    if not callable(obj) or (inspect.isclass(obj) and issubclass(obj, BaseException)):
+        return []
+    names = [name]
+    if inspect.isclass(obj):
+        names += [f"{name}.{attribute}" for attribute, member in vars(obj).items()
+                  if not attribute.startswith("_") and (
+                      inspect.isfunction(member) or isinstance(member, (staticmethod,
+                                                                        classmethod)))]
+    gaps = []
+    for full in names:
+        found = validate(full)["errors"]
+        errors = [text for code, text in found if code == "PR02"]
+        if any(code == "PR01" for code, _ in found):
+            errors += (_not_attributes(obj) if full == name and inspect.isclass(obj)
+                       else [text for code, text in found if code == "PR01"])
+        if errors:
+            gaps.append(f"{full}: {'; '.join(errors)}: give each in its docstring")
+    return gaps
+
+
+def _not_attributes(cls) -> list[str]:
+    """A class the analyses make (results, reports) documents its constructor's arguments
+    as its attributes: those in neither section of its docstring."""
+    from numpydoc.docscrape import ClassDoc  # noqa: PLC0415
+
+    doc = ClassDoc(cls, config={"show_class_members": False})
+    documented = {part.strip().lstrip("*") for section in ("Parameters", "Attributes")
+                  for entry in doc[section] for part in entry.name.split(",")}
+    missing = [name for name in inspect.signature(cls).parameters if name not in documented]
+    return [f"Parameters {set(missing)} neither in its Parameters nor in its Attributes"] \
+        if missing else []
 
 
 def _write(path: pathlib.Path, text: str) -> None:

@@ -87,7 +87,13 @@ class CamFollower(ConstraintElement):
         self.roller_radius = roller_radius
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, np.ndarray]:
-        """``(u_i, u_j)``: the cam's centre in its frame and the follower's point in its own."""
+        """``(u_i, u_j)``: the cam's centre in its frame and the follower's point in its own.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         _require_planar(ctx, self)
         profile = _profile(self, self.profile)
         rho = ctx.scalar(self.roller_radius, f"cam '{self.name}': roller_radius")
@@ -166,7 +172,13 @@ class FlatFaceFollower(ConstraintElement):
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """``(u_i, u_j, v_j, psi_0)``: the cam's centre, the face's point and normal in the
-        follower's frame, and the angle of ``-v_j`` there."""
+        follower's frame, and the angle of ``-v_j`` there.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         _require_planar(ctx, self)
         profile = _profile(self, self.profile)
         # a flat face follows only a convex cam: the support function's radius of curvature,

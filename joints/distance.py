@@ -26,8 +26,10 @@ class Distance(Joint):
     name : str
     body_i, body_j : Body
     point_i, point_j : (dim,) array_like, optional
-        Link ends in the body frames [m]; alternatively ``at_i``, ``at_j`` in the drawing.
-        Default: the centres of mass.
+        Link ends in the body frames [m]; default the centres of mass.
+    at_i, at_j : (dim,) array_like, optional
+        Link ends in global coordinates of the drawing [m], instead of ``point_i``,
+        ``point_j``.
     length : float, optional
         [m], positive; default the distance of the two points in the drawing.
     """

@@ -7,8 +7,6 @@ of increasing ``c``: a torque [N m] for a rotation driver, a force [N] for a tra
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from mbd3d.model.body import Body
@@ -144,6 +142,18 @@ class TranslationDriver(ConstraintElement):
     point on body i (zero in the drawing when the joint was given with ``at``), less ``offset``
     [m] (the position at which the driven coordinate is zero: a URDF joint's). The effort is
     the force on body j along the axis [N].
+
+    Parameters
+    ----------
+    name : str
+        The driver's name (``results.driver(name)``).
+    joint : Prismatic
+        The slider whose travel is driven (its bodies, points and axis are used).
+    motion : Motion or float
+        ``f(t)`` [m].
+    offset : float
+        The travel at which the driven coordinate is zero [m]: the travel is ``offset +
+        f(t)``.
     """
 
     is_driver = True

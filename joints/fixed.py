@@ -18,6 +18,18 @@ class Fixed(Joint):
     orientation (``axis_f``, ``axis_g``, ``twist``). The relative orientation is that of the
     bodies' initial guesses. Reaction on body j: force [N] and moment [N m] about the weld point
     (default body j's centre of mass).
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
     """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:

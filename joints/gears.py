@@ -160,7 +160,13 @@ class GearPair(_Mesh):
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, np.ndarray, float, float]:
         """Planar: ``(u_i, u_j, rho_i, sigma rho_j)``: centres in body frames and signed radii
-        [m]."""
+        [m].
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         if ctx.dim != 2:
             return self.spatial_geometry(ctx)[:4]
         if self.axis_i is not None or self.axis_j is not None:
@@ -177,7 +183,13 @@ class GearPair(_Mesh):
     def spatial_geometry(self, ctx: BuildContext):
         """Spatial: ``(u_i, u_j, rho_i, sigma rho_j, h_i, h_j)``: centres in body frames,
         signed radii [m] and the axes in the drawing, gear j's the same way as gear i's
-        (spur) or both away from the apex (bevel)."""
+        (spur) or both away from the apex (bevel).
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         rho_i, rho_j = self._radii(ctx)
         what = f"gear pair '{self.name}'"
         if self.axis_i is None:
@@ -217,7 +229,13 @@ class GearPair(_Mesh):
         return u_i, u_j, rho_i, rho_j, oriented[0], oriented[1]
 
     def teeth(self, ctx: BuildContext) -> tuple[int, int]:
-        """The smallest tooth counts ``(z_i, z_j)`` in the ratio of the pitch radii."""
+        """The smallest tooth counts ``(z_i, z_j)`` in the ratio of the pitch radii.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         rho_i, rho_j = self._radii(ctx)
         ratio = Fraction(rho_i / rho_j).limit_denominator(_MAX_TEETH)
         z_i, z_j = ratio.numerator, ratio.denominator
@@ -318,7 +336,13 @@ class RackPinion(_Mesh):
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """``(u_i, u_j, a_i, rho)``: the pinion centre in the frames of the rack and the pinion,
-        the rack's unit direction in its frame, the pitch radius [m]."""
+        the rack's unit direction in its frame, the pitch radius [m].
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         if ctx.dim != 2:
             raise ModelError(f"{self.kind} '{self.name}': available for planar models only "
                              "(dim=2) so far")

@@ -48,7 +48,13 @@ class Prismatic(Joint):
         self.axis = axis
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, ...]:
-        """``(u_i, u_j, h_i, h_j)``: points and unit axis in the frames of bodies i and j."""
+        """``(u_i, u_j, h_i, h_j)``: points and unit axis in the frames of bodies i and j.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         u_i, u_j = self.points(ctx)
         h = ctx.direction(self.axis, f"joint '{self.name}': axis")
         return u_i, u_j, ctx.to_local_vector(self.body_i, h), ctx.to_local_vector(self.body_j, h)

@@ -118,7 +118,13 @@ class RollingDiscOnPlane(ConstraintElement):
 
     def geometry(self, ctx: BuildContext):
         """``(k, t_1, a_j, r, offset)``: the plane's normal and an in-plane axis (global), the
-        disc's axis in its frame, the radius [m] and the plane's offset ``k . P0`` [m]."""
+        disc's axis in its frame, the radius [m] and the plane's offset ``k . P0`` [m].
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         what = f"rolling disc '{self.name}'"
         if ctx.dim != 3:
             raise ModelError(f"{what}: RollingDiscOnPlane is spatial (dim=3); a planar disc on "

@@ -22,6 +22,18 @@ class Spherical(Joint):
 
     Reaction on body j: the force [N]; no moment about the ball. A
     :class:`~mbd3d.JointLimit` stops it at a cone (``coordinate="cone"``).
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
     """
 
     #: the coordinates a :class:`~mbd3d.JointLimit` may stop
@@ -39,6 +51,21 @@ class Universal(Joint):
     and ``axis_j`` (fixed in body j) kept perpendicular (rows ``x``, ``y``, ``z``, ``cross``).
 
     ``axis_i`` and ``axis_j`` are directions of the drawing and must be perpendicular there.
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    axis_i, axis_j : (3,) array_like
+        The cross's axis fixed in body i and the one fixed in body j, in the drawing (global
+        axes).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
     """
 
     def __init__(self, name: str, body_i: Body, body_j: Body, *, axis_i: Any, axis_j: Any,
@@ -91,8 +118,23 @@ class Cylindrical(_Hinge):
     """Body j slides along and turns about an axis of body i: axes aligned (``axis_f``,
     ``axis_g``) and the point of j on the line (``normal_f``, ``normal_g``); 4 rows.
 
-    Its angle reads ``drawn_angle`` [rad] in the drawing where given (see
-    :class:`~mbd3d.joints.Revolute`)."""
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    axis : (3,) array_like
+        The axis it slides along and turns about, in the drawing (global axes).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
+    drawn_angle : float, optional
+        The angle it reads in the drawing [rad] (see :class:`~mbd3d.joints.Revolute`).
+    """
 
     #: the coordinates a :class:`~mbd3d.JointLimit` may stop
     limit_coordinates = ("angle", "displacement")
@@ -112,8 +154,23 @@ class Planar(_Hinge):
     """Body j slides on a plane of body i and turns about its normal ``axis``: normals aligned
     (``axis_f``, ``axis_g``) and the point of j in the plane (``plane``); 3 rows.
 
-    Its angle reads ``drawn_angle`` [rad] in the drawing where given (see
-    :class:`~mbd3d.joints.Revolute`)."""
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    axis : (3,) array_like
+        The plane's normal, which it turns about, in the drawing (global axes).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
+    drawn_angle : float, optional
+        The angle it reads in the drawing [rad] (see :class:`~mbd3d.joints.Revolute`).
+    """
 
     #: the coordinates a :class:`~mbd3d.JointLimit` may stop: the turn about the normal and
     #: the two components of ``results.joint(name).plane_position``
@@ -134,6 +191,20 @@ class PointOnLine(_AxisJoint):
     slot, row ``normal`` (1 row; body j also slides along and turns freely).
 
     Reaction on body j: force [N] normal to the line, in joint axes (x along the line).
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    axis : array_like
+        The line's direction in the drawing (global axes).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
     """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
@@ -158,7 +229,22 @@ class PointOnLine(_AxisJoint):
 
 class PointOnPlane(_AxisJoint):
     """The point of body j stays in the plane of body i through its point with normal ``axis``
-    (row ``plane``); everything else is free. 1 row."""
+    (row ``plane``); everything else is free. 1 row.
+
+    Parameters
+    ----------
+    name : str
+        The joint's name (``results.joint(name)``).
+    body_i, body_j : Body
+        The connected bodies (either may be ``builder.ground``).
+    axis : (3,) array_like
+        The plane's normal, in the drawing (global axes).
+    at : array_like, optional
+        The joint's point in global coordinates of the drawing [m].
+    point_i, point_j : array_like, optional
+        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+        default body j's centre of mass).
+    """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         require_spatial(ctx, self.name)

@@ -24,7 +24,15 @@ __all__ = ["slider_crank", "four_bar", "pendulum_chain", "driven_chain", "slider
 
 def slider_crank_positions(crank_angle: float, crank_length: float, rod_length: float
                            ) -> tuple[np.ndarray, float, np.ndarray]:
-    """Pin A, rod angle and slider point B of an in-line slider-crank (B on the x axis, right)."""
+    """Pin A, rod angle and slider point B of an in-line slider-crank (B on the x axis, right).
+
+    Parameters
+    ----------
+    crank_angle : float
+        [rad] from the x axis.
+    crank_length, rod_length : float
+        O-A and A-B [m].
+    """
     a = crank_length * np.array([math.cos(crank_angle), math.sin(crank_angle)])
     rod_angle = math.asin(-a[1] / rod_length)
     b = a + rod_length * np.array([math.cos(rod_angle), math.sin(rod_angle)])
@@ -46,6 +54,12 @@ def slider_crank(*, crank_length: float = 0.12, rod_length: float = 0.26,
 
     Parameters
     ----------
+    crank_length, rod_length : float
+        O-A and A-B [m], positive.
+    crank_mass, rod_mass, slider_mass : float
+        [kg].
+    crank_inertia, rod_inertia, slider_inertia : float
+        About the centres of mass [kg m^2].
     crank_angle : float
         Crank angle at t = 0 [rad]; the bodies' guesses are the assembled drawing there.
     crank_speed : float or None
@@ -106,6 +120,23 @@ def four_bar(*, ground_length: float = 0.30, crank_length: float = 0.10,
     revolute ``S`` at O2) that turns the crank through an elastic coupling, the rotational
     spring ``coupling``, relaxed in the drawing: the mechanism keeps one degree of freedom,
     the crank's twist against the shaft.
+
+    Parameters
+    ----------
+    ground_length, crank_length, coupler_length, rocker_length : float
+        O2-O4, O2-A, A-B and O4-B [m].
+    mass_per_length : float
+        Of the bars [kg/m].
+    crank_angle : float
+        At t = 0 [rad].
+    crank_speed : float or None
+        Of the driver ``motor`` [rad/s]; None: no driver.
+    crank_torque : float, optional
+        [N m] on the crank.
+    gravity : float
+        [m/s^2] along -y.
+    shaft_stiffness : float, optional
+        Of the coupling between the motor's shaft and the crank [N m/rad].
     """
     from mbd3d.joints import Revolute, RotationDriver
 
@@ -173,6 +204,20 @@ def pendulum_chain(n_links: int, *, link_length: float = 1.0, link_mass: float =
     origin, laid out at ``angle`` [rad] from the x axis (0: horizontal, -pi/2: hanging).
 
     Bodies ``link1`` ... ``linkN``; revolutes ``pin1`` (ground) ... ``pinN``.
+
+    Parameters
+    ----------
+    n_links : int
+    link_length : float
+        [m].
+    link_mass : float
+        [kg].
+    angle : float
+        Of the chain from the x axis in the drawing [rad].
+    gravity : float
+        [m/s^2] along -y.
+    sparse : bool, optional
+        Sparse linear algebra (default by the model's size).
     """
     b, _ = _chain(n_links, link_length, link_mass, angle, gravity, f"{n_links}-link chain")
     return b.build(sparse=sparse)
@@ -187,6 +232,16 @@ def driven_chain(n_links: int, *, amplitude: float = 0.2, frequency: float = 1.0
     Pin ``k`` (1-based) turns its link relative to the one above by ``amplitude sin((frequency
     + (k - 1) frequency_step) t)`` [rad, rad/s]. Bodies ``link1`` ... ``linkN``; revolutes
     ``pin1`` ... ``pinN``; drivers ``drive1`` ... ``driveN``.
+
+    Parameters
+    ----------
+    n_links : int
+    amplitude : float
+        Of each pin's turn [rad].
+    frequency : float
+        Of the first pin [rad/s].
+    frequency_step : float
+        Added for each pin below it [rad/s].
     """
     from mbd3d.joints import RotationDriver
     from mbd3d.model.motion import Harmonic
@@ -211,6 +266,19 @@ def spatial_slider_crank(*, crank_length: float = 0.10, rod_length: float = 0.30
     (universal), ``B`` (spherical), ``rail`` (prismatic); driver ``motor`` at ``crank_speed``
     [rad/s] (None: none). Gravity along -z. Closed form of the slider position:
     ``x = r cos(phi) + sqrt(l^2 - e^2 - (d - r sin(phi))^2)``.
+
+    Parameters
+    ----------
+    crank_length, rod_length : float
+        ``r`` and ``l`` [m].
+    offset_y, offset_z : float
+        The rail's offsets ``d`` and ``e`` from the crank's axis [m].
+    crank_angle : float
+        At t = 0 [rad].
+    crank_speed : float or None
+        Of the driver ``motor`` [rad/s]; None: no driver.
+    gravity : float
+        [m/s^2] along -z.
     """
     from mbd3d.joints import Prismatic, Revolute, RotationDriver, Spherical, Universal
 
@@ -250,6 +318,15 @@ def spatial_four_bar(*, all_revolute: bool = False, crank_speed: float | None = 
     (crank and rocker axes as above, coupler pins parallel to them): a spatial four-bar of
     revolutes only moves when its axes meet Bennett's conditions, so this one is rigid, and
     :func:`mbd3d.analyses.mobility` reports 0 degrees of freedom with 2 redundant rows.
+
+    Parameters
+    ----------
+    all_revolute : bool
+        Four revolutes instead of a revolute, a ball, a universal and a revolute.
+    crank_speed : float or None
+        Of the driver ``motor`` [rad/s]; None: no driver.
+    gravity : float
+        [m/s^2] along -z.
     """
     from mbd3d.joints import Revolute, RotationDriver, Spherical, Universal
 
@@ -288,7 +365,20 @@ def spatial_four_bar(*, all_revolute: bool = False, crank_speed: float | None = 
 def spatial_chain(n_links: int, *, link_length: float = 1.0, link_mass: float = 1.0,
                   gravity: float = 9.81, sparse: bool | None = None) -> Model:
     """A chain of ``n_links`` uniform bars joined by ball joints, the first to the ground at the
-    origin, laid along x; gravity along -z. Bodies ``link1`` ...; joints ``ball1`` ...."""
+    origin, laid along x; gravity along -z. Bodies ``link1`` ...; joints ``ball1`` ....
+
+    Parameters
+    ----------
+    n_links : int
+    link_length : float
+        [m].
+    link_mass : float
+        [kg].
+    gravity : float
+        [m/s^2] along -z.
+    sparse : bool, optional
+        Sparse linear algebra (default by the model's size).
+    """
     from mbd3d.joints import Spherical
 
     L, m = link_length, link_mass
@@ -319,6 +409,23 @@ def newtons_cradle(n_balls: int = 5, *, radius: float = 0.015, string_length: fl
     Bodies ``ball1`` ... (mass ``density 4/3 pi r^3``, inertia ``2/5 m r^2``); joints ``pin1``
     ... (pin k at ``((k - 1)(2 r + gap), string_length)``); contacts ``touch1`` ... between
     ball k and ball k + 1.
+
+    Parameters
+    ----------
+    n_balls : int
+    radius, string_length, gap : float
+        [m].
+    density : float
+        [kg/m^3].
+    young_modulus : float
+        [Pa].
+    poisson_ratio : float
+    restitution : float
+        Coefficient of restitution of the contacts, in (0, 1].
+    release : float
+        [rad].
+    gravity : float
+        [m/s^2] along -y.
     """
     from mbd3d.joints import Revolute
     from mbd3d.model.contact_laws import HertzContact
@@ -359,6 +466,30 @@ def spheres_in_box(n_spheres: int = 1000, *, dim: int = 3, radius: float = 0.01,
 
     Bodies ``sphere0`` ... ; the lattice has ``ceil(n^(1/3))`` (planar: ``ceil(n^(1/2))``)
     spheres along each horizontal side, filled layer by layer from the floor.
+
+    Parameters
+    ----------
+    n_spheres : int
+    dim : {2, 3}
+    radius : float
+        [m].
+    spacing : float
+        Of the lattice, in radii.
+    density : float
+        [kg/m^3].
+    young_modulus : float
+        [Pa].
+    poisson_ratio : float
+    restitution : float
+        In (0, 1].
+    friction : float
+        Coulomb's coefficient.
+    speed : float
+        The largest starting speed [m/s].
+    seed : int
+        Of the random moves and speeds.
+    gravity : float
+        [m/s^2].
     """
     from mbd3d.model.contact_laws import HertzContact
     from mbd3d.model.contacts import ContactGroup, Plane, Sphere

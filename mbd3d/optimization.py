@@ -45,7 +45,14 @@ _STATISTICS = ("rms", "peak", "mean", "final")
 
 def column(res: Results, name: str) -> np.ndarray:
     """The results' column ``name`` over time, named as ``res.columns()`` names it, with or
-    without its unit (``"motor.effort"`` or ``"motor.effort [N m]"``)."""
+    without its unit (``"motor.effort"`` or ``"motor.effort [N m]"``).
+
+    Parameters
+    ----------
+    res : Results
+    name : str
+        A column's name, with or without its unit.
+    """
     columns = res.columns()
     if name in columns:
         return np.asarray(columns[name], dtype=float)
@@ -61,7 +68,14 @@ def column(res: Results, name: str) -> np.ndarray:
 class Objective:
     """Minimise ``statistic`` of the results' column ``name`` (see :func:`column`): "rms"
     (root mean square over the output times), "peak" (largest magnitude: not smooth where
-    two times share it, so the optimiser may stop short there), "mean" or "final"."""
+    two times share it, so the optimiser may stop short there), "mean" or "final".
+
+    Parameters
+    ----------
+    name : str
+        A column of the results (see :func:`column`).
+    statistic : {"rms", "peak", "mean", "final"}
+    """
 
     name: str
     statistic: str = "rms"
@@ -75,7 +89,15 @@ class Objective:
         return f"{self.statistic} of {self.name}"
 
     def value(self, res: Results, sens) -> tuple[float, np.ndarray]:
-        """The objective and its gradient (p,) from the results and their sensitivities."""
+        """The objective and its gradient (p,) from the results and their sensitivities.
+
+        Parameters
+        ----------
+        res : Results
+            Of the analysis.
+        sens : Sensitivities
+            Of those results, in the parameters being optimised.
+        """
         c = column(res, self.name)
         dc = sens.derivative(lambda r: column(r, self.name))  # (k, p)
         if self.statistic == "rms":
@@ -93,7 +115,15 @@ class Objective:
 class Fit:
     """Least squares of results' columns against measurements: ``t`` (k,) [s] the times
     measured (the analysis runs at them) and ``values`` the measured columns by name (see
-    :func:`column`), each (k,), in the columns' units."""
+    :func:`column`), each (k,), in the columns' units.
+
+    Parameters
+    ----------
+    t : sequence of float
+        The times measured [s].
+    values : mapping of str to sequence of float
+        Column name -> the measured values, each as long as ``t``.
+    """
 
     t: tuple
     values: Mapping[str, tuple]
@@ -114,7 +144,15 @@ class Fit:
         return f"fit of {', '.join(self.values)} at {len(self.t)} times"
 
     def residuals(self, res: Results, sens) -> tuple[np.ndarray, np.ndarray]:
-        """The residuals (computed minus measured) and their Jacobian (rows, p)."""
+        """The residuals (computed minus measured) and their Jacobian (rows, p).
+
+        Parameters
+        ----------
+        res : Results
+            Of the analysis.
+        sens : Sensitivities
+            Of those results, in the parameters being optimised.
+        """
         r = np.concatenate([column(res, name) - np.asarray(v) for name, v in
                             self.values.items()])
         J = np.concatenate([sens.derivative(lambda x, n=name: column(x, n))
@@ -124,7 +162,16 @@ class Fit:
 
 class LocalOptimization:
     """One start of :func:`optimize`, as a sweep runs it: ``self(model) -> Results`` (those of
-    the optimised model, with ``stats["optimization"]``), from the model's own values."""
+    the optimised model, with ``stats["optimization"]``), from the model's own values.
+
+    Parameters
+    ----------
+    analysis : Analysis
+        What each evaluation runs.
+    bounds : mapping of str to (float, float)
+        Parameter name -> its lower and upper bound.
+    objective : Objective or Fit
+    """
 
     def __init__(self, analysis: Analysis, bounds: Mapping[str, tuple[float, float]],
                  objective: Objective | Fit):
@@ -142,7 +189,14 @@ class LocalOptimization:
         return "optimization " + hashlib.sha1(json.dumps(described).encode()).hexdigest()
 
     def evaluate(self, model, x: np.ndarray) -> tuple[Results, Any]:
-        """The analysis of ``model`` with the parameters at ``x``, and its sensitivities."""
+        """The analysis of ``model`` with the parameters at ``x``, and its sensitivities.
+
+        Parameters
+        ----------
+        model : Model
+        x : (p,) ndarray
+            The parameters' values, in the order of ``bounds``.
+        """
         import mbd3d as mb  # noqa: PLC0415  (the analyses are above this module's users)
 
         moved = with_parameters(model, dict(zip(self.names, map(float, x))))
@@ -187,7 +241,15 @@ class LocalOptimization:
         return res
 
     def objective_at(self, res: Results, sens) -> tuple:
-        """``(residuals, Jacobian)`` of a fit, ``(value, gradient)`` of an objective."""
+        """``(residuals, Jacobian)`` of a fit, ``(value, gradient)`` of an objective.
+
+        Parameters
+        ----------
+        res : Results
+            Of the analysis.
+        sens : Sensitivities
+            Of those results, in the parameters being optimised.
+        """
         if isinstance(self.objective, Fit):
             return self.objective.residuals(res, sens)
         return self.objective.value(res, sens)
@@ -197,7 +259,18 @@ def starting_points(model, bounds: Mapping[str, tuple[float, float]], count: int
                     ) -> list[dict]:
     """``count`` starting points: the model's own values clipped into the bounds, then a
     seeded Latin hypercube over them (each parameter's range cut into ``count - 1`` strata,
-    one point in each, the strata paired at random)."""
+    one point in each, the strata paired at random).
+
+    Parameters
+    ----------
+    model : Model
+    bounds : mapping of str to (float, float)
+        Parameter name -> its lower and upper bound.
+    count : int
+        How many points, the model's own included.
+    seed : int
+        Of the Latin hypercube.
+    """
     names = list(bounds)
     own = {name: float(np.clip(parameter_value(model, name)[0], *bounds[name]))
            for name in names}
@@ -268,14 +341,28 @@ def optimize(model, analysis: Analysis, bounds: Mapping[str, tuple[float, float]
 
 def best(table: SweepTable) -> dict | None:
     """The row of an :func:`optimize` table with the least objective among the starts that
-    succeeded (None if none did)."""
+    succeeded (None if none did).
+
+    Parameters
+    ----------
+    table : SweepTable
+        Of :func:`optimize`.
+    """
     rows = [row for row in table.rows if row.get("status") == "ok" and row.get("success")]
     return min(rows, key=lambda row: row["objective"], default=None)
 
 
 def check_forward_options(options: Mapping[str, Any], what: str) -> None:
     """Forward dynamics' ``options`` are those its sensitivities take (an explicit method);
-    messages start with ``what``."""
+    messages start with ``what``.
+
+    Parameters
+    ----------
+    options : mapping
+        Keyword arguments for forward dynamics.
+    what : str
+        What the messages start with.
+    """
     import inspect  # noqa: PLC0415
     import mbd3d as mb  # noqa: PLC0415
 

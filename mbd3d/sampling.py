@@ -22,6 +22,13 @@ def grid(**axes: Iterable) -> list[dict]:
     Floats are kept to 15 significant digits, so that ``np.linspace(0.1, 0.5, 9)`` gives
     0.15, as written, where its binary value prints as 0.15000000000000002.
 
+    Parameters
+    ----------
+    **axes
+        Parameter name -> its values (any iterable).
+
+    Examples
+    --------
     >>> grid(speed=[1.0, 2.0], rod=[0.3, 0.4])
     [{'speed': 1.0, 'rod': 0.3}, {'speed': 1.0, 'rod': 0.4}, {'speed': 2.0, 'rod': 0.3}, {'speed': 2.0, 'rod': 0.4}]
     >>> grid(speed=np.array([1.0, 2.0]), mode="fast")
@@ -50,6 +57,17 @@ def monte_carlo(n: int, seed: int, **distributions: Any) -> list[dict]:
     (``scipy.stats.norm(0.26, 0.001)``), or a function of a ``numpy.random.Generator``
     returning one value. Parameters are drawn in the order given, sample after sample.
 
+    Parameters
+    ----------
+    n : int
+        The number of samples, positive.
+    seed : int
+        Of the random generator.
+    **distributions
+        Parameter name -> its distribution (see above).
+
+    Examples
+    --------
     >>> samples = monte_carlo(3, seed=1, rod=(0.25, 0.27))
     >>> len(samples), all(0.25 <= s["rod"] <= 0.27 for s in samples)
     (3, True)

@@ -49,7 +49,13 @@ class SweepTable:
 
     def column(self, name: str) -> np.ndarray:
         """One parameter or metric over the rows; NaN where a run failed (numbers), or an
-        object array (text)."""
+        object array (text).
+
+        Parameters
+        ----------
+        name : str
+            One of :attr:`columns`.
+        """
         if name not in self.columns:
             raise MBDError(f"sweep table has no column '{name}'; columns: "
                            f"{', '.join(self.columns)}")
@@ -72,7 +78,13 @@ class SweepTable:
 
     def results(self, row: Mapping[str, Any]) -> dict[str, np.ndarray]:
         """The full results of a run swept with ``keep_results=True``: the arrays of
-        :meth:`mbd3d.Results.to_npz` (``t``, ``q``, ``qd``, ``qdd``, ``lam``, labels)."""
+        :meth:`mbd3d.Results.to_npz` (``t``, ``q``, ``qd``, ``qdd``, ``lam``, labels).
+
+        Parameters
+        ----------
+        row : mapping
+            One of the table's rows.
+        """
         path = os.path.join(self.folder, "runs", f"{row['key']}.npz")
         if row["status"] != "ok":
             raise MBDError(f"run {row['key']} ({_describe(row, self)}) failed, so it has no "
@@ -92,7 +104,13 @@ class SweepTable:
                             columns=self.columns)
 
     def to_csv(self, path: str | os.PathLike) -> None:
-        """Write the table (one row per run) to a CSV file, atomically."""
+        """Write the table (one row per run) to a CSV file, atomically.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The CSV file.
+        """
         def write(f):
             writer = csv.writer(f, lineterminator="\n")
             writer.writerow(self.columns)

@@ -54,7 +54,16 @@ class Analysis:
     """The analysis a sweep runs on every model: one of ``"kinematic"``, ``"inverse
     dynamics"``, ``"forward dynamics"``, over the times ``t`` [s], with the keyword ``options``
     of :func:`mbd3d.kinematic_analysis`, :func:`mbd3d.inverse_dynamics` or
-    :func:`mbd3d.forward_dynamics` (e.g. ``method="DOP853", rtol=1e-9``)."""
+    :func:`mbd3d.forward_dynamics` (e.g. ``method="DOP853", rtol=1e-9``).
+
+    Parameters
+    ----------
+    kind : {"kinematic", "inverse dynamics", "forward dynamics"}
+    t : sequence of float
+        The output times [s].
+    options : mapping, optional
+        Keyword arguments of the analysis.
+    """
 
     kind: str
     t: Sequence[float]
@@ -502,7 +511,12 @@ class _Progress:
 
 def default_metrics(model) -> dict:
     """A file's sweep's metrics (``mbd3d sweep``): the peak ``|effort|`` of every driver and the
-    final position of every body (up to 12)."""
+    final position of every body (up to 12).
+
+    Parameters
+    ----------
+    model : Model
+    """
     metrics = {}
     for element in model.joints:
         if element.is_driver:

@@ -156,7 +156,7 @@ def test_interrupt_keeps_the_results_so_far(monkeypatch):
     model = pendulum_chain(2)
     calls = {"n": 0}
     import mbd3d.analyses.explicit as dynamics
-    real = dynamics.project_state
+    real = dynamics._project_with_one_factorization  # each output's projection
 
     def interrupted(*args):  # Ctrl-C while an output is being stored
         calls["n"] += 1
@@ -164,7 +164,7 @@ def test_interrupt_keeps_the_results_so_far(monkeypatch):
             raise KeyboardInterrupt
         return real(*args)
 
-    monkeypatch.setattr(dynamics, "project_state", interrupted)
+    monkeypatch.setattr(dynamics, "_project_with_one_factorization", interrupted)
     res = mb.forward_dynamics(model, np.linspace(0.0, 5.0, 501))
     assert res.status == "interrupted" and 1 < len(res) < 501
     assert "interrupted" in res.message

@@ -25,7 +25,13 @@ def _chunks(path: str | os.PathLike):
 
 
 def entity_paths(path: str | os.PathLike) -> set[str]:
-    """Entity paths holding data in the recording (leading ``/``, e.g. ``/world/bodies/crank``)."""
+    """Entity paths holding data in the recording (leading ``/``, e.g. ``/world/bodies/crank``).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.rrd`` file.
+    """
     return {chunk.entity_path for chunk in _chunks(path)}
 
 

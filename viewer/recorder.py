@@ -156,7 +156,15 @@ class Recorder(Observer):
 
     # -- the Observer interface ------------------------------------------------------------------
     def start(self, model, times: np.ndarray, analysis: str) -> None:
-        """Open the recording and log what does not change: shapes, joints, layout."""
+        """Open the recording and log what does not change: shapes, joints, layout.
+
+        Parameters
+        ----------
+        model : Model
+        times : (k,) ndarray
+        analysis : str
+            See :meth:`mbd3d.Observer.start`.
+        """
         if self._used:
             raise RecordingError("this Recorder has already recorded an analysis; make a new "
                                  "Recorder (and file) for each analysis")
@@ -169,11 +177,25 @@ class Recorder(Observer):
         self._sent = 0
 
     def update(self, results: Results, time: float, steps: int) -> None:
-        """Send the time points computed since the last update."""
+        """Send the time points computed since the last update.
+
+        Parameters
+        ----------
+        results : Results
+        time : float
+        steps : int
+            See :meth:`mbd3d.Observer.update`.
+        """
         self._send(results)
 
     def finish(self, results: Results) -> None:
-        """Send the rest, record how the analysis ended and close the file."""
+        """Send the rest, record how the analysis ended and close the file.
+
+        Parameters
+        ----------
+        results : Results
+            All of the run's results.
+        """
         if self.stream is None:
             return
         try:
@@ -309,7 +331,13 @@ def rerun_executable() -> str:
 
 def require_display(path: str | None = None) -> None:
     """Raise a :class:`RecordingError` that says how to view a recording when this machine
-    has no display to open a viewer window on (Linux without X11 or Wayland)."""
+    has no display to open a viewer window on (Linux without X11 or Wayland).
+
+    Parameters
+    ----------
+    path : str, optional
+        The recording, to name in the message.
+    """
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY")
                                                  or os.environ.get("WAYLAND_DISPLAY")):
         where = f"'{path}'" if path else "the recording (save it to a file with save=...)"
@@ -321,7 +349,17 @@ def check_destination(path: str | os.PathLike, overwrite: bool = True, show: boo
                       ) -> str:
     """Check before an analysis runs that its recording can be written to ``path`` and, with
     ``show``, opened in a viewer here; returns the absolute path. Examples call this first so
-    that a wrong path fails at once instead of after the computing."""
+    that a wrong path fails at once instead of after the computing.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Where the ``.rrd`` file will be written.
+    overwrite : bool
+        Whether an existing file may be replaced.
+    show : bool
+        Whether the recording will also be opened in a viewer here.
+    """
     path = check_output_path(path, overwrite)
     if show:
         require_display(path)
@@ -348,6 +386,15 @@ def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None, bind: str = V
     default would be every interface).
 
     Returns ``(url, process)``, ``process`` None when a running viewer was used.
+
+    Parameters
+    ----------
+    port : int
+        The viewer's gRPC port on this machine.
+    path : str, optional
+        A recording it opens, and names in messages.
+    bind : str
+        The address its server listens on.
 
     Raises
     ------
@@ -384,7 +431,15 @@ def spawn_viewer(port: int = VIEWER_PORT, path: str | None = None, bind: str = V
 
 def show(path: str | os.PathLike, bind: str = VIEWER_BIND) -> subprocess.Popen:
     """Open an ``.rrd`` recording in the Rerun viewer (a separate process; needs a display),
-    whose server listens on ``bind`` (this machine only, unless another address is given)."""
+    whose server listens on ``bind`` (this machine only, unless another address is given).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.rrd`` file.
+    bind : str
+        The address the viewer's server listens on.
+    """
     path = os.path.abspath(os.fspath(path))
     if not os.path.isfile(path):
         raise RecordingError(f"no recording at '{path}'")

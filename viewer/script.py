@@ -19,7 +19,13 @@ __all__ = ["run_script", "check_recording_first"]
 def check_recording_first(main: Callable[..., Any]) -> Callable[..., Any]:
     """Decorate a script's ``main(..., rrd=None, show=False)`` so that the recording's path
     (and a display, with ``show``) is checked before it computes anything: a mistake fails at
-    once, not after the computing (see :func:`mbd3d.viewer.check_destination`)."""
+    once, not after the computing (see :func:`mbd3d.viewer.check_destination`).
+
+    Parameters
+    ----------
+    main : callable
+        The script's ``main``, with ``rrd`` and ``show`` parameters.
+    """
     signature = inspect.signature(main)
 
     @functools.wraps(main)

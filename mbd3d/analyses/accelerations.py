@@ -32,6 +32,18 @@ def forward_accelerations(model, t: float, q: np.ndarray, qd: np.ndarray,
     model's initial charts). ``what``: the analysis its errors name (default forward
     dynamics of the model).
 
+    Parameters
+    ----------
+    model : Model
+    t : float
+        Time [s].
+    q, qd : (n,) array_like
+        The state, positions in ``charts`` for a spatial model.
+    charts : ndarray, optional
+        See above.
+    what : str, optional
+        See above.
+
     Raises
     ------
     SingularJacobianError

@@ -108,7 +108,17 @@ class Event:
                              f"{self.tolerance!r}")
 
     def value(self, t: float, q: np.ndarray, qd: np.ndarray, part: str = "function") -> float:
-        """The event's function (``part="rate"``: its rate) at ``(t, q, qd)``, checked."""
+        """The event's function (``part="rate"``: its rate) at ``(t, q, qd)``, checked.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        q, qd : (n,) ndarray
+            The state.
+        part : {"function", "rate"}
+            Which of the event's functions.
+        """
         g = (self.function if part == "function" else self.rate)(t, q, qd)
         if not (_is_number(g) and np.isfinite(g)):
             raise ModelError(f"event '{self.name}': {part}(t, q, qd) must return a finite "
@@ -117,7 +127,15 @@ class Event:
 
     def crosses(self, g_old: float, g_new: float, either: bool = False) -> bool:
         """A crossing in the event's direction (``either``: in either) between two values
-        (from exactly zero, where the run restarted at this event, is none)."""
+        (from exactly zero, where the run restarted at this event, is none).
+
+        Parameters
+        ----------
+        g_old, g_new : float
+            The function's values at the start and the end of a step.
+        either : bool
+            Count a crossing in either direction.
+        """
         up, down = g_old < 0.0 <= g_new, g_old > 0.0 >= g_new
         return (up and (either or self.direction >= 0)) or (down and (either or
                                                                      self.direction <= 0))

@@ -81,12 +81,26 @@ def solve_velocity(model, q: np.ndarray, t: float = 0.0, *, qd_guess: Sequence[f
                    charts: np.ndarray | None = None, redundant: bool = False) -> np.ndarray:
     """Velocities consistent with the constraints: ``Cq qd = -Ct``.
 
-    ``redundant``: the rows are known to depend on each other (see :func:`mbd3d.analyses.mobility`);
-    the projection then goes straight to the augmented Lagrangian, since an LU of dependent
-    rows can pass its pivot test by rounding and return an arbitrary null-space component.
-
     For a fully driven mechanism the solution is unique. Otherwise it is the mass-weighted
     projection of ``qd_guess`` (default ``model.qd0``), keeping held coordinates' rates.
+
+    Parameters
+    ----------
+    model : Model
+    q : (n,) array_like
+        Assembled positions (in ``charts`` for a spatial model).
+    t : float
+        Time [s] (of the drivers' motions).
+    qd_guess : (n,) array_like, optional
+        Velocities to project (default ``model.qd0``).
+    hold : sequence of str or int, optional
+        Coordinates whose rates are kept (``"crank.theta"`` or indices).
+    charts : ndarray, optional
+        Spatial models: the bodies' reference rotations ``q`` is given in (default the model's).
+    redundant : bool
+        The rows are known to depend on each other (see :func:`mbd3d.mobility`): the
+        projection goes straight to the augmented Lagrangian, since an LU of dependent rows
+        can pass its pivot test by rounding and return an arbitrary null-space component.
 
     Returns
     -------
@@ -145,14 +159,37 @@ def project_state(model, t: float, q: np.ndarray, qd: np.ndarray, tol: float,
                   charts: np.ndarray | None = None, redundant: bool = False
                   ) -> tuple[np.ndarray, np.ndarray]:
     """Nearest (mass-weighted) state that satisfies the position and velocity constraints
-    (``redundant``: see :func:`mbd3d.solve_position`)."""
+    (``redundant``: see :func:`mbd3d.solve_position`).
+
+    Parameters
+    ----------
+    model : Model
+    t : float
+        Time [s].
+    q, qd : (n,) array_like
+        The state to project.
+    tol : float
+        Newton-Raphson tolerance of the positions (see :func:`mbd3d.solve_position`).
+    charts, redundant
+        As for :func:`solve_velocity`.
+    """
     q = solve_position(model, q, t, tol=tol, charts=charts, redundant=redundant)
     return q, solve_velocity(model, q, t, qd_guess=qd, charts=charts, redundant=redundant)
 
 
 def solve_acceleration(model, q: np.ndarray, qd: np.ndarray, t: float = 0.0, *,
                        charts: np.ndarray | None = None) -> np.ndarray:
-    """Accelerations of a fully driven mechanism: ``Cq qdd = Qd``."""
+    """Accelerations of a fully driven mechanism: ``Cq qdd = Qd``.
+
+    Parameters
+    ----------
+    model : Model
+        Fully driven.
+    q, qd : (n,) array_like
+        A consistent state (in ``charts`` for a spatial model).
+    t, charts
+        As for :func:`solve_velocity`.
+    """
     _require_fully_driven(model, "solve_acceleration")
     fr = constraints.frames(model, q, qd, charts)
     if model.n_constraints > model.n_coordinates:
@@ -551,7 +588,12 @@ def inverse_dynamics(model, times: Sequence[float], q_guess: Sequence[float] | N
                      progress: bool | None = None) -> Results:
     """Kinematic analysis plus the multipliers: joint reactions and driver efforts.
 
-    Same parameters as :func:`kinematic_analysis`; the results also carry ``lam``, so
-    ``results.joint(name).reaction(on=...)`` and ``results.driver(name).effort`` are available.
+    The results also carry ``lam``, so ``results.joint(name).reaction(on=...)`` and
+    ``results.driver(name).effort`` are available.
+
+    Parameters
+    ----------
+    model, times, q_guess, tol, observers, progress
+        As for :func:`mbd3d.kinematic_analysis`.
     """
     return _sweep(model, times, q_guess, tol, True, "inverse dynamics", observers, progress)

@@ -20,6 +20,8 @@ class MobilityReport:
 
     Attributes
     ----------
+    model : str
+        The model's name.
     n_bodies, n_coordinates, n_constraints : int
     gruebler : int
         ``n_d = x n_b - n_c`` (x = 3 planar, 6 spatial): the count from the equations alone.
@@ -116,9 +118,15 @@ def mobility(model, q: Sequence[float] | None = None, t: float = 0.0,
 
     Parameters
     ----------
+    model : Model
     q : (n,) array_like, optional
         Configuration (default the bodies' initial guesses). The rank is that of the Jacobian
         there, so pass an assembled configuration away from singular positions.
+    t : float
+        Time [s] (of the drivers' rows).
+    charts : ndarray, optional
+        Spatial models: the bodies' reference rotations ``q`` is given in (default the
+        model's).
     """
     q = np.asarray(model.q0 if q is None else q, dtype=float)
     Cq = constraints.jacobian(model, t, q, constraints.frames(model, q, charts=charts), sparse=False)

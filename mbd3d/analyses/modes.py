@@ -147,11 +147,25 @@ class ModesAlong:
 
     def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
         """Write :meth:`columns` to a CSV file (atomically; an existing file is replaced only
-        with ``overwrite``); returns its path."""
+        with ``overwrite``); returns its path.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The CSV file.
+        overwrite : bool
+            Replace ``path`` where it exists.
+        """
         return write_columns(self.columns(), path, overwrite)
 
     def at(self, index: int) -> Modes:
-        """The modes at the ``index``-th position (to animate one)."""
+        """The modes at the ``index``-th position (to animate one).
+
+        Parameters
+        ----------
+        index : int
+            A time point of the motion.
+        """
         count = int(np.sum(np.isfinite(self.frequencies[index])))
         return Modes(self.frequencies[index, :count], self.damping_ratios[index, :count],
                      self.shapes[index, :count], self.equilibrium.subset(index, index + 1))
@@ -166,6 +180,16 @@ def vibration_modes_along(model, times: Sequence[float], q_guess: Sequence[float
     modes about that position are computed as by :func:`vibration_modes`: the frequencies
     against crank angle that show the speeds to avoid. A mechanism needs compliance (springs,
     or a released driver) to vibrate at all: a fully driven rigid one has no modes.
+
+    Parameters
+    ----------
+    model : Model
+    times : (k,) array_like
+        Times [s] of the drivers' motions, increasing.
+    q_guess : (n,) array_like, optional
+        Guess of the first position (default the drawing); each later one starts from the last.
+    release : sequence of str, or bool
+        Drivers released (``True``: every one), as for :func:`mbd3d.static_equilibrium`.
 
     Returns
     -------
@@ -193,6 +217,16 @@ def vibration_modes(model, q_guess: Sequence[float] | None = None, t: float = 0.
     """Natural frequencies, damping ratios and mode shapes of ``model`` about its static
     equilibrium at time ``t`` (found from ``q_guess`` by :func:`static_equilibrium`, with the
     drivers named in ``release`` released and the others held).
+
+    Parameters
+    ----------
+    model : Model
+    q_guess : (n,) array_like, optional
+        Guess of the equilibrium's positions (default the drawing).
+    t : float
+        Time [s] of the drivers' positions and of the forces.
+    release : sequence of str, or bool
+        Drivers released (``True``: every one), as for :func:`mbd3d.static_equilibrium`.
 
     Returns
     -------

@@ -37,7 +37,12 @@ _ANALYSIS = "inverse dynamics at given states"
 
 def driven_coordinates(model) -> tuple[str, ...]:
     """The names of ``model``'s drivers, in the order the state-wise analyses take and return
-    their values (the order they were added)."""
+    their values (the order they were added).
+
+    Parameters
+    ----------
+    model : Model
+    """
     return tuple(e.name for e in model.joints if e.is_driver)
 
 
@@ -233,6 +238,15 @@ def joint_space_dynamics_at(model, q: Any, qd: Any, t: float = 0.0, *, q_guess: 
 
     Parameters as for :func:`inverse_dynamics_at` (without ``qdd``).
 
+    Parameters
+    ----------
+    model : Model
+    q, qd : mapping or array_like
+    t : float
+    q_guess : (n,) array_like, optional
+    tol : float
+        As for :func:`mbd3d.inverse_dynamics_at`.
+
     Returns
     -------
     M : ndarray (k, d, d)
@@ -269,12 +283,12 @@ def forward_dynamics_at(model, q: Any, qd: Any, efforts: Any, t: float = 0.0, *,
     model : Model
         Fully driven: the drivers' coordinates are the mechanism's independent ones.
     q, qd : mapping or array_like
-        As for :func:`inverse_dynamics_at`.
+        As for :func:`mbd3d.inverse_dynamics_at`.
     efforts : mapping or array_like
         Each driver's effort [N m or N] (what :func:`inverse_dynamics_at` returns as
         ``res.joint(driver).effort``), as ``q`` is given; one state broadcasts to all.
     t, q_guess, tol
-        As for :func:`inverse_dynamics_at`.
+        As for :func:`mbd3d.inverse_dynamics_at`.
 
     Returns
     -------
@@ -285,7 +299,7 @@ def forward_dynamics_at(model, q: Any, qd: Any, efforts: Any, t: float = 0.0, *,
     Raises
     ------
     ModelError
-        As for :func:`inverse_dynamics_at`, and for efforts given for another number of states.
+        As for :func:`mbd3d.inverse_dynamics_at`. and for efforts given for another number of states.
     AnalysisError
         A state where a driver's coordinate moves no mass (the mass matrix is singular).
     """

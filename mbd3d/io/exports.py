@@ -196,8 +196,17 @@ def format_table(columns: dict[str, Sequence[float]], precision: int = 5,
                  rows: int | None = None) -> str:
     """A plain-text table of equally long columns (numbers or text), for printing in a terminal.
 
-    ``rows`` limits a long table to that many rows, evenly spaced, first and last included.
+    Parameters
+    ----------
+    columns : dict of str to sequence
+        Column name -> its values, all equally long.
+    precision : int
+        Significant digits of the numbers.
+    rows : int, optional
+        Limits a long table to that many rows, evenly spaced, first and last included.
 
+    Examples
+    --------
     >>> print(format_table({"t [s]": [0.0, 0.5], "x [m]": [1.0, -0.25]}, precision=3))
       t [s]  x [m]
           0      1

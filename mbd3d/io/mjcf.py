@@ -48,8 +48,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from mbd3d.errors import ModelError, user_stacklevel
-from mbd3d.io.robot_parts import (add_driver, add_limit, composite, joint_names,
-                                  limit_law, physical)
+from mbd3d.io.robot_parts import add_driver, add_limit, composite, joint_names, limit_law, physical
 from mbd3d.model.motion import Motion, as_motion
 
 __all__ = ["mjcf_builder", "load_mjcf", "MjcfWarning"]
@@ -68,7 +67,15 @@ class MjcfWarning(UserWarning):
 
 
 def load_mjcf(path: str | os.PathLike, **options: Any):
-    """The model of an MJCF file: :func:`mjcf_builder` built. Returns a :class:`Model`."""
+    """The model of an MJCF file: :func:`mjcf_builder` built. Returns a :class:`Model`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The MJCF file.
+    **options
+        As for :func:`mjcf_builder`.
+    """
     return mjcf_builder(path, **options).build()
 
 
@@ -187,10 +194,9 @@ class _Joints:
     def one(self, label: str, name: str, parent, child, j: int) -> None:
         """Joint ``j`` (hinge, slide or ball), its range, drive and spring-damper."""
         m, d, kind = self.m, self.d, int(self.m.jnt_type[j])
-        axis = d.xaxis[j].copy()
         qpos = float(d.qpos[m.jnt_qposadr[j]])
-        element = _add_joint(self.b, kind, name, parent, child, d.xanchor[j].copy(), axis,
-                             qpos)
+        element = _add_joint(self.b, kind, name, parent, child, d.xanchor[j].copy(),
+                             d.xaxis[j].copy(), qpos)
         if m.jnt_limited[j] and kind == _BALL:
             self.left_out.append(f"the range of ball joint '{label}'")
         elif m.jnt_limited[j] and not add_limit(self.b, kind == _SLIDE, name, element, qpos,
@@ -205,10 +211,9 @@ class _Joints:
         if kind == _HINGE and (stiffness or damping):
             from mbd3d.model.springs import RotationalSpringDamper  # noqa: PLC0415
             # MuJoCo's spring is at rest at qpos_spring; the hinge reads qpos (drawn_angle)
-            rest = float(m.qpos_spring[m.jnt_qposadr[j]])
-            self.b.add(RotationalSpringDamper(f"{name}_spring", joint=element,
-                                              stiffness=stiffness, damping=damping,
-                                              free_angle=rest))
+            self.b.add(RotationalSpringDamper(
+                f"{name}_spring", joint=element, stiffness=stiffness, damping=damping,
+                free_angle=float(m.qpos_spring[m.jnt_qposadr[j]])))
             self.sprung.add(j)
 
     def connect(self, name: str, k: int, bodies: dict, owner: dict) -> None:
@@ -471,17 +476,15 @@ def _add_joint_set(b, m, name: str, parent, child, d, js: list) -> str:
     return kind
 
 
-def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis: np.ndarray,
-               qpos: float):
+def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis, qpos: float):
     """The hinge, slide or ball joint ``name`` at ``anchor`` (global) along ``axis``, drawn at
     ``qpos`` (a hinge reads its angle as MuJoCo's ``qpos``)."""
     from mbd3d.joints import Prismatic, Revolute, Spherical  # noqa: PLC0415
 
     if kind == _BALL:
         return b.add(Spherical(name, parent, child, at=anchor))
-    if kind == _SLIDE:
-        return b.add(Prismatic(name, parent, child, at=anchor, axis=axis))
-    return b.add(Revolute(name, parent, child, at=anchor, axis=axis, drawn_angle=qpos))
+    return b.add(Prismatic(name, parent, child, at=anchor, axis=axis) if kind == _SLIDE else
+                 Revolute(name, parent, child, at=anchor, axis=axis, drawn_angle=qpos))
 
 
 def _equalities(mujoco, m) -> dict[tuple[str, str], int]:

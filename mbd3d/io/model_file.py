@@ -139,6 +139,11 @@ class ModelFile:
 def load(path: str | os.PathLike):
     """Build the model a model file describes (see the module doc for the format).
 
+    Parameters
+    ----------
+    path : str or path-like
+        The model file (YAML).
+
     Raises
     ------
     ModelFileError
@@ -593,6 +598,3 @@ def times_from_step(start: float, stop: float, step: float, error=None, where=()
         count = int(np.floor((stop - start) / step))
         return np.append(start + step * np.arange(count + 1), stop)
     return np.linspace(start, stop, count + 1)
-
-
-# -- writing ----------------------------------------------------------------------------------

@@ -33,6 +33,18 @@ def save(model, path: str | os.PathLike, *, analyses: Sequence[AnalysisSpec | di
     :class:`~mbd3d.io.optimization_spec.OptimizationSpec`) is written as its ``optimize:``
     section, its measurements' file named relative to the new file.
 
+    Parameters
+    ----------
+    model : Model
+    path : str or path-like
+        The model file to write (YAML).
+    analyses : sequence of AnalysisSpec or dict
+        Analyses the file lists for ``mbd3d run`` (its ``analyses:`` section).
+    overwrite : bool
+        Replace ``path`` and the meshes beside it where they exist.
+    optimization : OptimizationSpec, optional
+        A file's ``optimize:`` section to write (see above).
+
     Raises
     ------
     ModelFileError

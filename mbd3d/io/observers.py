@@ -37,15 +37,40 @@ class Observer:
     interval: float = 0.25
 
     def start(self, model, times: np.ndarray, analysis: str) -> None:
-        """The analysis ``analysis`` of ``model`` over output ``times`` [s] begins."""
+        """The analysis ``analysis`` of ``model`` over output ``times`` [s] begins.
+
+        Parameters
+        ----------
+        model : Model
+        times : (k,) ndarray
+            The output times [s].
+        analysis : str
+            The analysis' name (``"forward dynamics"``, ...).
+        """
 
     def update(self, results: "Results", time: float, steps: int) -> None:
         """Progress: ``results`` holds the output times done so far (status "running"),
-        ``time`` [s] is how far the solver has got, ``steps`` how many steps it took."""
+        ``time`` [s] is how far the solver has got, ``steps`` how many steps it took.
+
+        Parameters
+        ----------
+        results : Results
+            The output times done so far.
+        time : float
+            How far the solver has got [s].
+        steps : int
+            Steps taken so far.
+        """
 
     def finish(self, results: "Results") -> None:
         """The analysis ended; ``results.status`` says how ("complete", "failed",
-        "interrupted")."""
+        "interrupted").
+
+        Parameters
+        ----------
+        results : Results
+            All of the run's results.
+        """
 
 
 class ProgressBar(Observer):

@@ -35,6 +35,10 @@ def parameters(model) -> dict[str, float]:
     """Every number ``model`` was built with, by name (see the module doc), in the order of
     the model's file: bodies, then joints and drivers, then force elements.
 
+    Parameters
+    ----------
+    model : Model
+
     Examples
     --------
     >>> import mbd3d as mb
@@ -50,6 +54,12 @@ def parameters(model) -> dict[str, float]:
 def with_parameters(model, values: Mapping[str, float]):
     """A new model, ``model`` built again with the parameters ``values`` (by name, see
     :func:`parameters`) changed; ``model`` itself is left as it is.
+
+    Parameters
+    ----------
+    model : Model
+    values : mapping of str to float
+        Parameter name -> its new value.
 
     Raises
     ------
@@ -67,6 +77,11 @@ class ModelVariants:
     ``mb.grid(**{"forces.spring.stiffness": [10.0, 20.0]})``). It holds the model as its
     file's plain data, which Dask ships to its workers, and names itself to the sweep's store
     by a digest of that data, so that a changed model is a new sweep.
+
+    Parameters
+    ----------
+    model : Model
+        The model whose variants the sweep builds.
 
     Examples
     --------

@@ -50,7 +50,9 @@ class Results:
     lam : ndarray (k, m) or None
         Lagrange multipliers (dynamics only).
     status : str
-        "complete", "failed" or "interrupted"; ``message`` says why when not complete.
+        "complete", "failed" or "interrupted".
+    message : str
+        Why, when not complete.
     stats : dict
         Solver statistics (steps, right-hand side evaluations, projections, wall time [s]).
     charts : ndarray (k, n_bodies + 1, 3, 3) or None
@@ -60,6 +62,19 @@ class Results:
         Times [s] at which the model's drivers and forces are evaluated for derived quantities
         (residuals, reactions): ``t``, except in a vibration mode's animation, whose time axis
         is the vibration's while the mechanism stays at the equilibrium's time.
+    turns : ndarray (k, n_bodies + 1, 4) or None
+        Spatial models: the charts as quaternions with signs that follow the motion, where
+        the analysis tracked them.
+    contact_forces : ndarray (k, contact rows) or None
+        The normal forces [N; a turning stop's: N m] of the contact rows held closed as
+        constraints (rigid contacts at rest), where a run held any.
+    contact_friction : ndarray (k, contact rows, 3) or None
+        The friction [N] on the second shape of those rows (rigid contacts at rest with a
+        friction coefficient), global axes, where a run held any.
+    contact_dissipation : ndarray (k, contact rows) or None
+        The energy [J] each compliant contact row has dissipated since the start (its
+        damper, its friction; :mod:`mbd3d.analyses.dissipation`), where forward dynamics ran
+        a model with contacts.
     """
 
     def __init__(self, model, analysis: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray,
@@ -79,18 +94,9 @@ class Results:
         self.message = message
         self.stats = dict(stats or {})
         self.charts = charts
-        #: spatial models: the charts as quaternions with signs that follow the motion, (k,
-        #: n_bodies + 1, 4), where the analysis tracked them (else None)
         self.turns = turns
-        #: the normal forces [N; a turning stop's: N m] of the contact rows held closed as
-        #: constraints (rigid contacts at rest), (k, contact rows), where a run held any
         self.contact_forces = contact_forces
-        #: the friction [N] on the second shape of those rows (rigid contacts at rest with a
-        #: friction coefficient), global axes, (k, contact rows, 3), where a run held any
         self.contact_friction = contact_friction
-        #: the energy [J] each compliant contact row has dissipated since the start (its
-        #: damper, its friction; :mod:`mbd3d.analyses.dissipation`), (k, contact rows), where
-        #: forward dynamics ran a model with contacts (else None)
         self.contact_dissipation = contact_dissipation
         self._residuals: tuple[np.ndarray, np.ndarray] | None = None
         self._energies: tuple[np.ndarray, np.ndarray] | None = None
@@ -104,7 +110,13 @@ class Results:
                 f"{span}, {self.status})")
 
     def subset(self, start: int, stop: int | None = None) -> "Results":
-        """The time points ``start <= k < stop`` as results of their own (views, not copies)."""
+        """The time points ``start <= k < stop`` as results of their own (views, not copies).
+
+        Parameters
+        ----------
+        start, stop : int
+            Time point indices (``stop`` None: to the end).
+        """
         sl = slice(start, stop)
         return Results(self.model, self.analysis, self.t[sl], self.q[sl], self.qd[sl],
                        self.qdd[sl], None if self.lam is None else self.lam[sl],
@@ -153,7 +165,13 @@ class Results:
 
     def body(self, name: str) -> BodyHistory:
         """Motion of body ``name``: centre of mass, orientation, angular velocity and
-        acceleration."""
+        acceleration.
+
+        Parameters
+        ----------
+        name : str
+            A body of the model.
+        """
         b = self.model.body(name)
         bt = self.model.body_type
         fr, qdd = self._body_frames(b)
@@ -212,7 +230,15 @@ class Results:
     def point(self, body: str, point: Sequence[float]) -> PointHistory:
         """Trajectory of the point ``point`` [m] (body frame) of body ``body``: its global
         ``.position`` [m], ``.velocity`` [m/s] and ``.acceleration`` [m/s^2]; indexing the
-        history indexes the positions."""
+        history indexes the positions.
+
+        Parameters
+        ----------
+        body : str
+            A body of the model.
+        point : (dim,) array_like
+            The point in the body's frame [m].
+        """
         b = self.model.body(body)
         u = np.asarray(point, dtype=float).reshape(-1)
         if u.size != self.model.dim or not np.all(np.isfinite(u)):
@@ -228,7 +254,13 @@ class Results:
         return PointHistory(bt.point(fr, idx, U), bt.point_velocity(fr, idx, U), acc)
 
     def joint(self, name: str) -> JointHistory:
-        """Multipliers, reactions and efforts of joint or driver ``name``."""
+        """Multipliers, reactions and efforts of joint or driver ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A joint or driver of the model.
+        """
         return JointHistory(self, name)
 
     driver = joint
@@ -241,7 +273,13 @@ class Results:
     def friction(self, name: str) -> np.ndarray:
         """Friction of :class:`~mbd3d.JointFriction` ``name`` on its joint's body j, (k,): a
         torque [N m] about a revolute's axis, a force [N] along a prismatic joint's axis (the
-        opposite acts on body i), from the results' multipliers."""
+        opposite acts on body i), from the results' multipliers.
+
+        Parameters
+        ----------
+        name : str
+            A :class:`~mbd3d.JointFriction` of the model.
+        """
         group = self.model.friction
         if group is None or name not in group.names:
             known = group.names if group is not None else []
@@ -426,6 +464,13 @@ class Results:
         Names are quoted by the csv module where they hold commas, quotes or line breaks, so
         any body or joint name reads back. The file is checked before it is written and written
         atomically (see :mod:`mbd3d.io.files`). Returns the absolute path written.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The CSV file.
+        overwrite : bool
+            Replace ``path`` where it exists.
         """
         return exports.to_csv(self, path, overwrite)
 
@@ -443,7 +488,15 @@ class Results:
         ``chart_quaternions``, ``contact_forces``, ``contact_friction``), the labels of the coordinates and rows and
         the run's statistics (JSON) to a compressed NumPy ``.npz`` file: a path (checked, then
         written atomically; its absolute path is returned) or an open binary file.
-        :func:`mbd3d.read_results` reads it back against the model."""
+        :func:`mbd3d.read_results` reads it back against the model.
+
+        Parameters
+        ----------
+        path : str, path-like or binary file
+            The ``.npz`` file, or an open binary file.
+        overwrite : bool
+            Replace ``path`` where it exists.
+        """
         return results_file.to_npz(self, path, overwrite)
 
 
@@ -452,6 +505,12 @@ def read_results(path: str | os.PathLike, model) -> Results:
     the model the run was of, or one with the same coordinates and constraint rows (the
     file's labels are checked against the model's). Reading is bounded: no pickled objects,
     and no array larger than the file's time points make it.
+
+    Parameters
+    ----------
+    path : str or path-like
+        An NPZ file of :meth:`Results.to_npz`.
+    model : Model
 
     Raises
     ------

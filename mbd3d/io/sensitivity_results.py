@@ -68,7 +68,17 @@ class Sensitivities:
     def sensitivity(self, coordinate: str, parameter: str, of: str = "q") -> np.ndarray:
         """``d(coordinate)/d(parameter)`` over time (k,), e.g.
         ``sens.sensitivity("slider.x", "joints.B.point_i[0]")`` [m per unit of the
-        parameter]; ``of="qd"`` or ``"qdd"`` for the coordinate's rate or acceleration."""
+        parameter]; ``of="qd"`` or ``"qdd"`` for the coordinate's rate or acceleration.
+
+        Parameters
+        ----------
+        coordinate : str
+            ``"body.coordinate"``, e.g. ``"slider.x"``.
+        parameter : str
+            One of the parameters asked for.
+        of : {"q", "qd", "qdd"}
+            The coordinate, its rate or its acceleration.
+        """
         if of not in _OF:
             raise ModelError(f"sensitivity(of={of!r}): give 'q', 'qd' or 'qdd'")
         array = {"q": self.dq, "qd": self.dqd, "qdd": self.dqdd}[of]
@@ -76,7 +86,15 @@ class Sensitivities:
 
     def integral(self, name: str, parameter: str | None = None) -> np.ndarray:
         """An integral's value ``G(t) = int_{t0}^{t} g dt`` over time (k,), or its derivative
-        with respect to ``parameter`` (forward sensitivities' ``integrals``)."""
+        with respect to ``parameter`` (forward sensitivities' ``integrals``).
+
+        Parameters
+        ----------
+        name : str
+            One of the integrals given to :func:`mbd3d.forward_sensitivities`.
+        parameter : str, optional
+            One of the parameters asked for (None: the integral itself).
+        """
         if name not in self.integrals:
             raise ModelError(f"sensitivities of '{self.model.name}': no integral '{name}'"
                              f"{did_you_mean(name, list(self.integrals))}; the integrals are "
@@ -86,7 +104,15 @@ class Sensitivities:
 
     def effort(self, driver: str, parameter: str) -> np.ndarray:
         """``d(effort)/d(parameter)`` of a driver over time (k,) [N m or N per unit of the
-        parameter] (inverse dynamics)."""
+        parameter] (inverse dynamics).
+
+        Parameters
+        ----------
+        driver : str
+            A driver of the model.
+        parameter : str
+            One of the parameters asked for.
+        """
         if self.dlam is None:
             raise ModelError(f"sensitivities of the {self.analysis} of '{self.model.name}': "
                              "efforts have sensitivities after inverse dynamics or a "
@@ -104,7 +130,15 @@ class Sensitivities:
         model, e.g. ``lambda r: r.joint("O").reaction(on="crank").force``) with respect to
         ``parameter``, or to each parameter along a last axis: a fourth-order central
         difference along the parameter, the results' state moving by its sensitivities and
-        the model through its variants (1e-11 relative or better for smooth quantities)."""
+        the model through its variants (1e-11 relative or better for smooth quantities).
+
+        Parameters
+        ----------
+        quantity : callable
+            ``quantity(results) -> array``.
+        parameter : str, optional
+            One of the parameters asked for (None: each of them, along a last axis).
+        """
         columns = [j for j, name in enumerate(self.parameters)
                    if parameter is None or name == parameter]
         if parameter is not None and not columns:
@@ -169,7 +203,15 @@ class Sensitivities:
 
     def to_csv(self, path: str | os.PathLike, overwrite: bool = True) -> str:
         """Write :meth:`columns` to a CSV file (atomically; an existing file is replaced only
-        with ``overwrite``); returns its path."""
+        with ``overwrite``); returns its path.
+
+        Parameters
+        ----------
+        path : str or path-like
+            The CSV file.
+        overwrite : bool
+            Replace ``path`` where it exists.
+        """
         return write_columns(self.columns(), path, overwrite)
 
     def to_pandas(self):
@@ -211,5 +253,13 @@ class ModeSensitivities:
 
     def frequency(self, mode: int, parameter: str) -> np.ndarray:
         """``d(frequency of mode)/d(parameter)`` [Hz per unit of the parameter]: a number
-        about one equilibrium, an array (k,) along a motion."""
+        about one equilibrium, an array (k,) along a motion.
+
+        Parameters
+        ----------
+        mode : int
+            The mode's index, lowest frequency first.
+        parameter : str
+            One of the parameters asked for.
+        """
         return self.frequencies[..., mode, self.equilibrium._parameter(parameter)]

@@ -62,7 +62,16 @@ class UrdfWarning(UserWarning):
 
 
 def load_urdf(path: str | os.PathLike, **options: Any):
-    """The model of a URDF robot: :func:`urdf_builder` built. Returns a :class:`Model`."""
+    """The model of a URDF robot: :func:`urdf_builder` built. Returns a :class:`Model`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The URDF file.
+    **options
+        As for :func:`urdf_builder` (``joint_positions``, ``drive``, ``fixed_base``,
+        ``joint_limits``, ``meshes``, ...).
+    """
     return urdf_builder(path, **options).build()
 
 

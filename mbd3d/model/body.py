@@ -52,6 +52,8 @@ class Body:
         The body's geometry in the body frame [m], drawn by the viewer.
     arguments : dict
         The arguments of ``add_body`` that made it (what a model file writes back).
+    is_ground : bool
+        Whether it is the ground (fixed, no coordinates).
     """
 
     def __init__(self, name: str, index: int, mass: float, inertia: Any,

@@ -261,7 +261,13 @@ class ModelBuilder:
         return body
 
     def add(self, element: Any) -> Any:
-        """Add a joint, driver or force element; returns it for convenience."""
+        """Add a joint, driver or force element; returns it for convenience.
+
+        Parameters
+        ----------
+        element : ConstraintElement or ForceElement
+            A joint, driver, higher pair, contact or force element of this builder's bodies.
+        """
         from mbd3d.model.forces import ForceElement
 
         if not isinstance(element, (ConstraintElement, ForceElement)):

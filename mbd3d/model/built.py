@@ -59,11 +59,25 @@ class _Group:
 class Model:
     """A built, immutable multibody model. Created by :meth:`ModelBuilder.build`.
 
+    Parameters
+    ----------
+    builder : ModelBuilder
+        Its bodies, ground, gravity and name.
+    ctx : BuildContext
+        The drawing the elements were checked and turned into rows in.
+    elements : list of ConstraintElement
+        Joints and drivers, in the order added.
+    specs : list of (int, PrimitiveSpec)
+        Their constraint primitives, each with its element's index.
+    forces : list of ForceElement
+    sparse : bool or None
+        Sparse linear algebra; None: by the model's size.
+
     Attributes
     ----------
     name : str
     dim : int
-        2 (planar).
+        2 (planar) or 3 (spatial).
     body_type : BodyType
         Kinematics of the bodies.
     bodies : tuple of Body
@@ -289,7 +303,13 @@ class Model:
 
     # -- named access ----------------------------------------------------------------------------
     def body(self, name: str) -> Body:
-        """The body called ``name``."""
+        """The body called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            As given to :meth:`mbd3d.ModelBuilder.add_body`.
+        """
         try:
             return self._body_by_name[name]
         except KeyError:
@@ -297,12 +317,24 @@ class Model:
                              f"{', '.join(self._body_by_name) or '(none)'}") from None
 
     def joint(self, name: str) -> ConstraintElement:
-        """The joint or driver called ``name``."""
+        """The joint or driver called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            As given to the joint or driver.
+        """
         return self._joint_by_name[self._check_joint(name)][1]
 
     def force(self, name: str) -> Any:
         """The force element called ``name``; a :class:`~mbd3d.ModelError` naming the
-        model's forces if there is none."""
+        model's forces if there is none.
+
+        Parameters
+        ----------
+        name : str
+            As given to the force element.
+        """
         try:
             return self._force_by_name[name]
         except KeyError:
@@ -316,37 +348,73 @@ class Model:
         return name
 
     def rows_of(self, name: str) -> np.ndarray:
-        """Constraint rows of the joint or driver ``name``."""
+        """Constraint rows of the joint or driver ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A joint's or driver's name.
+        """
         return self._rows_of[self._check_joint(name)]
 
     def reaction_frame(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where joint or driver ``name`` acts: ``(u_i, u_j, axes)``, its point in the frames of
         body i and body j [m] and its axes as columns in body i's frame (what reactions are
-        reported about and in)."""
+        reported about and in).
+
+        Parameters
+        ----------
+        name : str
+            A joint's or driver's name.
+        """
         return self._reaction_frames[self._check_joint(name)]
 
     def hinge_directions(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where spatial hinge ``name`` (revolute, cylindrical, planar) measures its angle
         from: ``(f_i, g_i, f_j)``, unit vectors normal to its axis, ``f_i`` and ``g_i`` in body
         i's frame, ``f_j`` in body j's (the angle is that of ``f_j`` from ``f_i`` towards
-        ``g_i``, see :mod:`mbd3d.io.joint_coordinates`)."""
+        ``g_i``, see :mod:`mbd3d.io.joint_coordinates`).
+
+        Parameters
+        ----------
+        name : str
+            A revolute, cylindrical or planar joint's name.
+        """
         if self._check_joint(name) not in self._hinge_directions:
             raise ModelError(f"'{name}' of model '{self.name}' is not a spatial hinge "
                              "(revolute, cylindrical or planar joint of a spatial model)")
         return self._hinge_directions[name]
 
     def padded_index(self, body: Body) -> int:
-        """Row of ``body`` in the per-body arrays of the solvers (the ground is the last row)."""
+        """Row of ``body`` in the per-body arrays of the solvers (the ground is the last row).
+
+        Parameters
+        ----------
+        body : Body
+            One of the model's bodies, or its ground.
+        """
         return self.n_bodies if body.is_ground else body.index
 
     def coordinates_of(self, body: str | Body) -> slice:
-        """The slice of ``q`` owned by ``body``."""
+        """The slice of ``q`` owned by ``body``.
+
+        Parameters
+        ----------
+        body : str or Body
+            The body or its name.
+        """
         b = self.body(body) if isinstance(body, str) else body
         nc = self.n_coords_per_body
         return slice(b.index * nc, (b.index + 1) * nc)
 
     def coordinate_index(self, spec: str) -> int:
-        """Index in ``q`` of a coordinate named ``"body.coordinate"``, e.g. ``"crank.theta"``."""
+        """Index in ``q`` of a coordinate named ``"body.coordinate"``, e.g. ``"crank.theta"``.
+
+        Parameters
+        ----------
+        spec : str
+            ``"body.coordinate"``, the coordinate one of ``model.body_type.coordinate_names``.
+        """
         body, _, coord = spec.rpartition(".")
         names = self.body_type.coordinate_names
         if not body or coord not in names:
@@ -397,7 +465,13 @@ class Model:
         self.position_coordinates = np.tile(np.arange(self.n_coords_per_body) < dim, nb)
 
     def joints_of_rows(self, rows: Iterable[int]) -> list[str]:
-        """Names of the joints owning ``rows``, without repetition, in row order."""
+        """Names of the joints owning ``rows``, without repetition, in row order.
+
+        Parameters
+        ----------
+        rows : iterable of int
+            Constraint row indices.
+        """
         seen: dict[str, None] = {}
         for r in rows:
             seen[self.joints[self.row_element[r]].name] = None

@@ -65,7 +65,15 @@ class CamProfile(RecordsArguments):
     def sampled(cls, function: Callable[[np.ndarray], np.ndarray], points: int = 720
                 ) -> "CamProfile":
         """The profile through ``points`` samples, evenly spaced over a turn from 0, of
-        ``function(phi)`` [m] (vectorised over an array of angles)."""
+        ``function(phi)`` [m] (vectorised over an array of angles).
+
+        Parameters
+        ----------
+        function : callable
+            ``r(phi)`` [m] of the angle [rad], vectorised.
+        points : int
+            The number of samples over a turn.
+        """
         phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
         return cls(phi, np.asarray(function(phi), dtype=float))
 
@@ -82,7 +90,15 @@ class CamProfile(RecordsArguments):
         """The points ``(m, 2)`` [m] of the curve at the angles ``phi`` [rad] moved by
         ``distance`` [m] along its outward normal ``(r e - r' e_perp) / sqrt(r^2 + r'^2)``
         (``e`` the radial unit vector, ``e_perp`` it turned by 90 degrees): with ``-d``, the
-        surface of a cam whose pitch curve this is for a roller of radius ``d``."""
+        surface of a cam whose pitch curve this is for a roller of radius ``d``.
+
+        Parameters
+        ----------
+        phi : array_like
+            Angles [rad].
+        distance : float
+            Along the outward normal [m].
+        """
         phi = np.asarray(phi, dtype=float)
         r, slope = self(phi), self(phi, 1)
         e = np.column_stack([np.cos(phi), np.sin(phi)])
@@ -95,7 +111,15 @@ class CamProfile(RecordsArguments):
         """The cam's surface for a roller of ``roller_radius`` [m] whose centre runs on this
         pitch curve: the curve moved inwards by the radius, sampled at ``points`` angles
         evenly spaced from 0 and interpolated again in polar form (the shape a
-        :class:`~mbd3d.Cam` contact touches)."""
+        :class:`~mbd3d.Cam` contact touches).
+
+        Parameters
+        ----------
+        roller_radius : float
+            [m], >= 0.
+        points : int
+            The number of samples over a turn.
+        """
         rho = float(roller_radius)
         if not (math.isfinite(rho) and rho >= 0.0):
             raise ModelError(f"cam profile: roller_radius must be finite and >= 0, got "
@@ -106,7 +130,13 @@ class CamProfile(RecordsArguments):
     def envelope(self, points: int = 720) -> "CamProfile":
         """The cam's surface whose support function this is (a flat-faced follower's
         profile): the envelope ``h e + h' e_perp`` of the tangent lines, sampled at ``points``
-        angles evenly spaced from 0 and interpolated again in polar form."""
+        angles evenly spaced from 0 and interpolated again in polar form.
+
+        Parameters
+        ----------
+        points : int
+            The number of samples over a turn.
+        """
         phi = np.linspace(0.0, 2 * math.pi, int(points), endpoint=False)
         # only a convex cam has a support function: its radius of curvature h + h'' > 0
         curvature_radius = self(phi) + self(phi, 2)
@@ -120,7 +150,13 @@ class CamProfile(RecordsArguments):
     def envelope_points(self, phi: Any) -> np.ndarray:
         """The points ``(m, 2)`` [m] where the tangent lines with outward normals at the
         angles ``phi`` [rad] touch the cam whose support function ``h`` this is: ``h e + h'
-        e_perp``."""
+        e_perp``.
+
+        Parameters
+        ----------
+        phi : array_like
+            The tangent lines' outward normals' angles [rad].
+        """
         phi = np.asarray(phi, dtype=float)
         e = np.column_stack([np.cos(phi), np.sin(phi)])
         across = np.column_stack([-e[:, 1], e[:, 0]])

@@ -111,7 +111,13 @@ class ContactGroup(ForceElement):
         """As :meth:`mbd3d.Contact.arrays`, the group's one row: ``points[0, 3, :2]`` the
         first and the number of its shapes and ``points[0, 2, :2]`` the offset and number of
         classes of its law table, both from zero (:class:`~mbd3d.model.contact_rows._Contacts`
-        moves them to the model's tables); the mass is the smallest pair's."""
+        moves them to the model's tables); the mass is the smallest pair's.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         shape_points, shape_values, laws, masses = self.tables(ctx)
         points = np.zeros((1, POINTS, ctx.dim))
         points[0, 3, :2] = 0, len(self.shapes)
@@ -122,7 +128,13 @@ class ContactGroup(ForceElement):
 
     def tables(self, ctx: "BuildContext") -> tuple:
         """``(points (s, 2, dim), values (s, 3), laws (c * c, 10), pair masses)`` of the
-        shapes (see :mod:`mbd3d.numerics.compiled.contact_grid`) and of the classes' laws."""
+        shapes (see :mod:`mbd3d.numerics.compiled.contact_grid`) and of the classes' laws.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         what = self.what
         mu = finite_scalar(self.friction, f"{what}: friction")
         slip = finite_scalar(self.slip_velocity, f"{what}: slip_velocity", positive=True)
@@ -154,7 +166,13 @@ class ContactGroup(ForceElement):
         return points, np.array(values, dtype=float), laws, np.array(masses or [math.inf])
 
     def outlines(self, ctx: "BuildContext") -> list:
-        """The group's shapes as the viewer draws them, one outline per shape."""
+        """The group's shapes as the viewer draws them, one outline per shape.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         return [outline(ctx, shape, f"{self.what}: shape {k}")
                 for k, shape in enumerate(self.shapes)]
 

@@ -126,14 +126,26 @@ class Contact(ForceElement):
         return _Contacts(elements, ctx)
 
     def outlines(self, ctx: "BuildContext") -> list:
-        """The two shapes in their bodies' frames, for drawing."""
+        """The two shapes in their bodies' frames, for drawing.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         return [outline(ctx, shape, self.what) for shape in (self.first, self.second)]
 
     def arrays(self, ctx: "BuildContext") -> tuple:
         """``(points (r, 4, dim), values (r, 10), labels, swapped, effective mass, curve)``:
         the rows of the compiled core (see :mod:`mbd3d.numerics.compiled.contacts` and
         :func:`shapes.pair_rows`), checked, the mass the law is calibrated with, and a cam's
-        curve table (else None)."""
+        curve table (else None).
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         what = f"contact '{self.name}'"
         rows = pair_rows(ctx, self.first, self.second, what)
         mu = finite_scalar(self.friction, f"{what}: friction")
@@ -230,7 +242,18 @@ def states_of(group: _Contacts, report: np.ndarray, k: int | None = None) -> Con
 def contact_states(model: "Model", q: np.ndarray, qd: np.ndarray | None = None,
                    charts: np.ndarray | None = None) -> ContactStates:
     """The state of every contact of ``model`` at ``(q, qd)`` (``qd`` default zero); over a
-    run, :meth:`mbd3d.Results.contacts`."""
+    run, :meth:`mbd3d.Results.contacts`.
+
+    Parameters
+    ----------
+    model : Model
+    q : (n,) array_like
+        Positions (in ``charts`` for a spatial model).
+    qd : (n,) array_like, optional
+        Velocities (default zero).
+    charts : ndarray, optional
+        Spatial models: the bodies' reference rotations ``q`` is given in (default the model's).
+    """
     from mbd3d.model.constraints import frames  # noqa: PLC0415
 
     q = np.asarray(q, dtype=float)

@@ -52,7 +52,16 @@ def generalized_forces(model, t: float, fr: Frames) -> np.ndarray:
 
 def kinetic_energy(model, q: np.ndarray, qd: np.ndarray, charts: np.ndarray | None = None
                    ) -> float:
-    """``T = 1/2 qd^T M qd`` [J] (``charts``: see :func:`mbd3d.model.constraints.frames`)."""
+    """``T = 1/2 qd^T M qd`` [J] (``charts``: see :func:`mbd3d.model.constraints.frames`).
+
+    Parameters
+    ----------
+    model : Model
+    q, qd : (n,) array_like
+        The state (positions in ``charts`` for a spatial model).
+    charts : ndarray, optional
+        Spatial models: the bodies' reference rotations (default the model's).
+    """
     fr = frames(model, q, qd, charts)
     blocks = model.body_type.mass_blocks(fr, model.mass, model.inertia)
     v = np.reshape(qd, blocks.shape[:2])
@@ -60,7 +69,16 @@ def kinetic_energy(model, q: np.ndarray, qd: np.ndarray, charts: np.ndarray | No
 
 
 def potential_energy(model, q: np.ndarray, charts: np.ndarray | None = None) -> float:
-    """Potential energy of gravity (zero at the global origin) and of springs [J]."""
+    """Potential energy of gravity (zero at the global origin) and of springs [J].
+
+    Parameters
+    ----------
+    model : Model
+    q : (n,) array_like
+        Positions (in ``charts`` for a spatial model).
+    charts : ndarray, optional
+        Spatial models: the bodies' reference rotations (default the model's).
+    """
     nb = model.n_bodies
     R = np.reshape(q, (nb, model.n_coords_per_body))[:, :model.dim]
     V = -float(np.sum(model.mass * (R @ model.gravity)))

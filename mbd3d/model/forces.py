@@ -252,6 +252,17 @@ class Torque(ForceElement):
     In 2D the torque is a scalar about the normal to the plane (counter-clockwise positive). In
     3D it is a vector in global axes, or in body axes with ``frame="body"`` (it turns with the
     body, like a motor's torque on its rotor).
+
+    Parameters
+    ----------
+    name : str
+    body : Body
+        The body it acts on.
+    torque : float, array_like, Motion or callable
+        [N m]: a number (2D) or a vector (3D), a motion ``f(t)``, or a function ``f(t, state)``
+        of a :class:`~mbd3d.ForceState`.
+    frame : {"global", "body"}
+        The axes a spatial torque is given in.
     """
 
     def __init__(self, name: str, body: Body, torque: Any, frame: str = "global"):

@@ -119,12 +119,24 @@ class JointLimit(ForceElement):
         return _Contacts(elements, ctx)
 
     def outlines(self, ctx: "BuildContext") -> list:
-        """None: a stop has no shapes to draw."""
+        """None: a stop has no shapes to draw.
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         return []
 
     def arrays(self, ctx: "BuildContext") -> tuple:
         """``(points (1, 4, dim), values (1, 10), labels, swapped, effective mass, None)`` of
-        the compiled core, checked (see :meth:`mbd3d.Contact.arrays`)."""
+        the compiled core, checked (see :meth:`mbd3d.Contact.arrays`).
+
+        Parameters
+        ----------
+        ctx : BuildContext
+            The model being built (its drawing, and the checks that name what is wrong).
+        """
         what = self.what
         lower, upper = self._ends(ctx)
         u_i, u_j, axes = self.joint.reaction_frame(ctx)

@@ -44,7 +44,13 @@ class Motion(RecordsArguments, ABC):
 
     @abstractmethod
     def evaluate(self, t: float) -> tuple[float, float, float]:
-        """Return ``(f(t), f'(t), f''(t))``."""
+        """Return ``(f(t), f'(t), f''(t))``.
+
+        Parameters
+        ----------
+        t : float
+            Time [s].
+        """
 
     def terms(self) -> list[tuple[int, np.ndarray]] | None:
         """The motion as a sum of terms ``(kind, parameters)`` of
@@ -92,7 +98,13 @@ class _Term(Motion):
 
 
 class Constant(_Term):
-    """``f(t) = value``."""
+    """``f(t) = value``.
+
+    Parameters
+    ----------
+    value : float
+        The value [rad or m, as the driver it drives].
+    """
 
     _kind = compiled.CONSTANT
 
@@ -105,7 +117,15 @@ class Constant(_Term):
 
 
 class Ramp(_Term):
-    """``f(t) = initial + rate * t``: constant speed, e.g. a crank turning at ``rate`` rad/s."""
+    """``f(t) = initial + rate * t``: constant speed, e.g. a crank turning at ``rate`` rad/s.
+
+    Parameters
+    ----------
+    initial : float
+        The value at t = 0 [rad or m].
+    rate : float
+        Its rate [rad/s or m/s].
+    """
 
     _kind = compiled.RAMP
 
@@ -119,7 +139,19 @@ class Ramp(_Term):
 
 
 class Harmonic(_Term):
-    """``f(t) = offset + amplitude * sin(frequency * t + phase)``, frequency in rad/s."""
+    """``f(t) = offset + amplitude * sin(frequency * t + phase)``, frequency in rad/s.
+
+    Parameters
+    ----------
+    amplitude : float
+        [rad or m].
+    frequency : float
+        Angular frequency [rad/s].
+    phase : float
+        [rad].
+    offset : float
+        The mean value [rad or m].
+    """
 
     _kind = compiled.HARMONIC
 
@@ -136,7 +168,13 @@ class Harmonic(_Term):
 
 
 class Polynomial(_Term):
-    """``f(t) = c0 + c1 t + c2 t^2 + ...`` with coefficients in ascending powers."""
+    """``f(t) = c0 + c1 t + c2 t^2 + ...`` with coefficients in ascending powers.
+
+    Parameters
+    ----------
+    coefficients : sequence of float
+        ``c0, c1, ...`` [rad or m, per second to the power].
+    """
 
     def __init__(self, coefficients: Sequence[float]):
         coefficients = [finite_scalar(c, "Polynomial coefficient") for c in coefficients]
@@ -155,6 +193,13 @@ class SmoothStep(_Term):
 
     Velocity and acceleration are zero at both ends, so a driver using it starts and stops
     without a jump in the driving effort.
+
+    Parameters
+    ----------
+    t0, t1 : float
+        Where the step starts and ends [s], ``t1 > t0``.
+    start, end : float
+        The values before and after it [rad or m].
     """
 
     _kind = compiled.SMOOTH_STEP
@@ -176,6 +221,11 @@ class Function(Motion):
     """A user motion given by three callables ``f(t)``, ``df(t)`` and ``d2f(t)``.
 
     The derivatives must be exact; they are not checked against ``f``.
+
+    Parameters
+    ----------
+    f, df, d2f : callable
+        ``f(t)`` [rad or m] and its first and second derivatives, each of the time [s].
     """
 
     def __init__(self, f: Callable[[float], float], df: Callable[[float], float],

@@ -37,7 +37,19 @@ __all__ = ["Sphere", "Plane", "Capsule", "Box", "Hole", "Cam", "PairRows", "Outl
 class Sphere:
     """A sphere (planar model: a circle) of ``radius`` [m] fixed to ``body``, centred at
     ``point`` (body frame [m]) or at ``at`` (global point of the drawing); default the body's
-    reference point."""
+    reference point.
+
+    Parameters
+    ----------
+    body : Body
+        The body it is fixed to.
+    radius : float
+        [m], positive.
+    point : array_like, optional
+        Its centre in the body frame [m].
+    at : array_like, optional
+        Its centre in global coordinates of the drawing [m], instead of ``point``.
+    """
 
     body: Body
     radius: float
@@ -49,7 +61,21 @@ class Sphere:
 class Plane:
     """The half-space (planar model: half-plane) of ``body`` bounded by the plane (line)
     through ``point`` (body frame) or ``at`` (drawing) with outward ``normal`` (body frame,
-    or ``normal_at`` in the drawing's axes): the side the normal points to is free."""
+    or ``normal_at`` in the drawing's axes): the side the normal points to is free.
+
+    Parameters
+    ----------
+    body : Body
+        The body it is fixed to.
+    normal : array_like, optional
+        The outward normal in the body frame.
+    point : array_like, optional
+        A point of the plane in the body frame [m].
+    at : array_like, optional
+        A point of the plane in global coordinates of the drawing [m], instead of ``point``.
+    normal_at : array_like, optional
+        The outward normal in the drawing's axes, instead of ``normal``.
+    """
 
     body: Body
     normal: Any = None
@@ -62,7 +88,19 @@ class Plane:
 class Capsule:
     """All points within ``radius`` [m] of the segment between two points fixed to ``body``
     (planar model: a stadium): ``ends`` in the body frame [m] or ``ends_at`` in the drawing,
-    two points each. A cylinder with rounded ends; a rod, a pin, a link's outline."""
+    two points each. A cylinder with rounded ends; a rod, a pin, a link's outline.
+
+    Parameters
+    ----------
+    body : Body
+        The body it is fixed to.
+    radius : float
+        [m], positive.
+    ends : (2, dim) array_like, optional
+        The segment's ends in the body frame [m].
+    ends_at : (2, dim) array_like, optional
+        The ends in global coordinates of the drawing [m], instead of ``ends``.
+    """
 
     body: Body
     radius: float
@@ -75,7 +113,21 @@ class Box:
     """A box fixed to ``body`` with its edges along the body's axes: edge lengths ``size``
     [m] (planar model: a rectangle, two lengths), centred at ``point`` (body frame) or ``at``
     (drawing), default the body's reference point; its edges and corners rounded by
-    ``radius`` [m] (default 0: sharp)."""
+    ``radius`` [m] (default 0: sharp).
+
+    Parameters
+    ----------
+    body : Body
+        The body it is fixed to.
+    size : array_like
+        Edge lengths along the body's axes [m] (two in a planar model, three in space).
+    point : array_like, optional
+        Its centre in the body frame [m].
+    at : array_like, optional
+        Its centre in global coordinates of the drawing [m], instead of ``point``.
+    radius : float
+        Rounding of the edges and corners [m], >= 0.
+    """
 
     body: Body
     size: Any
@@ -91,7 +143,23 @@ class Hole:
     (drawing), default the body's reference point, along ``axis`` (body frame) or ``axis_at``
     (the drawing's axes; spatial models only). A sphere or a capsule of another body moves
     inside it and is pushed back from its wall: a pin in a hole with clearance (a revolute
-    clearance joint), a ball in a tube, a shaft in a bearing."""
+    clearance joint), a ball in a tube, a shaft in a bearing.
+
+    Parameters
+    ----------
+    body : Body
+        The body it is fixed to.
+    radius : float
+        [m], positive.
+    point : array_like, optional
+        A point of its axis in the body frame [m].
+    at : array_like, optional
+        A point of its axis in global coordinates of the drawing [m], instead of ``point``.
+    axis : array_like, optional
+        Its axis in the body frame (spatial models).
+    axis_at : array_like, optional
+        Its axis in the drawing's axes, instead of ``axis`` (spatial models).
+    """
 
     body: Body
     radius: float
@@ -111,7 +179,19 @@ class Cam:
     ``h.envelope()``. A sphere (circle) touches it from outside, a roller follower (a knife
     edge: a small radius), or a plane (line), a flat face, whose gap is measured to the cam's
     point farthest towards it (a convex cam's support point); either may leave the cam and
-    land on it again."""
+    land on it again.
+
+    Parameters
+    ----------
+    body : Body
+        The body it is fixed to.
+    profile : CamProfile
+        The cam's surface, polar about its centre in the body's axes [m].
+    point : array_like, optional
+        Its centre in the body frame [m].
+    at : array_like, optional
+        Its centre in global coordinates of the drawing [m], instead of ``point``.
+    """
 
     body: Body
     profile: Any

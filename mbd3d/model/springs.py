@@ -93,8 +93,10 @@ class SpringDamper(ForceElement):
     name : str
     body_i, body_j : Body
     point_i, point_j : array_like (dim,), optional
-        Attachment points in the body frames [m]. Alternatively ``at_i``, ``at_j``: the points
-        in global coordinates of the drawing (the bodies' initial guesses).
+        Attachment points in the body frames [m].
+    at_i, at_j : array_like (dim,), optional
+        The points in global coordinates of the drawing (the bodies' initial guesses),
+        instead of ``point_i``, ``point_j``.
     stiffness : float
         [N/m], >= 0.
     damping : float

@@ -138,7 +138,15 @@ def frame_along(direction: Any, hint: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
     """A body frame from the drawing: the rotation matrix (body axes as columns) whose x axis
     is ``direction`` and whose z axis is as close to ``hint`` as that allows (y axis instead
     of ``hint`` when the two are parallel). For a bar along ``direction``, a hinge's yoke, a
-    body whose axis the drawing gives but whose roll it does not."""
+    body whose axis the drawing gives but whose roll it does not.
+
+    Parameters
+    ----------
+    direction : (3,) array_like
+        The body's x axis in the drawing.
+    hint : (3,) array_like
+        Where its z axis should point as nearly as it can.
+    """
     x = finite_vector(direction, 3, "frame direction")
     if np.linalg.norm(x) < 1e-12:
         raise ModelError(f"frame direction must be a non-zero vector, got {direction!r}")
