@@ -172,3 +172,16 @@ def test_the_kernels_are_compiled_per_body_type_and_contacts_not_per_kind_of_mod
     # type per body type and contacts
     assert counts == {"accelerations_with_parts": "4", "advance": "4", "newton_step": "1",
                       "alpha_steps": "4"}
+
+
+def test_record_constructors_take_the_fields_in_the_records_order():
+    # model_arrays and force_arrays name their arguments (a star argument holding records is
+    # typed in Python at every call); a field added to a record's list must be added there too
+    import inspect
+
+    from mbd3d.numerics.compiled import structures
+
+    for build, fields in ((structures.model_arrays, structures.MODEL_FIELDS),
+                          (structures.force_arrays, structures.FORCE_FIELDS)):
+        function = getattr(build, "py_func", build)
+        assert tuple(inspect.signature(function).parameters) == fields
