@@ -13,6 +13,41 @@ from mbd3d.model.builder import BuildContext
 from mbd3d.model.element import PrimitiveSpec
 
 
+#: the arguments of a joint at a point, as its docstring's Parameters section gives them:
+#: :func:`point_parameters` puts them where the docstring says ``{point_parameters}``
+POINT_PARAMETERS = """name : str
+    The joint's name (``results.joint(name)``).
+body_i, body_j : Body
+    The connected bodies (either may be ``builder.ground``).
+at : array_like, optional
+    The joint's point in global coordinates of the drawing [m].
+point_i, point_j : array_like, optional
+    The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
+    default body j's centre of mass)."""
+
+
+def point_parameters(cls: type) -> type:
+    """Class decorator: the line ``{point_parameters}`` of the class's docstring becomes
+    :data:`POINT_PARAMETERS`, at that line's indentation (one text for every joint's).
+
+    Parameters
+    ----------
+    cls : type
+        A joint class.
+    """
+    if cls.__doc__ is None:  # python -OO: no docstrings
+        return cls
+    lines = []
+    for line in cls.__doc__.split("\n"):
+        if line.strip() != "{point_parameters}":
+            lines.append(line)
+            continue
+        indent = line[:len(line) - len(line.lstrip())]
+        lines += [indent + part if part else part for part in POINT_PARAMETERS.split("\n")]
+    cls.__doc__ = "\n".join(lines)
+    return cls
+
+
 def perpendicular(v: np.ndarray) -> np.ndarray:
     """A 2D vector turned by +90 degrees."""
     return np.array([-v[1], v[0]])

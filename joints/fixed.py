@@ -7,9 +7,10 @@ import numpy as np
 from mbd3d.model.element import PrimitiveSpec
 from mbd3d.model.builder import BuildContext
 
-from mbd3d.joints.base import Axes, Joint, perpendicular_rows
+from mbd3d.joints.base import Axes, Joint, perpendicular_rows, point_parameters
 
 
+@point_parameters
 class Fixed(Joint):
     """Welds body j to body i (or to the ground) as they are in the drawing.
 
@@ -21,15 +22,7 @@ class Fixed(Joint):
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
+    {point_parameters}
     """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:

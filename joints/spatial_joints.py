@@ -13,10 +13,12 @@ from mbd3d.model.element import PrimitiveSpec
 from mbd3d.errors import ModelError
 from mbd3d.model.builder import BuildContext
 
-from mbd3d.joints.base import Axes, Joint, perpendicular, perpendicular_rows, require_spatial
+from mbd3d.joints.base import (Axes, Joint, perpendicular, perpendicular_rows, point_parameters,
+                               require_spatial)
 from mbd3d.joints.revolute import hinge_directions
 
 
+@point_parameters
 class Spherical(Joint):
     """Ball joint: a point of body i and a point of body j coincide (rows ``x``, ``y``, ``z``).
 
@@ -25,15 +27,7 @@ class Spherical(Joint):
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
+    {point_parameters}
     """
 
     #: the coordinates a :class:`~mbd3d.JointLimit` may stop
@@ -46,6 +40,7 @@ class Spherical(Joint):
                               ("x", "y", "z"))]
 
 
+@point_parameters
 class Universal(Joint):
     """Cardan joint: coincident points, and the cross's two axes ``axis_i`` (fixed in body i)
     and ``axis_j`` (fixed in body j) kept perpendicular (rows ``x``, ``y``, ``z``, ``cross``).
@@ -54,18 +49,10 @@ class Universal(Joint):
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
+    {point_parameters}
     axis_i, axis_j : (3,) array_like
         The cross's axis fixed in body i and the one fixed in body j, in the drawing (global
         axes).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
     """
 
     def __init__(self, name: str, body_i: Body, body_j: Body, *, axis_i: Any, axis_j: Any,
@@ -114,6 +101,7 @@ class _Hinge(_AxisJoint):
         return hinge_directions(ctx, self)
 
 
+@point_parameters
 class Cylindrical(_Hinge):
     """Body j slides along and turns about an axis of body i: axes aligned (``axis_f``,
     ``axis_g``) and the point of j on the line (``normal_f``, ``normal_g``); 4 rows.
@@ -121,17 +109,9 @@ class Cylindrical(_Hinge):
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
+    {point_parameters}
     axis : (3,) array_like
         The axis it slides along and turns about, in the drawing (global axes).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
     drawn_angle : float, optional
         The angle it reads in the drawing [rad] (see :class:`~mbd3d.joints.Revolute`).
     """
@@ -150,6 +130,7 @@ class Cylindrical(_Hinge):
                 PrimitiveSpec("dot2", bi, bj, {"v_i": g, "u_i": u_i, "u_j": u_j}, ("normal_g",))]
 
 
+@point_parameters
 class Planar(_Hinge):
     """Body j slides on a plane of body i and turns about its normal ``axis``: normals aligned
     (``axis_f``, ``axis_g``) and the point of j in the plane (``plane``); 3 rows.
@@ -157,17 +138,9 @@ class Planar(_Hinge):
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
+    {point_parameters}
     axis : (3,) array_like
         The plane's normal, which it turns about, in the drawing (global axes).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
     drawn_angle : float, optional
         The angle it reads in the drawing [rad] (see :class:`~mbd3d.joints.Revolute`).
     """
@@ -185,6 +158,7 @@ class Planar(_Hinge):
                               {"v_i": axes.i[2], "u_i": u_i, "u_j": u_j}, ("plane",))]
 
 
+@point_parameters
 class PointOnLine(_AxisJoint):
     """The point of body j stays on the line of body i through its point along ``axis``;
     rotations are free. Spatial: rows ``normal_f``, ``normal_g`` (2 rows). Planar: the pin in a
@@ -194,17 +168,9 @@ class PointOnLine(_AxisJoint):
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
+    {point_parameters}
     axis : array_like
         The line's direction in the drawing (global axes).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
     """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
@@ -227,23 +193,16 @@ class PointOnLine(_AxisJoint):
         return u_i, u_j, np.column_stack([h_i, perpendicular(h_i)])
 
 
+@point_parameters
 class PointOnPlane(_AxisJoint):
     """The point of body j stays in the plane of body i through its point with normal ``axis``
     (row ``plane``); everything else is free. 1 row.
 
     Parameters
     ----------
-    name : str
-        The joint's name (``results.joint(name)``).
-    body_i, body_j : Body
-        The connected bodies (either may be ``builder.ground``).
+    {point_parameters}
     axis : (3,) array_like
         The plane's normal, in the drawing (global axes).
-    at : array_like, optional
-        The joint's point in global coordinates of the drawing [m].
-    point_i, point_j : array_like, optional
-        The point in the frames of body i and body j [m] (see :class:`mbd3d.joints.base.Joint`;
-        default body j's centre of mass).
     """
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
