@@ -36,6 +36,11 @@ class Prismatic(Joint):
     at, point_i, point_j : optional
         A point on the sliding line (see :class:`joints.base.Joint`); default body j's centre of
         mass.
+    drawn_displacement : float, optional
+        The displacement it reads in the drawing [m] (``results.joint(name).displacement``,
+        what a TranslationDriver and a JointLimit take): body i's point is taken that far back
+        along the axis. Default zero, the points' own separation along it. Robot files'
+        importers give it their joint coordinate, so that it reads as the file's.
     """
 
     friction_kind = "prismatic"
@@ -43,9 +48,11 @@ class Prismatic(Joint):
     limit_coordinates = ("displacement",)
 
     def __init__(self, name: str, body_i: Body, body_j: Body, *, axis: Any, at: Any = None,
-                 point_i: Any = None, point_j: Any = None):
+                 point_i: Any = None, point_j: Any = None,
+                 drawn_displacement: float | None = None):
         super().__init__(name, body_i, body_j, at=at, point_i=point_i, point_j=point_j)
         self.axis = axis
+        self.drawn_displacement = drawn_displacement
 
     def geometry(self, ctx: BuildContext) -> tuple[np.ndarray, ...]:
         """``(u_i, u_j, h_i, h_j)``: points and unit axis in the frames of bodies i and j.
@@ -57,7 +64,12 @@ class Prismatic(Joint):
         """
         u_i, u_j = self.points(ctx)
         h = ctx.direction(self.axis, f"joint '{self.name}': axis")
-        return u_i, u_j, ctx.to_local_vector(self.body_i, h), ctx.to_local_vector(self.body_j, h)
+        h_i = ctx.to_local_vector(self.body_i, h)
+        if self.drawn_displacement is not None:
+            # along the axis: the rows across it do not see it, the displacement does
+            u_i = u_i - ctx.scalar(self.drawn_displacement,
+                                   f"joint '{self.name}': drawn_displacement") * h_i
+        return u_i, u_j, h_i, ctx.to_local_vector(self.body_j, h)
 
     def primitives(self, ctx: BuildContext) -> list[PrimitiveSpec]:
         u_i, u_j, h_i, h_j = self.geometry(ctx)

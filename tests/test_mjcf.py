@@ -135,6 +135,17 @@ def test_an_arm_has_mujocos_inverse_dynamics(tmp_path):
     q, qd, qdd = rng.uniform(-1, 1, (6, 4)), rng.uniform(-2, 2, (6, 4)), rng.uniform(-3, 3, (6, 4))
     res = mb.inverse_dynamics_at(model, q, qd, qdd)
     ours = np.column_stack([res.joint(f"{joint}_drive").effort for joint in JOINTS])
+    # drawn elsewhere, the joints read MuJoCo's qpos all the same: the same efforts
+    drawn = dict(zip(JOINTS, (0.3, -0.4, 0.5, 0.07)))
+    posed = mb.load_mjcf(path, drive={joint: 0.0 for joint in JOINTS}, joint_positions=drawn)
+    start = mb.forward_dynamics(mb.load_mjcf(path, joint_positions=drawn), [0.0, 1e-3])
+    for joint, value in drawn.items():
+        view = start.joint(joint)
+        assert (view.displacement if joint == "extend" else view.angle)[0] == pytest.approx(
+            value, abs=1e-12)
+    again = mb.inverse_dynamics_at(posed, q, qd, qdd)
+    np.testing.assert_allclose([again.joint(f"{joint}_drive").effort for joint in JOINTS],
+                               ours.T, rtol=0, atol=1e-12 * np.abs(ours).max())
     m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
     theirs = np.zeros_like(ours)

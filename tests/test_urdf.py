@@ -545,11 +545,12 @@ def test_what_a_broken_robot_gets_is_said(tmp_path):
         assert load_urdf(grounded).bodies[0].name == "ground_link"
 
 
-def test_hinges_read_the_files_joint_coordinates_and_start_from_them(tmp_path):
+def test_joints_read_the_files_joint_coordinates_and_start_from_them(tmp_path):
     """Two hinges on skew axes, their origins turned (so that the links' x axes lean on the
-    axes and on each other), drawn at joint_positions: each reads the file's coordinate, in
-    the drawing and where initial_positions puts it, and the links are where the URDF's chain
-    of transforms (composed here with SciPy) puts them at those coordinates."""
+    axes and on each other), and a slide along a skew axis, drawn at joint_positions: each
+    reads the file's coordinate, in the drawing and where initial_positions puts it, and the
+    last link is where the URDF's chain of transforms (composed here with SciPy) puts it at
+    those coordinates."""
     from scipy.spatial.transform import Rotation
 
     urdf = tmp_path / "arm.urdf"
@@ -572,27 +573,40 @@ def test_hinges_read_the_files_joint_coordinates_and_start_from_them(tmp_path):
     <inertial><origin xyz="0.1 0.05 0.02"/><mass value="1.0"/>
       <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
   </link>
+  <joint name="slide" type="prismatic">
+    <parent link="lower"/><child link="slider"/>
+    <origin xyz="0.2 0 0.1" rpy="0 0.3 0.6"/><axis xyz="1 2 2"/>
+    <limit lower="-0.5" upper="0.5" effort="1" velocity="1"/>
+  </joint>
+  <link name="slider">
+    <inertial><origin xyz="0.03 0 -0.02"/><mass value="0.5"/>
+      <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
 </robot>""")
 
-    def pose(yaw, pitch):
-        """The lower link's centre of mass and rotation at the file's coordinates."""
-        def joint(xyz, rpy, axis, angle):
+    def pose(yaw, pitch, slide):
+        """The slider's centre of mass and rotation at the file's coordinates."""
+        def joint(xyz, rpy, axis, angle=0.0, travel=0.0):
             axis = np.asarray(axis, float) / np.linalg.norm(axis)
-            return np.array(xyz), Rotation.from_euler("xyz", rpy) * Rotation.from_rotvec(
+            turned = Rotation.from_euler("xyz", rpy)
+            return np.array(xyz) + turned.apply(travel * axis), turned * Rotation.from_rotvec(
                 angle * axis)
         p1, R1 = joint([0.1, -0.2, 0.3], [0.4, -0.3, 0.2], [0.5, 0.6, 1.8], yaw)
         p2, R2 = joint([0.4, 0.1, 0.0], [1.2, 0.5, -0.7], [0.0, 1.0, 0.3], pitch)
-        return p1 + R1.apply(p2 + R2.apply([0.1, 0.05, 0.02])), (R1 * R2).as_matrix()
+        p3, R3 = joint([0.2, 0.0, 0.1], [0.0, 0.3, 0.6], [1.0, 2.0, 2.0], travel=slide)
+        return (p1 + R1.apply(p2 + R2.apply(p3 + R3.apply([0.03, 0.0, -0.02]))),
+                (R1 * R2 * R3).as_matrix())
 
-    drawn = {"yaw": 0.7, "pitch": -2.9}
+    drawn = {"yaw": 0.7, "pitch": -2.9, "slide": 0.15}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UrdfWarning)
         model = load_urdf(urdf, gravity=(0.0, 0.0, 0.0), joint_positions=drawn)
-    for start in (None, {"yaw": -1.3, "pitch": 2.4}):
+    for start in (None, {"yaw": -1.3, "pitch": 2.4, "slide": -0.35}):
         res = mb.forward_dynamics(model, [0.0, 0.01], initial_positions=start)
         at = start or drawn
         for name, value in at.items():
-            assert res.joint(name).angle[0] == pytest.approx(value, abs=1e-12)
-        centre, rotation = pose(at["yaw"], at["pitch"])
-        np.testing.assert_allclose(res.body("lower").position[0], centre, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(res.body("lower").rotation[0], rotation, rtol=0, atol=1e-12)
+            read = res.joint(name).displacement if name == "slide" else res.joint(name).angle
+            assert read[0] == pytest.approx(value, abs=1e-12)
+        centre, rotation = pose(at["yaw"], at["pitch"], at["slide"])
+        np.testing.assert_allclose(res.body("slider").position[0], centre, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(res.body("slider").rotation[0], rotation, rtol=0, atol=1e-12)

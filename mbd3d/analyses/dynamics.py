@@ -110,8 +110,8 @@ def forward_dynamics(model, times: Sequence[float], q0: Sequence[float] | None =
         Positions the initial state takes, named the same way: a revolute's angle [rad] or a
         prismatic's displacement [m] as ``results.joint(name).angle`` and ``.displacement``
         read them (a spatial hinge's angle is measured between its bodies' reference
-        directions, see :mod:`mbd3d.io.joint_coordinates`; a URDF or MJCF robot's hinges read
-        the file's joint coordinates), or ``"body.coordinate"``; the rest of the
+        directions, see :mod:`mbd3d.io.joint_coordinates`; a URDF or MJCF robot's hinges and
+        slides read the file's joint coordinates), or ``"body.coordinate"``; the rest of the
         mechanism is assembled around them, nearest the guess (see
         :func:`mbd3d.analyses.initial.place_joints`).
     strict : bool

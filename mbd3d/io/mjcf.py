@@ -9,10 +9,9 @@ means here what it means in MuJoCo. In the drawing at ``joint_positions`` (defau
 - each body that a joint carries, together with the bodies welded to it (nested without a
   joint), becomes one spatial body named after it: their summed mass and inertia at their
   common centre of mass, with the body's axes; bodies welded to the world are the ground;
-- a ``hinge`` joint is a :class:`~mbd3d.joints.Revolute` about its axis through its anchor
-  (drawn at its ``qpos``: ``results.joint(name).angle`` reads MuJoCo's ``qpos`` [rad]), a
-  ``slide`` a :class:`~mbd3d.joints.Prismatic` (its displacement measured from the drawing),
-  a ``ball`` a :class:`~mbd3d.joints.Spherical`, and a ``free`` joint leaves its body free;
+- ``hinge``, ``slide`` and ``ball`` joints are a :class:`~mbd3d.joints.Revolute` about the
+  axis through the anchor, a :class:`~mbd3d.joints.Prismatic` (both read MuJoCo's ``qpos``,
+  drawn at it) and a :class:`~mbd3d.joints.Spherical`; a ``free`` joint leaves its body free;
 - a limited hinge's or slide's ``range`` becomes a :class:`~mbd3d.JointLimit` (as URDF's
   ``<limit>``: ``joint_limits``);
 - ``drive={"joint": motion}`` adds a driver named ``"<joint>_drive"`` whose coordinate is
@@ -199,14 +198,14 @@ class _Joints:
                              d.xaxis[j].copy(), qpos)
         if m.jnt_limited[j] and kind == _BALL:
             self.left_out.append(f"the range of ball joint '{label}'")
-        elif m.jnt_limited[j] and not add_limit(self.b, kind == _SLIDE, name, element, qpos,
+        elif m.jnt_limited[j] and not add_limit(self.b, kind == _SLIDE, name, element,
                                                 tuple(m.jnt_range[j]), self.law):
             lower, upper = m.jnt_range[j]
             unit = "m" if kind == _SLIDE else "rad"
             self.left_out.append(f"the range [{lower:.6g}, {upper:.6g}] {unit} of joint "
                                  f"'{label}'")
         if label in self.drive:
-            add_driver(self.b, kind == _SLIDE, name, element, self.drive[label], qpos)
+            add_driver(self.b, kind == _SLIDE, name, element, self.drive[label])
         stiffness, damping = float(m.jnt_stiffness[j]), float(m.dof_damping[m.jnt_dofadr[j]])
         if kind == _HINGE and (stiffness or damping):
             from mbd3d.model.springs import RotationalSpringDamper  # noqa: PLC0415
@@ -483,7 +482,8 @@ def _add_joint(b, kind: int, name: str, parent, child, anchor: np.ndarray, axis,
 
     if kind == _BALL:
         return b.add(Spherical(name, parent, child, at=anchor))
-    return b.add(Prismatic(name, parent, child, at=anchor, axis=axis) if kind == _SLIDE else
+    return b.add(Prismatic(name, parent, child, at=anchor, axis=axis, drawn_displacement=qpos)
+                 if kind == _SLIDE else
                  Revolute(name, parent, child, at=anchor, axis=axis, drawn_angle=qpos))
 
 

@@ -74,30 +74,25 @@ def joint_names(names: Iterable[str], taken: set, what: str, warning: type) -> d
     return out
 
 
-def add_driver(b, slides: bool, name: str, element, motion: Motion, q0: float) -> None:
-    """Drive a hinge's (``slides``: a slide's) coordinate of the file, ``q0`` in the drawing,
-    by ``motion``: a driver named ``"<name>_drive"`` whose coordinate is the file's (a hinge
-    reads it, its ``drawn_angle`` being ``q0``; a slide's offset makes it so; see
-    :func:`mbd3d.inverse_dynamics_at`)."""
+def add_driver(b, slides: bool, name: str, element, motion: Motion) -> None:
+    """Drive a hinge's (``slides``: a slide's) coordinate of the file by ``motion``: a driver
+    named ``"<name>_drive"`` (the joint reads the file's coordinate, drawn at its position
+    there: ``drawn_angle``, ``drawn_displacement``; see :func:`mbd3d.inverse_dynamics_at`)."""
     from mbd3d.joints import RotationDriver, TranslationDriver  # noqa: PLC0415
 
-    if slides:
-        b.add(TranslationDriver(f"{name}_drive", element, motion=motion, offset=-q0))
-    else:
-        b.add(RotationDriver(f"{name}_drive", element, motion=motion))
+    driver = TranslationDriver if slides else RotationDriver
+    b.add(driver(f"{name}_drive", element, motion=motion))
 
 
-def add_limit(b, slides: bool, name: str, element, q0: float,
-              ends: tuple[float | None, float | None], law) -> bool:
-    """Add a hinge's (``slides``: a slide's) range ``ends`` in the file's coordinate (``q0`` in
-    the drawing) as a JointLimit ``"<name>_limit"`` on ``element``, a slide's ends moved to the
-    displacement mbd3d measures (a hinge reads the file's angle, its ``drawn_angle`` being
-    ``q0``); False when it is not added (no law, equal ends, or a hinge's ends beyond half a
-    turn, where a spatial hinge's angle is measured)."""
+def add_limit(b, slides: bool, name: str, element, ends: tuple[float | None, float | None],
+              law) -> bool:
+    """Add a hinge's (``slides``: a slide's) range ``ends`` in the file's coordinate, which
+    the joint reads, as a JointLimit ``"<name>_limit"`` on ``element``; False when it is not
+    added (no law, equal ends, or a hinge's ends beyond half a turn, where a spatial hinge's
+    angle is measured)."""
     from mbd3d.model.contacts import JointLimit  # noqa: PLC0415
 
-    offset = -q0 if slides else 0.0
-    ends = [None if end is None else float(end) + offset for end in ends]
+    ends = [None if end is None else float(end) for end in ends]
     if law is None or (not slides and any(end is not None and not -np.pi < end < np.pi
                                           for end in ends)):
         return False

@@ -12,8 +12,8 @@ Joints become constraints between those bodies, given in the drawing of the robo
 - ``revolute`` and ``continuous``: :class:`~mbd3d.joints.Revolute` about the joint axis,
   whose ``drawn_angle`` is the joint's position, so that ``results.joint(name).angle``,
   ``initial_positions``, drivers and stops are in the file's joint coordinate [rad];
-- ``prismatic``: :class:`~mbd3d.joints.Prismatic` along it (its displacement is measured
-  from the drawing: the file's coordinate less its ``joint_positions`` entry);
+- ``prismatic``: :class:`~mbd3d.joints.Prismatic` along it, its ``drawn_displacement`` the
+  joint's position (so it reads the file's joint coordinate [m] too);
 - ``fixed``: nothing (its child is part of its parent's body; its axis is not read);
 - ``floating``: nothing either, its child is free (a floating base);
 - ``planar``: :class:`~mbd3d.joints.Planar`, its axis the plane's normal.
@@ -238,7 +238,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
             continue  # floating: its child is free
         if joint.limit is not None and joint.type in ("revolute", "prismatic") and (
                 joint.limit.lower is not None or joint.limit.upper is not None):
-            if not add_limit(b, joint.type == "prismatic", names[joint.name], element, q0,
+            if not add_limit(b, joint.type == "prismatic", names[joint.name], element,
                              (joint.limit.lower, joint.limit.upper), law):
                 limited.append(f"{joint.name} [{joint.limit.lower}, {joint.limit.upper}]")
         if joint.mimic is not None:
@@ -246,7 +246,7 @@ def urdf_builder(path: str | os.PathLike, *, joint_positions: Mapping[str, float
                          f"{joint.mimic.joint} + {joint.mimic.offset or 0.0}")
         if joint.name in drive:
             add_driver(b, joint.type == "prismatic", names[joint.name], element,
-                       drive[joint.name], q0)
+                       drive[joint.name])
     if limited:
         why = ("joint_limits='ignore'" if law is None
                else "a spatial hinge's angle is measured within half a turn of the drawing, "
@@ -366,7 +366,7 @@ def _add_joint(b, joint, name: str, parent, child, frame: np.ndarray, q0: float,
     if joint.type == "floating":
         return None
     if joint.type == "prismatic":
-        return b.add(Prismatic(name, parent, child, at=point, axis=axis))
+        return b.add(Prismatic(name, parent, child, at=point, axis=axis, drawn_displacement=q0))
     if joint.type == "planar":  # its axis is the normal of the plane its child moves in
         return b.add(Planar(name, parent, child, at=point, axis=axis))
     return b.add(Revolute(name, parent, child, at=point, axis=axis, drawn_angle=q0))
