@@ -601,6 +601,11 @@ def test_joints_read_the_files_joint_coordinates_and_start_from_them(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UrdfWarning)
         model = load_urdf(urdf, gravity=(0.0, 0.0, 0.0), joint_positions=drawn)
+    # the stops are at the file's limits too: each gap to the nearer end, [-3, 3] rad from
+    # 0.7 rad and [-0.5, 0.5] m from 0.15 m
+    states = mb.contact_states(model, model.q0)
+    assert states.names == ["yaw_limit", "slide_limit"]
+    np.testing.assert_allclose(states.gap, [2.3, 0.35], rtol=0, atol=1e-12)
     for start in (None, {"yaw": -1.3, "pitch": 2.4, "slide": -0.35}):
         res = mb.forward_dynamics(model, [0.0, 0.01], initial_positions=start)
         at = start or drawn
