@@ -10,14 +10,15 @@ solve for the positions with the exact rows, and eight evaluations of the rows a
 the dynamic equations along the parameter: the ratio per parameter is what to expect of a
 study of p parameters, p times it.
 
-Forward sensitivities take, at every stage of every step, the change of the right-hand side
-along each parameter from four evaluations of the model's variants (at a shorter step where
-the state's sensitivities are large: interpolated from the first variants' compiled arrays
-where the parameter enters them affinely, built otherwise), all stages of a step in one
-compiled call: four right-hand sides per stage and parameter, plus building the four variants
-through the model's file, is several analyses per parameter, not the issue's target of half of
-one, which needs the right-hand side's own tangent compiled (one residual and one
-back-substitution per parameter).
+Forward sensitivities take, at every stage of every step, the stage's accelerations and
+multipliers solved once, then per parameter the change of the right-hand side and of the
+equations' residual with them held, from four evaluations of the model's variants (at a
+shorter step where the state's sensitivities are large: interpolated from the first variants'
+compiled arrays where the parameter enters them affinely, built otherwise), and one solve with
+the stage's matrix; all stages of a step in one compiled call. Four residuals per stage and
+parameter, plus building the four variants through the model's file, is still several
+analyses per parameter, not the issue's target of half of one, which needs the residual's own
+tangent compiled (one evaluation instead of four, and no variants to build).
 
 Run: python benchmarks/sensitivities.py [--repeat N]
 """

@@ -18,6 +18,7 @@ import mbd3d as mb
 from mbd3d import mechanisms
 from mbd3d.io.parameters import parameter_tangent, parameter_value
 from mbd3d.numerics.compiled.accelerations import accelerations_with_parts
+from mbd3d.numerics import patterns
 from mbd3d.numerics.compiled.structures import workspace
 
 EXAMPLES = pathlib.Path(__file__).parent.parent / "examples"
@@ -163,6 +164,31 @@ def test_a_held_start_against_differences():
         got, reference = sensitivity_and_difference(model, sens, j, name, tight)
         assert sens.dq[0, model.coordinate_index("crank.theta"), j] == 0.0
         assert np.max(np.abs(got - reference)) <= 1e-8 * np.max(np.abs(reference)), name
+
+
+@pytest.mark.compiled_only
+@pytest.mark.parametrize("layout", ["dense", "banded", "sparse", "range"])
+def test_every_layout_against_differences(layout, monkeypatch):
+    # each stage's augmented matrix, solved once for the state, then solves every parameter's
+    # change of the accelerations (the sheet's 1.1): factored again (dense, banded), through
+    # SuperLU (the caller's solve) or from the range-space factors the stage's solve kept
+    with monkeypatch.context() as patch:
+        if layout == "sparse":
+            patch.setattr(patterns, "BANDED_WORK_LIMIT", -1)
+        if layout == "banded":
+            patch.setattr(patterns, "RANGE_SPACE_WORK_LIMIT", -1)
+        model = mechanisms.pendulum_chain(6, sparse=layout != "dense", link_mass=2.7,
+                                          link_length=0.8)
+        assert model._augmented_pattern.layout == layout
+        t = np.linspace(0.0, 0.4, 5)
+        names = ["bodies.link3.mass", "gravity[1]"]
+        options = dict(method="DOP853", rtol=1e-12, atol=1e-14)
+        sens = mb.forward_sensitivities(model, t, names, **options)
+        tight = dict(options, rtol=1e-13, atol=1e-15)
+        for j, name in enumerate(names):
+            got, reference = sensitivity_and_difference(model, sens, j, name, tight)
+            error = np.max(np.abs(got - reference))
+            assert error <= 1e-8 * np.max(np.abs(reference)), (name, error)
 
 
 @pytest.mark.compiled_only

@@ -9,9 +9,11 @@ every accepted step of the state takes the same step of the sensitivities (the f
 - the sensitivities ``S = dy/dp`` of the integrated state ``y = (q, v)`` go through the step's
   own stages with the method's own weights, each stage's derivative being the change of the
   right-hand side ``f(t, y)`` along the parameter with the stage state moving by its
-  sensitivity, ``d/dh f_{p+h}(t, Y + h S)``: the compiled right-hand side of the model's
-  variants (:class:`mbd3d.model.tangents.ModelTangent`, a fourth-order difference, about
-  1e-12 of its size). All stages of all parameters are one compiled call per step
+  sensitivity, ``d/dh f_{p+h}(t, Y + h S)``: the change of the compiled right-hand side
+  and of the equations' residual of the model's variants with the stage's accelerations and
+  multipliers held (:class:`mbd3d.model.tangents.ModelTangent`, a fourth-order difference,
+  about 1e-12 of its size), then the accelerations' change from one solve with the stage's
+  augmented matrix, factored once for all parameters (sheet 1.1). All stages of all parameters are one compiled call per step
   (:func:`~mbd3d.numerics.compiled.sensitivity_steps.sensitivity_stages_into`), which asks
   for the variants at a shorter step where a sensitivity is large and they are not made yet.
   With the step sizes the state's error control chose (not differentiated, so the
@@ -108,8 +110,8 @@ def forward_sensitivities(model, times: Sequence[float], parameters: Sequence[st
         ``sens.results`` the forward dynamics' Results; ``sens.sensitivity("slider.x",
         name)`` (``of="qd"``, ``"qdd"``), ``sens.effort``, ``sens.derivative(f)`` as for the
         other analyses (:func:`mbd3d.sensitivities`); ``sens.integral(name, parameter)``.
-        ``sens.results.stats["sensitivity_evaluations"]`` counts the model variants'
-        right-hand sides.
+        ``sens.results.stats["sensitivity_evaluations"]`` counts the stages' right-hand
+        sides and the model variants' residuals the sensitivities evaluated.
 
     Raises
     ------
@@ -362,7 +364,8 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
 
 class _VariantSets:
     """The compiled right-hand sides the sensitivities' stages evaluate: the model's own (with
-    a workspace of its own: the run's holds its contacts' power) and, per parameter, its
+    two workspaces of its own, one keeping each stage's matrix while the other evaluates; the
+    run's holds its contacts' power) and, per parameter, its
     variants, four per level (level ``l`` at a step ``2**-(REFINE l)`` of the first), in the
     typed lists :func:`sensitivity_stages_into` takes; level 0 made with the tangent, finer
     ones as the stages ask for them (:meth:`make`)."""
@@ -384,7 +387,7 @@ class _VariantSets:
 
     def _compiled(self, model) -> tuple:
         arrays = model._core.arrays()
-        return arrays, workspace(self.spatial, arrays)
+        return arrays, workspace(self.spatial, arrays), workspace(self.spatial, arrays)
 
     def _install(self, j: int, level: int, arrays: Sequence, step: float) -> None:
         for o, record in enumerate(arrays):

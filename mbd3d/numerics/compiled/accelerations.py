@@ -34,7 +34,8 @@ from mbd3d.numerics.compiled.contact_groups import REPORT_COLUMNS, all_contact_f
 from mbd3d.numerics.compiled.forces import (point_forces_into, rotary_forces_into,
                                             spring_forces_into, torques_into)
 from mbd3d.numerics.compiled.motions import motion_values_into
-from mbd3d.numerics.compiled.range_space import range_space_solve_into
+from mbd3d.numerics.compiled.range_space import (range_space_solve_factored,
+                                                  range_space_solve_into)
 from mbd3d.numerics.compiled.rows import constraint_rows_into
 from mbd3d.numerics.compiled.structures import BANDED, DENSE, RANGE, SPARSE, contact_count
 
@@ -135,19 +136,18 @@ def forces_into(forces, work, t: float, rhs) -> bool:
 
 
 @jit
-def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
-    """Solve the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`) in
-    ``work`` (:class:`Workspace`); returns the status.
+def augmented_into(model, work, t, q, qd, charts, extra, phi, drivers):
+    """Assemble the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`)
+    in ``work`` (:class:`Workspace`), not solved: the mass blocks ``work.blocks``, the
+    Jacobian's entries ``work.data`` and the right-hand side ``work.rhs``; returns the status.
 
-    ``x = (qdd, lam)`` is ``work.x``; the matrix entries in the pattern's order
-    ``work.values`` and the right-hand side ``work.rhs`` are what the caller solves for the
-    ``SPARSE`` layout. For a model with parts that are Python objects (``python_parts``) the
+    For a model with parts that are Python objects (``python_parts``) the
     caller gives ``extra`` (n,), the generalized forces of the force elements, and the
     motions ``(f, f', f'')`` of the rotation drivers ``phi`` (k, 3) and of the drivers
     ``drivers`` (n_drivers, 3); otherwise the motions are evaluated here. ``charts``:
     reference rotations of a spatial model's bodies, None for a planar model (which then
-    compiles no spatial code: Numba drops the branches decided by ``charts is None``, and
-    ``nc`` below is a constant of each). Every model's record has the same type (see
+    compiles no spatial code: Numba drops the branches decided by ``charts is None``).
+    Every model's record has the same type (see
     :mod:`~mbd3d.numerics.compiled.structures`), so these are compiled twice in all: planar
     and spatial.
     """
@@ -175,12 +175,77 @@ def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
         gamma[driver_rows[k]] += drivers[k, 2]
     for i in range(model.n_rows):
         rhs[n + i] = gamma[i]
+    return SOLVED
+
+
+@jit
+def accelerations_into(model, work, t, q, qd, charts, extra, phi, drivers):
+    """Solve the augmented equations at ``(t, q, qd)`` of ``model`` (:class:`ModelArrays`) in
+    ``work`` (:class:`Workspace`): :func:`augmented_into`, then the solve for the model's
+    layout; returns the status. ``x = (qdd, lam)`` is ``work.x``; the matrix entries in the
+    pattern's order ``work.values`` and the right-hand side ``work.rhs`` are what the caller
+    solves for the ``SPARSE`` layout. The factors stay in ``work`` for
+    :func:`solve_again_into`."""
+    status = augmented_into(model, work, t, q, qd, charts, extra, phi, drivers)
+    if status != SOLVED:
+        return status
     # nc: coordinates per body, a compile-time constant (a literal where it is passed on)
     if charts is not None:
         nc = 6
     else:
         nc = 3
     return SOLVED if _solve_into(nc, model, work) else SINGULAR
+
+
+@jit
+def solve_again_into(model, work, charts, b, x) -> bool:
+    """``[M Cq^T; Cq 0] x = b`` with the matrix :func:`accelerations_into` solved last in
+    ``work`` (from its factors where they are kept: the range-space layout; by factoring the
+    same entries again otherwise); False for the ``SPARSE`` layout, whose caller solves (its
+    entries are ``work.values``). ``work.x`` and ``work.rhs`` are overwritten."""
+    if charts is not None:
+        nc = 6
+    else:
+        nc = 3
+    if model.layout == RANGE:
+        range_space = model.range_space
+        range_space_solve_factored(nc, work.blocks, range_space.body_start,
+                                   range_space.positions, range_space.row_position,
+                                   range_space.bandwidth, b, work.range_jacobian,
+                                   work.range_band, work.range_vector, work.range_forces, x)
+        return True
+    if model.layout == SPARSE:
+        return False
+    work.rhs[:] = b
+    _solve_into(nc, model, work)  # regular: the same matrix was
+    x[:] = work.x
+    return True
+
+
+@jit
+def frozen_residual_into(model, work, t, q, qd, charts, extra, phi, drivers, x, r) -> int:
+    """``r = [Qe + Qv; Qd] - [M Cq^T; Cq 0] x`` at ``(t, q, qd)`` with ``x = (qdd, lam)``
+    given (the equations' residual with the accelerations and multipliers held); returns the
+    status of :func:`augmented_into`."""
+    status = augmented_into(model, work, t, q, qd, charts, extra, phi, drivers)
+    if status != SOLVED:
+        return status
+    n = q.shape[0]
+    blocks, data, rhs = work.blocks, work.data, work.rhs
+    nc = blocks.shape[1]
+    for i in range(rhs.shape[0]):
+        r[i] = rhs[i]
+    for b in range(blocks.shape[0]):
+        for i in range(nc):
+            total = 0.0
+            for j in range(nc):
+                total += blocks[b, i, j] * x[b * nc + j]
+            r[b * nc + i] -= total
+    for p in range(data.shape[0]):
+        row, col = model.jac_rows[p], model.jac_cols[p]
+        r[col] -= data[p] * x[n + row]
+        r[n + row] -= data[p] * x[col]
+    return SOLVED
 
 
 @jit

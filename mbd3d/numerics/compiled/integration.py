@@ -20,7 +20,8 @@ from numba import objmode
 
 from mbd3d.numerics.compiled import callbacks, jit, jit_calling_python
 from mbd3d.numerics.compiled.accelerations import (NOT_FINITE, SOLVED, accelerations_into,
-                                                   motions_at, padded_into)
+                                                   frozen_residual_into, motions_at,
+                                                   padded_into, solve_again_into)
 from mbd3d.numerics.compiled.bodies import (body_vectors_into, planar_frames_into,
                                             spatial_frames_into, spatial_rates_into,
                                             spatial_reset_charts, spatial_velocity_derivative_into)
@@ -88,14 +89,13 @@ def _python_parts(model, key, t, q, qd, charts):
 def derivative(model, key, t, y, charts, out, work):
     """``out = dy/dt`` at ``(t, y)`` in the workspace ``work``; returns the solve's status
     (0: solved). ``charts``: the reference rotations of a spatial model's bodies, None for a
-    planar model (see :func:`advance`)."""
+    planar model (see :func:`advance`). Solved, ``work.x`` holds ``(qdd, lam)`` (but for a
+    model whose accelerations Python solves) and ``work`` the matrix for
+    :func:`solve_again`."""
     n = model.n
     q = y[:n]
     qd = out[:n]
-    if charts is not None:
-        spatial_rates_into(q, y[n:], qd)
-    else:
-        qd[:] = y[n:]
+    _coordinate_rates_into(q, y[n:], qd, charts)
     extra, drivers, phi = _python_parts(model, key, t, q, qd, charts)
     if model.python_accelerations:
         x, status = _callback_accelerations(key, t, q, qd, charts)
@@ -104,13 +104,61 @@ def derivative(model, key, t, y, charts, out, work):
         x = work.x
         if status == SOLVED and not model.solved_here:
             x, status = _callback_solve(key, work.values, work.rhs)
+            work.x[:] = x
     if status != SOLVED:
         return status
-    if charts is not None:
-        spatial_velocity_derivative_into(q, qd, x[:n], out[n:])
-    else:
-        out[n:] = x[:n]
+    velocity_derivative_into(q, qd, x[:n], out[n:], charts)
     return SOLVED
+
+
+@jit
+def frozen_derivative_into(model, key, t, y, charts, x, work, out, r) -> int:
+    """``out = dy/dt`` at ``(t, y)`` with the accelerations held at ``x[:n]``, and ``r`` the
+    residual of the augmented equations there with ``x = (qdd, lam)`` held
+    (:func:`~mbd3d.numerics.compiled.accelerations.frozen_residual_into`): what changes of
+    the right-hand side along a direction, the accelerations' change being ``K^-1 dr``
+    (:func:`solve_again`); returns the status."""
+    n = model.n
+    q = y[:n]
+    qd = out[:n]
+    _coordinate_rates_into(q, y[n:], qd, charts)
+    extra, drivers, phi = _python_parts(model, key, t, q, qd, charts)
+    status = frozen_residual_into(model, work, t, q, qd, charts, extra, phi, drivers, x, r)
+    if status != SOLVED:
+        return status
+    velocity_derivative_into(q, qd, x[:n], out[n:], charts)
+    return SOLVED
+
+
+@jit
+def solve_again(model, key, work, charts, b, x) -> int:
+    """``x``: the augmented equations' matrix of the last :func:`derivative` in ``work``
+    solved for ``b``; returns the status."""
+    if solve_again_into(model, work, charts, b, x):
+        return SOLVED
+    solution, status = _callback_solve(key, work.values, b)
+    if status == SOLVED:
+        x[:] = solution
+    return status
+
+
+@jit
+def _coordinate_rates_into(q, v, qd, charts) -> None:
+    """``qd``: the coordinates' rates from the integrated velocities ``v``."""
+    if charts is not None:
+        spatial_rates_into(q, v, qd)
+    else:
+        qd[:] = v
+
+
+@jit
+def velocity_derivative_into(q, qd, qdd, out, charts) -> None:
+    """``out``: the integrated velocities' derivative from the accelerations ``qdd`` (affine
+    in them: with ``qd = 0``, their linear part)."""
+    if charts is not None:
+        spatial_velocity_derivative_into(q, qd, qdd, out)
+    else:
+        out[:] = qdd
 
 
 @jit
@@ -123,10 +171,7 @@ def drift(model, key, t, y, charts, work):
         return 0.0
     q = y[:n]
     qd = np.empty(n)
-    if charts is not None:
-        spatial_rates_into(q, y[n:], qd)
-    else:
-        qd[:] = y[n:]
+    _coordinate_rates_into(q, y[n:], qd, charts)
     _, drivers, phi = _python_parts(model, key, t, q, qd, charts)
     if not model.python_parts:
         motions_at(model, work, t)
@@ -183,10 +228,7 @@ def switches(model, y, charts, work, out) -> None:
     :func:`.contacts.switches_into`)."""
     n = model.n
     qd = np.empty(n)
-    if charts is not None:
-        spatial_rates_into(y[:n], y[n:], qd)
-    else:
-        qd[:] = y[n:]
+    _coordinate_rates_into(y[:n], y[n:], qd, charts)
     Q, Qd, A, axes, omega, kappa = work.Q, work.Qd, work.A, work.axes, work.omega, work.kappa
     padded_into(y[:n], Q)
     padded_into(qd, Qd)

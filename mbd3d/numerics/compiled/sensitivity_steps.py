@@ -5,12 +5,18 @@ After the compiled Runge-Kutta step of the state
 :func:`sensitivity_stages_into` takes the same step of the sensitivities ``S = dy/dp`` of every
 parameter: at each stage, with the stage's state ``Y`` formed exactly as the step formed it,
 the derivative of ``S`` is the change of the right-hand side along the parameter with the state
-moving by its sensitivity, ``d/dh f_{p+h}(t, Y + h S)``, the fourth-order central difference
-(:data:`OFFSETS`) of the compiled right-hand sides of the model's variants (the model built
-with the parameter at ``OFFSETS`` steps from its value; see
+moving by its sensitivity, ``d/dh f_{p+h}(t, Y + h S)``. It is taken as the formula sheet's 1.1
+has it: the stage's accelerations and multipliers ``x = (qdd, lam)`` are solved once (one
+right-hand side of the model, whose augmented matrix ``K`` stays factored in its workspace),
+and per parameter the right-hand side and the residual ``r = [Qe + Qv; Qd] - K x`` are
+differenced with ``x`` held (no solve in them: about two thirds of a right-hand side on the
+slider-crank, two fifths on a 100-link chain), then ``dqdd = K^-1 dr`` is one more solve with
+``K`` (from the range-space layout's factors, or the same entries factored again). The
+differences are fourth-order central ones (:data:`OFFSETS`) over the model's variants (the
+model built with the parameter at ``OFFSETS`` steps from its value; see
 :class:`mbd3d.model.tangents.ModelTangent`, whose
 :meth:`~mbd3d.model.tangents.ModelTangent.along` is the same rule for any quantity evaluated
-in Python).
+in Python); an analytic tangent of the residual would replace them where it is written.
 
 Where a step of the variants would move the state further than :data:`REACH` of its scale (a
 large sensitivity), the stencil's error would show: the variants at a step ``2**-k`` shorter
@@ -18,7 +24,7 @@ are used (``k`` a multiple of 4 up to 16), which the caller makes when the kerne
 (a negative status), or, beyond those or where the parameter has none, the state's change
 alone from the model itself plus the parameter's alone from the variants with the state held.
 
-Everything here evaluates right-hand sides the integrator already compiled; the loop over
+Everything here evaluates what the integrator's right-hand side is made of; the loop over
 stages and parameters is what was Python (four calls from Python per stage and parameter, 60 us
 of overhead for 4 us of work on the slider-crank).
 """
@@ -30,7 +36,8 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
-from mbd3d.numerics.compiled.integration import derivative
+from mbd3d.numerics.compiled.integration import (derivative, frozen_derivative_into,
+                                                 solve_again, velocity_derivative_into)
 from mbd3d.numerics.compiled.runge_kutta import stage_state
 
 __all__ = ["sensitivity_stages_into", "OFFSETS", "REACH", "REFINE", "LEVELS", "SOLVED"]
@@ -58,40 +65,52 @@ def _reach(coordinate_scale: np.ndarray, y: np.ndarray, S: np.ndarray) -> float:
 
 @jit
 def _stencil_into(model, work, key, variants, works, first, use_variants, state_step, step, t,
-                  y, S, charts, values, moved, counts, out) -> int:
-    """``out += `` the fourth-order difference, divided by ``step``, of ``f(t, y + o h S)`` at
-    the offsets ``o`` (``h = state_step``; 0 holds the state) of the variants ``first`` to
-    ``first + 3`` (``use_variants``) or of the model itself; returns the first failing
-    evaluation's status."""
+                  y, S, charts, x, F, R, moved, counts, dF, dR) -> int:
+    """``dF += , dR += `` the fourth-order differences, divided by ``step``, of the right-hand
+    side and the residual with the accelerations and multipliers held at ``x``
+    (:func:`~mbd3d.numerics.compiled.integration.frozen_derivative_into`) at ``(t, y + o h
+    S)`` for the offsets ``o`` (``h = state_step``; 0 holds the state), of the variants
+    ``first`` to ``first + 3`` (``use_variants``) or of the model itself (in ``work``);
+    returns the first failing evaluation's status."""
     n2 = y.shape[0]
     for o in range(4):
         h = OFFSETS[o] * state_step
         for i in range(n2):
             moved[i] = y[i] + h * S[i]
         if use_variants:
-            status = derivative(variants[first + o], key, t, moved, charts, values[o],
-                                works[first + o])
+            status = frozen_derivative_into(variants[first + o], key, t, moved, charts, x,
+                                            works[first + o], F[o], R[o])
         else:
-            status = derivative(model, key, t, moved, charts, values[o], work)
+            status = frozen_derivative_into(model, key, t, moved, charts, x, work, F[o], R[o])
         counts[0] += 1
         if status != SOLVED:
             return status
-    for i in range(n2):
-        out[i] += (8.0 * (values[2, i] - values[1, i]) - (values[3, i] - values[0, i])
-                   ) / (12.0 * step)
+    _difference_into(F, step, dF)
+    _difference_into(R, step, dR)
     return SOLVED
 
 
 @jit
+def _difference_into(values, step, out) -> None:
+    """``out +=`` the fourth-order central difference of ``values`` at :data:`OFFSETS`."""
+    for i in range(out.shape[0]):
+        out[i] += (8.0 * (values[2, i] - values[1, i]) - (values[3, i] - values[0, i])
+                   ) / (12.0 * step)
+
+
+@jit
 def _tangent_into(model, work, key, variants, works, steps, have, refine, j, t, y, S, charts,
-                  reach, values, moved, counts, out) -> int:
-    """``out = d/dh f_{p+h}(t, y + h S)`` for parameter ``j`` (see the module doc); a negative
-    status ``-(1 + j LEVELS + level)`` asks for that level's variants."""
-    out[:] = 0.0
+                  reach, x, F, R, moved, counts, dF, dR) -> int:
+    """``dF``, ``dR``: the derivatives along parameter ``j`` with the state moving by ``S`` of
+    the right-hand side and the residual with the accelerations held at ``x`` (see the module
+    doc); a negative status ``-(1 + j LEVELS + level)`` asks for that level's variants.
+    ``work``: where the model itself is evaluated."""
+    dF[:] = 0.0
+    dR[:] = 0.0
     step = steps[j, 0]
     if reach * step <= REACH:
         return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, step,
-                             step, t, y, S, charts, values, moved, counts, out)
+                             step, t, y, S, charts, x, F, R, moved, counts, dF, dR)
     k = REFINE * math.ceil(math.log2(reach * step / REACH) / REFINE)
     level = k // REFINE
     if refine[j] and level < LEVELS:
@@ -99,39 +118,58 @@ def _tangent_into(model, work, key, variants, works, steps, have, refine, j, t, 
             return -(1 + j * LEVELS + level)
         finer = steps[j, level]
         return _stencil_into(model, work, key, variants, works, (j * LEVELS + level) * 4,
-                             True, finer, finer, t, y, S, charts, values, moved, counts, out)
+                             True, finer, finer, t, y, S, charts, x, F, R, moved, counts, dF,
+                             dR)
     # the state's change alone (the model, a shorter step), then the parameter's alone
     h = REACH / reach
-    status = _stencil_into(model, work, key, variants, works, 0, False, h, h, t, y, S,
-                           charts, values, moved, counts, out)
+    status = _stencil_into(model, work, key, variants, works, 0, False, h, h, t, y, S, charts,
+                           x, F, R, moved, counts, dF, dR)
     if status != SOLVED:
         return status
-    return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, 0.0, step,
-                         t, y, S, charts, values, moved, counts, out)
+    return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, 0.0, step, t,
+                         y, S, charts, x, F, R, moved, counts, dF, dR)
 
 
 @jit
-def _rates_into(model, work, key, variants, works, steps, have, refine, coordinate_scale,
-                m, width, t, y, z, charts, values, moved, counts, out) -> int:
+def _rates_into(model, work, residual_work, key, variants, works, steps, have, refine,
+                coordinate_scale, m, width, t, y, z, charts, scratch, counts, out) -> int:
     """The sensitivities' part of ``dz/dt`` at the stage ``(t, y)``, ``z`` the stage's
     sensitivities: per parameter ``j`` its columns ``m + j width`` on, ``2n`` of them (the
-    integrals' columns are the caller's)."""
+    integrals' columns are the caller's). Sheet 1.1: the stage's accelerations and
+    multipliers ``x`` are solved once (in ``work``, whose matrix ``K`` then serves every
+    parameter), and each parameter's derivative of the right-hand side is its change with
+    ``x`` held plus the accelerations' change ``K^-1 dr``, ``dr`` the change of the
+    equations' residual with ``x`` held."""
+    x, F, R, moved, dF, dR, dx, linear, zero = scratch
     n2 = y.shape[0]
+    n = n2 // 2
+    status = derivative(model, key, t, y, charts, moved, work)
+    counts[0] += 1
+    if status != SOLVED:
+        return status
+    x[:] = work.x
     for j in range(steps.shape[0]):
         start = m + j * width
         S = z[start:start + n2]
-        status = _tangent_into(model, work, key, variants, works, steps, have, refine, j, t,
-                               y, S, charts, _reach(coordinate_scale, y, S), values, moved,
-                               counts, out[start:start + n2])
+        status = _tangent_into(model, residual_work, key, variants, works, steps, have,
+                               refine, j, t, y, S, charts, _reach(coordinate_scale, y, S), x,
+                               F, R, moved, counts, dF, dR)
         if status != SOLVED:
             return status
+        status = solve_again(model, key, work, charts, dR, dx)
+        if status != SOLVED:
+            return status
+        velocity_derivative_into(y[:n], zero, dx[:n], linear, charts)
+        for i in range(n):
+            out[start + i] = dF[i]
+            out[start + n + i] = dF[n + i] + linear[i]
     return SOLVED
 
 
 @jit
-def sensitivity_stages_into(model, work, key, variants, works, steps, have, refine,
-                            coordinate_scale, m, width, W, C, t_old, step, y_old, K, z, L,
-                            charts, first, stage_y, stage_z, counts) -> int:
+def sensitivity_stages_into(model, work, residual_work, key, variants, works, steps, have,
+                            refine, coordinate_scale, m, width, W, C, t_old, step, y_old, K, z,
+                            L, charts, first, stage_y, stage_z, counts) -> int:
     """The stages ``L`` of the sensitivities ``z`` through the step ``t_old -> t_old + step``
     the state took from ``y_old`` with its stages ``K``; returns the status (0; a
     right-hand side's failing status; a negative request for finer variants, see
@@ -139,8 +177,9 @@ def sensitivity_stages_into(model, work, key, variants, works, steps, have, refi
 
     Parameters
     ----------
-    model, work, key
-        The model's compiled arrays, a workspace of its own and the integrator's key.
+    model, work, residual_work, key
+        The model's compiled arrays, two workspaces of its own (the stage's matrix stays in
+        the first) and the integrator's key.
     variants, works
         Typed lists of the variants' arrays and workspaces, four per level, ``LEVELS`` levels
         per parameter (levels not made yet: any record, ``have`` False).
@@ -159,25 +198,26 @@ def sensitivity_stages_into(model, work, key, variants, works, steps, have, refi
     stage_y, stage_z : (rows + 1, ...) ndarray
         Each stage's state and sensitivities, for the caller's integrals.
     counts : (1,) int64 ndarray
-        Right-hand side evaluations, added to.
+        Right-hand sides and residuals evaluated, added to.
     """
     n2 = y_old.shape[0]
-    values = np.empty((4, n2))
-    moved = np.empty(n2)
+    n, size = n2 // 2, work.x.shape[0]
+    scratch = (np.empty(size), np.empty((4, n2)), np.empty((4, size)), np.empty(n2),
+               np.empty(n2), np.empty(size), np.empty(size), np.empty(n), np.zeros(n))
     stage_y[0, :] = y_old
     stage_z[0, :] = z
     if first:
-        status = _rates_into(model, work, key, variants, works, steps, have, refine,
-                             coordinate_scale, m, width, t_old, y_old, z, charts, values, moved,
-                             counts, L[0])
+        status = _rates_into(model, work, residual_work, key, variants, works, steps, have,
+                             refine, coordinate_scale, m, width, t_old, y_old, z, charts,
+                             scratch, counts, L[0])
         if status != SOLVED:
             return status
     for i in range(1, W.shape[0] + 1):
         stage_state(y_old, K, W[i - 1], i, step, stage_y[i])
         stage_state(z, L, W[i - 1], i, step, stage_z[i])
-        status = _rates_into(model, work, key, variants, works, steps, have, refine,
-                             coordinate_scale, m, width, t_old + C[i - 1] * step, stage_y[i],
-                             stage_z[i], charts, values, moved, counts, L[i])
+        status = _rates_into(model, work, residual_work, key, variants, works, steps, have,
+                             refine, coordinate_scale, m, width, t_old + C[i - 1] * step,
+                             stage_y[i], stage_z[i], charts, scratch, counts, L[i])
         if status != SOLVED:
             return status
     return SOLVED
