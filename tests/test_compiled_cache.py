@@ -147,6 +147,8 @@ print(sorted(models[k]._augmented_pattern.layout for k in models))
 for kernel in (accelerations.accelerations_with_parts, integration.advance,
                generalized_alpha.newton_step, alpha_loop.alpha_steps):
     print(kernel.__name__, len(kernel.signatures))
+print("literal_arguments", sum("Literal" in str(a) for s in generalized_alpha.newton_step.signatures
+                                for a in s))
 """
 
 
@@ -169,9 +171,13 @@ def test_the_kernels_are_compiled_per_body_type_and_contacts_not_per_kind_of_mod
     counts = dict(line.split() for line in lines[1:] if line)
     # generalized-alpha's steps: in the compiled loop for every model here but the one
     # with forces given as Python functions (its steps one by one from Python): still one
-    # type per body type and contacts
-    assert counts == {"accelerations_with_parts": "4", "advance": "4", "newton_step": "1",
-                      "alpha_steps": "4"}
+    # type per body type and contacts. newton_step's own count depends on the disk cache:
+    # alpha_steps compiled here adds the types it calls it with (4), loaded from the cache
+    # it adds none (1, Python's call); a flag passed as a literal would add a second type
+    newton = int(counts.pop("newton_step"))
+    assert counts == {"accelerations_with_parts": "4", "advance": "4", "alpha_steps": "4",
+                      "literal_arguments": "0"}
+    assert 1 <= newton <= 4
 
 
 def test_record_constructors_take_the_fields_in_the_records_order():

@@ -164,6 +164,9 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
     lam_try = np.empty(lam.shape[0])
     t_old, h_last, smallest, t_step, turn = t, 0.0, np.inf, t, 0.0
     taken = 0
+    # python_factor as a run-time False: a literal one compiled newton_step once more for
+    # each type, beside the type Python calls it with (see accelerations_into)
+    python_factor = n < 0
     while taken < out_t.shape[0]:
         h_try = trial_step(t, min(h, step_limit(state, t)), t_end)
         beta_prime, gamma_prime = predict_into(coefficients, h_try, q, qd, qdd, a, shift,
@@ -175,8 +178,8 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
         lam_try[:] = lam
         iterations, factorizations = counters[0], counters[1]
         outcome = newton_step(work, penalty_arrays, key, t + h_try, trial, q_hat, qd_hat,
-                              beta_prime, gamma_prime, lam_try, charts, extra, False,
-                              relative_penalty, newton_tol, projection_tol, max_iterations,
+                              beta_prime, gamma_prime, lam_try, charts, extra,
+                              python_factor, relative_penalty, newton_tol, projection_tol, max_iterations,
                               penalty, lam_effective, matrix, band, piv, counters)
         if outcome != CONVERGED:
             if outcome == NOT_FINITE or 0.25 * h_try < 1e-14 * max(1.0, abs(t)):
