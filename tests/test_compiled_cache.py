@@ -147,8 +147,8 @@ print(sorted(models[k]._augmented_pattern.layout for k in models))
 for kernel in (accelerations.accelerations_with_parts, integration.advance,
                generalized_alpha.newton_step, alpha_loop.alpha_steps):
     print(kernel.__name__, len(kernel.signatures))
-print("literal_arguments", sum("Literal" in str(a) for s in generalized_alpha.newton_step.signatures
-                                for a in s))
+print("literal_arguments", sum("Literal" in str(a)
+                                for s in generalized_alpha.newton_step.signatures for a in s))
 """
 
 

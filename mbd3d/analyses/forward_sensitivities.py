@@ -13,7 +13,8 @@ every accepted step of the state takes the same step of the sensitivities (the f
   and of the equations' residual of the model's variants with the stage's accelerations and
   multipliers held (:class:`mbd3d.model.tangents.ModelTangent`, a fourth-order difference,
   about 1e-12 of its size), then the accelerations' change from one solve with the stage's
-  augmented matrix, factored once for all parameters (sheet 1.1). All stages of all parameters are one compiled call per step
+  augmented matrix, factored once for all parameters (sheet 1.1). All stages of all
+  parameters are one compiled call per step
   (:func:`~mbd3d.numerics.compiled.sensitivity_steps.sensitivity_stages_into`), which asks
   for the variants at a shorter step where a sensitivity is large and they are not made yet.
   With the step sizes the state's error control chose (not differentiated, so the

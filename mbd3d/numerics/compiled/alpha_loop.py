@@ -179,8 +179,9 @@ def alpha_steps(work, penalty_arrays, key, coefficients, settings, times, t_targ
         iterations, factorizations = counters[0], counters[1]
         outcome = newton_step(work, penalty_arrays, key, t + h_try, trial, q_hat, qd_hat,
                               beta_prime, gamma_prime, lam_try, charts, extra,
-                              python_factor, relative_penalty, newton_tol, projection_tol, max_iterations,
-                              penalty, lam_effective, matrix, band, piv, counters)
+                              python_factor, relative_penalty, newton_tol, projection_tol,
+                              max_iterations, penalty, lam_effective, matrix, band, piv,
+                              counters)
         if outcome != CONVERGED:
             if outcome == NOT_FINITE or 0.25 * h_try < 1e-14 * max(1.0, abs(t)):
                 # Python names what cannot be evaluated, or why no step converges
