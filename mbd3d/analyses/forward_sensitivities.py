@@ -61,10 +61,11 @@ from mbd3d.model.tangents import OFFSETS, ModelTangent, reach, slope, state_scal
 from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, TABLEAUS,
                                                  dop853_coefficients, interpolate,
                                                  polynomial_coefficients, stage_state)
-from mbd3d.numerics.compiled.sensitivity_steps import LEVELS, REFINE, sensitivity_stages_into
+from mbd3d.numerics.compiled.sensitivity_steps import (LEVELS, REFINE,
+                                                       accelerations_tangent_into,
+                                                       sensitivity_stages_into)
 from mbd3d.numerics.compiled.structures import workspace
 from mbd3d.numerics.linalg import factor_model_augmented
-from mbd3d.analyses.accelerations import consistent_accelerations
 from mbd3d.analyses.driver import DynamicsRequest, Segment, drive
 from mbd3d.analyses.explicit import FAILURES, ExplicitRungeKutta
 from mbd3d.analyses.position import hold_indices
@@ -160,7 +161,7 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         self.m, self.n2 = len(self.integrands), 2 * self.n
         self.width = self.n2 + self.m
         self.sets = _VariantSets(model, self.tangents, self.spatial)
-        self.z = self.z_old = self.z_dense = self._k0 = None
+        self.z = self.z_old = self.z_dense = self._k0 = self._pending = None
         self.outputs: list[tuple] = []  # per output: (dq, dqd, dqdd, dlam, G, dG)
         self.stats["sensitivity_evaluations"] = 0
 
@@ -212,7 +213,7 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         q, qd, qdd, lam = super().output(t, segment)
         t_old, step = segment.t_start, segment.info["step"]
         kind = self.tableau.dense_kind
-        z = interpolate(kind, self.z_dense, self.z_old, t_old, step, t)
+        z = interpolate(kind, self._dense(), self.z_old, t_old, step, t)
         q_from, qd_from = segment.state_at(t)  # before the output's projection
         pairs = [_projected(self.model, tangent, t, q, qd, self.chart(),
                             *self._rate_tangent(q_from, qd_from, z[self._s(j)]))
@@ -236,9 +237,10 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         return slice(start, start + self.m)
 
     def _step(self, segment: Segment) -> None:
-        """``z`` through the step just accepted, with its stages and its dense output: the
-        sensitivities' stages in one compiled call (:func:`sensitivity_stages_into`, which
-        asks for finer variants as it needs them), then the integrals' stages here."""
+        """``z`` through the step just accepted, with its stages: the sensitivities' stages in
+        one compiled call (:func:`sensitivity_stages_into`), then the integrals' stages here.
+        The dense output's extra stages (DOP853's three of sixteen) are left to the first
+        output time in the step (:meth:`_dense`): most steps have none."""
         tab, step, t_old = self.tableau, segment.info["step"], segment.t_start
         W, C = self.sets.weights(tab)
         stages, first = len(tab.B), self._k0 is None
@@ -246,14 +248,30 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         if not first:
             L[0] = self._k0
         stage_y, stage_z = np.empty((len(W) + 1, self.n2)), np.empty((len(W) + 1, self.z.size))
+        pending = (t_old, step, L, stage_y, stage_z)
+        self._stages(pending, W[:stages], C[:stages], 0 if first else 1, first)
+        if self.m:
+            z_new = stage_state(self.z, L, W[stages - 1], stages, step, np.empty(self.z.size))
+        else:
+            z_new = stage_z[stages].copy()
+        # the dense output is made of the step's own z_new, before any projection of z
+        self._pending, self.z_dense = pending + (z_new.copy(),), None
+        self.z_old, self.z, self._k0 = self.z, z_new, L[stages].copy()
+
+    def _stages(self, pending: tuple, W: np.ndarray, C: np.ndarray, start: int,
+                first: bool) -> None:
+        """The stages ``start`` on (0: the first too) of the pending step into its ``L``
+        (asking for finer variants as the compiled call needs them), then the integrals'."""
+        t_old, step, L, stage_y, stage_z = pending[:5]
         counts = np.zeros(1, dtype=np.int64)
         status = -1
         while status < 0:  # until the finer variants the stages need are all made
             status = sensitivity_stages_into(
                 *self.sets.own, self.key, self.sets.variants, self.sets.works, self.sets.steps,
                 self.sets.have, self.sets.refine, self.model.coordinate_scale, self.m,
-                self.width, W, C, t_old, step, self.y_old, self.K, self.z, L, self.charts,
-                first, stage_y, stage_z, counts)
+                self.width, W, C, t_old, step, self.y_old, self.K,
+                self.z if start <= 1 else self.z_old, L, self.charts, first, max(start, 1),
+                stage_y, stage_z, counts)
             if status < 0:
                 self.sets.make(-status - 1)
         self.stats["sensitivity_evaluations"] += int(counts[0])
@@ -262,18 +280,25 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
                 f"forward sensitivities of '{self.model.name}': the model or one of its "
                 f"variants (a parameter moved) could not be evaluated in the step from t = "
                 f"{t_old:.6g} s beside the motion (a singular or non-finite state)", time=t_old)
-        if self.m:
-            for i in range(0 if first else 1, len(W) + 1):
-                t = t_old + (C[i - 1] if i else 0.0) * step
-                self._integral_rates(t, stage_y[i], stage_z[i], L[i])
-            z_new = stage_state(self.z, L, W[stages - 1], stages, step, np.empty(self.z.size))
-        else:
-            z_new = stage_z[stages].copy()
-        if tab.dense_kind == DOP853_INTERPOLANT:
-            self.z_dense = dop853_coefficients(L, tab.D, self.z, z_new, L[0], L[stages], step)
-        else:
-            self.z_dense = polynomial_coefficients(L, tab.P, stages + 1)
-        self.z_old, self.z, self._k0 = self.z, z_new, L[stages].copy()
+        for i in range(start, len(W) + 1) if self.m else ():
+            t = t_old + (C[i - 1] if i else 0.0) * step
+            self._integral_rates(t, stage_y[i], stage_z[i], L[i])
+
+    def _dense(self) -> np.ndarray:
+        """The dense output's coefficients of ``z`` in the step just taken, its extra stages
+        computed when first needed."""
+        if self.z_dense is None:
+            tab = self.tableau
+            t_old, step, L, _, _, z_new = self._pending
+            stages = len(tab.B)
+            if tab.dense_kind == DOP853_INTERPOLANT:
+                W, C = self.sets.weights(tab)
+                self._stages(self._pending, W, C, stages + 1, False)
+                self.z_dense = dop853_coefficients(L, tab.D, self.z_old, z_new, L[0],
+                                                   L[stages], step)
+            else:
+                self.z_dense = polynomial_coefficients(L, tab.P, stages + 1)
+        return self.z_dense
 
     def _integral_rates(self, t: float, y: np.ndarray, z: np.ndarray, out: np.ndarray) -> None:
         """The integrals' part of ``dz/dt`` at the stage ``(t, y)``, ``z`` the stage's
@@ -335,23 +360,41 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
     # -- results --------------------------------------------------------------------------------
     def _record(self, t: float, q, qd, qdd, lam, pairs: list, z: np.ndarray) -> None:
         """The sensitivities at an output time: of ``(q, qd)`` each parameter's ``(s, s')``
-        of ``pairs``, of ``(qdd, lam)`` their change along it at that state, of the integrals
-        from ``z``."""
-        charts, p = self.chart(), len(self.tangents)
+        of ``pairs``, of ``(qdd, lam)`` their change along it at that state (as the stages
+        take it, one compiled call for all parameters), of the integrals from ``z``."""
+        p = len(self.tangents)
         out = [np.zeros((self.n, p)), np.zeros((self.n, p)), np.zeros((self.n, p)),
                np.zeros((len(lam), p)), z[:self.m].copy(), np.zeros((self.m, p))]
-        for j, (tangent, (s, sd)) in enumerate(zip(self.tangents, pairs)):
-
-            def moved(variant, h):
-                a, multipliers, _ = consistent_accelerations(variant, t, q + h * s, qd + h * sd,
-                                                             charts, fallback=False)
-                return np.concatenate([a, multipliers])
-            change = tangent.along(moved, reach(state_scale(self.model, qd), s, sd),
-                                   make_finer=False)
+        if p:
+            y = np.concatenate([q, self.model.body_type.velocities(q, qd)])
+            Z = np.array([self._state_tangent(q, qd, s, sd) for s, sd in pairs])
+            change = self._accelerations_tangent(t, y, Z, self.n + len(lam))
+            out[2][:], out[3][:] = change[:, :self.n].T, change[:, self.n:].T
+        for j, (s, sd) in enumerate(pairs):
             out[0][:, j], out[1][:, j] = s, sd
-            out[2][:, j], out[3][:, j] = change[:self.n], change[self.n:]
             out[5][:, j] = z[self._g(j)]
         self.outputs.append(tuple(out))
+
+    def _accelerations_tangent(self, t: float, y: np.ndarray, Z: np.ndarray, size: int
+                               ) -> np.ndarray:
+        """``(p, size = n + m)``: the change of ``(qdd, lam)`` at ``(t, y)`` along each parameter
+        with the state moving by its row of ``Z`` (:func:`accelerations_tangent_into`)."""
+        sets, counts = self.sets, np.zeros(1, dtype=np.int64)
+        out = np.empty((len(Z), size))
+        status = -1
+        while status < 0:  # until the finer variants it needs are all made
+            status = accelerations_tangent_into(
+                *sets.own, self.key, sets.variants, sets.works, sets.steps, sets.have,
+                sets.refine, self.model.coordinate_scale, t, y, Z, self.charts, counts, out)
+            if status < 0:
+                sets.make(-status - 1)
+        self.stats["sensitivity_evaluations"] += int(counts[0])
+        if status != 0:
+            raise IntegrationError(
+                f"forward sensitivities of '{self.model.name}': the model or one of its "
+                f"variants (a parameter moved) could not be evaluated at the output time t = "
+                f"{t:.6g} s (a singular or non-finite state)", time=t)
+        return out
 
     def sensitivities(self, results, parameters: Sequence[str]) -> Sensitivities:
         """The :class:`Sensitivities` of ``results`` (the outputs this run computed)."""

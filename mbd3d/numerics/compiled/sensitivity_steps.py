@@ -40,7 +40,7 @@ from mbd3d.numerics.compiled.integration import (derivative, frozen_derivative_i
                                                  solve_again, velocity_derivative_into)
 from mbd3d.numerics.compiled.runge_kutta import stage_state
 
-__all__ = ["sensitivity_stages_into", "OFFSETS", "REACH", "REFINE", "LEVELS", "SOLVED"]
+__all__ = ["sensitivity_stages_into", "accelerations_tangent_into", "OFFSETS", "REACH", "REFINE", "LEVELS", "SOLVED"]
 
 #: the stencil's offsets, in steps, of the fourth-order central difference
 OFFSETS = (-2.0, -1.0, 1.0, 2.0)
@@ -131,32 +131,52 @@ def _tangent_into(model, work, key, variants, works, steps, have, refine, j, t, 
 
 
 @jit
+def _solved_into(model, work, key, t, y, charts, scratch, counts) -> int:
+    """The accelerations and multipliers ``x`` at ``(t, y)`` solved into ``scratch[0]``, the
+    augmented matrix ``K`` left in ``work`` for :func:`_change_into`; returns the status."""
+    x, moved = scratch[0], scratch[3]
+    status = derivative(model, key, t, y, charts, moved, work)
+    counts[0] += 1
+    if status == SOLVED:
+        x[:] = work.x
+    return status
+
+
+@jit
+def _change_into(model, work, residual_work, key, variants, works, steps, have, refine,
+                 coordinate_scale, j, t, y, S, charts, scratch, counts) -> int:
+    """Sheet 1.1 for parameter ``j`` at the state solved by :func:`_solved_into`, the state
+    moving by ``S``: ``dF`` (``scratch[4]``) the right-hand side's change with ``x`` held and
+    ``dx = K^-1 dr`` (``scratch[6]``) the accelerations' and multipliers' change, ``dr`` the
+    change of the equations' residual with ``x`` held; returns the status."""
+    x, F, R, moved, dF, dR, dx = scratch[:7]
+    status = _tangent_into(model, residual_work, key, variants, works, steps, have, refine, j,
+                           t, y, S, charts, _reach(coordinate_scale, y, S), x, F, R, moved,
+                           counts, dF, dR)
+    if status != SOLVED:
+        return status
+    return solve_again(model, key, work, charts, dR, dx)
+
+
+@jit
 def _rates_into(model, work, residual_work, key, variants, works, steps, have, refine,
                 coordinate_scale, m, width, t, y, z, charts, scratch, counts, out) -> int:
     """The sensitivities' part of ``dz/dt`` at the stage ``(t, y)``, ``z`` the stage's
     sensitivities: per parameter ``j`` its columns ``m + j width`` on, ``2n`` of them (the
-    integrals' columns are the caller's). Sheet 1.1: the stage's accelerations and
-    multipliers ``x`` are solved once (in ``work``, whose matrix ``K`` then serves every
-    parameter), and each parameter's derivative of the right-hand side is its change with
-    ``x`` held plus the accelerations' change ``K^-1 dr``, ``dr`` the change of the
-    equations' residual with ``x`` held."""
-    x, F, R, moved, dF, dR, dx, linear, zero = scratch
+    integrals' columns are the caller's). The stage's ``x`` is solved once, its matrix
+    serving every parameter (:func:`_change_into`); each parameter's derivative of the
+    right-hand side is its change with ``x`` held plus that of ``dx``."""
+    dF, dx, linear, zero = scratch[4], scratch[6], scratch[7], scratch[8]
     n2 = y.shape[0]
     n = n2 // 2
-    status = derivative(model, key, t, y, charts, moved, work)
-    counts[0] += 1
+    status = _solved_into(model, work, key, t, y, charts, scratch, counts)
     if status != SOLVED:
         return status
-    x[:] = work.x
     for j in range(steps.shape[0]):
         start = m + j * width
-        S = z[start:start + n2]
-        status = _tangent_into(model, residual_work, key, variants, works, steps, have,
-                               refine, j, t, y, S, charts, _reach(coordinate_scale, y, S), x,
-                               F, R, moved, counts, dF, dR)
-        if status != SOLVED:
-            return status
-        status = solve_again(model, key, work, charts, dR, dx)
+        status = _change_into(model, work, residual_work, key, variants, works, steps, have,
+                              refine, coordinate_scale, j, t, y, z[start:start + n2], charts,
+                              scratch, counts)
         if status != SOLVED:
             return status
         velocity_derivative_into(y[:n], zero, dx[:n], linear, charts)
@@ -167,11 +187,40 @@ def _rates_into(model, work, residual_work, key, variants, works, steps, have, r
 
 
 @jit
+def _scratch(n2: int, size: int) -> tuple:
+    """What :func:`_rates_into` works in: ``x, F, R, moved, dF, dR, dx, linear, zero``."""
+    n = n2 // 2
+    return (np.empty(size), np.empty((4, n2)), np.empty((4, size)), np.empty(n2),
+            np.empty(n2), np.empty(size), np.empty(size), np.empty(n), np.zeros(n))
+
+
+@jit
+def accelerations_tangent_into(model, work, residual_work, key, variants, works, steps, have,
+                               refine, coordinate_scale, t, y, Z, charts, counts, out) -> int:
+    """``out[j]``: the change of the accelerations and multipliers ``(qdd, lam)`` at ``(t,
+    y)`` along parameter ``j`` with the state moving by ``Z[j]`` (its sensitivities of ``y =
+    (q, v)``), as the stages take it (:func:`_change_into`); arguments as
+    :func:`sensitivity_stages_into` takes them; returns the status (a negative one asks for
+    finer variants)."""
+    scratch = _scratch(y.shape[0], work.x.shape[0])
+    status = _solved_into(model, work, key, t, y, charts, scratch, counts)
+    if status != SOLVED:
+        return status
+    for j in range(Z.shape[0]):
+        status = _change_into(model, work, residual_work, key, variants, works, steps, have,
+                              refine, coordinate_scale, j, t, y, Z[j], charts, scratch, counts)
+        if status != SOLVED:
+            return status
+        out[j, :] = scratch[6]
+    return SOLVED
+
+
+@jit
 def sensitivity_stages_into(model, work, residual_work, key, variants, works, steps, have,
                             refine, coordinate_scale, m, width, W, C, t_old, step, y_old, K, z,
-                            L, charts, first, stage_y, stage_z, counts) -> int:
-    """The stages ``L`` of the sensitivities ``z`` through the step ``t_old -> t_old + step``
-    the state took from ``y_old`` with its stages ``K``; returns the status (0; a
+                            L, charts, first, start, stage_y, stage_z, counts) -> int:
+    """The stages ``L[start:]`` of the sensitivities ``z`` through the step ``t_old -> t_old +
+    step`` the state took from ``y_old`` with its stages ``K``; returns the status (0; a
     right-hand side's failing status; a negative request for finer variants, see
     :func:`_tangent_into`).
 
@@ -193,26 +242,26 @@ def sensitivity_stages_into(model, work, residual_work, key, variants, works, st
     W : (rows, n_stored) ndarray
         Each stage's weights after the first, ``C`` (rows,) its time [in steps].
     L : (n_stored, z.size) ndarray
-        The stages; ``L[0]`` is computed where ``first``, kept otherwise (the last stage of
-        the step before).
+        The stages; ``L[0]`` is computed where ``first`` (and ``start`` is 1), kept otherwise
+        (the last stage of the step before).
+    start : int
+        The first stage computed after ``L[0]``: 1, or past the solution's stage for the
+        dense output's extra stages alone (needed only in a step with an output time).
     stage_y, stage_z : (rows + 1, ...) ndarray
         Each stage's state and sensitivities, for the caller's integrals.
     counts : (1,) int64 ndarray
         Right-hand sides and residuals evaluated, added to.
     """
-    n2 = y_old.shape[0]
-    n, size = n2 // 2, work.x.shape[0]
-    scratch = (np.empty(size), np.empty((4, n2)), np.empty((4, size)), np.empty(n2),
-               np.empty(n2), np.empty(size), np.empty(size), np.empty(n), np.zeros(n))
+    scratch = _scratch(y_old.shape[0], work.x.shape[0])
     stage_y[0, :] = y_old
     stage_z[0, :] = z
-    if first:
+    if first and start == 1:
         status = _rates_into(model, work, residual_work, key, variants, works, steps, have,
                              refine, coordinate_scale, m, width, t_old, y_old, z, charts,
                              scratch, counts, L[0])
         if status != SOLVED:
             return status
-    for i in range(1, W.shape[0] + 1):
+    for i in range(start, W.shape[0] + 1):
         stage_state(y_old, K, W[i - 1], i, step, stage_y[i])
         stage_state(z, L, W[i - 1], i, step, stage_z[i])
         status = _rates_into(model, work, residual_work, key, variants, works, steps, have,
