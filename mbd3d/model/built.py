@@ -8,6 +8,7 @@ and holds the compiled form of its forces.
 from __future__ import annotations
 
 from collections import OrderedDict
+from functools import cached_property
 from typing import TYPE_CHECKING, Any, Iterable
 
 import numpy as np
@@ -154,7 +155,9 @@ class Model:
         self.driver_names = tuple(driver_names)
         self._rows_of = {e.name: np.flatnonzero(self.row_element == i)
                          for i, e in enumerate(self.joints)}
-        self._reaction_frames = {e.name: e.reaction_frame(ctx) for e in self.joints}
+        # each joint's reaction frame is laid out when first asked for, from the drawing's
+        # frames (a tenth of a 100-link chain's build, which variants of a model never read)
+        self._drawing, self._reaction_frames = ctx, {}
         self._hinge_directions = {e.name: e.hinge_directions(ctx, f"joint '{e.name}'")
                                   for e in self.joints if self.dim == 3 and "angle" in
                                   getattr(e, "limit_coordinates", ())}
@@ -163,7 +166,6 @@ class Model:
             sparse = self.n_coordinates + self.n_constraints > SPARSE_THRESHOLD
         self.sparse = bool(sparse)
         self._augmented_pattern = AugmentedPattern(self)
-        self._penalty_pattern = PenaltyPattern(self)
 
         from mbd3d.model.equations import _Core
         from mbd3d.model.forces import compile_forces
@@ -179,6 +181,12 @@ class Model:
                     *(() if self.charts0 is None else (self.charts0,))):
             arr.setflags(write=False)
         self._core = _Core(self)
+
+    @cached_property
+    def _penalty_pattern(self) -> PenaltyPattern:
+        """Generalized-alpha's iteration matrix pattern, laid out when first asked for (the
+        other analyses never read it: a fourteenth of a 100-link chain's build)."""
+        return PenaltyPattern(self)
 
     def _by_kind(self, specs: list[tuple[int, PrimitiveSpec]]) -> OrderedDict:
         """The primitive instances grouped by type, in a fixed order, each checked against
@@ -367,7 +375,10 @@ class Model:
         name : str
             A joint's or driver's name.
         """
-        return self._reaction_frames[self._check_joint(name)]
+        frames = self._reaction_frames
+        if self._check_joint(name) not in frames:
+            frames[name] = self._joint_by_name[name][1].reaction_frame(self._drawing)
+        return frames[name]
 
     def hinge_directions(self, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Where spatial hinge ``name`` (revolute, cylindrical, planar) measures its angle
