@@ -2,7 +2,7 @@
 the slider-crank and of a hanging planar chain driven at every pin, then ``mb.sensitivities``
 of its results with respect to p of the model's numbers (masses and joint points); and
 forward dynamics of the slider-crank turned by a torque and of a falling 100-link chain
-against ``mb.forward_sensitivities`` of the same run with p masses. Medians of a few runs in
+against ``mb.forward_sensitivities`` of the same run with p masses (then inertias). Medians of a few runs in
 one process.
 
 Each parameter costs its four variants of the model (built once) and, per time point, one
@@ -70,11 +70,14 @@ def forward(counts: tuple = (1, 4), repeat: int = 3, links: int = 100, duration:
              (pendulum_chain(links), duration / 2))
     for model, duration in cases:
         t = np.linspace(0.0, duration, 11)
-        names = [n for n in mb.parameters(model) if n.endswith(".mass")]
+        # the bodies' masses, then their inertias (the slider-crank has three masses)
+        names = [n for suffix in (".mass", ".inertia") for n in mb.parameters(model)
+                 if n.endswith(suffix)]
         options = dict(method="DOP853", rtol=1e-8, atol=1e-10)
         mb.forward_sensitivities(model, t[:2] * 0.01, names[:1], **options)  # compiles
         plain = median_time(lambda: mb.forward_dynamics(model, t, **options), repeat)
         for p in counts:
+            assert len(names) >= p, f"{model.name} has {len(names)} masses and inertias"
             cost = median_time(lambda: mb.forward_sensitivities(model, t, names[:p],
                                                                 **options), repeat)
             # of which: building the model's variants (four models per parameter)
@@ -85,7 +88,7 @@ def forward(counts: tuple = (1, 4), repeat: int = 3, links: int = 100, duration:
                          "of which variants [s]": built, "ratio": cost / plain,
                          "target 1 + 0.5 p": 1 + 0.5 * p})
     print(f"\nforward dynamics (DOP853, rtol 1e-8) against mb.forward_sensitivities of the "
-          f"same run to p masses (medians of {repeat})\n")
+          f"same run to p masses and inertias (medians of {repeat})\n")
     print(mb.format_table({key: [r[key] for r in rows] for key in rows[0]}))
     return rows
 

@@ -25,7 +25,9 @@ every accepted step of the state takes the same step of the sensitivities (the f
   function, evaluated here at the stages the compiled call kept (the integrals do not feed
   back into the motion, so they follow it);
 - the dense output of the sensitivities is the method's own interpolant of their stages, so
-  output times need no extra steps;
+  output times need no extra steps (DOP853's three extra stages are computed only in steps
+  with an output time); at an output, the accelerations' and multipliers' sensitivities are
+  the stages' tangent at that state;
 - where the state is projected onto the constraints (after a drifting step, at every output)
   its sensitivities are projected as the projection's derivative (sheet 1.4), to first order
   in the projection's correction: the neglected change of the projection's direction is of
