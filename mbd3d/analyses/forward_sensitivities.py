@@ -65,6 +65,7 @@ from mbd3d.numerics.compiled.runge_kutta import (DOP853_INTERPOLANT, TABLEAUS,
                                                  polynomial_coefficients, stage_state)
 from mbd3d.numerics.compiled.sensitivity_steps import (LEVELS, REFINE,
                                                        accelerations_tangent_into,
+                                                       rows_tangent_into,
                                                        sensitivity_stages_into)
 from mbd3d.numerics.compiled.structures import workspace
 from mbd3d.numerics.linalg import factor_model_augmented
@@ -177,8 +178,7 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         held = hold_indices(self.model, self.request.hold)
         z = np.zeros(self.m + len(self.tangents) * self.width)
         zero = np.zeros(self.n)
-        pairs = [_projected(self.model, tangent, t0, q, qd, self.chart(), zero, zero, held)
-                 for tangent in self.tangents]
+        pairs = self._projected(t0, q, qd, [(zero, zero)] * len(self.tangents), held)
         for j, (s, sd) in enumerate(pairs):
             z[self._s(j)] = self._state_tangent(q, qd, s, sd)
         self.z = z
@@ -205,9 +205,10 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         if self.stats["projections"] != projections:  # the state was projected
             q, qd = self._split(self.y)
             q_from, qd_from = self._split(y)
-            for j, tangent in enumerate(self.tangents):
-                s, sd = self._rate_tangent(q_from, qd_from, self.z[self._s(j)])
-                s, sd = _projected(self.model, tangent, self.t_now, q, qd, self.chart(), s, sd)
+            pairs = self._projected(self.t_now, q, qd, [
+                self._rate_tangent(q_from, qd_from, self.z[self._s(j)])
+                for j in range(len(self.tangents))])
+            for j, (s, sd) in enumerate(pairs):
                 self.z[self._s(j)] = self._state_tangent(q, qd, s, sd)
             self._k0 = None
 
@@ -217,9 +218,8 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         kind = self.tableau.dense_kind
         z = interpolate(kind, self._dense(), self.z_old, t_old, step, t)
         q_from, qd_from = segment.state_at(t)  # before the output's projection
-        pairs = [_projected(self.model, tangent, t, q, qd, self.chart(),
-                            *self._rate_tangent(q_from, qd_from, z[self._s(j)]))
-                 for j, tangent in enumerate(self.tangents)]
+        pairs = self._projected(t, q, qd, [self._rate_tangent(q_from, qd_from, z[self._s(j)])
+                                           for j in range(len(self.tangents))])
         self._record(t, q, qd, qdd, lam, pairs, z)
         return q, qd, qdd, lam
 
@@ -370,33 +370,58 @@ class SensitiveRungeKutta(ExplicitRungeKutta):
         if p:
             y = np.concatenate([q, self.model.body_type.velocities(q, qd)])
             Z = np.array([self._state_tangent(q, qd, s, sd) for s, sd in pairs])
-            change = self._accelerations_tangent(t, y, Z, self.n + len(lam))
+            change = self._along(accelerations_tangent_into, t, y, Z, self.n + len(lam))
             out[2][:], out[3][:] = change[:, :self.n].T, change[:, self.n:].T
         for j, (s, sd) in enumerate(pairs):
             out[0][:, j], out[1][:, j] = s, sd
             out[5][:, j] = z[self._g(j)]
         self.outputs.append(tuple(out))
 
-    def _accelerations_tangent(self, t: float, y: np.ndarray, Z: np.ndarray, size: int
-                               ) -> np.ndarray:
-        """``(p, size = n + m)``: the change of ``(qdd, lam)`` at ``(t, y)`` along each parameter
-        with the state moving by its row of ``Z`` (:func:`accelerations_tangent_into`)."""
+    def _along(self, kernel, t: float, y: np.ndarray, Z: np.ndarray, size: int) -> np.ndarray:
+        """``(p, size)``: what the compiled ``kernel`` (:func:`accelerations_tangent_into`,
+        :func:`rows_tangent_into`) gives at ``(t, y)`` along each parameter with the state
+        moving by its row of ``Z``, the finer variants it asks for made."""
         sets, counts = self.sets, np.zeros(1, dtype=np.int64)
         out = np.empty((len(Z), size))
         status = -1
         while status < 0:  # until the finer variants it needs are all made
-            status = accelerations_tangent_into(
-                *sets.own, self.key, sets.variants, sets.works, sets.steps, sets.have,
-                sets.refine, self.model.coordinate_scale, t, y, Z, self.charts, counts, out)
+            status = kernel(*sets.own, self.key, sets.variants, sets.works, sets.steps,
+                            sets.have, sets.refine, self.model.coordinate_scale, t, y,
+                            np.asarray(Z, dtype=float), self.charts, counts, out)
             if status < 0:
                 sets.make(-status - 1)
         self.stats["sensitivity_evaluations"] += int(counts[0])
         if status != 0:
             raise IntegrationError(
                 f"forward sensitivities of '{self.model.name}': the model or one of its "
-                f"variants (a parameter moved) could not be evaluated at the output time t = "
-                f"{t:.6g} s (a singular or non-finite state)", time=t)
+                f"variants (a parameter moved) could not be evaluated at t = {t:.6g} s (a "
+                "singular or non-finite state)", time=t)
         return out
+
+    def _projected(self, t: float, q: np.ndarray, qd: np.ndarray, pairs: Sequence[tuple],
+                   held: np.ndarray | None = None) -> list[tuple]:
+        """Each parameter's ``(s, s')`` of ``pairs`` projected as the mass-weighted
+        projection of ``(q, qd)`` onto the constraints moves them (sheet 1.4): ``[M Cq^T; Cq
+        0] [ds; mu] = [0; -dC]``, ``dC`` the change of the position rows along the parameter
+        with ``q`` moving by ``s``, then the same for ``s'`` with the change of the velocity
+        rows ``Cq qd + C_t`` (``s`` corrected); both changes compiled
+        (:func:`rows_tangent_into`), one factorization for all parameters. ``held``
+        coordinates (indices) are kept (their rows ``ds_i = 0`` beside the constraints', as
+        the initial state holds them)."""
+        model = self.model
+        if not pairs or not model.n_constraints:
+            return list(pairs)
+        fr = constraints.frames(model, q, qd, self.chart())
+        correction = _least_change(model, fr, constraints.evaluate(model, t, fr, False,
+                                                                   True)[1], held)
+        m, y = model.n_constraints, np.concatenate([q, model.body_type.velocities(q, qd)])
+        change = self._along(rows_tangent_into, t, y,
+                             [self._state_tangent(q, qd, s, sd) for s, sd in pairs], 2 * m)
+        moved = [s + correction(c[:m]) for (s, _), c in zip(pairs, change)]
+        change = self._along(rows_tangent_into, t, y,
+                             [self._state_tangent(q, qd, s, sd)
+                              for s, (_, sd) in zip(moved, pairs)], 2 * m)
+        return [(s, sd + correction(c[m:])) for s, (_, sd), c in zip(moved, pairs, change)]
 
     def sensitivities(self, results, parameters: Sequence[str]) -> Sensitivities:
         """The :class:`Sensitivities` of ``results`` (the outputs this run computed)."""
@@ -478,24 +503,6 @@ def _refuse(model, request: DynamicsRequest) -> None:
         raise ModelError(f"{what}: not covered for {'; '.join(reasons)}")
 
 
-def _projected(model, tangent: ModelTangent, t: float, q: np.ndarray, qd: np.ndarray, charts,
-               s: np.ndarray, sd: np.ndarray, held: np.ndarray | None = None) -> tuple:
-    """``(s, s')`` projected as the mass-weighted projection of ``(q, qd)`` onto the
-    constraints moves them (sheet 1.4): ``[M Cq^T; Cq 0] [ds; mu] = [0; -(Cq s + C_p)]``, then
-    the same for ``s'`` with the velocity rows' change ``d(Cq qd + C_t)`` along the parameter
-    and the state's sensitivities; ``held`` coordinates (indices) are kept (their rows
-    ``ds_i = 0`` beside the constraints', as the initial state holds them)."""
-    fr = constraints.frames(model, q, qd, charts)
-    data = constraints.evaluate(model, t, fr, False, True)[1]
-    correction = _least_change(model, fr, data, held)
-    s = s + correction(constraints.jacobian_times(model, data, s)
-                       + tangent.constraint_rows(t, fr))
-    velocity = tangent.along(lambda v, h: _velocity_residual(v, t, q + h * s, qd + h * sd,
-                                                             charts),
-                             reach(state_scale(model, qd), s, sd), make_finer=False)
-    return s, sd + correction(velocity)
-
-
 def _least_change(model, fr, data: np.ndarray, held: np.ndarray | None):
     """``dx(r)``: the least mass-weighted change with ``Cq dx = -r`` (``held`` coordinates
     kept), from the model's own factorization of ``[M Cq^T; Cq 0]`` (dense with ``held``)."""
@@ -510,10 +517,3 @@ def _least_change(model, fr, data: np.ndarray, held: np.ndarray | None):
     lu = scipy.linalg.lu_factor(K, check_finite=False)
     return lambda r: scipy.linalg.lu_solve(lu, np.concatenate(
         [np.zeros(n), -r, np.zeros(len(held))]), check_finite=False)[:n]
-
-
-def _velocity_residual(variant, t: float, q: np.ndarray, qd: np.ndarray, charts) -> np.ndarray:
-    """``Cq qd + C_t`` of ``variant`` at ``(q, qd)``."""
-    fr = constraints.frames(variant, q, charts=charts)
-    _, data, _, nu = constraints.evaluate(variant, t, fr, False, True, False, True)
-    return constraints.jacobian_times(variant, data, qd) - nu

@@ -165,10 +165,24 @@ def velocity_derivative_into(q, qd, qdd, out, charts) -> None:
 def drift(model, key, t, y, charts, work):
     """Largest position and velocity constraint residual at ``(t, y)``, each row relative to
     its scale (lengths in units of the model's length)."""
-    n = model.n
     m = model.n_rows
     if m == 0:
         return 0.0
+    C, nu = work.C, work.nu
+    constraint_residuals_into(model, key, t, y, charts, work, C, nu)
+    largest = 0.0
+    for r in range(m):
+        largest = max(largest, abs(C[r]) / model.row_scale[r], abs(nu[r]) / model.row_scale[r])
+    return largest
+
+
+@jit
+def constraint_residuals_into(model, key, t, y, charts, work, C, nu) -> None:
+    """``C``: the position rows' residual ``C(q, t) - c0`` and ``nu``: the velocity rows'
+    ``Cq qd + C_t`` at ``(t, y)`` [each row's unit]; ``C`` and ``nu`` may be ``work.C`` and
+    ``work.nu``."""
+    n = model.n
+    m = model.n_rows
     q = y[:n]
     qd = np.empty(n)
     _coordinate_rates_into(q, y[n:], qd, charts)
@@ -179,7 +193,7 @@ def drift(model, key, t, y, charts, work):
     yes = m > 0  # run-time flags (see accelerations_into)
     no = not yes
     Q, A, axes, omega, kappa = work.Q, work.A, work.axes, work.omega, work.kappa
-    s, J, v, a, C, data, nu = work.s, work.J, work.v, work.a, work.C, work.data, work.nu
+    s, J, v, a, data = work.s, work.J, work.v, work.a, work.data
     padded_into(q, Q)
     if charts is not None:
         spatial_frames_into(Q, Q, charts, no, A, axes, omega, kappa, work.Gb, work.omega_bar)
@@ -188,23 +202,19 @@ def drift(model, key, t, y, charts, work):
     body_vectors_into(A, axes, omega, kappa, model.vector_bodies, model.vector_local, no, s,
                       J, v, a)
     constraint_rows_into(model.code, model.bi, model.bj, model.first_row, model.slots,
-                         model.coordinate, model.motion, model.real, model.curves, phi, m, Q, Q, s, J, v, a,
-                         model.destination, yes, yes, no, yes, C, data, C, nu, work.row_work,
-                         work.row_jacobian)
-    c0, row_scale, jac_rows, jac_cols = model.c0, model.row_scale, model.jac_rows, model.jac_cols
+                         model.coordinate, model.motion, model.real, model.curves, phi, m, Q,
+                         Q, s, J, v, a, model.destination, yes, yes, no, yes, C, data, C, nu,
+                         work.row_work, work.row_jacobian)
+    c0, jac_rows, jac_cols = model.c0, model.jac_rows, model.jac_cols
     driver_rows = model.driver_rows
     for k in range(driver_rows.shape[0]):
         C[driver_rows[k]] -= drivers[k, 0]
         nu[driver_rows[k]] = drivers[k, 1]
-    largest = 0.0
     for r in range(m):
-        largest = max(largest, abs(C[r] - c0[r]) / row_scale[r])
+        C[r] -= c0[r]
         nu[r] = -nu[r]
     for p in range(jac_rows.shape[0]):
         nu[jac_rows[p]] += data[p] * qd[jac_cols[p]]
-    for r in range(m):
-        largest = max(largest, abs(nu[r]) / row_scale[r])
-    return largest
 
 
 @jit

@@ -36,11 +36,13 @@ import math
 import numpy as np
 
 from mbd3d.numerics.compiled import jit
-from mbd3d.numerics.compiled.integration import (derivative, frozen_derivative_into,
-                                                 solve_again, velocity_derivative_into)
+from mbd3d.numerics.compiled.integration import (constraint_residuals_into, derivative,
+                                                 frozen_derivative_into, solve_again,
+                                                 velocity_derivative_into)
 from mbd3d.numerics.compiled.runge_kutta import stage_state
 
-__all__ = ["sensitivity_stages_into", "accelerations_tangent_into", "OFFSETS", "REACH", "REFINE", "LEVELS", "SOLVED"]
+__all__ = ["sensitivity_stages_into", "accelerations_tangent_into", "rows_tangent_into",
+           "OFFSETS", "REACH", "REFINE", "LEVELS", "SOLVED"]
 
 #: the stencil's offsets, in steps, of the fourth-order central difference
 OFFSETS = (-2.0, -1.0, 1.0, 2.0)
@@ -64,24 +66,39 @@ def _reach(coordinate_scale: np.ndarray, y: np.ndarray, S: np.ndarray) -> float:
 
 
 @jit
+def _evaluate_into(model, key, t, y, charts, x, work, F, R, rows) -> int:
+    """What the stencil differences at ``(t, y)``: the right-hand side ``F`` and the residual
+    ``R`` with ``x`` held (:func:`~mbd3d.numerics.compiled.integration.frozen_derivative_into`)
+    or, with ``rows``, the constraints' position and velocity residuals
+    (:func:`~mbd3d.numerics.compiled.integration.constraint_residuals_into`) in ``R[:m]`` and
+    ``R[m:2m]`` (``F`` zero); returns the status."""
+    if rows:
+        m = model.n_rows
+        F[:] = 0.0
+        constraint_residuals_into(model, key, t, y, charts, work, R[:m], R[m:2 * m])
+        return SOLVED
+    return frozen_derivative_into(model, key, t, y, charts, x, work, F, R)
+
+
+@jit
 def _stencil_into(model, work, key, variants, works, first, use_variants, state_step, step, t,
-                  y, S, charts, x, F, R, moved, counts, dF, dR) -> int:
-    """``dF += , dR += `` the fourth-order differences, divided by ``step``, of the right-hand
-    side and the residual with the accelerations and multipliers held at ``x``
-    (:func:`~mbd3d.numerics.compiled.integration.frozen_derivative_into`) at ``(t, y + o h
-    S)`` for the offsets ``o`` (``h = state_step``; 0 holds the state), of the variants
-    ``first`` to ``first + 3`` (``use_variants``) or of the model itself (in ``work``);
-    returns the first failing evaluation's status."""
+                  y, S, charts, x, F, R, moved, counts, dF, dR, rows) -> int:
+    """``dF += , dR += `` the fourth-order differences, divided by ``step``, of what
+    :func:`_evaluate_into` evaluates (``rows``: the constraints' residuals; else the
+    right-hand side and the residual with the accelerations and multipliers held at ``x``) at
+    ``(t, y + o h S)`` for the offsets ``o`` (``h = state_step``; 0 holds the state), of the
+    variants ``first`` to ``first + 3`` (``use_variants``) or of the model itself (in
+    ``work``); returns the first failing evaluation's status."""
     n2 = y.shape[0]
     for o in range(4):
         h = OFFSETS[o] * state_step
         for i in range(n2):
             moved[i] = y[i] + h * S[i]
         if use_variants:
-            status = frozen_derivative_into(variants[first + o], key, t, moved, charts, x,
-                                            works[first + o], F[o], R[o])
+            status = _evaluate_into(variants[first + o], key, t, moved, charts, x,
+                                    works[first + o], F[o], R[o], rows)
         else:
-            status = frozen_derivative_into(model, key, t, moved, charts, x, work, F[o], R[o])
+            status = _evaluate_into(model, key, t, moved, charts, x, work, F[o], R[o], rows)
         counts[0] += 1
         if status != SOLVED:
             return status
@@ -100,17 +117,18 @@ def _difference_into(values, step, out) -> None:
 
 @jit
 def _tangent_into(model, work, key, variants, works, steps, have, refine, j, t, y, S, charts,
-                  reach, x, F, R, moved, counts, dF, dR) -> int:
+                  reach, x, F, R, moved, counts, dF, dR, rows) -> int:
     """``dF``, ``dR``: the derivatives along parameter ``j`` with the state moving by ``S`` of
     the right-hand side and the residual with the accelerations held at ``x`` (see the module
-    doc); a negative status ``-(1 + j LEVELS + level)`` asks for that level's variants.
+    doc), or with ``rows`` of the constraints' residuals (see :func:`_evaluate_into`); a
+    negative status ``-(1 + j LEVELS + level)`` asks for that level's variants.
     ``work``: where the model itself is evaluated."""
     dF[:] = 0.0
     dR[:] = 0.0
     step = steps[j, 0]
     if reach * step <= REACH:
         return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, step,
-                             step, t, y, S, charts, x, F, R, moved, counts, dF, dR)
+                             step, t, y, S, charts, x, F, R, moved, counts, dF, dR, rows)
     k = REFINE * math.ceil(math.log2(reach * step / REACH) / REFINE)
     level = k // REFINE
     if refine[j] and level < LEVELS:
@@ -119,15 +137,15 @@ def _tangent_into(model, work, key, variants, works, steps, have, refine, j, t, 
         finer = steps[j, level]
         return _stencil_into(model, work, key, variants, works, (j * LEVELS + level) * 4,
                              True, finer, finer, t, y, S, charts, x, F, R, moved, counts, dF,
-                             dR)
+                             dR, rows)
     # the state's change alone (the model, a shorter step), then the parameter's alone
     h = REACH / reach
     status = _stencil_into(model, work, key, variants, works, 0, False, h, h, t, y, S, charts,
-                           x, F, R, moved, counts, dF, dR)
+                           x, F, R, moved, counts, dF, dR, rows)
     if status != SOLVED:
         return status
     return _stencil_into(model, work, key, variants, works, j * LEVELS * 4, True, 0.0, step, t,
-                         y, S, charts, x, F, R, moved, counts, dF, dR)
+                         y, S, charts, x, F, R, moved, counts, dF, dR, rows)
 
 
 @jit
@@ -150,9 +168,10 @@ def _change_into(model, work, residual_work, key, variants, works, steps, have, 
     ``dx = K^-1 dr`` (``scratch[6]``) the accelerations' and multipliers' change, ``dr`` the
     change of the equations' residual with ``x`` held; returns the status."""
     x, F, R, moved, dF, dR, dx = scratch[:7]
+    held = steps.shape[0] < 0  # a run-time False: one compilation with rows_tangent_into's
     status = _tangent_into(model, residual_work, key, variants, works, steps, have, refine, j,
                            t, y, S, charts, _reach(coordinate_scale, y, S), x, F, R, moved,
-                           counts, dF, dR)
+                           counts, dF, dR, held)
     if status != SOLVED:
         return status
     return solve_again(model, key, work, charts, dR, dx)
@@ -212,6 +231,28 @@ def accelerations_tangent_into(model, work, residual_work, key, variants, works,
         if status != SOLVED:
             return status
         out[j, :] = scratch[6]
+    return SOLVED
+
+
+@jit
+def rows_tangent_into(model, work, residual_work, key, variants, works, steps, have, refine,
+                      coordinate_scale, t, y, Z, charts, counts, out) -> int:
+    """``out[j] = (dC, dnu)``: the change of the constraints' position residual ``C(q, t) - c0``
+    and velocity residual ``Cq qd + C_t`` at ``(t, y)`` along parameter ``j`` with the state
+    moving by ``Z[j]`` (its sensitivities of ``y = (q, v)``): what projecting the
+    sensitivities onto the constraints corrects (sheet 1.4). Arguments as
+    :func:`accelerations_tangent_into` takes them (the model itself is evaluated in
+    ``residual_work``); returns the status (a negative one asks for finer variants)."""
+    m = model.n_rows
+    x, F, R, moved, dF, dR = _scratch(y.shape[0], max(work.x.shape[0], 2 * m))[:6]
+    rows = steps.shape[0] >= 0  # a run-time True (see _change_into)
+    for j in range(Z.shape[0]):
+        status = _tangent_into(model, residual_work, key, variants, works, steps, have, refine,
+                               j, t, y, Z[j], charts, _reach(coordinate_scale, y, Z[j]), x, F,
+                               R, moved, counts, dF, dR, rows)
+        if status != SOLVED:
+            return status
+        out[j, :] = dR[:2 * m]
     return SOLVED
 
 
