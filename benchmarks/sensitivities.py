@@ -2,8 +2,8 @@
 the slider-crank and of a hanging planar chain driven at every pin, then ``mb.sensitivities``
 of its results with respect to p of the model's numbers (masses and joint points); and
 forward dynamics of the slider-crank turned by a torque and of a falling 100-link chain
-against ``mb.forward_sensitivities`` of the same run with p masses (then inertias). Medians of a few runs in
-one process.
+against ``mb.forward_sensitivities`` of the same run with p masses (then inertias). Medians of
+a few runs in one process.
 
 Each parameter costs its four variants of the model (built once) and, per time point, one
 solve for the positions with the exact rows, and eight evaluations of the rows and four of
